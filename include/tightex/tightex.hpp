@@ -1,0 +1,37 @@
+// tightex: global-parameterization texture space optimization (Chen, Ren, Lei, Luo, Gu; arXiv 2406.04115).
+//
+// The library's public entry point: take a textured mesh with a loose, fragmented UV atlas and return
+// the same geometry with one chart per connected surface, each filling its own rectangle of texture.
+#pragma once
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <string_view>
+
+#include "core/mesh.hpp"
+#include "io/image_io.hpp"
+#include "topology/topology.hpp"
+
+namespace tightex {
+
+enum class Layout { kAtlas, kPerComponent };
+
+struct Options {
+  int size = 4096;                 // atlas: the texture's side; per-component: the largest texture's side
+  Layout layout = Layout::kAtlas;
+  HoleMode holes = HoleMode::kFill;
+  /// Called with a stage name and the fraction [0,1] done; may be called from the calling thread only.
+  std::function<void(std::string_view stage, double fraction)> progress;
+};
+
+struct Result {
+  TexturedMesh output;      // geometry of the input (same corner positions), new UVs, new textures
+  nlohmann::json report;    // what was done and measured (see ../shared/METRICS.md)
+};
+
+/// Runs the whole method: repair, components, holes, cut, harmonic map, layout, bake, metrics.
+/// Requires a mesh as returned by read_obj (validated). Throws InputError for input it cannot handle
+/// (e.g. nothing left after dropping degenerate triangles) and InternalError for broken invariants.
+Result optimize(const TexturedMesh& input, const Options& options);
+
+}  // namespace tightex

@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# Installs everything tightex needs to build and test on Debian 12 (run as root, or with sudo available).
+set -euo pipefail
+pkgs=(build-essential cmake ninja-build pkg-config
+      libeigen3-dev libsuitesparse-dev libtbb-dev
+      libtinyobjloader-dev libtinygltf-dev nlohmann-json3-dev
+      libspng-dev libjpeg62-turbo-dev libwebp-dev libstb-dev zlib1g-dev
+      libcli11-dev libfmt-dev libgtest-dev libgmock-dev libbenchmark-dev)
+missing=()
+for p in "${pkgs[@]}"; do dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p"); done
+if [ ${#missing[@]} -gt 0 ]; then
+  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi

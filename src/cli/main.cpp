@@ -1,0 +1,148 @@
+// The tightex command: a thin shell over the library. Exit codes: 0 ok, 1 bad input (the message names
+// the file and element), 2 internal error.
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+
+#include "core/error.hpp"
+#include "io/obj_reader.hpp"
+#include "io/obj_writer.hpp"
+#include "report/metrics.hpp"
+#include "tightex/tightex.hpp"
+
+namespace fs = std::filesystem;
+using namespace tightex;
+
+namespace {
+
+void write_text_atomically(const fs::path& path, const std::string& text) {
+  const fs::path tmp = path.parent_path() / ("." + path.filename().string() + ".tmp");
+  {
+    std::ofstream f(tmp, std::ios::binary);
+    if (!f) fail_input("{}: cannot write", path.string());
+    f << text;
+    if (!f) fail_input("{}: write failed", path.string());
+  }
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  if (ec) {
+    fs::remove(tmp, ec);
+    fail_input("{}: cannot rename into place", path.string());
+  }
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+int run_measure(int argc, char** argv) {
+  CLI::App app{"tightex measure: the figures of METRICS.md for an input model and an output model"};
+  std::string in_path, out_path;
+  size_t samples = 200000;
+  app.add_option("input", in_path, "the original model (OBJ)")->required();
+  app.add_option("output", out_path, "the re-textured model (OBJ)")->required();
+  app.add_option("--samples", samples, "surface PSNR samples");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 1;
+  }
+  const TexturedMesh in = read_obj(in_path), out = read_obj(out_path);
+  std::cout << to_json(measure(in, out, samples)).dump(2) << "\n";
+  return 0;
+}
+
+int run_main(int argc, char** argv) {
+  CLI::App app{"tightex: one compact texture per surface, from a scan's fragmented UV atlas\n"
+               "(global parameterization by a harmonic map onto a square; Chen et al., arXiv 2406.04115)"};
+  std::string input, outdir, report_path, layout = "atlas", format = "png", holes = "fill";
+  int size = 4096;
+  bool quiet = false, verbose = false;
+  app.add_option("input", input, "textured model (OBJ + MTL + textures)")->required();
+  app.add_option("-o,--output", outdir, "output directory")->required();
+  app.add_option("--size", size, "texture side in texels (per-component: of the largest component)")->check(CLI::Range(8, 65536));
+  app.add_option("--layout", layout, "atlas: all components in one texture; per-component: one texture each (the paper's)")
+      ->check(CLI::IsMember({"atlas", "per-component"}));
+  app.add_option("--format", format, "texture file format")->check(CLI::IsMember({"png", "jpg"}));
+  app.add_option("--holes", holes, "fill: cap holes with scaffolding (paper §4.1); cut: open them into the seam")
+      ->check(CLI::IsMember({"fill", "cut"}));
+  app.add_option("--report", report_path, "where to write the JSON report (default OUTDIR/report.json)");
+  app.add_flag("-q,--quiet", quiet, "print nothing but errors");
+  app.add_flag("-v,--verbose", verbose, "print the report's main figures");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 1;
+  }
+  const bool show_progress = !quiet && isatty(STDERR_FILENO);
+  const auto t0 = std::chrono::steady_clock::now();
+
+  if (fs::is_directory(input)) fail_input("{}: is a directory, not a model file", input);
+  ObjReadStats read_stats;
+  const TexturedMesh mesh = read_obj(input, {}, &read_stats);
+  const double read_s = seconds_since(t0);
+
+  Options opt;
+  opt.size = size;
+  opt.layout = layout == "atlas" ? Layout::kAtlas : Layout::kPerComponent;
+  opt.holes = holes == "fill" ? HoleMode::kFill : HoleMode::kCut;
+  if (show_progress)
+    opt.progress = [](std::string_view stage, double) { fmt::print(stderr, "\r\033[Ktightex: {}...", stage); };
+  Result result = optimize(mesh, opt);
+  if (show_progress) fmt::print(stderr, "\r\033[K");
+
+  const auto tw = std::chrono::steady_clock::now();
+  std::string name = fs::path(input).stem().string();
+  write_obj(result.output, outdir, name, format == "png" ? ImageFormat::kPng : ImageFormat::kJpeg);
+  // texture file names get their extension now that the format is known
+  nlohmann::json& rep = result.report;
+  rep["timings"].push_back(nlohmann::json{{"stage", "write"}, {"seconds", seconds_since(tw)}});
+  rep["timings"].insert(rep["timings"].begin(), nlohmann::json{{"stage", "read"}, {"seconds", read_s}});
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  rep["wall_seconds"] = seconds_since(t0);
+  rep["peak_rss_mib"] = double(u.ru_maxrss) / 1024.0;
+  rep["input"]["polygons_triangulated"] = read_stats.polygons_triangulated;
+  rep["output"] = {{"directory", outdir}, {"obj", name + ".obj"}};
+  if (report_path.empty()) report_path = (fs::path(outdir) / "report.json").string();
+  write_text_atomically(report_path, rep.dump(2) + "\n");
+
+  if (!quiet) {
+    const auto& m = rep["metrics"];
+    fmt::print("tightex: {} -> {}/{}.obj  ({} components, {:.1f}% -> {:.1f}% texels used, {} charts, "
+               "PSNR {:.1f} dB, {} lost, {} flipped, {:.2f} s)\n",
+               input, outdir, name, rep["preparation"]["components"].get<size_t>(),
+               100 * m["input"]["utilization"].get<double>(), 100 * m["output"]["utilization"].get<double>(),
+               m["charts"].get<size_t>(), m["surface_psnr_db"].get<double>(), m["lost_triangles"].get<size_t>(),
+               m["flipped"].get<size_t>(), rep["wall_seconds"].get<double>());
+    if (verbose) fmt::print("{}\n", m.dump(2));
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    if (argc > 1 && std::string(argv[1]) == "measure") return run_measure(argc - 1, argv + 1);
+    return run_main(argc, argv);
+  } catch (const InputError& e) {
+    fmt::print(stderr, "tightex: error: {}\n", e.what());
+    return int(ExitCode::kBadInput);
+  } catch (const InternalError& e) {
+    fmt::print(stderr, "tightex: internal error: {}\n", e.what());
+    return int(ExitCode::kInternal);
+  } catch (const std::bad_alloc&) {
+    fmt::print(stderr, "tightex: internal error: out of memory\n");
+    return int(ExitCode::kInternal);
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "tightex: internal error: {}\n", e.what());
+    return int(ExitCode::kInternal);
+  }
+}

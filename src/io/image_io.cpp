@@ -1,0 +1,591 @@
+#include "io/image_io.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <climits>
+#include <csetjmp>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <new>
+#include <system_error>
+#include <utility>
+#include <vector>
+
+// jpeglib.h needs FILE and size_t declared before it; jerror.h needs jpeglib.h's configuration.
+// clang-format off
+#include <jpeglib.h>
+#include <jerror.h>
+// clang-format on
+#include <spng.h>
+#include <zlib.h>
+
+#include "core/error.hpp"
+
+// stb_image is the fallback for formats other than PNG and JPEG, which have hardened decoders above.
+// STB_IMAGE_STATIC keeps its functions private to this file, so another translation unit that also
+// compiles stb cannot clash with it; PNG and JPEG are compiled out because they never reach stb.
+#define STB_IMAGE_STATIC
+#define STB_IMAGE_IMPLEMENTATION
+#define STBI_NO_STDIO
+#define STBI_NO_PNG
+#define STBI_NO_JPEG
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wunused-function"
+#pragma GCC diagnostic ignored "-Wsign-compare"
+#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
+#pragma GCC diagnostic ignored "-Wimplicit-fallthrough"
+#pragma GCC diagnostic ignored "-Wunused-but-set-variable"
+#include <stb/stb_image.h>
+#pragma GCC diagnostic pop
+
+namespace tightex {
+
+// The decoders write straight into Image::pixels, which must therefore be tightly packed RGBA bytes.
+static_assert(sizeof(Rgba8) == 4 && alignof(Rgba8) == 1);
+
+namespace {
+
+// Bigger than any compressed image tightex could accept under the default pixel limit, and a guard
+// against reading an endless stream (a FIFO fed from /dev/zero) into memory.
+constexpr size_t kMaxFileBytes = size_t(4) << 30;
+
+// An ancillary PNG chunk (text, ICC profile, EXIF) larger than this is refused as hostile; real ones
+// are kilobytes. libspng stores ancillary chunks in memory, so both limits bound its allocations.
+// The image data (IDAT) is streamed through zlib and is not subject to these limits.
+constexpr size_t kPngChunkSizeLimit = size_t(64) << 20;
+constexpr size_t kPngChunkCacheLimit = size_t(256) << 20;
+
+// A progressive JPEG may legally hold any number of scans, and each one makes libjpeg re-walk the whole
+// coefficient buffer: a tiny hostile file can keep it busy for hours. Real encoders write at most a few
+// dozen (libjpeg-turbo's own djpeg/TurboJPEG use the same kind of cap).
+constexpr int kMaxJpegScans = 500;
+
+// PNG encoder settings, measured on this machine (AMD EPYC, spng 0.7.3, zlib 1.2.13) for a
+// 4096x4096 RGB image, best of 3 runs (time, file size):
+//
+//                                      photo-like (smooth + noise)    meshroom texture_1001.png
+//   level 1, Z_FILTERED, filter NONE       1111 ms  44.2 MB              128 ms  4.05 MB
+//   level 1, Z_FILTERED, filter UP          620 ms  28.4 MB              163 ms  3.35 MB
+//   level 1, Z_FILTERED, filter PAETH       915 ms  28.5 MB              243 ms  3.28 MB
+//   level 1, Z_FILTERED, adaptive (ALL)    1191 ms  27.3 MB              558 ms  3.30 MB
+//   level 2, Z_FILTERED, filter UP          751 ms  28.2 MB              171 ms  3.30 MB
+//   level 6, Z_FILTERED, filter UP         4320 ms  24.2 MB              371 ms  2.94 MB
+//   level 6, Z_FILTERED, adaptive (ALL)    6205 ms  23.1 MB              801 ms  2.84 MB
+//   level 1, Z_RLE,      filter UP          454 ms  24.1 MB              155 ms  3.05 MB   <- chosen
+//   level 1, Z_RLE,      filter PAETH       746 ms  24.3 MB              234 ms  2.80 MB
+//
+// After the UP filter, photographic data has almost no long repeats for LZ77 to find; the bytes are
+// small residuals that Huffman coding compresses. Z_RLE skips the (useless) match search, so it is the
+// fastest setting and, oddly but reproducibly, as small as level 6: 13x faster than libspng's default
+// (level 6, adaptive filter) at +4% size. One fixed filter also avoids trying five filters per row.
+constexpr int kPngCompressionLevel = 1;
+constexpr int kPngCompressionStrategy = Z_RLE;
+constexpr int kPngFilterChoice = SPNG_FILTER_CHOICE_UP;
+
+// From this quality on, JPEG keeps full-resolution chroma (4:4:4). A texture atlas packs unrelated
+// charts side by side, so sharp colour edges are everywhere; 4:2:0 averages chroma over 2x2 texels and
+// bleeds colour across chart borders and into the gutters. At quality >= 90 that chroma error is the
+// largest error left, and a user asking for such a quality wants fidelity (costs about 15-30% more
+// bytes); below 90 the luma quantisation dominates and 4:2:0's smaller file is the better trade.
+constexpr int kJpegFullChromaQuality = 90;
+
+std::string errno_message(int error) { return std::generic_category().message(error); }
+
+bool starts_with(const unsigned char* data, size_t size, const unsigned char* magic, size_t magic_size) {
+  return size >= magic_size && std::memcmp(data, magic, magic_size) == 0;
+}
+
+bool is_png(const unsigned char* data, size_t size) {
+  static constexpr unsigned char kMagic[] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  return starts_with(data, size, kMagic, sizeof(kMagic));
+}
+
+bool is_jpeg(const unsigned char* data, size_t size) {
+  static constexpr unsigned char kMagic[] = {0xff, 0xd8, 0xff};
+  return starts_with(data, size, kMagic, sizeof(kMagic));
+}
+
+// Rejects empty images and images larger than the caller's limit, before any pixel memory is allocated.
+void check_dimensions(const std::string& name, const char* format, uint64_t width, uint64_t height,
+                      size_t max_pixels) {
+  if (width == 0 || height == 0) fail_input("{}: {} image has zero size ({}x{})", name, format, width, height);
+  if (width > uint64_t(INT_MAX) || height > uint64_t(INT_MAX) || width * height > max_pixels) {
+    fail_input("{}: {} image is {}x{} pixels, more than the limit of {} pixels", name, format, width, height,
+               max_pixels);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Files
+
+class FileDescriptor {
+ public:
+  explicit FileDescriptor(int fd) : fd_(fd) {}
+  ~FileDescriptor() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  FileDescriptor(const FileDescriptor&) = delete;
+  FileDescriptor& operator=(const FileDescriptor&) = delete;
+  int get() const { return fd_; }
+
+ private:
+  int fd_;
+};
+
+std::vector<unsigned char> read_whole_file(const std::string& path) {
+  const FileDescriptor fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC));
+  if (fd.get() < 0) fail_input("{}: cannot open image ({})", path, errno_message(errno));
+  struct stat info {};
+  if (::fstat(fd.get(), &info) != 0) fail_input("{}: cannot open image ({})", path, errno_message(errno));
+  // open() succeeds on a directory; read() would then fail with a less obvious message.
+  if (S_ISDIR(info.st_mode)) fail_input("{}: cannot open image ({})", path, errno_message(EISDIR));
+  if (S_ISREG(info.st_mode) && uint64_t(info.st_size) > kMaxFileBytes) {
+    fail_input("{}: cannot read image (the file is {} bytes, more than the limit of {})", path,
+               uint64_t(info.st_size), kMaxFileBytes);
+  }
+
+  // Read until end of file rather than trusting st_size, so pipes and files that change size work too.
+  std::vector<unsigned char> data;
+  data.resize(S_ISREG(info.st_mode) ? size_t(info.st_size) + 1 : size_t(1) << 20);
+  size_t used = 0;
+  for (;;) {
+    if (used == data.size()) {
+      if (data.size() >= kMaxFileBytes) {
+        fail_input("{}: cannot read image (more than {} bytes)", path, kMaxFileBytes);
+      }
+      data.resize(std::min(data.size() * 2, kMaxFileBytes));
+    }
+    const ssize_t n = ::read(fd.get(), data.data() + used, data.size() - used);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      fail_input("{}: cannot read image ({})", path, errno_message(errno));
+    }
+    if (n == 0) break;
+    used += size_t(n);
+  }
+  if (used == 0) fail_input("{}: cannot read image (the file is empty)", path);
+  data.resize(used);
+  return data;
+}
+
+// An output file that is removed again unless commit() succeeds, so a failed save leaves no truncated
+// image behind that a later step could mistake for a good one.
+class OutputFile {
+ public:
+  explicit OutputFile(const std::string& path) : path_(path), file_(std::fopen(path.c_str(), "wb")) {
+    if (file_ == nullptr) fail_input("{}: cannot open for writing ({})", path, errno_message(errno));
+    struct stat info {};
+    // Only a regular file we created may be deleted on failure (never a device such as /dev/null).
+    is_regular_ = ::fstat(::fileno(file_), &info) == 0 && S_ISREG(info.st_mode);
+  }
+  ~OutputFile() {
+    if (file_ != nullptr) {
+      std::fclose(file_);
+      discard();
+    }
+  }
+  OutputFile(const OutputFile&) = delete;
+  OutputFile& operator=(const OutputFile&) = delete;
+
+  std::FILE* get() const { return file_; }
+  const std::string& path() const { return path_; }
+
+  // Flushes and closes; throws naming the file if anything written so far or the close failed.
+  void commit() {
+    std::FILE* file = std::exchange(file_, nullptr);
+    const int write_errno = errno;  // set by the fwrite that failed, if one did
+    const bool write_failed = std::ferror(file) != 0;
+    errno = 0;
+    if (std::fclose(file) != 0 || write_failed) {
+      const int error = errno != 0 ? errno : write_errno;
+      discard();
+      fail_input("{}: cannot write image ({})", path_, error != 0 ? errno_message(error) : "I/O error");
+    }
+  }
+
+  // Throws naming the file; `what` says which encoder step failed. The system's reason is added only
+  // when a write actually failed, since errno is otherwise left over from something unrelated.
+  [[noreturn]] void fail(const std::string& what) {
+    const int error = errno;
+    std::string reason = what;
+    if (file_ != nullptr) {
+      if (std::ferror(file_) != 0 && error != 0) reason += "; " + errno_message(error);
+      std::fclose(std::exchange(file_, nullptr));
+      discard();
+    }
+    fail_input("{}: cannot write image ({})", path_, reason);
+  }
+
+ private:
+  void discard() const {
+    if (is_regular_) std::remove(path_.c_str());
+  }
+
+  std::string path_;
+  std::FILE* file_;
+  bool is_regular_ = false;
+};
+
+// ---------------------------------------------------------------------------------------------------
+// PNG (libspng)
+
+struct SpngContextDeleter {
+  void operator()(spng_ctx* ctx) const { spng_ctx_free(ctx); }
+};
+using SpngContext = std::unique_ptr<spng_ctx, SpngContextDeleter>;
+
+SpngContext make_spng_context(int flags) {
+  SpngContext ctx(spng_ctx_new(flags));
+  if (ctx == nullptr) throw std::bad_alloc();
+  return ctx;
+}
+
+[[noreturn]] void fail_png(const std::string& name, int error) {
+  if (error == SPNG_IO_EOF) fail_input("{}: truncated PNG (the data ends early)", name);
+  fail_input("{}: corrupt PNG (spng: {})", name, spng_strerror(error));
+}
+
+Image decode_png(const unsigned char* data, size_t size, const std::string& name, size_t max_pixels) {
+  SpngContext ctx = make_spng_context(0);
+  spng_set_png_buffer(ctx.get(), data, size);
+  spng_set_chunk_limits(ctx.get(), kPngChunkSizeLimit, kPngChunkCacheLimit);
+
+  spng_ihdr ihdr{};
+  if (int error = spng_get_ihdr(ctx.get(), &ihdr)) fail_png(name, error);
+  check_dimensions(name, "PNG", ihdr.width, ihdr.height, max_pixels);
+
+  size_t size_rgba = 0;
+  if (int error = spng_decoded_image_size(ctx.get(), SPNG_FMT_RGBA8, &size_rgba)) fail_png(name, error);
+  Image image(int(ihdr.width), int(ihdr.height));
+  if (size_rgba != image.pixels.size() * sizeof(Rgba8)) {
+    fail_internal("{}: libspng reports {} bytes for a {}x{} RGBA8 image", name, size_rgba, ihdr.width,
+                  ihdr.height);
+  }
+  // SPNG_FMT_RGBA8 converts every colour type and bit depth (16-bit samples are scaled to 8 bits);
+  // SPNG_DECODE_TRNS turns a tRNS chunk (transparent colour or palette alpha) into alpha. Gamma (gAMA)
+  // is deliberately not applied: texture values are used as stored, as renderers do.
+  // Decoding stops at the end of the zlib stream, whose Adler-32 has then verified every pixel; a file
+  // that lacks only the trailing IEND chunk is therefore accepted, like a JPEG without its EOI marker.
+  if (int error = spng_decode_image(ctx.get(), image.pixels.data(), size_rgba, SPNG_FMT_RGBA8, SPNG_DECODE_TRNS)) {
+    fail_png(name, error);
+  }
+  return image;
+}
+
+bool is_opaque(const Image& image) {
+  return std::all_of(image.pixels.begin(), image.pixels.end(), [](const Rgba8& p) { return p.a == 255; });
+}
+
+void save_png(OutputFile& out, const Image& image) {
+  SpngContext ctx = make_spng_context(SPNG_CTX_ENCODER);
+  const bool opaque = is_opaque(image);
+  spng_ihdr ihdr{};
+  ihdr.width = uint32_t(image.width);
+  ihdr.height = uint32_t(image.height);
+  ihdr.bit_depth = 8;
+  ihdr.color_type = opaque ? SPNG_COLOR_TYPE_TRUECOLOR : SPNG_COLOR_TYPE_TRUECOLOR_ALPHA;
+
+  int error = spng_set_png_file(ctx.get(), out.get());
+  if (error == 0) error = spng_set_ihdr(ctx.get(), &ihdr);
+  if (error == 0) error = spng_set_option(ctx.get(), SPNG_IMG_COMPRESSION_LEVEL, kPngCompressionLevel);
+  if (error == 0) error = spng_set_option(ctx.get(), SPNG_IMG_COMPRESSION_STRATEGY, kPngCompressionStrategy);
+  if (error == 0) error = spng_set_option(ctx.get(), SPNG_FILTER_CHOICE, kPngFilterChoice);
+  // Row by row, so dropping alpha needs one row of scratch memory instead of a copy of the image.
+  if (error == 0) {
+    error = spng_encode_image(ctx.get(), nullptr, 0, SPNG_FMT_PNG, SPNG_ENCODE_PROGRESSIVE | SPNG_ENCODE_FINALIZE);
+  }
+  if (error != 0) out.fail(fmt::format("spng: {}", spng_strerror(error)));
+
+  const size_t width = size_t(image.width);
+  std::vector<unsigned char> rgb_row(opaque ? width * 3 : 0);
+  for (size_t y = 0; y < size_t(image.height); ++y) {
+    const Rgba8* row = image.pixels.data() + y * width;
+    if (opaque) {
+      for (size_t x = 0; x < width; ++x) {
+        rgb_row[3 * x + 0] = row[x].r;
+        rgb_row[3 * x + 1] = row[x].g;
+        rgb_row[3 * x + 2] = row[x].b;
+      }
+      error = spng_encode_row(ctx.get(), rgb_row.data(), rgb_row.size());
+    } else {
+      error = spng_encode_row(ctx.get(), row, width * sizeof(Rgba8));
+    }
+    // SPNG_EOI marks the last row, after which libspng has written IEND (SPNG_ENCODE_FINALIZE).
+    const bool last_row = y + 1 == size_t(image.height);
+    if (error != 0 && !(last_row && error == SPNG_EOI)) out.fail(fmt::format("spng: {}", spng_strerror(error)));
+  }
+}
+
+// ---------------------------------------------------------------------------------------------------
+// JPEG (libjpeg-turbo)
+//
+// libjpeg reports errors through a callback that must not return. Throwing a C++ exception through the
+// C library's frames is undefined (it is built without unwind tables), so the callback longjmps back.
+// longjmp is only well defined if it skips no C++ destructors, so setjmp lives in the small *_guarded
+// functions below, whose frames hold only trivially destructible locals; they return false on error
+// and their callers, ordinary C++ code, then throw. libjpeg state is owned by RAII structs outside them.
+
+struct JpegErrorManager {
+  jpeg_error_mgr pub;  // first member: libjpeg hands us &pub, which we cast back
+  std::jmp_buf jump;
+  char message[JMSG_LENGTH_MAX];
+};
+
+JpegErrorManager& error_manager(j_common_ptr cinfo) { return *reinterpret_cast<JpegErrorManager*>(cinfo->err); }
+
+[[noreturn]] void jpeg_fail(j_common_ptr cinfo) {
+  JpegErrorManager& err = error_manager(cinfo);
+  (*err.pub.format_message)(cinfo, err.message);
+  std::longjmp(err.jump, 1);
+}
+
+// libjpeg treats damaged entropy data as a warning: it fills the rest of the image with grey and carries
+// on. A truncated or corrupt texture must not pass silently, so those warnings are made fatal. Benign
+// ones (extra bytes between markers, an unknown JFIF revision) are ignored, as is trace output.
+void jpeg_message(j_common_ptr cinfo, int msg_level) {
+  if (msg_level >= 0) return;
+  switch (cinfo->err->msg_code) {
+#if JPEG_LIB_VERSION >= 70 || defined(D_ARITH_CODING_SUPPORTED)
+    case JWRN_ARITH_BAD_CODE:  // declared by jerror.h only when arithmetic decoding is built in
+#endif
+    case JWRN_BOGUS_PROGRESSION:
+    case JWRN_HIT_MARKER:
+    case JWRN_HUFF_BAD_CODE:
+    case JWRN_JPEG_EOF:
+    case JWRN_MUST_RESYNC:
+    case JWRN_NOT_SEQUENTIAL:
+      jpeg_fail(cinfo);
+    default:
+      cinfo->err->num_warnings++;
+  }
+}
+
+void jpeg_progress(j_common_ptr cinfo) {
+  if (!cinfo->is_decompressor) return;
+  const int scan = reinterpret_cast<j_decompress_ptr>(cinfo)->input_scan_number;
+  if (scan > kMaxJpegScans) {
+    JpegErrorManager& err = error_manager(cinfo);
+    std::snprintf(err.message, sizeof(err.message), "more than %d progressive scans", kMaxJpegScans);
+    std::longjmp(err.jump, 1);
+  }
+}
+
+void install_error_handlers(JpegErrorManager& err) {
+  jpeg_std_error(&err.pub);
+  err.pub.error_exit = jpeg_fail;
+  err.pub.emit_message = jpeg_message;
+  err.message[0] = '\0';
+}
+
+struct JpegDecoder {
+  jpeg_decompress_struct cinfo{};  // zeroed, so destroying it is safe even if creation failed
+  JpegErrorManager err{};
+  jpeg_progress_mgr progress{};
+  ~JpegDecoder() { jpeg_destroy_decompress(&cinfo); }
+};
+
+bool jpeg_read_header_guarded(JpegDecoder& d, const unsigned char* data, size_t size) {
+  install_error_handlers(d.err);
+  d.cinfo.err = &d.err.pub;
+  if (setjmp(d.err.jump)) return false;
+  jpeg_create_decompress(&d.cinfo);
+  d.progress.progress_monitor = jpeg_progress;
+  d.cinfo.progress = &d.progress;
+  jpeg_mem_src(&d.cinfo, data, static_cast<unsigned long>(size));
+  jpeg_read_header(&d.cinfo, TRUE);
+  return true;
+}
+
+// Decodes into `out` (width * height pixels). For CMYK/YCCK input the four bytes per pixel are C, M, Y, K
+// and the caller converts them.
+bool jpeg_decompress_guarded(JpegDecoder& d, Rgba8* out, bool cmyk) {
+  if (setjmp(d.err.jump)) return false;
+  d.cinfo.out_color_space = cmyk ? JCS_CMYK : JCS_EXT_RGBA;  // libjpeg-turbo sets alpha to 255
+  jpeg_start_decompress(&d.cinfo);
+  if (d.cinfo.output_width != d.cinfo.image_width || d.cinfo.output_height != d.cinfo.image_height ||
+      d.cinfo.output_components != 4) {
+    std::snprintf(d.err.message, sizeof(d.err.message), "unexpected decoder output layout");
+    return false;
+  }
+  const size_t width = d.cinfo.output_width;
+  while (d.cinfo.output_scanline < d.cinfo.output_height) {
+    constexpr JDIMENSION kRowsPerCall = 8;
+    JSAMPROW rows[kRowsPerCall];
+    const JDIMENSION first = d.cinfo.output_scanline;
+    const JDIMENSION count = std::min(kRowsPerCall, d.cinfo.output_height - first);
+    for (JDIMENSION i = 0; i < count; ++i) rows[i] = reinterpret_cast<JSAMPROW>(out + (size_t(first) + i) * width);
+    // A memory source never suspends, so zero rows means the decoder is stuck: stop rather than spin.
+    if (jpeg_read_scanlines(&d.cinfo, rows, count) == 0) {
+      std::snprintf(d.err.message, sizeof(d.err.message), "decoder made no progress");
+      return false;
+    }
+  }
+  // jpeg_finish_decompress is skipped on purpose: it only checks that an EOI marker follows the image
+  // data, and files that lack it but are otherwise complete are common and harmless.
+  return true;
+}
+
+// CMYK as Adobe writes it (the only common source) stores inverted values, 255 meaning no ink; libjpeg
+// records an Adobe APP14 marker in saw_Adobe_marker. Plain CMYK stores ink amounts. This is the
+// naive conversion without a colour profile, the same as browsers use when no ICC profile is given.
+void cmyk_to_rgb(Image& image, bool adobe_inverted) {
+  for (Rgba8& p : image.pixels) {
+    int c = p.r, m = p.g, y = p.b, k = p.a;
+    if (!adobe_inverted) {
+      c = 255 - c;
+      m = 255 - m;
+      y = 255 - y;
+      k = 255 - k;
+    }
+    p = Rgba8{uint8_t((c * k + 127) / 255), uint8_t((m * k + 127) / 255), uint8_t((y * k + 127) / 255), 255};
+  }
+}
+
+Image decode_jpeg(const unsigned char* data, size_t size, const std::string& name, size_t max_pixels) {
+  JpegDecoder decoder;
+  if (!jpeg_read_header_guarded(decoder, data, size)) {
+    fail_input("{}: corrupt JPEG (libjpeg: {})", name, decoder.err.message);
+  }
+  const jpeg_decompress_struct& cinfo = decoder.cinfo;
+  bool cmyk = false;
+  switch (cinfo.jpeg_color_space) {
+    case JCS_GRAYSCALE:
+    case JCS_YCbCr:
+    case JCS_RGB:
+      break;
+    case JCS_CMYK:
+    case JCS_YCCK:
+      cmyk = true;
+      break;
+    default:
+      fail_input("{}: unsupported JPEG colour space ({} components, colour space {})", name,
+                 cinfo.num_components, int(cinfo.jpeg_color_space));
+  }
+  check_dimensions(name, "JPEG", cinfo.image_width, cinfo.image_height, max_pixels);
+
+  Image image(int(cinfo.image_width), int(cinfo.image_height));
+  if (!jpeg_decompress_guarded(decoder, image.pixels.data(), cmyk)) {
+    fail_input("{}: corrupt JPEG (libjpeg: {})", name, decoder.err.message);
+  }
+  if (cmyk) cmyk_to_rgb(image, cinfo.saw_Adobe_marker != 0);
+  return image;
+}
+
+struct JpegEncoder {
+  jpeg_compress_struct cinfo{};
+  JpegErrorManager err{};
+  ~JpegEncoder() { jpeg_destroy_compress(&cinfo); }
+};
+
+bool jpeg_encode_guarded(JpegEncoder& e, std::FILE* file, const Image& image, int quality) {
+  install_error_handlers(e.err);
+  e.cinfo.err = &e.err.pub;
+  if (setjmp(e.err.jump)) return false;
+  jpeg_create_compress(&e.cinfo);
+  jpeg_stdio_dest(&e.cinfo, file);
+  e.cinfo.image_width = JDIMENSION(image.width);
+  e.cinfo.image_height = JDIMENSION(image.height);
+  // libjpeg-turbo reads RGBA directly and ignores the fourth byte, so no RGB copy of the image is made.
+  e.cinfo.input_components = 4;
+  e.cinfo.in_color_space = JCS_EXT_RGBA;
+  jpeg_set_defaults(&e.cinfo);  // YCbCr, 4:2:0, Huffman tables optimised off, islow DCT
+  jpeg_set_quality(&e.cinfo, quality, TRUE);
+  if (quality >= kJpegFullChromaQuality) {
+    e.cinfo.comp_info[0].h_samp_factor = 1;
+    e.cinfo.comp_info[0].v_samp_factor = 1;
+  }
+  jpeg_start_compress(&e.cinfo, TRUE);
+  const size_t width = size_t(image.width);
+  while (e.cinfo.next_scanline < e.cinfo.image_height) {
+    // libjpeg's API takes non-const rows but only reads them.
+    JSAMPROW row = reinterpret_cast<JSAMPROW>(const_cast<Rgba8*>(image.pixels.data() + e.cinfo.next_scanline * width));
+    jpeg_write_scanlines(&e.cinfo, &row, 1);
+  }
+  jpeg_finish_compress(&e.cinfo);  // flushes; a failed fwrite raises JERR_FILE_WRITE here
+  return true;
+}
+
+void save_jpeg(OutputFile& out, const Image& image, int quality) {
+  // libjpeg's format limit (JPEG_MAX_DIMENSION); checked here to give a clear message.
+  constexpr int kMaxJpegSide = 65500;
+  if (image.width > kMaxJpegSide || image.height > kMaxJpegSide) {
+    out.fail(fmt::format("{}x{} is larger than JPEG allows ({} pixels a side)", image.width, image.height,
+                         kMaxJpegSide));
+  }
+  JpegEncoder encoder;
+  if (!jpeg_encode_guarded(encoder, out.get(), image, quality)) out.fail(fmt::format("libjpeg: {}", encoder.err.message));
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Everything else (stb_image)
+
+const char* stb_reason() {
+  const char* reason = stbi_failure_reason();
+  return reason != nullptr ? reason : "unknown error";
+}
+
+struct StbImageDeleter {
+  void operator()(stbi_uc* pixels) const { stbi_image_free(pixels); }
+};
+
+Image decode_with_stb(const unsigned char* data, size_t size, const std::string& name, size_t max_pixels) {
+  if (size > size_t(INT_MAX)) fail_input("{}: unrecognised image format", name);
+  int width = 0, height = 0, channels = 0;
+  // stbi_info parses only the header, so the size check happens before any pixel memory is allocated.
+  if (!stbi_info_from_memory(data, int(size), &width, &height, &channels)) {
+    fail_input("{}: unrecognised image format (not PNG or JPEG, and stb_image cannot read it: {})", name, stb_reason());
+  }
+  check_dimensions(name, "image", uint64_t(std::max(width, 0)), uint64_t(std::max(height, 0)), max_pixels);
+  std::unique_ptr<stbi_uc, StbImageDeleter> pixels(
+      stbi_load_from_memory(data, int(size), &width, &height, &channels, 4));
+  if (pixels == nullptr) fail_input("{}: corrupt image (stb_image: {})", name, stb_reason());
+  check_dimensions(name, "image", uint64_t(std::max(width, 0)), uint64_t(std::max(height, 0)), max_pixels);
+  Image image(width, height);
+  std::memcpy(image.pixels.data(), pixels.get(), image.pixels.size() * sizeof(Rgba8));
+  return image;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------------
+
+Image load_image(const std::string& path, size_t max_pixels) {
+  const std::vector<unsigned char> data = read_whole_file(path);
+  return decode_image(data.data(), data.size(), path, max_pixels);
+}
+
+Image decode_image(const unsigned char* data, size_t size, const std::string& name, size_t max_pixels) {
+  if (data == nullptr || size == 0) fail_input("{}: no image data (empty)", name);
+  // Detected by content, not by extension: textures named .png that hold JPEG data are common.
+  if (is_png(data, size)) return decode_png(data, size, name, max_pixels);
+  if (is_jpeg(data, size)) return decode_jpeg(data, size, name, max_pixels);
+  return decode_with_stb(data, size, name, max_pixels);
+}
+
+void save_image(const std::string& path, const Image& image, ImageFormat format, int jpeg_quality) {
+  if (image.empty() || image.pixels.size() != size_t(image.width) * size_t(image.height)) {
+    fail_internal("{}: cannot save a {}x{} image with {} pixels", path, image.width, image.height,
+                  image.pixels.size());
+  }
+  if (format == ImageFormat::kJpeg && (jpeg_quality < 1 || jpeg_quality > 100)) {
+    fail_input("{}: JPEG quality {} is outside 1..100", path, jpeg_quality);
+  }
+  OutputFile out(path);
+  switch (format) {
+    case ImageFormat::kPng:
+      save_png(out, image);
+      break;
+    case ImageFormat::kJpeg:
+      save_jpeg(out, image, jpeg_quality);
+      break;
+  }
+  out.commit();
+}
+
+}  // namespace tightex

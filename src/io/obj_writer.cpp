@@ -1,0 +1,150 @@
+#include "io/obj_writer.hpp"
+
+#include <charconv>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <unordered_map>
+#include <unistd.h>
+
+#include "core/error.hpp"
+
+namespace tightex {
+
+namespace fs = std::filesystem;
+
+std::string format_double(double value) {
+  char buf[32];
+  auto [end, ec] = std::to_chars(buf, buf + sizeof buf, value);
+  return std::string(buf, end);
+}
+
+namespace {
+
+struct Vec2Hash {
+  size_t operator()(const std::pair<uint64_t, uint64_t>& k) const { return size_t(k.first * 0x9E3779B97F4A7C15ull ^ k.second); }
+};
+std::pair<uint64_t, uint64_t> key(const Vec2& v) {
+  uint64_t a, b;
+  std::memcpy(&a, &v.x(), 8);
+  std::memcpy(&b, &v.y(), 8);
+  return {a, b};
+}
+
+void append(std::string& s, double v) {
+  char buf[32];
+  auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
+  s.append(buf, end);
+}
+
+void write_file(const fs::path& path, const std::string& text) {
+  std::ofstream f(path, std::ios::binary);
+  if (!f) fail_input("{}: cannot write ({})", path.string(), std::strerror(errno));
+  f.write(text.data(), std::streamsize(text.size()));
+  f.close();
+  if (!f) fail_input("{}: write failed ({})", path.string(), std::strerror(errno));
+}
+
+}  // namespace
+
+void write_obj(const TexturedMesh& mesh, const std::string& outdir, const std::string& name, ImageFormat format) {
+  std::error_code ec;
+  fs::create_directories(outdir, ec);
+  if (!fs::is_directory(outdir)) fail_input("{}: cannot create output directory", outdir);
+  const std::string tag = fmt::format(".tmp{}", ::getpid());
+  std::vector<std::pair<fs::path, fs::path>> pending;  // temporary -> final, in rename order
+  auto temp_for = [&](const std::string& file) {
+    const fs::path final_path = fs::path(outdir) / file;
+    const fs::path tmp = fs::path(outdir) / ("." + file + tag);
+    pending.push_back({tmp, final_path});
+    return tmp;
+  };
+  try {
+    // Texture::path is the file stem; the extension follows the chosen format.
+    std::vector<std::string> tex_name;
+    for (const Texture& tex : mesh.textures) {
+      tex_name.push_back(tex.path + (format == ImageFormat::kPng ? ".png" : ".jpg"));
+      save_image(temp_for(tex_name.back()).string(), tex.image, format);
+    }
+
+    std::string mtl = "# written by tightex\n";
+    for (const Material& m : mesh.materials) {
+      mtl += fmt::format("\nnewmtl {}\nKa 1 1 1\nKd {} {} {}\nKs 0 0 0\nd 1\nillum 1\n", m.name, format_double(m.kd[0]),
+                         format_double(m.kd[1]), format_double(m.kd[2]));
+      if (m.texture >= 0) mtl += fmt::format("map_Kd {}\n", tex_name[size_t(m.texture)]);
+    }
+    write_file(temp_for(name + ".mtl"), mtl);
+
+    std::string obj;
+    obj.reserve(mesh.num_vertices() * 40 + mesh.num_triangles() * 60);
+    obj += fmt::format("# written by tightex: {} vertices, {} triangles\nmtllib {}.mtl\n", mesh.num_vertices(),
+                       mesh.num_triangles(), name);
+    for (const Vec3& p : mesh.positions) {
+      obj += "v ";
+      append(obj, p.x());
+      obj += ' ';
+      append(obj, p.y());
+      obj += ' ';
+      append(obj, p.z());
+      obj += '\n';
+    }
+    std::unordered_map<std::pair<uint64_t, uint64_t>, uint32_t, Vec2Hash> uv_index;
+    std::vector<uint32_t> corner_vt(mesh.corner_uv.size());
+    for (size_t c = 0; c < mesh.corner_uv.size(); ++c) {
+      auto [it, inserted] = uv_index.try_emplace(key(mesh.corner_uv[c]), uint32_t(uv_index.size()));
+      if (inserted) {
+        obj += "vt ";
+        append(obj, mesh.corner_uv[c].x());
+        obj += ' ';
+        append(obj, mesh.corner_uv[c].y());
+        obj += '\n';
+      }
+      corner_vt[c] = it->second;
+    }
+    const bool normals = mesh.corner_normal.size() == mesh.corner_uv.size() && !mesh.corner_normal.empty();
+    std::vector<uint32_t> corner_vn;
+    if (normals) {
+      std::unordered_map<std::string, uint32_t> vn_index;
+      corner_vn.resize(mesh.corner_normal.size());
+      for (size_t c = 0; c < mesh.corner_normal.size(); ++c) {
+        const Vec3& n = mesh.corner_normal[c];
+        std::string line = "vn ";
+        append(line, n.x());
+        line += ' ';
+        append(line, n.y());
+        line += ' ';
+        append(line, n.z());
+        auto [it, inserted] = vn_index.try_emplace(line, uint32_t(vn_index.size()));
+        if (inserted) obj += line + '\n';
+        corner_vn[c] = it->second;
+      }
+    }
+    int32_t current = -2;
+    for (size_t t = 0; t < mesh.num_triangles(); ++t) {
+      if (mesh.face_material[t] != current) {
+        current = mesh.face_material[t];
+        if (current >= 0) obj += fmt::format("usemtl {}\n", mesh.materials[size_t(current)].name);
+      }
+      obj += 'f';
+      for (int k = 0; k < 3; ++k) {
+        const size_t c = 3 * t + size_t(k);
+        if (normals)
+          obj += fmt::format(" {}/{}/{}", mesh.triangles[t][k] + 1, corner_vt[c] + 1, corner_vn[c] + 1);
+        else
+          obj += fmt::format(" {}/{}", mesh.triangles[t][k] + 1, corner_vt[c] + 1);
+      }
+      obj += '\n';
+    }
+    write_file(temp_for(name + ".obj"), obj);
+    for (auto& [tmp, final_path] : pending) {
+      fs::rename(tmp, final_path, ec);
+      if (ec) fail_input("{}: cannot rename into place ({})", final_path.string(), ec.message());
+    }
+  } catch (...) {
+    for (auto& [tmp, final_path] : pending) fs::remove(tmp, ec);
+    throw;
+  }
+}
+
+}  // namespace tightex

@@ -1,0 +1,245 @@
+#include <Eigen/CholmodSupport>
+#include <Eigen/Sparse>
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "core/error.hpp"
+#include "param/param.hpp"
+
+namespace tightex {
+
+namespace {
+
+using SpMat = Eigen::SparseMatrix<double>;
+
+enum class Weights { kCotangent, kClamped, kUniform };
+
+/// Per interior edge (as a halfedge pair, stored on the smaller halfedge) the Laplacian weight.
+std::vector<double> edge_weights(const Surface& m, Weights kind, size_t* negative) {
+  const size_t nh = m.opposite.size();
+  std::vector<double> half_cot(nh, 0.0);  // 1/2 cot of the angle opposite halfedge h in its triangle
+  for (uint32_t h = 0; h < nh; ++h) {
+    const Vec3 &a = m.positions[m.from(h)], &b = m.positions[m.to(h)],
+               &c = m.positions[m.triangles[h / 3][(h % 3 + 2) % 3]];
+    const Vec3 u = a - c, v = b - c;
+    const double cross = u.cross(v).norm();
+    const double dot = u.dot(v);
+    half_cot[h] = cross > 0 ? 0.5 * dot / cross : 0.0;
+  }
+  std::vector<double> w(nh, 0.0);
+  double mean_abs = 0;
+  size_t count = 0, neg = 0;
+  for (uint32_t h = 0; h < nh; ++h) {
+    const uint32_t o = m.opposite[h];
+    if (o != kNone && o < h) continue;
+    w[h] = half_cot[h] + (o == kNone ? 0.0 : half_cot[o]);
+    if (!std::isfinite(w[h])) w[h] = 0;
+    mean_abs += std::abs(w[h]);
+    ++count;
+    neg += w[h] < 0;
+  }
+  if (negative) *negative = neg;
+  mean_abs = count ? mean_abs / double(count) : 1.0;
+  if (!(mean_abs > 0)) mean_abs = 1.0;
+  for (uint32_t h = 0; h < nh; ++h) {
+    const uint32_t o = m.opposite[h];
+    if (o != kNone && o < h) continue;
+    if (kind == Weights::kUniform) w[h] = 1.0;
+    else if (kind == Weights::kClamped) w[h] = std::max(w[h], 1e-3 * mean_abs);
+  }
+  return w;
+}
+
+/// Solves the Dirichlet problem with the boundary fixed at `uv` of boundary vertices.
+bool solve_interior(const Surface& m, const std::vector<double>& w, const std::vector<char>& on_boundary,
+                    std::vector<Vec2>& uv) {
+  const size_t nv = m.num_vertices();
+  std::vector<int> unknown(nv, -1);
+  int n = 0;
+  for (size_t v = 0; v < nv; ++v)
+    if (!on_boundary[v]) unknown[v] = n++;
+  if (n == 0) return true;
+  std::vector<Eigen::Triplet<double>> trips;
+  trips.reserve(size_t(n) * 7);
+  Eigen::MatrixX2d rhs = Eigen::MatrixX2d::Zero(n, 2);
+  std::vector<double> diag(size_t(n), 0.0);
+  for (uint32_t h = 0; h < m.opposite.size(); ++h) {
+    const uint32_t o = m.opposite[h];
+    if (o == kNone || o < h) continue;  // boundary edges join two fixed vertices
+    const uint32_t a = m.from(h), b = m.to(h);
+    const double wt = w[h];
+    const int ia = unknown[a], ib = unknown[b];
+    if (ia >= 0) diag[size_t(ia)] += wt;
+    if (ib >= 0) diag[size_t(ib)] += wt;
+    if (ia >= 0 && ib >= 0) {
+      trips.emplace_back(std::max(ia, ib), std::min(ia, ib), -wt);  // lower triangle only
+    } else if (ia >= 0) {
+      rhs.row(ia) += wt * uv[b].transpose();
+    } else if (ib >= 0) {
+      rhs.row(ib) += wt * uv[a].transpose();
+    }
+  }
+  for (int i = 0; i < n; ++i) trips.emplace_back(i, i, diag[size_t(i)]);
+  SpMat A(n, n);
+  A.setFromTriplets(trips.begin(), trips.end());
+  Eigen::CholmodSupernodalLLT<SpMat, Eigen::Lower> solver;
+  solver.compute(A);
+  if (solver.info() != Eigen::Success) return false;
+  Eigen::MatrixX2d x = solver.solve(rhs);
+  if (solver.info() != Eigen::Success || !x.allFinite()) return false;
+  for (size_t v = 0; v < nv; ++v)
+    if (unknown[v] >= 0) uv[v] = x.row(unknown[v]).transpose();
+  return true;
+}
+
+}  // namespace
+
+size_t count_folds(const Surface& mesh, const std::vector<Vec2>& uv) {
+  size_t folds = 0;
+  for (const Tri& f : mesh.triangles) folds += !(signed_area(uv[f[0]], uv[f[1]], uv[f[2]]) > 0);
+  return folds;
+}
+
+std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& options, SquareMapStats* stats) {
+  SquareMapStats st;
+  const Surface& m = disk.mesh;
+  const auto& bnd = disk.boundary;
+  const size_t nb = bnd.size();
+  std::vector<Vec2> uv(m.num_vertices(), Vec2::Zero());
+  if (nb < 3) fail_internal("map_to_square: boundary has {} vertices", nb);
+
+  // Arc length along the boundary.
+  std::vector<double> arc(nb + 1, 0.0);
+  for (size_t i = 0; i < nb; ++i) arc[i + 1] = arc[i] + (m.positions[bnd[(i + 1) % nb]] - m.positions[bnd[i]]).norm();
+  const double total = arc[nb];
+  // Ears: boundary vertices with one triangle.
+  std::vector<uint32_t> face_count(m.num_vertices(), 0);
+  for (const Tri& f : m.triangles)
+    for (uint32_t v : f) face_count[v]++;
+  std::vector<size_t> ears;
+  for (size_t i = 0; i < nb; ++i)
+    if (face_count[bnd[i]] == 1) ears.push_back(i);
+
+  std::array<size_t, 4> corner{};
+  if (nb == 3) {
+    corner = {0, 1, 2, 2};  // a lone triangle: three corners, the fourth side has no edge
+  } else {
+    const size_t start = ears.empty() ? 0 : ears[0];
+    corner[0] = start;
+    for (int k = 1; k < 4; ++k) {
+      const double target = std::fmod(arc[start] + total * k / 4.0, total);
+      auto dist_to = [&](size_t i) {
+        const double d = std::abs(arc[i] - target);
+        return std::min(d, total - d);
+      };
+      size_t best = 0;
+      for (size_t i = 0; i < nb; ++i)
+        if (dist_to(i) < dist_to(best)) best = i;
+      for (size_t e : ears)
+        if (dist_to(e) < 0.05 * total && dist_to(e) < dist_to(best) + 0.05 * total) {
+          best = e;
+          break;
+        }
+      corner[k] = best;
+    }
+    // Corners must be distinct and in boundary order; fall back to index quarters otherwise.
+    auto rel = [&](size_t i) { return (i + nb - start) % nb; };
+    bool ok = true;
+    for (int k = 1; k < 4; ++k) ok = ok && rel(corner[k]) > rel(corner[k - 1]);
+    if (!ok)
+      for (int k = 1; k < 4; ++k) corner[k] = (start + k * nb / 4) % nb;
+  }
+  for (int k = 0; k < 4; ++k) st.corners[k] = bnd[corner[k]];
+
+  // Alg. 1: each side by arc length between its corners.
+  static const Vec2 kCorner[4] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  std::vector<char> on_boundary(m.num_vertices(), 0);
+  std::vector<int> side_of(nb, 0);
+  std::vector<double> side_t(nb, 0.0);
+  for (int k = 0; k < 4; ++k) {
+    const size_t a = corner[k], b = corner[(k + 1) % 4];
+    const size_t len = (b + nb - a) % nb;
+    if (len == 0) continue;
+    auto arc_from_a = [&](size_t i) {
+      const double d = arc[i] - arc[a];
+      return d < 0 ? d + total : d;
+    };
+    const double side_len = (b == a) ? total : (arc_from_a(b) > 0 ? arc_from_a(b) : total);
+    for (size_t j = 0; j < len; ++j) {
+      const size_t i = (a + j) % nb;
+      const double t = side_len > 0 ? arc_from_a(i) / side_len : double(j) / double(len);
+      uv[bnd[i]] = (1 - t) * kCorner[k] + t * kCorner[(k + 1) % 4];
+      side_of[i] = k;
+      side_t[i] = t;
+    }
+  }
+  if (nb == 3) uv[bnd[2]] = kCorner[2];
+  for (uint32_t v : bnd) on_boundary[v] = 1;
+
+  // Bumps over chords whose two ends lie on the same side.
+  if (nb > 4) {
+    std::vector<int> bindex(m.num_vertices(), -1);
+    for (size_t i = 0; i < nb; ++i) bindex[bnd[i]] = int(i);
+    std::vector<std::vector<std::pair<size_t, size_t>>> intervals(4);  // per side, offsets from its corner
+    auto offset = [&](int k, size_t i) { return (i + nb - corner[k]) % nb; };
+    auto side_len_idx = [&](int k) { return (corner[(k + 1) % 4] + nb - corner[k]) % nb; };
+    for (uint32_t h = 0; h < m.opposite.size(); ++h) {
+      const uint32_t o = m.opposite[h];
+      if (o == kNone || o < h) continue;
+      const int ia = bindex[m.from(h)], ib = bindex[m.to(h)];
+      if (ia < 0 || ib < 0) continue;
+      for (int k = 0; k < 4; ++k) {
+        const size_t L = side_len_idx(k), pa = offset(k, size_t(ia)), pb = offset(k, size_t(ib));
+        if (pa <= L && pb <= L && std::max(pa, pb) - std::min(pa, pb) >= 2)
+          intervals[k].push_back({std::min(pa, pb), std::max(pa, pb)});
+      }
+    }
+    for (int k = 0; k < 4; ++k) {
+      auto& iv = intervals[k];
+      if (iv.empty()) continue;
+      std::sort(iv.begin(), iv.end());
+      const bool horizontal = (k % 2 == 0);
+      const double h = options.bump_texels / double(std::max(1, (horizontal ? options.rect_height : options.rect_width) - 1));
+      const Vec2 outward = k == 0 ? Vec2(0, -1) : k == 1 ? Vec2(1, 0) : k == 2 ? Vec2(0, 1) : Vec2(-1, 0);
+      const Vec2 along = kCorner[(k + 1) % 4] - kCorner[k];
+      size_t lo = iv[0].first, hi = iv[0].second;
+      auto bump = [&](size_t lo_, size_t hi_) {
+        const size_t ia = (corner[k] + lo_) % nb, ib = (corner[k] + hi_) % nb;
+        const double ta = lo_ == 0 ? 0.0 : side_t[ia], tb = hi_ == side_len_idx(k) ? 1.0 : side_t[ib];
+        for (size_t p = lo_ + 1; p < hi_; ++p) {
+          const size_t i = (corner[k] + p) % nb;
+          const double s = (side_t[i] - ta) / std::max(tb - ta, 1e-300);
+          uv[bnd[i]] = kCorner[k] + side_t[i] * along + h * std::sin(std::numbers::pi * std::clamp(s, 0.0, 1.0)) * outward;
+          st.bumped_vertices++;
+        }
+      };
+      for (size_t j = 1; j < iv.size(); ++j) {
+        if (iv[j].first < hi) {
+          hi = std::max(hi, iv[j].second);
+        } else {
+          bump(lo, hi);
+          lo = iv[j].first, hi = iv[j].second;
+        }
+      }
+      bump(lo, hi);
+    }
+  }
+
+  // Alg. 2 with the fold-free fallbacks.
+  const std::vector<Vec2> boundary_uv = uv;
+  for (Weights kind : {Weights::kCotangent, Weights::kClamped, Weights::kUniform}) {
+    size_t negative = 0;
+    const auto w = edge_weights(m, kind, &negative);
+    if (kind == Weights::kCotangent) st.negative_weights = negative;
+    uv = boundary_uv;
+    if (!solve_interior(m, w, on_boundary, uv)) continue;
+    st.flipped = count_folds(m, uv);
+    st.weights = kind == Weights::kCotangent ? "cotangent" : kind == Weights::kClamped ? "clamped-cotangent" : "uniform";
+    if (st.flipped == 0) break;
+  }
+  if (stats) *stats = st;
+  return uv;
+}
+
+}  // namespace tightex

@@ -1,0 +1,206 @@
+// The whole method, stage after stage. Each stage lives in its own folder; this file only wires them
+// together, keeps the maps back to the input triangles, and records what each stage did and cost.
+#include <sys/resource.h>
+#include <tbb/parallel_for.h>
+
+#include <chrono>
+#include <cmath>
+#include <numeric>
+
+#include "bake/bake.hpp"
+#include "core/error.hpp"
+#include "layout/layout.hpp"
+#include "param/param.hpp"
+#include "repair/repair.hpp"
+#include "report/metrics.hpp"
+#include "tightex/tightex.hpp"
+
+namespace tightex {
+
+namespace {
+
+double peak_rss_mib() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_maxrss) / 1024.0;
+}
+
+class StageClock {
+ public:
+  explicit StageClock(nlohmann::json& out) : out_(out), last_(std::chrono::steady_clock::now()) {}
+  void done(const char* stage) {
+    const auto now = std::chrono::steady_clock::now();
+    out_.push_back({{"stage", stage}, {"seconds", std::chrono::duration<double>(now - last_).count()}, {"peak_rss_mib", peak_rss_mib()}});
+    last_ = now;
+  }
+
+ private:
+  nlohmann::json& out_;
+  std::chrono::steady_clock::time_point last_;
+};
+
+}  // namespace
+
+Result optimize(const TexturedMesh& input, const Options& options) {
+  auto progress = [&](std::string_view stage, double f) {
+    if (options.progress) options.progress(stage, f);
+  };
+  if (options.size < 8 || options.size > 65536) fail_input("--size {} is out of range (8..65536)", options.size);
+  Result result;
+  nlohmann::json& rep = result.report;
+  nlohmann::json timings = nlohmann::json::array();
+  StageClock clock(timings);
+
+  // 1. Repair (§4.1): weld, drop degenerate and duplicate triangles, slice non-manifold elements.
+  progress("repair", 0);
+  RepairStats rs;
+  const Surface surface = prepare_surface(input, &rs);
+  if (surface.num_faces() == 0)
+    fail_input("{}: no triangle with non-zero area ({} zero-area, {} duplicate)", input.source, rs.zero_area_triangles, rs.duplicate_triangles);
+  clock.done("repair");
+
+  // 2. Components, holes, cut to a disk.
+  progress("cut", 0);
+  const std::vector<Surface> components = split_components(surface);
+  const size_t nc = components.size();
+  std::vector<Disk> disks(nc);
+  std::vector<CutStats> cut_stats(nc);
+  std::vector<double> areas(nc, 0.0);
+  tbb::parallel_for(size_t(0), nc, [&](size_t c) {
+    disks[c] = cut_to_disk(components[c], options.holes, &cut_stats[c]);
+    for (const Tri& f : components[c].triangles)
+      areas[c] += triangle_area(components[c].positions[f[0]], components[c].positions[f[1]], components[c].positions[f[2]]);
+  });
+  clock.done("cut");
+
+  // 3. Layout: a rectangle of texels per component.
+  std::vector<Rect> rects;
+  int num_images = 1;
+  std::vector<std::pair<int, int>> image_size;
+  if (options.layout == Layout::kAtlas) {
+    rects = layout_atlas(areas, options.size, options.size);
+    image_size.push_back({options.size, options.size});
+  } else {
+    rects = layout_per_component(areas, options.size);
+    num_images = int(nc);
+    for (const Rect& r : rects) image_size.push_back({r.w, r.h});
+  }
+
+  // 4. Harmonic map of each disk onto the unit square (§4.2).
+  progress("map", 0);
+  std::vector<std::vector<Vec2>> uv(nc);
+  std::vector<SquareMapStats> map_stats(nc);
+  std::vector<size_t> order(nc);
+  std::iota(order.begin(), order.end(), 0);
+  tbb::parallel_for(size_t(0), nc, [&](size_t c) {
+    SquareMapOptions mo;
+    mo.rect_width = rects[c].w;
+    mo.rect_height = rects[c].h;
+    uv[c] = map_to_square(disks[c], mo, &map_stats[c]);
+  });
+  clock.done("map");
+
+  // 5. Output model: the input's positions and triangles (same corners, same winding), new UVs.
+  TexturedMesh& out = result.output;
+  out.source = input.source;
+  out.positions = input.positions;
+  const bool normals = !input.corner_normal.empty();
+  std::vector<BakeTriangle> bake_tris;
+  bake_tris.reserve(input.num_triangles());
+  std::vector<std::vector<uint32_t>> by_component(nc);
+  for (size_t c = 0; c < nc; ++c) {
+    const Rect& r = rects[c];
+    const auto [W, H] = image_size[size_t(r.image)];
+    const Disk& d = disks[c];
+    for (uint32_t f = 0; f < d.mesh.num_faces(); ++f) {
+      const uint32_t cf = d.mesh.face_parent[f];
+      if (cf == kNone) continue;  // scaffolding
+      const uint32_t t = surface.face_parent[components[c].face_parent[cf]];
+      BakeTriangle bt;
+      bt.image = uint32_t(r.image);
+      bt.material = input.face_material[t];
+      out.triangles.push_back(input.triangles[t]);
+      for (int k = 0; k < 3; ++k) {
+        const Vec2& s = uv[c][d.mesh.triangles[f][k]];
+        const Vec2 px(r.x + 0.5 + s.x() * (r.w - 1), r.y + 0.5 + (1.0 - s.y()) * (r.h - 1));
+        bt.target_px[k] = px;
+        bt.source_uv[k] = input.sampled_uv(t, k);
+        out.corner_uv.push_back(Vec2(px.x() / W, 1.0 - px.y() / H));
+        if (normals) out.corner_normal.push_back(input.corner_normal[3 * t + size_t(k)]);
+      }
+      out.face_material.push_back(int32_t(r.image));
+      bake_tris.push_back(bt);
+    }
+  }
+  const std::string stem = [&] {
+    std::string s = input.source;
+    const size_t slash = s.find_last_of('/');
+    if (slash != std::string::npos) s = s.substr(slash + 1);
+    const size_t dot = s.find_last_of('.');
+    return dot == std::string::npos || dot == 0 ? s : s.substr(0, dot);
+  }();
+  for (int i = 0; i < num_images; ++i) {
+    Texture tex;
+    tex.path = num_images == 1 ? stem + "_tightex" : fmt::format("{}_tightex_{}", stem, i);
+    tex.image = Image(image_size[size_t(i)].first, image_size[size_t(i)].second, Rgba8{0, 0, 0, 255});
+    out.textures.push_back(std::move(tex));
+    Material m;
+    m.name = num_images == 1 ? "tightex" : fmt::format("tightex_{}", i);
+    m.texture = i;
+    out.materials.push_back(m);
+  }
+
+  // 6. Bake the new texture (§4.3).
+  progress("bake", 0);
+  std::vector<Image> images;
+  for (Texture& t : out.textures) images.push_back(std::move(t.image));
+  BakeStats bs;
+  bake_texture(input, bake_tris, rects, images, &bs);
+  for (size_t i = 0; i < images.size(); ++i) out.textures[i].image = std::move(images[i]);
+  clock.done("bake");
+
+  // 7. Report.
+  progress("measure", 0);
+  const Metrics metrics = measure(input, out);
+  clock.done("measure");
+
+  rep["input"] = {{"file", input.source}, {"vertices", input.num_vertices()}, {"triangles", input.num_triangles()},
+                  {"materials", input.materials.size()}, {"textures", input.textures.size()}};
+  rep["options"] = {{"size", options.size}, {"layout", options.layout == Layout::kAtlas ? "atlas" : "per-component"},
+                    {"holes", options.holes == HoleMode::kFill ? "fill" : "cut"}, {"map", "harmonic"}};
+  rep["preparation"] = {{"input_vertices", rs.input_vertices},       {"welded_vertices", rs.welded_vertices},
+                        {"zero_area_dropped", rs.zero_area_triangles}, {"duplicates_dropped", rs.duplicate_triangles},
+                        {"non_manifold_edges_sliced", rs.non_manifold_edges}, {"inconsistent_edges_sliced", rs.inconsistent_edges},
+                        {"vertices_sliced", rs.sliced_vertices}, {"slits_closed", rs.slits_closed},      {"components", nc}};
+  nlohmann::json comps = nlohmann::json::array();
+  size_t holes_filled = 0;
+  for (size_t c = 0; c < nc; ++c) {
+    const CutStats& cs = cut_stats[c];
+    holes_filled += cs.holes_filled;
+    comps.push_back({{"triangles", components[c].num_faces()},
+                     {"area", areas[c]},
+                     {"euler", cs.before.euler()},
+                     {"boundary_loops", cs.before.boundary_loops},
+                     {"genus", cs.before.genus()},
+                     {"holes_filled", cs.holes_filled},
+                     {"holes_cut", cs.holes_cut},
+                     {"cut", cs.method},
+                     {"cut_edges", cs.cut_edges},
+                     {"cut_length", cs.cut_length},
+                     {"weights", map_stats[c].weights},
+                     {"negative_cotangent_weights", map_stats[c].negative_weights},
+                     {"bumped_boundary_vertices", map_stats[c].bumped_vertices},
+                     {"flipped_in_map", map_stats[c].flipped},
+                     {"rect", {{"image", rects[c].image}, {"x", rects[c].x}, {"y", rects[c].y}, {"w", rects[c].w}, {"h", rects[c].h}}}});
+  }
+  rep["preparation"]["holes_filled"] = holes_filled;
+  rep["components"] = comps;
+  rep["bake"] = {{"texels_filled", bs.texels_filled}, {"texels_dilated", bs.texels_dilated}};
+  rep["metrics"] = to_json(metrics);
+  rep["timings"] = timings;
+  rep["peak_rss_mib"] = peak_rss_mib();
+  progress("done", 1);
+  return result;
+}
+
+}  // namespace tightex

@@ -1,0 +1,156 @@
+#include "repair/repair.hpp"
+
+#include <algorithm>
+#include <cstring>
+#include <unordered_map>
+
+namespace tightex {
+
+namespace {
+
+struct PositionKey {
+  uint64_t x, y, z;
+  bool operator==(const PositionKey&) const = default;
+};
+struct PositionHash {
+  size_t operator()(const PositionKey& k) const {
+    uint64_t h = k.x * 0x9E3779B97F4A7C15ull;
+    h ^= (k.y + 0x632BE59BD9B4E019ull + (h << 6) + (h >> 2));
+    h ^= (k.z + 0x85EBCA77C2B2AE63ull + (h << 6) + (h >> 2));
+    return size_t(h);
+  }
+};
+uint64_t bits(double d) {
+  if (d == 0.0) d = 0.0;  // -0 and +0 are the same place
+  uint64_t b;
+  std::memcpy(&b, &d, sizeof b);
+  return b;
+}
+
+}  // namespace
+
+Surface prepare_surface(const TexturedMesh& mesh, RepairStats* stats) {
+  RepairStats st;
+  st.input_vertices = mesh.num_vertices();
+
+  // 1. Weld equal positions: OBJ exports split vertices along UV seams; the surface is one piece.
+  std::vector<uint32_t> weld(mesh.num_vertices());
+  std::vector<uint32_t> welded_origin;  // welded vertex -> first input vertex
+  {
+    std::unordered_map<PositionKey, uint32_t, PositionHash> index;
+    index.reserve(mesh.num_vertices() * 2);
+    for (uint32_t v = 0; v < mesh.num_vertices(); ++v) {
+      const Vec3& p = mesh.positions[v];
+      auto [it, inserted] = index.try_emplace(PositionKey{bits(p.x()), bits(p.y()), bits(p.z())}, uint32_t(welded_origin.size()));
+      if (inserted) welded_origin.push_back(v);
+      weld[v] = it->second;
+    }
+  }
+  st.welded_vertices = welded_origin.size();
+
+  // 2. Drop zero-area and duplicated triangles.
+  Surface s0;
+  s0.positions.resize(welded_origin.size());
+  for (size_t w = 0; w < welded_origin.size(); ++w) s0.positions[w] = mesh.positions[welded_origin[w]];
+  s0.vertex_parent = welded_origin;
+  {
+    std::vector<std::pair<Tri, uint32_t>> keyed;
+    keyed.reserve(mesh.num_triangles());
+    for (uint32_t t = 0; t < mesh.num_triangles(); ++t) {
+      Tri f{weld[mesh.triangles[t][0]], weld[mesh.triangles[t][1]], weld[mesh.triangles[t][2]]};
+      if (f[0] == f[1] || f[1] == f[2] || f[2] == f[0] ||
+          triangle_area(s0.positions[f[0]], s0.positions[f[1]], s0.positions[f[2]]) == 0.0) {
+        ++st.zero_area_triangles;
+        continue;
+      }
+      // Rotate so the smallest index comes first: equal keys = same triangle, same orientation.
+      const int m = f[0] < f[1] ? (f[0] < f[2] ? 0 : 2) : (f[1] < f[2] ? 1 : 2);
+      keyed.push_back({Tri{f[m], f[(m + 1) % 3], f[(m + 2) % 3]}, t});
+    }
+    std::stable_sort(keyed.begin(), keyed.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::vector<char> keep(mesh.num_triangles(), 0);
+    for (size_t i = 0; i < keyed.size(); ++i) {
+      if (i > 0 && keyed[i].first == keyed[i - 1].first) {
+        ++st.duplicate_triangles;
+        continue;
+      }
+      keep[keyed[i].second] = 1;
+    }
+    for (uint32_t t = 0; t < mesh.num_triangles(); ++t) {
+      if (!keep[t]) continue;
+      s0.triangles.push_back({weld[mesh.triangles[t][0]], weld[mesh.triangles[t][1]], weld[mesh.triangles[t][2]]});
+      s0.face_parent.push_back(t);
+    }
+  }
+
+  // 3. Pair halfedges: an edge joins its two triangles only when exactly two use it, in opposite
+  //    directions. Everything else is sliced (each triangle keeps its own copy of the edge).
+  const size_t nh = 3 * s0.num_faces();
+  s0.opposite.assign(nh, kNone);
+  {
+    std::vector<std::pair<uint64_t, uint32_t>> keyed(nh);
+    for (uint32_t h = 0; h < nh; ++h) {
+      const uint64_t a = s0.from(h), b = s0.to(h);
+      keyed[h] = {std::min(a, b) << 32 | std::max(a, b), h};
+    }
+    std::sort(keyed.begin(), keyed.end());
+    for (size_t i = 0; i < nh;) {
+      size_t j = i + 1;
+      while (j < nh && keyed[j].first == keyed[i].first) ++j;
+      if (j - i == 2) {
+        const uint32_t h = keyed[i].second, o = keyed[i + 1].second;
+        if (s0.from(h) == s0.to(o)) {
+          s0.opposite[h] = o;
+          s0.opposite[o] = h;
+        } else {
+          ++st.inconsistent_edges;
+        }
+      } else if (j - i > 2) {
+        ++st.non_manifold_edges;
+      }
+      i = j;
+    }
+  }
+
+  // 4. Slice vertices: one copy per fan of corners that stays connected through paired edges. This
+  //    separates bowtie vertices and the ends of sliced edges alike.
+  uint32_t groups = 0;
+  const auto corner_vertex = group_corners(s0, [](uint32_t) { return true; }, &groups);
+  Surface s = regroup(s0, corner_vertex, groups);
+  // regroup maps to s0's vertices and faces; compose with s0's maps so they point at the input.
+  std::vector<uint32_t> copies(s0.num_vertices(), 0);
+  for (uint32_t v = 0; v < s.num_vertices(); ++v) {
+    copies[s.vertex_parent[v]]++;
+    s.vertex_parent[v] = s0.vertex_parent[s.vertex_parent[v]];
+  }
+  for (uint32_t c : copies) st.sliced_vertices += c > 1;
+  for (uint32_t t = 0; t < s.num_faces(); ++t) s.face_parent[t] = s0.face_parent[t];
+
+  // 5. Close slits. Slicing an edge shared by several sheets can leave a sheet whose fan around each
+  //    end vertex is whole but open along that edge: two boundary halfedges a->b and b->a with the same
+  //    vertex copies. They are the two ends of one fan chain, so pairing them restores a manifold disk.
+  {
+    std::vector<std::pair<uint64_t, uint32_t>> open;
+    for (uint32_t h = 0; h < s.opposite.size(); ++h)
+      if (s.opposite[h] == kNone) open.push_back({uint64_t(s.from(h)) << 32 | s.to(h), h});
+    std::sort(open.begin(), open.end());
+    auto unique_find = [&](uint64_t key) -> uint32_t {
+      auto it = std::lower_bound(open.begin(), open.end(), std::pair<uint64_t, uint32_t>{key, 0});
+      if (it == open.end() || it->first != key) return kNone;
+      if (std::next(it) != open.end() && std::next(it)->first == key) return kNone;
+      return it->second;
+    };
+    for (auto [key, h] : open) {
+      if (s.opposite[h] != kNone) continue;
+      const uint32_t g = unique_find((key & 0xffffffffu) << 32 | (key >> 32));
+      if (g == kNone || s.opposite[g] != kNone || unique_find(key) != h) continue;
+      s.opposite[h] = g;
+      s.opposite[g] = h;
+      ++st.slits_closed;
+    }
+  }
+  if (stats) *stats = st;
+  return s;
+}
+
+}  // namespace tightex

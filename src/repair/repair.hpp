@@ -1,0 +1,26 @@
+// Data preparation, first half (paper §4.1): make the input a clean manifold surface.
+#pragma once
+#include <cstddef>
+
+#include "core/surface.hpp"
+
+namespace tightex {
+
+struct RepairStats {
+  size_t input_vertices = 0;
+  size_t welded_vertices = 0;       // vertices after welding equal positions
+  size_t zero_area_triangles = 0;   // dropped: repeated vertex or exactly zero 3D area
+  size_t duplicate_triangles = 0;   // dropped: same three vertices in the same cyclic order as an earlier one
+  size_t non_manifold_edges = 0;    // edges used by more than two triangles, sliced apart
+  size_t inconsistent_edges = 0;    // edges whose two triangles disagree on orientation, sliced apart
+  size_t sliced_vertices = 0;       // welded vertices that became more than one vertex
+  size_t slits_closed = 0;          // sliced edges glued back within one sheet (see prepare_surface)
+};
+
+/// Welds vertices with bit-equal positions, drops zero-area and duplicated triangles, and slices every
+/// non-manifold edge and vertex (and every edge whose two triangles are oriented inconsistently, so a
+/// Mobius strip becomes an orientable strip). No triangle with area is ever dropped.
+/// Returns a manifold surface; face_parent maps to input triangles, vertex_parent to input vertices.
+Surface prepare_surface(const TexturedMesh& mesh, RepairStats* stats);
+
+}  // namespace tightex

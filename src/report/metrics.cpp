@@ -1,0 +1,434 @@
+#include "report/metrics.hpp"
+
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <unordered_map>
+
+#include "core/surface.hpp"
+
+namespace tightex {
+
+namespace {
+
+uint64_t bits(double d) {
+  if (d == 0.0) d = 0.0;
+  uint64_t b;
+  std::memcpy(&b, &d, 8);
+  return b;
+}
+
+/// Vertex ids by bit-equal position, so models with split vertices compare as surfaces.
+std::vector<uint32_t> weld_positions(const TexturedMesh& m) {
+  struct Key {
+    uint64_t x, y, z;
+    bool operator==(const Key&) const = default;
+  };
+  struct Hash {
+    size_t operator()(const Key& k) const { return size_t((k.x * 0x9E3779B97F4A7C15ull) ^ (k.y * 0xC2B2AE3D27D4EB4Full) ^ k.z); }
+  };
+  std::unordered_map<Key, uint32_t, Hash> index;
+  std::vector<uint32_t> id(m.num_vertices());
+  for (size_t v = 0; v < m.num_vertices(); ++v) {
+    const Vec3& p = m.positions[v];
+    id[v] = index.try_emplace(Key{bits(p.x()), bits(p.y()), bits(p.z())}, uint32_t(index.size())).first->second;
+  }
+  return id;
+}
+
+const Image* image_of(const TexturedMesh& m, size_t t) {
+  const int32_t mat = m.face_material[t];
+  if (mat < 0) return nullptr;
+  const int tex = m.materials[size_t(mat)].texture;
+  if (tex < 0 || m.textures[size_t(tex)].image.empty()) return nullptr;
+  return &m.textures[size_t(tex)].image;
+}
+int texture_of(const TexturedMesh& m, size_t t) {
+  const int32_t mat = m.face_material[t];
+  return mat < 0 ? -1 : m.materials[size_t(mat)].texture;
+}
+
+/// Calls f(x, y) for every texel centre inside the UV triangle (edges included), in texel indices of a
+/// W x H image before wrapping.
+template <typename F>
+void raster(const Vec2& a, const Vec2& b, const Vec2& c, int W, int H, F&& f) {
+  const Vec2 p[3] = {{a.x() * W, (1 - a.y()) * H}, {b.x() * W, (1 - b.y()) * H}, {c.x() * W, (1 - c.y()) * H}};
+  auto edge = [](const Vec2& s, const Vec2& e, double x, double y) { return (e.x() - s.x()) * (y - s.y()) - (e.y() - s.y()) * (x - s.x()); };
+  const double area = edge(p[0], p[1], p[2].x(), p[2].y());
+  if (area == 0 || !std::isfinite(area)) return;
+  const double sg = area > 0 ? 1 : -1;
+  const double x0 = std::min({p[0].x(), p[1].x(), p[2].x()}), x1 = std::max({p[0].x(), p[1].x(), p[2].x()});
+  const double y0 = std::min({p[0].y(), p[1].y(), p[2].y()}), y1 = std::max({p[0].y(), p[1].y(), p[2].y()});
+  if (x1 - x0 > 4.0 * W || y1 - y0 > 4.0 * H) return;  // absurd span: a broken input triangle
+  for (long y = long(std::ceil(y0 - 0.5)); y <= long(std::floor(y1 - 0.5)); ++y)
+    for (long x = long(std::ceil(x0 - 0.5)); x <= long(std::floor(x1 - 0.5)); ++x) {
+      const double px = x + 0.5, py = y + 0.5;
+      if (sg * edge(p[1], p[2], px, py) >= 0 && sg * edge(p[2], p[0], px, py) >= 0 && sg * edge(p[0], p[1], px, py) >= 0) f(x, y);
+    }
+}
+
+double quantile(std::vector<std::pair<double, double>>& vw, double q) {
+  // vw: (value, weight), sorted by value
+  double total = 0;
+  for (auto& p : vw) total += p.second;
+  double acc = 0;
+  for (auto& p : vw) {
+    acc += p.second;
+    if (acc >= q * total) return p.first;
+  }
+  return vw.empty() ? 0 : vw.back().first;
+}
+
+std::array<uint8_t, 3> colour_at(const TexturedMesh& m, size_t t, const Vec2& uv) {
+  const Image* img = image_of(m, t);
+  if (!img) {
+    const int32_t mat = m.face_material[t];
+    if (mat < 0) return {255, 255, 255};
+    const auto& kd = m.materials[size_t(mat)].kd;
+    auto q = [](double x) { return uint8_t(std::clamp(std::lround(x * 255), 0l, 255l)); };
+    return {q(kd[0]), q(kd[1]), q(kd[2])};
+  }
+  const auto c = sample_bilinear(*img, uv.x(), uv.y());
+  auto q = [](float x) { return uint8_t(std::clamp(std::lround(x), 0l, 255l)); };
+  return {q(c[0]), q(c[1]), q(c[2])};
+}
+
+}  // namespace
+
+ModelFigures measure_texture_space(const TexturedMesh& mesh) {
+  ModelFigures f;
+  f.image_utilization.assign(mesh.textures.size(), 0.0);
+  std::vector<std::vector<size_t>> tris(mesh.textures.size());
+  for (size_t t = 0; t < mesh.num_triangles(); ++t) {
+    const int tex = texture_of(mesh, t);
+    if (tex >= 0) tris[size_t(tex)].push_back(t);
+  }
+  for (size_t i = 0; i < mesh.textures.size(); ++i) {
+    const Image& img = mesh.textures[i].image;
+    if (img.empty()) continue;
+    const int W = img.width, H = img.height;
+    std::vector<uint8_t> cov(size_t(W) * size_t(H), 0);
+    for (size_t t : tris[i])
+      raster(mesh.sampled_uv(t, 0), mesh.sampled_uv(t, 1), mesh.sampled_uv(t, 2), W, H, [&](long x, long y) {
+        x %= W, y %= H;
+        if (x < 0) x += W;
+        if (y < 0) y += H;
+        cov[size_t(y) * size_t(W) + size_t(x)] = 1;
+      });
+    const size_t used = size_t(std::count(cov.begin(), cov.end(), 1));
+    f.image_utilization[i] = double(used) / double(cov.size());
+    f.used_texels += double(used);
+    f.texels += cov.size();
+  }
+  f.utilization = f.texels ? f.used_texels / double(f.texels) : 0.0;
+  return f;
+}
+
+size_t count_charts(const TexturedMesh& m, double* seam_length) {
+  const auto vid = weld_positions(m);
+  // Halfedges keyed by welded endpoints.
+  const size_t nh = 3 * m.num_triangles();
+  std::vector<std::pair<uint64_t, uint32_t>> keyed(nh);
+  for (uint32_t h = 0; h < nh; ++h) {
+    const uint64_t a = vid[m.triangles[h / 3][h % 3]], b = vid[m.triangles[h / 3][(h % 3 + 1) % 3]];
+    keyed[h] = {std::min(a, b) << 32 | std::max(a, b), h};
+  }
+  std::sort(keyed.begin(), keyed.end());
+  detail::UnionFind uf(m.num_triangles());
+  double seam = 0, area = 0;
+  for (size_t t = 0; t < m.num_triangles(); ++t)
+    area += triangle_area(m.positions[m.triangles[t][0]], m.positions[m.triangles[t][1]], m.positions[m.triangles[t][2]]);
+  auto uv_at = [&](uint32_t h, uint64_t v) {
+    const uint32_t t = h / 3;
+    for (int k = 0; k < 3; ++k)
+      if (vid[m.triangles[t][k]] == v) return m.corner_uv[3 * t + size_t(k)];
+    return Vec2(NAN, NAN);
+  };
+  for (size_t i = 0; i < nh;) {
+    size_t j = i + 1;
+    while (j < nh && keyed[j].first == keyed[i].first) ++j;
+    if (j - i >= 2) {
+      const uint64_t a = keyed[i].first >> 32, b = keyed[i].first & 0xffffffffu;
+      bool differs = false;
+      for (size_t k = i + 1; k < j; ++k) {
+        const uint32_t h0 = keyed[i].second, h1 = keyed[k].second;
+        if (uv_at(h0, a) == uv_at(h1, a) && uv_at(h0, b) == uv_at(h1, b))
+          uf.unite(h0 / 3, h1 / 3);
+        else
+          differs = true;
+      }
+      if (differs) {
+        const uint32_t h = keyed[i].second;
+        seam += (m.positions[m.triangles[h / 3][h % 3]] - m.positions[m.triangles[h / 3][(h % 3 + 1) % 3]]).norm();
+      }
+    }
+    i = j;
+  }
+  size_t charts = 0;
+  for (uint32_t t = 0; t < m.num_triangles(); ++t) charts += uf.find(t) == t;
+  if (seam_length) *seam_length = area > 0 ? seam / std::sqrt(area) : 0;
+  return charts;
+}
+
+Metrics measure(const TexturedMesh& in, const TexturedMesh& out, size_t psnr_samples) {
+  Metrics r;
+  r.input = measure_texture_space(in);
+  r.output = measure_texture_space(out);
+  count_charts(in, &r.seam_length_input);
+  r.charts = count_charts(out, &r.seam_length);
+
+  // Correspondence: output triangle for each input triangle, by the sorted triple of corner positions.
+  struct Key {
+    uint64_t v[9];
+    bool operator==(const Key& o) const { return std::memcmp(v, o.v, sizeof v) == 0; }
+  };
+  struct Hash {
+    size_t operator()(const Key& k) const {
+      uint64_t h = 0;
+      for (uint64_t x : k.v) h = (h ^ x) * 0x100000001B3ull + 0x9E3779B97F4A7C15ull;
+      return size_t(h);
+    }
+  };
+  auto key_of = [](const TexturedMesh& m, size_t t, std::array<int, 3>* order) {
+    std::array<int, 3> o{0, 1, 2};
+    auto pb = [&](int k) {
+      const Vec3& p = m.positions[m.triangles[t][k]];
+      return std::array<uint64_t, 3>{bits(p.x()), bits(p.y()), bits(p.z())};
+    };
+    std::sort(o.begin(), o.end(), [&](int a, int b) { return pb(a) < pb(b); });
+    Key k;
+    for (int i = 0; i < 3; ++i) {
+      const auto b = pb(o[i]);
+      k.v[3 * i] = b[0], k.v[3 * i + 1] = b[1], k.v[3 * i + 2] = b[2];
+    }
+    if (order) *order = o;
+    return k;
+  };
+  std::unordered_multimap<Key, uint32_t, Hash> out_index;
+  out_index.reserve(out.num_triangles());
+  for (uint32_t t = 0; t < out.num_triangles(); ++t) out_index.emplace(key_of(out, t, nullptr), t);
+  // match[t] = (output triangle, output corner for each input corner)
+  std::vector<uint32_t> match(in.num_triangles(), kNone);
+  std::vector<std::array<int, 3>> corner_map(in.num_triangles());
+  std::vector<double> area3(in.num_triangles());
+  for (uint32_t t = 0; t < in.num_triangles(); ++t) {
+    area3[t] = triangle_area(in.positions[in.triangles[t][0]], in.positions[in.triangles[t][1]], in.positions[in.triangles[t][2]]);
+    std::array<int, 3> oi;
+    const Key k = key_of(in, t, &oi);
+    auto it = out_index.find(k);
+    if (it == out_index.end()) {
+      r.lost_triangles += area3[t] > 0;
+      continue;
+    }
+    const uint32_t o = it->second;
+    std::array<int, 3> oo;
+    key_of(out, o, &oo);
+    match[t] = o;
+    for (int i = 0; i < 3; ++i) corner_map[t][size_t(oi[size_t(i)])] = oo[size_t(i)];
+  }
+
+  // Flips and degenerates per chart majority; density and angle distortion.
+  {
+    double seam_unused;
+    (void)seam_unused;
+    const auto vid = weld_positions(out);
+    // chart ids again (cheap relative to the rest) for the majority sign
+    const size_t nh = 3 * out.num_triangles();
+    std::vector<std::pair<uint64_t, uint32_t>> keyed(nh);
+    for (uint32_t h = 0; h < nh; ++h) {
+      const uint64_t a = vid[out.triangles[h / 3][h % 3]], b = vid[out.triangles[h / 3][(h % 3 + 1) % 3]];
+      keyed[h] = {std::min(a, b) << 32 | std::max(a, b), h};
+    }
+    std::sort(keyed.begin(), keyed.end());
+    detail::UnionFind uf(out.num_triangles());
+    for (size_t i = 0; i < nh;) {
+      size_t j = i + 1;
+      while (j < nh && keyed[j].first == keyed[i].first) ++j;
+      for (size_t k = i + 1; k < j; ++k) {
+        const uint32_t h0 = keyed[i].second, h1 = keyed[k].second;
+        auto uvp = [&](uint32_t h, uint32_t v) {
+          for (int c = 0; c < 3; ++c)
+            if (vid[out.triangles[h / 3][c]] == v) return out.corner_uv[3 * (h / 3) + size_t(c)];
+          return Vec2(NAN, NAN);
+        };
+        const uint32_t a = uint32_t(keyed[i].first >> 32), b = uint32_t(keyed[i].first & 0xffffffffu);
+        if (uvp(h0, a) == uvp(h0 == h1 ? h0 : h1, a) && uvp(h0, b) == uvp(h1, b)) uf.unite(h0 / 3, h1 / 3);
+      }
+      i = j;
+    }
+    std::vector<double> sa(out.num_triangles());
+    std::unordered_map<uint32_t, long> balance;
+    for (uint32_t t = 0; t < out.num_triangles(); ++t) {
+      sa[t] = signed_area(out.corner_uv[3 * t], out.corner_uv[3 * t + 1], out.corner_uv[3 * t + 2]);
+      if (sa[t] != 0) balance[uf.find(t)] += sa[t] > 0 ? 1 : -1;
+    }
+    for (uint32_t t = 0; t < out.num_triangles(); ++t) {
+      const double a3 = triangle_area(out.positions[out.triangles[t][0]], out.positions[out.triangles[t][1]], out.positions[out.triangles[t][2]]);
+      if (sa[t] == 0) {
+        r.degenerate += a3 > 0;
+        continue;
+      }
+      const long b = balance[uf.find(t)];
+      if ((b >= 0 && sa[t] < 0) || (b < 0 && sa[t] > 0)) r.flipped++;
+    }
+  }
+
+  // Overlap: texel centres covered by two or more triangles of the same image; a centre exactly on a
+  // shared edge is counted for one triangle only (top-left rule via a half-open test).
+  {
+    size_t overlapped = 0, total = 0;
+    std::vector<std::vector<size_t>> tris(out.textures.size());
+    for (size_t t = 0; t < out.num_triangles(); ++t)
+      if (texture_of(out, t) >= 0) tris[size_t(texture_of(out, t))].push_back(t);
+    for (size_t i = 0; i < out.textures.size(); ++i) {
+      const Image& img = out.textures[i].image;
+      if (img.empty()) continue;
+      const int W = img.width, H = img.height;
+      std::vector<uint8_t> cnt(size_t(W) * size_t(H), 0);
+      for (size_t t : tris[i]) {
+        const Vec2 uv[3] = {out.sampled_uv(t, 0), out.sampled_uv(t, 1), out.sampled_uv(t, 2)};
+        const Vec2 p[3] = {{uv[0].x() * W, (1 - uv[0].y()) * H}, {uv[1].x() * W, (1 - uv[1].y()) * H}, {uv[2].x() * W, (1 - uv[2].y()) * H}};
+        const double area = (p[1].x() - p[0].x()) * (p[2].y() - p[0].y()) - (p[1].y() - p[0].y()) * (p[2].x() - p[0].x());
+        if (area == 0) continue;
+        const int o[3] = {0, area > 0 ? 1 : 2, area > 0 ? 2 : 1};
+        const Vec2 q[3] = {p[o[0]], p[o[1]], p[o[2]]};
+        auto edge = [](const Vec2& s, const Vec2& e, double x, double y) { return (e.x() - s.x()) * (y - s.y()) - (e.y() - s.y()) * (x - s.x()); };
+        // top-left rule: include an edge's points only if it is a "top" or "left" edge
+        auto owns = [](const Vec2& s, const Vec2& e) { const double dx = e.x() - s.x(), dy = e.y() - s.y(); return dy < 0 || (dy == 0 && dx > 0); };
+        const double x0 = std::min({q[0].x(), q[1].x(), q[2].x()}), x1 = std::max({q[0].x(), q[1].x(), q[2].x()});
+        const double y0 = std::min({q[0].y(), q[1].y(), q[2].y()}), y1 = std::max({q[0].y(), q[1].y(), q[2].y()});
+        for (long y = std::max(0l, long(std::ceil(y0 - 0.5))); y <= std::min(long(H) - 1, long(std::floor(y1 - 0.5))); ++y)
+          for (long x = std::max(0l, long(std::ceil(x0 - 0.5))); x <= std::min(long(W) - 1, long(std::floor(x1 - 0.5))); ++x) {
+            const double px = x + 0.5, py = y + 0.5;
+            bool in = true;
+            for (int e = 0; e < 3 && in; ++e) {
+              const double v = edge(q[e], q[(e + 1) % 3], px, py);
+              in = v > 0 || (v == 0 && owns(q[e], q[(e + 1) % 3]));
+            }
+            if (in) {
+              uint8_t& c = cnt[size_t(y) * size_t(W) + size_t(x)];
+              if (c < 2) c++;
+            }
+          }
+      }
+      for (uint8_t c : cnt) {
+        total += c > 0;
+        overlapped += c > 1;
+      }
+    }
+    r.overlap = total ? double(overlapped) / double(total) : 0.0;
+  }
+
+  // Density, detail loss, angle distortion over matched triangles.
+  {
+    std::vector<std::pair<double, double>> logd, angle;
+    double sum_at = 0, sum_a3 = 0, loss = 0, area_total = 0, angle_sum = 0;
+    std::vector<double> dens(in.num_triangles(), 0), din(in.num_triangles(), 0);
+    for (uint32_t t = 0; t < in.num_triangles(); ++t) {
+      if (match[t] == kNone || area3[t] <= 0) continue;
+      const uint32_t o = match[t];
+      const Image* oi = image_of(out, o);
+      const Image* ii = image_of(in, t);
+      const double Wo = oi ? oi->width : 1, Ho = oi ? oi->height : 1;
+      const double at = std::abs(signed_area(out.sampled_uv(o, 0), out.sampled_uv(o, 1), out.sampled_uv(o, 2))) * Wo * Ho;
+      dens[t] = at / area3[t];
+      if (ii) din[t] = std::abs(signed_area(in.sampled_uv(t, 0), in.sampled_uv(t, 1), in.sampled_uv(t, 2))) * ii->width * ii->height / area3[t];
+      sum_at += at;
+      sum_a3 += area3[t];
+      // Jacobian 3D (local frame) -> texels
+      const Vec3 &p0 = in.positions[in.triangles[t][0]], &p1 = in.positions[in.triangles[t][1]], &p2 = in.positions[in.triangles[t][2]];
+      const Vec3 e1 = p1 - p0, e2 = p2 - p0;
+      const Vec3 x = e1.normalized(), n = e1.cross(e2).normalized(), y = n.cross(x);
+      Eigen::Matrix2d P;
+      P << e1.dot(x), e2.dot(x), e1.dot(y), e2.dot(y);
+      const auto& cm = corner_map[t];
+      const Vec2 q0 = out.sampled_uv(o, cm[0]), q1 = out.sampled_uv(o, cm[1]), q2 = out.sampled_uv(o, cm[2]);
+      Eigen::Matrix2d U;
+      U << (q1.x() - q0.x()) * Wo, (q2.x() - q0.x()) * Wo, (q1.y() - q0.y()) * Ho, (q2.y() - q0.y()) * Ho;
+      const Eigen::Matrix2d J = U * P.inverse();
+      Eigen::JacobiSVD<Eigen::Matrix2d> svd(J);
+      const double smax = svd.singularValues()(0), smin = svd.singularValues()(1);
+      const double ratio = smin > 0 ? smax / smin : 1e12;
+      if (std::isfinite(ratio)) {
+        angle.push_back({ratio, area3[t]});
+        angle_sum += ratio * area3[t];
+      }
+      area_total += area3[t];
+    }
+    const double mean = sum_a3 > 0 ? sum_at / sum_a3 : 1;
+    for (uint32_t t = 0; t < in.num_triangles(); ++t) {
+      if (match[t] == kNone || area3[t] <= 0) continue;
+      logd.push_back({dens[t] > 0 ? std::log2(dens[t] / mean) : -60.0, area3[t]});
+      if (din[t] > 0 && dens[t] < 0.5 * din[t]) loss += area3[t];
+    }
+    std::sort(logd.begin(), logd.end());
+    std::sort(angle.begin(), angle.end());
+    r.density_spread = {quantile(logd, 0.05), quantile(logd, 0.5), quantile(logd, 0.95)};
+    r.detail_loss_area = area_total > 0 ? loss / area_total : 0;
+    r.angle_distortion_mean = area_total > 0 ? angle_sum / area_total : 0;
+    r.angle_distortion_p95 = quantile(angle, 0.95);
+  }
+
+  // Surface PSNR: uniform samples by area on the input, fixed seed.
+  {
+    std::vector<double> cdf(in.num_triangles());
+    double acc = 0;
+    for (size_t t = 0; t < in.num_triangles(); ++t) cdf[t] = acc += area3[t];
+    std::mt19937_64 rng(20240606);
+    std::uniform_real_distribution<double> uni(0.0, 1.0);
+    double se = 0;
+    size_t n = 0;
+    for (size_t s = 0; s < psnr_samples && acc > 0; ++s) {
+      const double pick = uni(rng) * acc;
+      const size_t t = size_t(std::upper_bound(cdf.begin(), cdf.end(), pick) - cdf.begin());
+      double r1 = uni(rng), r2 = uni(rng);
+      if (r1 + r2 > 1) r1 = 1 - r1, r2 = 1 - r2;
+      const double b[3] = {1 - r1 - r2, r1, r2};
+      if (t >= in.num_triangles()) continue;
+      const Vec2 uin = b[0] * in.sampled_uv(t, 0) + b[1] * in.sampled_uv(t, 1) + b[2] * in.sampled_uv(t, 2);
+      const auto ci = colour_at(in, t, uin);
+      std::array<uint8_t, 3> co{0, 0, 0};
+      if (match[t] != kNone) {
+        const uint32_t o = match[t];
+        const auto& cm = corner_map[t];
+        const Vec2 uout = b[0] * out.sampled_uv(o, cm[0]) + b[1] * out.sampled_uv(o, cm[1]) + b[2] * out.sampled_uv(o, cm[2]);
+        co = colour_at(out, o, uout);
+      }
+      for (int c = 0; c < 3; ++c) se += double(int(ci[size_t(c)]) - int(co[size_t(c)])) * double(int(ci[size_t(c)]) - int(co[size_t(c)]));
+      n += 3;
+    }
+    r.psnr_samples = n / 3;
+    const double mse = n ? se / double(n) : 0;
+    r.surface_psnr = mse > 0 ? 10 * std::log10(255.0 * 255.0 / mse) : 99.0;
+  }
+  return r;
+}
+
+nlohmann::json to_json(const Metrics& m) {
+  nlohmann::json j;
+  auto fig = [](const ModelFigures& f) {
+    return nlohmann::json{{"utilization", f.utilization}, {"image_utilization", f.image_utilization}, {"used_texels", f.used_texels}, {"texels", f.texels}};
+  };
+  j["input"] = fig(m.input);
+  j["output"] = fig(m.output);
+  j["lost_triangles"] = m.lost_triangles;
+  j["flipped"] = m.flipped;
+  j["degenerate"] = m.degenerate;
+  j["overlap"] = m.overlap;
+  j["charts"] = m.charts;
+  j["seam_length"] = {{"input", m.seam_length_input}, {"output", m.seam_length}};
+  j["density_spread"] = {{"p5", m.density_spread.p5}, {"p50", m.density_spread.p50}, {"p95", m.density_spread.p95}};
+  j["detail_loss_area"] = m.detail_loss_area;
+  j["angle_distortion"] = {{"mean", m.angle_distortion_mean}, {"p95", m.angle_distortion_p95}};
+  j["surface_psnr_db"] = m.surface_psnr;
+  j["psnr_samples"] = m.psnr_samples;
+  return j;
+}
+
+}  // namespace tightex

@@ -1,0 +1,49 @@
+// The figures of ../shared/METRICS.md, computed from an input and an output model alone, so the same
+// code measures tightex's own result (in memory) and any other tool's output (read from its files).
+#pragma once
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "core/mesh.hpp"
+
+namespace tightex {
+
+struct Quantiles {
+  double p5 = 0, p50 = 0, p95 = 0;
+};
+
+struct ModelFigures {
+  double utilization = 0;              // texel-weighted over all images
+  std::vector<double> image_utilization;
+  double used_texels = 0;
+  size_t texels = 0;                   // sum of W x H
+};
+
+struct Metrics {
+  ModelFigures input, output;
+  size_t lost_triangles = 0;
+  size_t flipped = 0;
+  size_t degenerate = 0;
+  double overlap = 0;
+  size_t charts = 0;
+  double seam_length_input = 0, seam_length = 0;
+  Quantiles density_spread;            // log2(d / mean d), area-weighted
+  double detail_loss_area = 0;
+  double angle_distortion_mean = 0, angle_distortion_p95 = 0;
+  double surface_psnr = 0;
+  size_t psnr_samples = 0;
+};
+
+/// Texel utilization of a model (texel centres inside at least one triangle sampling that image,
+/// edges included; coordinates outside [0,1] wrap as a renderer's repeat sampler does).
+ModelFigures measure_texture_space(const TexturedMesh& mesh);
+
+/// Charts (triangles joined through edges with equal uv on both sides) and seam length of a model.
+size_t count_charts(const TexturedMesh& mesh, double* seam_length);
+
+/// Everything in METRICS.md. Triangles correspond by their three corner positions (bit-exact).
+Metrics measure(const TexturedMesh& input, const TexturedMesh& output, size_t psnr_samples = 200000);
+
+nlohmann::json to_json(const Metrics& m);
+
+}  // namespace tightex

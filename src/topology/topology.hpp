@@ -1,0 +1,44 @@
+// Data preparation, second half (paper §4.1) and the cut to a disk: components, holes, cut graph.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "core/surface.hpp"
+
+namespace tightex {
+
+/// Splits a manifold surface into its connected components (through shared edges). Each component has
+/// local indices; vertex_parent / face_parent map into `s`. Components are ordered by first triangle.
+std::vector<Surface> split_components(const Surface& s);
+
+/// Closes the given boundary loops (halfedge sequences from boundary_loops) with the §4.1 centroid fan:
+/// one new vertex at the loop's centroid, one triangle per loop edge. New vertices have
+/// vertex_parent = kNone and new triangles face_parent = kNone: they are scaffolding, never output.
+Surface fill_holes(const Surface& s, const std::vector<std::vector<uint32_t>>& loops);
+
+enum class HoleMode { kFill, kCut };
+
+struct CutStats {
+  Topology before;              // of the component as given (holes not yet filled)
+  size_t holes_filled = 0;
+  size_t holes_cut = 0;         // joined into the disk boundary
+  size_t cut_edges = 0;         // interior edges cut open
+  double cut_length = 0;        // their 3D length
+  std::string method;           // "disk", "path", "cut-graph"
+};
+
+struct Disk {
+  Surface mesh;                 // a topological disk; face_parent -> component face (kNone: scaffolding)
+                                // vertex_parent -> component vertex (kNone: scaffolding)
+  std::vector<uint32_t> boundary;  // boundary vertices in order (counter-clockwise w.r.t. the faces)
+};
+
+/// Turns a connected manifold surface into a topological disk (one boundary loop, Euler characteristic
+/// 1): holes are filled with scaffolding (kFill: all but the longest loop) or joined into the boundary
+/// (kCut); a closed genus-0 surface is cut along the shortest path between two far-apart vertices
+/// (double Dijkstra sweep: the paper's single seam); otherwise a cut graph is built by tree-cotree
+/// (shortest-path tree + greedy dual tree, Erickson & Whittlesey 2005) and pruned of dangling branches.
+/// Throws InternalError if the result is not a disk (it always should be).
+Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats);
+
+}  // namespace tightex

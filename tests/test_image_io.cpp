@@ -1,0 +1,591 @@
+// Image reading and writing: exact PNG round trips, approximate JPEG round trips, every PNG colour
+// type and bit depth, and bad files (missing, directory, empty, truncated, garbage, too large) that must
+// give an InputError naming the file instead of a crash.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+// The test builds its own odd PNGs and JPEGs with the same libraries tightex links.
+#include <cstdio>
+// clang-format off
+#include <jpeglib.h>
+// clang-format on
+#include <spng.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/error.hpp"
+#include "io/image_io.hpp"
+
+namespace tightex {
+namespace {
+
+namespace fs = std::filesystem;
+using Bytes = std::vector<unsigned char>;
+
+class ImageIoTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::random_device rd;
+    dir_ = fs::temp_directory_path() / ("tightex_image_io_" + std::to_string(::getpid()) + "_" + std::to_string(rd()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+
+  fs::path dir_;
+};
+
+Bytes read_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return Bytes(std::istreambuf_iterator<char>(in), {});
+}
+
+void write_bytes(const std::string& path, const Bytes& bytes) {
+  std::ofstream out(path, std::ios::binary);
+  out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+}
+
+// A smooth image with some structure in every channel, as a photo or a baked texture has.
+Image gradient_image(int width, int height, bool with_alpha) {
+  Image image(width, height);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      const double u = double(x) / width, v = double(y) / height;
+      image.at(x, y) = Rgba8{uint8_t(40 + 180 * u), uint8_t(30 + 190 * v), uint8_t(128 + 100 * std::sin(6 * u + 4 * v)),
+                             uint8_t(with_alpha ? (x * 7 + y * 3) % 256 : 255)};
+    }
+  }
+  return image;
+}
+
+Image noise_image(int width, int height, bool with_alpha, unsigned seed) {
+  std::mt19937 rng(seed);
+  Image image(width, height);
+  for (Rgba8& p : image.pixels) {
+    p = Rgba8{uint8_t(rng()), uint8_t(rng()), uint8_t(rng()), uint8_t(with_alpha ? rng() : 255)};
+  }
+  return image;
+}
+
+double psnr_rgb(const Image& a, const Image& b) {
+  EXPECT_EQ(a.width, b.width);
+  EXPECT_EQ(a.height, b.height);
+  double sum = 0;
+  for (size_t i = 0; i < a.pixels.size(); ++i) {
+    const double dr = a.pixels[i].r - b.pixels[i].r, dg = a.pixels[i].g - b.pixels[i].g,
+                 db = a.pixels[i].b - b.pixels[i].b;
+    sum += dr * dr + dg * dg + db * db;
+  }
+  const double mse = sum / (3.0 * double(a.pixels.size()));
+  return mse == 0 ? 99.0 : 10 * std::log10(255.0 * 255.0 / mse);
+}
+
+// PNG colour type, from the IHDR chunk at byte 25 of every PNG.
+int png_color_type(const Bytes& png) { return png.size() > 25 ? png[25] : -1; }
+
+// Encodes raw samples (PNG layout, host-endian for 16 bits) with libspng.
+Bytes encode_png(const spng_ihdr& ihdr, const void* samples, size_t size, const spng_plte* plte = nullptr,
+                 const spng_trns* trns = nullptr) {
+  spng_ctx* ctx = spng_ctx_new(SPNG_CTX_ENCODER);
+  spng_set_option(ctx, SPNG_ENCODE_TO_BUFFER, 1);
+  spng_ihdr header = ihdr;
+  EXPECT_EQ(spng_set_ihdr(ctx, &header), 0);
+  if (plte != nullptr) {
+    spng_plte p = *plte;
+    EXPECT_EQ(spng_set_plte(ctx, &p), 0);
+  }
+  if (trns != nullptr) {
+    spng_trns t = *trns;
+    EXPECT_EQ(spng_set_trns(ctx, &t), 0);
+  }
+  EXPECT_EQ(spng_encode_image(ctx, samples, size, SPNG_FMT_PNG, SPNG_ENCODE_FINALIZE), 0);
+  size_t length = 0;
+  int error = 0;
+  auto* buffer = static_cast<unsigned char*>(spng_get_png_buffer(ctx, &length, &error));
+  EXPECT_EQ(error, 0);
+  Bytes png(buffer, buffer + length);
+  std::free(buffer);
+  spng_ctx_free(ctx);
+  return png;
+}
+
+spng_ihdr make_ihdr(uint32_t width, uint32_t height, uint8_t bit_depth, uint8_t color_type) {
+  spng_ihdr ihdr{};
+  ihdr.width = width;
+  ihdr.height = height;
+  ihdr.bit_depth = bit_depth;
+  ihdr.color_type = color_type;
+  return ihdr;
+}
+
+// Encodes a greyscale or CMYK JPEG, which save_image never writes. For CMYK, libjpeg stores the samples
+// as given and marks the file Adobe; Adobe's convention is inverted (255 = no ink), as Photoshop writes.
+Bytes encode_jpeg(int width, int height, int components, J_COLOR_SPACE space, const Bytes& samples) {
+  jpeg_compress_struct cinfo{};
+  jpeg_error_mgr err{};
+  cinfo.err = jpeg_std_error(&err);
+  jpeg_create_compress(&cinfo);
+  unsigned char* buffer = nullptr;
+  unsigned long size = 0;
+  jpeg_mem_dest(&cinfo, &buffer, &size);
+  cinfo.image_width = JDIMENSION(width);
+  cinfo.image_height = JDIMENSION(height);
+  cinfo.input_components = components;
+  cinfo.in_color_space = space;
+  jpeg_set_defaults(&cinfo);
+  jpeg_set_quality(&cinfo, 95, TRUE);
+  jpeg_start_compress(&cinfo, TRUE);
+  while (cinfo.next_scanline < cinfo.image_height) {
+    JSAMPROW row = const_cast<JSAMPROW>(samples.data() + size_t(cinfo.next_scanline) * size_t(width * components));
+    jpeg_write_scanlines(&cinfo, &row, 1);
+  }
+  jpeg_finish_compress(&cinfo);
+  jpeg_destroy_compress(&cinfo);
+  Bytes jpeg(buffer, buffer + size);
+  std::free(buffer);
+  return jpeg;
+}
+
+// A 24-bit bottom-up BMP, to exercise the stb_image fallback.
+Bytes encode_bmp(const Image& image) {
+  const uint32_t row_bytes = (uint32_t(image.width) * 3 + 3) & ~3u;
+  const uint32_t data_size = row_bytes * uint32_t(image.height);
+  Bytes bmp;
+  auto put16 = [&](uint32_t v) { bmp.push_back(uint8_t(v)), bmp.push_back(uint8_t(v >> 8)); };
+  auto put32 = [&](uint32_t v) { put16(v & 0xffff), put16(v >> 16); };
+  bmp.push_back('B'), bmp.push_back('M');
+  put32(54 + data_size), put32(0), put32(54);                         // file header
+  put32(40), put32(uint32_t(image.width)), put32(uint32_t(image.height));  // BITMAPINFOHEADER
+  put16(1), put16(24), put32(0), put32(data_size), put32(2835), put32(2835), put32(0), put32(0);
+  for (int y = image.height - 1; y >= 0; --y) {
+    for (int x = 0; x < image.width; ++x) {
+      const Rgba8 p = image.at(x, y);
+      bmp.push_back(p.b), bmp.push_back(p.g), bmp.push_back(p.r);
+    }
+    for (uint32_t i = uint32_t(image.width) * 3; i < row_bytes; ++i) bmp.push_back(0);
+  }
+  return bmp;
+}
+
+// PNG chunk CRC (CRC-32, polynomial 0xedb88320), for hand-written chunks.
+uint32_t png_crc(const unsigned char* data, size_t size) {
+  uint32_t crc = 0xffffffffu;
+  for (size_t i = 0; i < size; ++i) {
+    crc ^= data[i];
+    for (int bit = 0; bit < 8; ++bit) crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
+  }
+  return crc ^ 0xffffffffu;
+}
+
+// A PNG signature and a valid RGB8 IHDR chunk, nothing else.
+Bytes png_header_only(uint32_t width, uint32_t height) {
+  Bytes png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n', 0, 0, 0, 13, 'I', 'H', 'D', 'R'};
+  for (uint32_t v : {width, height}) {
+    for (int shift : {24, 16, 8, 0}) png.push_back(uint8_t(v >> shift));
+  }
+  png.insert(png.end(), {8, 2, 0, 0, 0});          // 8-bit RGB, deflate, no interlace
+  const uint32_t crc = png_crc(png.data() + 12, 17);  // over chunk type and data
+  for (int shift : {24, 16, 8, 0}) png.push_back(uint8_t(crc >> shift));
+  return png;
+}
+
+// Runs `f`, expecting an InputError whose message contains `needle`; returns the message.
+template <typename F>
+std::string expect_input_error(F&& f, const std::string& needle) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << "message: " << e.what();
+    return e.what();
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "expected InputError, got: " << e.what();
+    return {};
+  }
+  ADD_FAILURE() << "expected InputError containing '" << needle << "', nothing was thrown";
+  return {};
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Round trips
+
+TEST_F(ImageIoTest, PngRgbRoundTripIsExactAndDropsAlpha) {
+  const Image image = noise_image(67, 41, false, 1);
+  save_image(path("rgb.png"), image, ImageFormat::kPng);
+  EXPECT_EQ(png_color_type(read_bytes(path("rgb.png"))), 2);  // RGB: alpha was 255 everywhere
+  const Image loaded = load_image(path("rgb.png"));
+  ASSERT_EQ(loaded.width, image.width);
+  ASSERT_EQ(loaded.height, image.height);
+  EXPECT_TRUE(loaded.pixels == image.pixels);
+}
+
+TEST_F(ImageIoTest, PngRgbaRoundTripIsExact) {
+  const Image image = noise_image(50, 33, true, 2);
+  save_image(path("rgba.png"), image, ImageFormat::kPng);
+  EXPECT_EQ(png_color_type(read_bytes(path("rgba.png"))), 6);  // RGBA
+  const Image loaded = load_image(path("rgba.png"));
+  ASSERT_EQ(loaded.width, image.width);
+  ASSERT_EQ(loaded.height, image.height);
+  EXPECT_TRUE(loaded.pixels == image.pixels);
+}
+
+TEST_F(ImageIoTest, PngOnePixelAndOneRowRoundTrip) {
+  for (const auto& [w, h] : {std::pair{1, 1}, std::pair{300, 1}, std::pair{1, 300}}) {
+    const Image image = noise_image(w, h, true, 3);
+    save_image(path("small.png"), image, ImageFormat::kPng);
+    EXPECT_TRUE(load_image(path("small.png")).pixels == image.pixels) << w << "x" << h;
+  }
+}
+
+TEST_F(ImageIoTest, SaveOverwritesAnExistingFile) {
+  write_bytes(path("old.png"), Bytes(100000, 'x'));
+  const Image image = gradient_image(8, 8, false);
+  save_image(path("old.png"), image, ImageFormat::kPng);
+  EXPECT_TRUE(load_image(path("old.png")).pixels == image.pixels);
+}
+
+TEST_F(ImageIoTest, JpegRoundTripIsClose) {
+  const Image image = gradient_image(256, 160, false);
+  for (int quality : {92, 75}) {  // 4:4:4 and 4:2:0 chroma
+    const std::string file = path("q" + std::to_string(quality) + ".jpg");
+    save_image(file, image, ImageFormat::kJpeg, quality);
+    const Image loaded = load_image(file);
+    ASSERT_EQ(loaded.width, image.width);
+    ASSERT_EQ(loaded.height, image.height);
+    EXPECT_GT(psnr_rgb(image, loaded), 35.0) << "quality " << quality;
+    for (const Rgba8& p : loaded.pixels) ASSERT_EQ(p.a, 255);
+  }
+}
+
+TEST_F(ImageIoTest, JpegOddSizeAndDroppedAlpha) {
+  const Image image = gradient_image(17, 13, true);  // alpha is dropped, colours kept
+  save_image(path("odd.jpg"), image, ImageFormat::kJpeg, 95);
+  const Image loaded = load_image(path("odd.jpg"));
+  ASSERT_EQ(loaded.width, 17);
+  ASSERT_EQ(loaded.height, 13);
+  EXPECT_GT(psnr_rgb(image, loaded), 35.0);
+}
+
+TEST_F(ImageIoTest, HigherJpegQualityKeepsMoreDetail) {
+  const Image image = noise_image(64, 64, false, 4);
+  save_image(path("lo.jpg"), image, ImageFormat::kJpeg, 30);
+  save_image(path("hi.jpg"), image, ImageFormat::kJpeg, 98);
+  EXPECT_GT(psnr_rgb(image, load_image(path("hi.jpg"))), psnr_rgb(image, load_image(path("lo.jpg"))) + 5);
+  EXPECT_GT(read_bytes(path("hi.jpg")).size(), read_bytes(path("lo.jpg")).size());
+}
+
+TEST_F(ImageIoTest, FormatIsDetectedByContentNotExtension) {
+  const Image image = gradient_image(32, 32, false);
+  save_image(path("really_a_jpeg.png"), image, ImageFormat::kJpeg, 95);
+  EXPECT_GT(psnr_rgb(image, load_image(path("really_a_jpeg.png"))), 35.0);
+  save_image(path("really_a_png.jpg"), image, ImageFormat::kPng);
+  EXPECT_TRUE(load_image(path("really_a_png.jpg")).pixels == image.pixels);
+}
+
+// ---------------------------------------------------------------------------------------------------
+// PNG colour types and bit depths
+
+TEST_F(ImageIoTest, DecodesGreyPng) {
+  const Bytes grey = {0, 64, 128, 255, 1, 2};
+  const Bytes png = encode_png(make_ihdr(3, 2, 8, SPNG_COLOR_TYPE_GRAYSCALE), grey.data(), grey.size());
+  const Image image = decode_image(png.data(), png.size(), "grey.png");
+  ASSERT_EQ(image.width, 3);
+  ASSERT_EQ(image.height, 2);
+  for (size_t i = 0; i < grey.size(); ++i) EXPECT_EQ(image.pixels[i], (Rgba8{grey[i], grey[i], grey[i], 255}));
+}
+
+TEST_F(ImageIoTest, DecodesLowBitDepthGreyPng) {
+  // 2 bits per sample, 4 pixels in one byte: 0, 1, 2, 3 -> 0, 85, 170, 255.
+  const Bytes packed = {0b00011011};
+  const Bytes png = encode_png(make_ihdr(4, 1, 2, SPNG_COLOR_TYPE_GRAYSCALE), packed.data(), packed.size());
+  const Image image = decode_image(png.data(), png.size(), "grey2.png");
+  ASSERT_EQ(image.width, 4);
+  const uint8_t expected[] = {0, 85, 170, 255};
+  for (int x = 0; x < 4; ++x) EXPECT_EQ(image.at(x, 0), (Rgba8{expected[x], expected[x], expected[x], 255}));
+}
+
+TEST_F(ImageIoTest, DecodesGreyAlphaPng) {
+  const Bytes grey_alpha = {10, 255, 200, 0, 90, 128, 255, 7};
+  const Bytes png =
+      encode_png(make_ihdr(2, 2, 8, SPNG_COLOR_TYPE_GRAYSCALE_ALPHA), grey_alpha.data(), grey_alpha.size());
+  const Image image = decode_image(png.data(), png.size(), "ga.png");
+  ASSERT_EQ(image.width, 2);
+  for (size_t i = 0; i < 4; ++i) {
+    const uint8_t g = grey_alpha[2 * i], a = grey_alpha[2 * i + 1];
+    EXPECT_EQ(image.pixels[i], (Rgba8{g, g, g, a}));
+  }
+}
+
+TEST_F(ImageIoTest, Decodes16BitPngs) {
+  // 16-bit samples are reduced to their high byte (0x1234 -> 0x12); spng rounds, so allow +-1.
+  const std::vector<uint16_t> rgba16 = {0x0000, 0x1234, 0xffff, 0x8000, 0xfedc, 0x0101, 0x7f80, 0x4000};
+  const Bytes png = encode_png(make_ihdr(2, 1, 16, SPNG_COLOR_TYPE_TRUECOLOR_ALPHA), rgba16.data(),
+                               rgba16.size() * sizeof(uint16_t));
+  const Image image = decode_image(png.data(), png.size(), "rgba16.png");
+  ASSERT_EQ(image.width, 2);
+  const uint8_t* bytes = &image.pixels[0].r;
+  for (size_t i = 0; i < rgba16.size(); ++i) EXPECT_NEAR(bytes[i], rgba16[i] / 257.0, 1.0) << i;
+
+  const std::vector<uint16_t> grey16 = {0x0000, 0xffff, 0x8080};
+  const Bytes grey_png =
+      encode_png(make_ihdr(3, 1, 16, SPNG_COLOR_TYPE_GRAYSCALE), grey16.data(), grey16.size() * sizeof(uint16_t));
+  const Image grey = decode_image(grey_png.data(), grey_png.size(), "grey16.png");
+  EXPECT_EQ(grey.at(0, 0), (Rgba8{0, 0, 0, 255}));
+  EXPECT_EQ(grey.at(1, 0), (Rgba8{255, 255, 255, 255}));
+  EXPECT_EQ(grey.at(2, 0), (Rgba8{128, 128, 128, 255}));
+
+  const std::vector<uint16_t> rgb16 = {0xffff, 0x0000, 0x8080};
+  const Bytes rgb_png =
+      encode_png(make_ihdr(1, 1, 16, SPNG_COLOR_TYPE_TRUECOLOR), rgb16.data(), rgb16.size() * sizeof(uint16_t));
+  EXPECT_EQ(decode_image(rgb_png.data(), rgb_png.size(), "rgb16.png").at(0, 0), (Rgba8{255, 0, 128, 255}));
+}
+
+TEST_F(ImageIoTest, DecodesPalettePngWithTransparency) {
+  spng_plte plte{};
+  plte.n_entries = 3;
+  plte.entries[0] = {255, 0, 0, 0};
+  plte.entries[1] = {0, 255, 0, 0};
+  plte.entries[2] = {0, 0, 255, 0};
+  spng_trns trns{};
+  trns.n_type3_entries = 2;  // entries past the list are opaque
+  trns.type3_alpha[0] = 0;
+  trns.type3_alpha[1] = 100;
+  const Bytes indices = {0, 1, 2, 2};
+  const Bytes png =
+      encode_png(make_ihdr(4, 1, 8, SPNG_COLOR_TYPE_INDEXED), indices.data(), indices.size(), &plte, &trns);
+  const Image image = decode_image(png.data(), png.size(), "palette.png");
+  ASSERT_EQ(image.width, 4);
+  EXPECT_EQ(image.at(0, 0), (Rgba8{255, 0, 0, 0}));
+  EXPECT_EQ(image.at(1, 0), (Rgba8{0, 255, 0, 100}));
+  EXPECT_EQ(image.at(2, 0), (Rgba8{0, 0, 255, 255}));
+}
+
+TEST_F(ImageIoTest, DecodesRgbPngWithTransparentColour) {
+  const Bytes rgb = {1, 2, 3, 9, 9, 9};
+  spng_trns trns{};
+  trns.red = 9, trns.green = 9, trns.blue = 9;
+  const Bytes png = encode_png(make_ihdr(2, 1, 8, SPNG_COLOR_TYPE_TRUECOLOR), rgb.data(), rgb.size(), nullptr, &trns);
+  const Image image = decode_image(png.data(), png.size(), "trns.png");
+  EXPECT_EQ(image.at(0, 0), (Rgba8{1, 2, 3, 255}));
+  EXPECT_EQ(image.at(1, 0).a, 0);
+}
+
+// ---------------------------------------------------------------------------------------------------
+// JPEG colour spaces and the stb_image fallback
+
+TEST_F(ImageIoTest, DecodesGreyJpeg) {
+  Bytes grey(40 * 30);
+  for (size_t i = 0; i < grey.size(); ++i) grey[i] = uint8_t(40 + (i % 40) * 4);
+  const Bytes jpeg = encode_jpeg(40, 30, 1, JCS_GRAYSCALE, grey);
+  const Image image = decode_image(jpeg.data(), jpeg.size(), "grey.jpg");
+  ASSERT_EQ(image.width, 40);
+  ASSERT_EQ(image.height, 30);
+  for (size_t i = 0; i < grey.size(); ++i) {
+    const Rgba8 p = image.pixels[i];
+    ASSERT_EQ(p.r, p.g);
+    ASSERT_EQ(p.r, p.b);
+    ASSERT_EQ(p.a, 255);
+    ASSERT_NEAR(p.r, grey[i], 4);
+  }
+}
+
+TEST_F(ImageIoTest, DecodesAdobeCmykJpeg) {
+  // Inverted CMYK, as Photoshop writes it: (C, M, Y, K) = (0, 100%, 100%, 0) is stored as 255, 0, 0, 255.
+  Bytes cmyk;
+  for (int i = 0; i < 16 * 16; ++i) cmyk.insert(cmyk.end(), {255, 0, 0, 255});
+  const Bytes jpeg = encode_jpeg(16, 16, 4, JCS_CMYK, cmyk);
+  const Image image = decode_image(jpeg.data(), jpeg.size(), "cmyk.jpg");
+  ASSERT_EQ(image.width, 16);
+  for (const Rgba8& p : image.pixels) {
+    ASSERT_NEAR(p.r, 255, 3);
+    ASSERT_NEAR(p.g, 0, 3);
+    ASSERT_NEAR(p.b, 0, 3);
+    ASSERT_EQ(p.a, 255);
+  }
+}
+
+TEST_F(ImageIoTest, DecodesBmpThroughStb) {
+  const Image image = noise_image(13, 7, false, 5);
+  write_bytes(path("image.bmp"), encode_bmp(image));
+  const Image loaded = load_image(path("image.bmp"));
+  ASSERT_EQ(loaded.width, 13);
+  ASSERT_EQ(loaded.height, 7);
+  EXPECT_TRUE(loaded.pixels == image.pixels);
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Bad input
+
+TEST_F(ImageIoTest, MissingFileNamesTheFile) {
+  const std::string message = expect_input_error([&] { load_image(path("nope.png")); }, path("nope.png"));
+  EXPECT_NE(message.find("No such file or directory"), std::string::npos) << message;
+}
+
+TEST_F(ImageIoTest, DirectoryIsRefused) {
+  expect_input_error([&] { load_image(dir_.string()); }, dir_.string());
+}
+
+TEST_F(ImageIoTest, EmptyFileIsRefused) {
+  write_bytes(path("empty.png"), {});
+  expect_input_error([&] { load_image(path("empty.png")); }, path("empty.png"));
+  expect_input_error([&] { decode_image(nullptr, 0, "nothing.png"); }, "nothing.png");
+}
+
+TEST_F(ImageIoTest, TruncatedPngNamesTheFile) {
+  const Image image = noise_image(64, 64, false, 6);
+  save_image(path("full.png"), image, ImageFormat::kPng);
+  const Bytes png = read_bytes(path("full.png"));
+  // Cuts inside the signature, the header and the image data.
+  for (size_t cut : {png.size() / 2, size_t(40), size_t(20), size_t(8), size_t(3), png.size() - 17}) {
+    SCOPED_TRACE(cut);
+    write_bytes(path("cut.png"), Bytes(png.begin(), png.begin() + std::ptrdiff_t(cut)));
+    const std::string message = expect_input_error([&] { load_image(path("cut.png")); }, path("cut.png"));
+    EXPECT_NE(message.find("truncated PNG"), std::string::npos) << message;
+  }
+  // Losing only what follows the image data (the IEND chunk) loses no pixels; that file is accepted.
+  const Bytes no_iend(png.begin(), png.end() - 12);
+  EXPECT_TRUE(decode_image(no_iend.data(), no_iend.size(), "no_iend.png").pixels == image.pixels);
+}
+
+TEST_F(ImageIoTest, TruncatedJpegNamesTheFile) {
+  save_image(path("full.jpg"), noise_image(64, 64, false, 7), ImageFormat::kJpeg, 90);
+  const Bytes jpeg = read_bytes(path("full.jpg"));
+  for (size_t cut : {jpeg.size() / 2, size_t(300), size_t(100), size_t(4)}) {
+    write_bytes(path("cut.jpg"), Bytes(jpeg.begin(), jpeg.begin() + std::ptrdiff_t(cut)));
+    expect_input_error([&] { load_image(path("cut.jpg")); }, path("cut.jpg"));
+  }
+}
+
+TEST_F(ImageIoTest, CorruptPngDataIsRefused) {
+  save_image(path("good.png"), noise_image(32, 32, false, 8), ImageFormat::kPng);
+  Bytes png = read_bytes(path("good.png"));
+  png[png.size() / 2] ^= 0x55;  // inside the image data: the CRC no longer matches
+  expect_input_error([&] { decode_image(png.data(), png.size(), "flipped.png"); }, "flipped.png");
+}
+
+TEST_F(ImageIoTest, CorruptJpegDataIsRefusedOrDecodedWithoutCrashing) {
+  save_image(path("good.jpg"), noise_image(64, 64, false, 9), ImageFormat::kJpeg, 90);
+  const Bytes jpeg = read_bytes(path("good.jpg"));
+  // Bit flips in entropy-coded data often decode to a valid (wrong) image, which JPEG cannot detect;
+  // what matters is that every variant either decodes or throws an InputError, never crashes.
+  std::mt19937 rng(10);
+  for (int trial = 0; trial < 200; ++trial) {
+    Bytes damaged = jpeg;
+    for (int k = 0; k < 4; ++k) damaged[2 + rng() % (damaged.size() - 2)] = uint8_t(rng());
+    try {
+      const Image image = decode_image(damaged.data(), damaged.size(), "damaged.jpg");
+      EXPECT_FALSE(image.empty());
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("damaged.jpg"), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST_F(ImageIoTest, GarbageIsRefused) {
+  std::mt19937 rng(11);
+  Bytes garbage(5000);
+  for (unsigned char& b : garbage) b = uint8_t(rng());
+  garbage[0] = 'G';  // not a TGA header by chance (stb guesses TGA from loose header checks)
+  garbage[1] = 'X';
+  write_bytes(path("garbage.png"), garbage);
+  expect_input_error([&] { load_image(path("garbage.png")); }, path("garbage.png"));
+
+  const std::string text = "this is a text file, not an image\n";
+  write_bytes(path("text.jpg"), Bytes(text.begin(), text.end()));
+  expect_input_error([&] { load_image(path("text.jpg")); }, path("text.jpg"));
+
+  // Right magic bytes, garbage after them.
+  for (Bytes magic : {Bytes{0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'}, Bytes{0xff, 0xd8, 0xff}}) {
+    magic.insert(magic.end(), garbage.begin(), garbage.end());
+    expect_input_error([&] { decode_image(magic.data(), magic.size(), "magic.bin"); }, "magic.bin");
+  }
+}
+
+TEST_F(ImageIoTest, RandomBytesNeverCrash) {
+  // Fuzz-style smoke test: short random buffers, including ones starting with each magic number.
+  std::mt19937 rng(12);
+  const std::vector<Bytes> prefixes = {{}, {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'}, {0xff, 0xd8, 0xff}, {'B', 'M'}};
+  for (int trial = 0; trial < 400; ++trial) {
+    Bytes data = prefixes[size_t(trial) % prefixes.size()];
+    const size_t extra = 1 + rng() % 300;
+    for (size_t i = 0; i < extra; ++i) data.push_back(uint8_t(rng()));
+    try {
+      decode_image(data.data(), data.size(), "fuzz.bin", size_t(1) << 20);
+    } catch (const InputError&) {
+    }
+  }
+}
+
+TEST_F(ImageIoTest, ZeroSizePngIsRefused) {
+  // spng's encoder refuses to write a zero width, so the header is written by hand.
+  const Bytes png = png_header_only(0, 1);
+  expect_input_error([&] { decode_image(png.data(), png.size(), "zero.png"); }, "zero.png");
+}
+
+TEST_F(ImageIoTest, PixelLimitIsEnforcedForEveryFormat) {
+  const Image image = gradient_image(100, 50, false);  // 5000 pixels
+  save_image(path("limit.png"), image, ImageFormat::kPng);
+  save_image(path("limit.jpg"), image, ImageFormat::kJpeg);
+  write_bytes(path("limit.bmp"), encode_bmp(image));
+  for (const char* name : {"limit.png", "limit.jpg", "limit.bmp"}) {
+    EXPECT_NO_THROW(load_image(path(name), 5000)) << name;
+    const std::string message = expect_input_error([&] { load_image(path(name), 4999); }, path(name));
+    EXPECT_NE(message.find("100x50"), std::string::npos) << message;
+  }
+}
+
+TEST_F(ImageIoTest, HugeDeclaredSizeIsRefusedBeforeAllocating) {
+  // 100000 x 100000 is 10^10 pixels, 40 GB as RGBA; the default limit must refuse it at once.
+  const Bytes png = png_header_only(100000, 100000);
+  expect_input_error([&] { decode_image(png.data(), png.size(), "huge.png"); }, "more than the limit");
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Write failures
+
+TEST_F(ImageIoTest, UnwritablePathNamesTheFile) {
+  const std::string target = path("no_such_dir/out.png");
+  expect_input_error([&] { save_image(target, gradient_image(4, 4, false), ImageFormat::kPng); }, target);
+}
+
+TEST_F(ImageIoTest, FullDiskIsReported) {
+  if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
+  const Image image = noise_image(256, 256, false, 13);  // larger than stdio's buffer
+  expect_input_error([&] { save_image("/dev/full", image, ImageFormat::kPng); }, "/dev/full");
+  expect_input_error([&] { save_image("/dev/full", image, ImageFormat::kJpeg); }, "/dev/full");
+  EXPECT_TRUE(fs::exists("/dev/full"));  // a failed save removes only regular files it created
+}
+
+TEST_F(ImageIoTest, FailedJpegSaveLeavesNoFile) {
+  // Wider than JPEG allows (65500 pixels a side).
+  expect_input_error([&] { save_image(path("wide.jpg"), Image(65501, 1), ImageFormat::kJpeg); }, path("wide.jpg"));
+  EXPECT_FALSE(fs::exists(path("wide.jpg")));
+}
+
+TEST_F(ImageIoTest, JpegQualityOutOfRangeIsRefused) {
+  expect_input_error([&] { save_image(path("q.jpg"), Image(2, 2), ImageFormat::kJpeg, 0); }, "quality");
+  expect_input_error([&] { save_image(path("q.jpg"), Image(2, 2), ImageFormat::kJpeg, 101); }, "quality");
+}
+
+#ifdef TIGHTEX_SHARED_DATA
+TEST_F(ImageIoTest, LoadsRealTexture) {
+  const std::string file = std::string(TIGHTEX_SHARED_DATA) + "/meshroom_esp32cam/texture_1001.png";
+  if (!fs::exists(file)) GTEST_SKIP() << file << " not present";
+  const Image image = load_image(file);
+  EXPECT_EQ(image.width, 4096);
+  EXPECT_EQ(image.height, 4096);
+}
+#endif
+
+}  // namespace
+}  // namespace tightex

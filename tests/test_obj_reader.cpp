@@ -1,0 +1,407 @@
+// Tests for the OBJ + MTL reader: small files written on the fly for every supported form and every
+// refused one (checking that the message names file and line), plus the Meshroom scan from
+// ../shared/data.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "core/error.hpp"
+#include "io/image_io.hpp"
+#include "io/obj_reader.hpp"
+
+namespace tightex {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// A fresh folder per test, removed afterwards.
+class ObjReaderTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() /
+           (std::string("tightex_obj_reader_") + info->name() + "_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+
+  /// Writes `text` verbatim (binary mode, so "\r\n" stays) and returns the path.
+  std::string write(const std::string& name, const std::string& text) {
+    const fs::path p = dir_ / name;
+    fs::create_directories(p.parent_path());
+    std::ofstream out(p, std::ios::binary);
+    out << text;
+    return p.string();
+  }
+
+  /// The message read_obj throws, or "" when it succeeds. Every message must be a single line.
+  static std::string error_of(const std::string& path, const ObjReadOptions& options = {}) {
+    try {
+      read_obj(path, options);
+    } catch (const InputError& e) {
+      const std::string message = e.what();
+      EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+      return message;
+    }
+    return "";
+  }
+
+  static ObjReadOptions no_textures() {
+    ObjReadOptions o;
+    o.load_textures = false;
+    return o;
+  }
+
+  fs::path dir_;
+};
+
+// A unit square as a quad, with its texture coordinates.
+const char* const kSquareVerts =
+    "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+    "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n";
+
+TEST_F(ObjReaderTest, QuadIsFanTriangulated) {
+  const std::string path = write("quad.obj", std::string(kSquareVerts) + "f 1/1 2/2 3/3 4/4\n");
+  ObjReadStats stats;
+  const TexturedMesh mesh = read_obj(path, {}, &stats);
+  EXPECT_EQ(mesh.source, path);
+  ASSERT_EQ(mesh.num_vertices(), 4u);
+  ASSERT_EQ(mesh.num_triangles(), 2u);
+  EXPECT_EQ(mesh.triangles[0], (Tri{0, 1, 2}));
+  EXPECT_EQ(mesh.triangles[1], (Tri{0, 2, 3}));
+  ASSERT_EQ(mesh.corner_uv.size(), 6u);
+  EXPECT_EQ(mesh.corner_uv[4], Vec2(1, 1));
+  EXPECT_EQ(mesh.corner_uv[5], Vec2(0, 1));
+  EXPECT_TRUE(mesh.corner_normal.empty());
+  EXPECT_EQ(mesh.face_material, (std::vector<int32_t>{-1, -1}));
+  EXPECT_TRUE(mesh.materials.empty());
+  EXPECT_EQ(stats.polygons_triangulated, 1u);
+  EXPECT_EQ(stats.lines, 9u);
+}
+
+TEST_F(ObjReaderTest, NegativeIndicesAreRelativeToTheirLine) {
+  const std::string path = write("neg.obj",
+                                 "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n"
+                                 "f -3/-3 -2/-2 -1/-1\n"
+                                 "v 5 5 5\nvt 0.5 0.5\n"
+                                 "f -4/-1 -3/-3 -1/-2\n");
+  const TexturedMesh mesh = read_obj(path);
+  ASSERT_EQ(mesh.num_triangles(), 2u);
+  EXPECT_EQ(mesh.triangles[0], (Tri{0, 1, 2}));
+  EXPECT_EQ(mesh.triangles[1], (Tri{0, 1, 3}));
+  EXPECT_EQ(mesh.corner_uv[3], Vec2(0.5, 0.5));
+  EXPECT_EQ(mesh.corner_uv[4], Vec2(1, 0));
+  EXPECT_EQ(mesh.corner_uv[5], Vec2(0, 1));
+}
+
+TEST_F(ObjReaderTest, NegativeIndexBeforeDefinitionIsRefused) {
+  const std::string path = write("neg_bad.obj", "v 0 0 0\nvt 0 0\nf -1/1 -2/1 -3/1\nv 1 0 0\nv 0 1 0\n");
+  EXPECT_EQ(error_of(path),
+            path + ":3: vertex index -2 out of range (only 1 vertices defined before this line)");
+}
+
+TEST_F(ObjReaderTest, CrlfTabsBlankLinesAndComments) {
+  const std::string path = write("crlf.obj",
+                                 "# exported on Windows\r\n"
+                                 "\r\n"
+                                 "o thing\r\n"
+                                 "v\t0 0 0 \r\n"
+                                 "v 1\t0 0\t\r\n"
+                                 "v 0 1 0   # trailing comment\r\n"
+                                 "   \t \r\n"
+                                 "vt 0 0\r\nvt 1 0\r\nvt 0 1\r\n"
+                                 "g group one\r\ns 1\r\n"
+                                 "f 1/1 2/2 3/3\t\r\n"
+                                 "l 1 2\r\np 1\r\n"
+                                 "f 1/1 2/2 3/3");  // last line without a newline
+  ObjReadStats stats;
+  const TexturedMesh mesh = read_obj(path, {}, &stats);
+  ASSERT_EQ(mesh.num_triangles(), 2u);
+  EXPECT_EQ(mesh.positions[1], Vec3(1, 0, 0));
+  EXPECT_EQ(mesh.corner_uv[2], Vec2(0, 1));
+  EXPECT_EQ(stats.lines, 16u);
+}
+
+TEST_F(ObjReaderTest, CornerFormsAndNormals) {
+  const std::string path = write("normals.obj", std::string(kSquareVerts) +
+                                                    "vn 0 0 1\n"
+                                                    "f 1/1/1 2/2/1 3/3/1\n"
+                                                    "f 1/1/-1 3/3/-1 4/4/1\n");
+  const TexturedMesh mesh = read_obj(path);
+  ASSERT_EQ(mesh.corner_normal.size(), 6u);
+  for (const Vec3& n : mesh.corner_normal) EXPECT_EQ(n, Vec3(0, 0, 1));
+}
+
+TEST_F(ObjReaderTest, NormalsOnSomeFacesOnlyAreDropped) {
+  const std::string path =
+      write("some_normals.obj", std::string(kSquareVerts) + "vn 0 0 1\nf 1/1/1 2/2/1 3/3/1\nf 1/1 3/3 4/4\n");
+  const TexturedMesh mesh = read_obj(path);
+  EXPECT_EQ(mesh.num_triangles(), 2u);
+  EXPECT_TRUE(mesh.corner_normal.empty());
+}
+
+TEST_F(ObjReaderTest, VertexSlashSlashNormalHasNoTextureCoordinates) {
+  const std::string path = write("vvn.obj", std::string(kSquareVerts) +
+                                                "vn 0 0 1\n"
+                                                "f 1/1/1 2/2/1 3/3/1\n"
+                                                "f 1//1 3//1 4//1\n");
+  EXPECT_EQ(error_of(path), path + ":11: face has no texture coordinates (every face needs v/vt indices)");
+}
+
+TEST_F(ObjReaderTest, FaceWithoutAnyTextureCoordinatesNamesItsLine) {
+  const std::string path = write("partial_vt.obj", std::string(kSquareVerts) + "f 1/1 2/2 3/3\nf 1 3 4\n");
+  EXPECT_EQ(error_of(path), path + ":10: face has no texture coordinates (every face needs v/vt indices)");
+}
+
+TEST_F(ObjReaderTest, ModelWithoutTextureCoordinates) {
+  const std::string path = write("no_vt.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\n");
+  EXPECT_EQ(error_of(path),
+            path + ": model has no texture coordinates (vt); tightex needs the input's UV atlas");
+}
+
+TEST_F(ObjReaderTest, ForwardReferencesAreResolvedAtTheEnd) {
+  const std::string path =
+      write("forward.obj", "f 1/1 2/2 3/3\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n");
+  const TexturedMesh mesh = read_obj(path);
+  EXPECT_EQ(mesh.num_triangles(), 1u);
+  EXPECT_EQ(mesh.corner_uv[1], Vec2(1, 0));
+}
+
+TEST_F(ObjReaderTest, IndexOutOfRangeNamesTheLine) {
+  const std::string path =
+      write("range.obj", std::string(kSquareVerts) + "f 1/1 2/2 3/3\n\nf 1/1 2/2 99999/3\n");
+  EXPECT_EQ(error_of(path), path + ":11: vertex index 99999 out of range (file has 4 vertices)");
+  const std::string vt_path = write("range_vt.obj", std::string(kSquareVerts) + "f 1/1 2/2 3/7\n");
+  EXPECT_EQ(error_of(vt_path),
+            vt_path + ":9: texture coordinate index 7 out of range (file has 4 texture coordinates)");
+}
+
+TEST_F(ObjReaderTest, ZeroIndexIsRefused) {
+  const std::string path = write("zero.obj", std::string(kSquareVerts) + "f 0/1 2/2 3/3\n");
+  EXPECT_EQ(error_of(path), path + ":9: index 0 is invalid (OBJ indices start at 1)");
+}
+
+TEST_F(ObjReaderTest, NonFiniteCoordinatesAreRefused) {
+  const std::string nan_path = write("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/1\n");
+  EXPECT_EQ(error_of(nan_path), nan_path + ":2: NaN or infinite coordinate");
+  const std::string inf_path = write("inf.obj", "v 0 0 0\nv 1 0 1e999\n");
+  EXPECT_EQ(error_of(inf_path), inf_path + ":2: NaN or infinite coordinate");
+  const std::string vt_path = write("nan_vt.obj", "v 0 0 0\nvt 0 -inf\n");
+  EXPECT_EQ(error_of(vt_path), vt_path + ":2: NaN or infinite texture coordinate");
+  const std::string absurd = write("absurd.obj", "v 0 0 0\nv 0 2e15 0\n");
+  EXPECT_EQ(error_of(absurd), absurd + ":2: absurd coordinate 2e+15 (absolute value above 1e15)");
+}
+
+TEST_F(ObjReaderTest, MalformedNumbersAreRefused) {
+  const std::string path = write("bad_number.obj", "v 0 0 0\nv 1 abc 0\n");
+  EXPECT_EQ(error_of(path), path + ":2: malformed number 'abc' in 'v'");
+  const std::string glued = write("glued.obj", "vt 0.5x 0\n");
+  EXPECT_EQ(error_of(glued), glued + ":1: malformed number '0.5x' in 'vt'");
+  const std::string few = write("few.obj", "v 1 2\n");
+  EXPECT_EQ(error_of(few), few + ":1: 'v' needs 3 coordinates, got 2");
+  const std::string corner = write("bad_corner.obj", std::string(kSquareVerts) + "f 1/1 2/x 3/3\n");
+  EXPECT_EQ(error_of(corner), corner + ":9: malformed face corner '2/x'");
+}
+
+TEST_F(ObjReaderTest, VertexColoursAndPlusSignsAreAccepted) {
+  const std::string path = write("colours.obj",
+                                 "v 0 0 0 1 0.5 0.25\nv +1 0 0 0 0 0\nv 0 1 0 1.0\n"
+                                 "vt 0 0 0\nvt 1\nvt 0 1\nf 1/1 2/2 3/3\n");
+  const TexturedMesh mesh = read_obj(path);
+  EXPECT_EQ(mesh.positions[1], Vec3(1, 0, 0));
+  EXPECT_EQ(mesh.corner_uv[1], Vec2(1, 0));
+}
+
+TEST_F(ObjReaderTest, FaceWithTwoCornersIsRefused) {
+  const std::string path = write("two.obj", std::string(kSquareVerts) + "f 1/1 2/2\n");
+  EXPECT_EQ(error_of(path), path + ":9: face has 2 corners (needs at least 3)");
+}
+
+TEST_F(ObjReaderTest, UnknownStatementsAreIgnored) {
+  const std::string path =
+      write("unknown.obj", std::string(kSquareVerts) + "vp 0.5\ncstype bspline\nmg 1\nf 1/1 2/2 3/3\n");
+  EXPECT_EQ(read_obj(path).num_triangles(), 1u);
+}
+
+TEST_F(ObjReaderTest, EmptyAndUnreadableFiles) {
+  const std::string empty = write("empty.obj", "");
+  EXPECT_EQ(error_of(empty), empty + ": no faces");
+  const std::string only_verts = write("verts.obj", kSquareVerts);
+  EXPECT_EQ(error_of(only_verts), only_verts + ": no faces");
+  EXPECT_EQ(error_of(dir_.string()), dir_.string() + ": is a directory, not a file");
+  const std::string missing = (dir_ / "missing.obj").string();
+  EXPECT_EQ(error_of(missing), missing + ": not found");
+  const std::string binary = write("binary.obj", std::string("\x89PNG\r\n\x1a\n\0\0\0", 11));
+  EXPECT_NE(error_of(binary).find("not a text file"), std::string::npos);
+}
+
+TEST_F(ObjReaderTest, MaterialsAndFacesBeforeUsemtl) {
+  write("mats.mtl",
+        "# comment\n"
+        "newmtl red\nKa 1 1 1\nKd 1 0 0\nillum 2\n\n"
+        "newmtl grey\nKd 0.5\n"
+        "newmtl unused\nKd 0 0 1\n");
+  const std::string path = write("mats.obj", std::string("mtllib mats.mtl\n") + kSquareVerts +
+                                                 "f 1/1 2/2 3/3\n"
+                                                 "usemtl grey\nf 1/1 3/3 4/4\n"
+                                                 "usemtl red\nf 1/1 2/2 4/4\n"
+                                                 "usemtl grey\nf 2/2 3/3 4/4\n");
+  const TexturedMesh mesh = read_obj(path);
+  // Materials in order of first use; unused ones are left out.
+  ASSERT_EQ(mesh.materials.size(), 2u);
+  EXPECT_EQ(mesh.materials[0].name, "grey");
+  EXPECT_EQ(mesh.materials[0].kd, (std::array<double, 3>{0.5, 0.5, 0.5}));
+  EXPECT_EQ(mesh.materials[1].name, "red");
+  EXPECT_EQ(mesh.materials[1].kd, (std::array<double, 3>{1, 0, 0}));
+  EXPECT_EQ(mesh.materials[1].texture, -1);
+  EXPECT_EQ(mesh.face_material, (std::vector<int32_t>{-1, 0, 1, 0}));
+  EXPECT_TRUE(mesh.textures.empty());
+}
+
+TEST_F(ObjReaderTest, MissingMaterialLibrary) {
+  const std::string path =
+      write("no_mtl.obj", std::string(kSquareVerts) + "mtllib nowhere.mtl\nf 1/1 2/2 3/3\n");
+  EXPECT_EQ(error_of(path), path + ":9: material library 'nowhere.mtl' not found");
+  const std::string spaced = write("no_mtl2.obj", "mtllib my materials.mtl\n");
+  EXPECT_EQ(error_of(spaced), spaced + ":1: material library 'my materials.mtl' not found");
+}
+
+TEST_F(ObjReaderTest, SeveralLibrariesAndNamesWithSpaces) {
+  write("a.mtl", "newmtl first\nKd 1 0 0\n");
+  write("b.mtl", "newmtl second\nKd 0 1 0\n");
+  write("sub dir/my mats.mtl", "newmtl third\nKd 0 0 1\n");
+  const std::string path =
+      write("multi.obj", std::string("mtllib a.mtl b.mtl\nmtllib sub dir\\my mats.mtl\n") + kSquareVerts +
+                             "usemtl third\nf 1/1 2/2 3/3\nusemtl second\nf 1/1 3/3 4/4\n");
+  const TexturedMesh mesh = read_obj(path);
+  ASSERT_EQ(mesh.materials.size(), 2u);
+  EXPECT_EQ(mesh.materials[0].name, "third");
+  EXPECT_EQ(mesh.materials[1].name, "second");
+
+  const std::string half = write("half.obj", "mtllib a.mtl c.mtl\n");
+  EXPECT_EQ(error_of(half), half + ":1: material library 'c.mtl' not found");
+}
+
+TEST_F(ObjReaderTest, UsemtlOfUndefinedMaterial) {
+  write("m.mtl", "newmtl known\nKd 1 1 1\n");
+  const std::string path =
+      write("undef.obj", std::string("mtllib m.mtl\n") + kSquareVerts +
+                             "usemtl known\nf 1/1 2/2 3/3\nusemtl mystery\nf 1/1 3/3 4/4\n");
+  EXPECT_EQ(error_of(path), path + ":12: material 'mystery' is not defined in any material library");
+  const std::string no_lib = write("no_lib.obj", std::string(kSquareVerts) + "usemtl known\nf 1/1 2/2 3/3\n");
+  EXPECT_EQ(error_of(no_lib),
+            no_lib + ":9: material 'known' used but the file names no material library (mtllib)");
+}
+
+TEST_F(ObjReaderTest, UsemtlBeforeMtllibIsResolved) {
+  write("late.mtl", "newmtl late\nKd 0 0 0\n");
+  const std::string path =
+      write("late.obj", std::string(kSquareVerts) + "usemtl late\nf 1/1 2/2 3/3\nmtllib late.mtl\n");
+  const TexturedMesh mesh = read_obj(path);
+  ASSERT_EQ(mesh.materials.size(), 1u);
+  EXPECT_EQ(mesh.face_material[0], 0);
+}
+
+TEST_F(ObjReaderTest, MapKdOptionsAndFileNameWithSpaces) {
+  write("tex.mtl",
+        "newmtl tiled\r\n"
+        "Kd 1 1 1\r\n"
+        "map_Kd -blendu on -blendv off -bm 1 -boost 2 -clamp off -s 2 3 1 -o 0.25 0.5 -mm 0 1 "
+        "-t 0 0 0 -texres 512 -imfchan r -cc off textures\\my texture.png\r\n"
+        "newmtl same_texture\n"
+        "map_kd textures/my texture.png\n"
+        "newmtl short_options\n"
+        "map_Kd -s 4 other.png\n");
+  const std::string path = write("tex.obj", std::string("mtllib tex.mtl\n") + kSquareVerts +
+                                                "usemtl tiled\nf 1/1 2/2 3/3\n"
+                                                "usemtl same_texture\nf 1/1 3/3 4/4\n"
+                                                "usemtl short_options\nf 2/2 3/3 4/4\n");
+  const TexturedMesh mesh = read_obj(path, no_textures());
+  ASSERT_EQ(mesh.materials.size(), 3u);
+  const Material& tiled = mesh.materials[0];
+  EXPECT_EQ(tiled.uv_scale, (std::array<double, 2>{2, 3}));
+  EXPECT_EQ(tiled.uv_offset, (std::array<double, 2>{0.25, 0.5}));
+  // Both materials name the same file: one texture.
+  ASSERT_EQ(mesh.textures.size(), 2u);
+  EXPECT_EQ(tiled.texture, 0);
+  EXPECT_EQ(mesh.materials[1].texture, 0);
+  EXPECT_EQ(mesh.materials[2].texture, 1);
+  EXPECT_EQ(fs::path(mesh.textures[0].path), (dir_ / "textures/my texture.png").lexically_normal());
+  EXPECT_TRUE(mesh.textures[0].image.empty());  // not loaded
+  // -s with only u leaves v at 1.
+  EXPECT_EQ(mesh.materials[2].uv_scale, (std::array<double, 2>{4, 1}));
+  // The sampled coordinate applies the transform.
+  EXPECT_EQ(mesh.sampled_uv(0, 1), Vec2(2 * 1 + 0.25, 3 * 0 + 0.5));
+}
+
+TEST_F(ObjReaderTest, TexturesAreLoaded) {
+  Image image(2, 3, Rgba8{10, 20, 30, 255});
+  fs::create_directories(dir_ / "textures");
+  save_image((dir_ / "textures/atlas page.png").string(), image, ImageFormat::kPng);
+  write("t.mtl",
+        "newmtl a\nmap_Kd -s 1 1 textures/atlas page.png\nnewmtl b\nmap_Kd textures/atlas page.png\n");
+  const std::string path = write("t.obj", std::string("mtllib t.mtl\n") + kSquareVerts +
+                                              "usemtl a\nf 1/1 2/2 3/3\nusemtl b\nf 1/1 3/3 4/4\n");
+  const TexturedMesh mesh = read_obj(path);
+  ASSERT_EQ(mesh.textures.size(), 1u);
+  EXPECT_EQ(mesh.textures[0].image.width, 2);
+  EXPECT_EQ(mesh.textures[0].image.height, 3);
+  EXPECT_EQ(mesh.materials[0].texture, 0);
+  EXPECT_EQ(mesh.materials[1].texture, 0);
+}
+
+TEST_F(ObjReaderTest, MissingTextureNamesTheMaterialLibraryLine) {
+  const std::string mtl = write("gone.mtl", "newmtl a\nKd 1 1 1\nmap_Kd gone.png\n");
+  const std::string path =
+      write("gone.obj", std::string("mtllib gone.mtl\n") + kSquareVerts + "usemtl a\nf 1/1 2/2 3/3\n");
+  const std::string message = error_of(path);
+  EXPECT_EQ(message.rfind(mtl + ":3: texture 'gone.png' of material 'a' could not be loaded: ", 0), 0u)
+      << message;
+  // Without pixels the path is kept and nothing is opened.
+  const TexturedMesh mesh = read_obj(path, no_textures());
+  ASSERT_EQ(mesh.textures.size(), 1u);
+  EXPECT_EQ(fs::path(mesh.textures[0].path), dir_ / "gone.png");
+}
+
+TEST_F(ObjReaderTest, MalformedMaterialLibrary) {
+  const std::string mtl = write("bad.mtl", "newmtl a\nKd 1 x 1\n");
+  const std::string path =
+      write("bad.obj", std::string("mtllib bad.mtl\n") + kSquareVerts + "f 1/1 2/2 3/3\n");
+  EXPECT_EQ(error_of(path), mtl + ":2: malformed number 'x' in 'Kd'");
+  const std::string opt = write("opt.mtl", "newmtl a\nmap_Kd -zoom 2 tex.png\n");
+  const std::string opt_obj =
+      write("opt.obj", std::string("mtllib opt.mtl\n") + kSquareVerts + "f 1/1 2/2 3/3\n");
+  EXPECT_EQ(error_of(opt_obj), opt + ":2: unknown option '-zoom' in 'map_Kd'");
+}
+
+TEST_F(ObjReaderTest, MeshroomScan) {
+  const fs::path obj = fs::path(TIGHTEX_SHARED_DATA) / "meshroom_esp32cam" / "texturedMesh.obj";
+  if (!fs::exists(obj)) GTEST_SKIP() << obj << " not present";
+  ObjReadStats stats;
+  const auto start = std::chrono::steady_clock::now();
+  const TexturedMesh mesh = read_obj(obj.string(), no_textures(), &stats);
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  std::printf("read_obj(%s): %.1f ms\n", obj.filename().c_str(), ms);
+  EXPECT_EQ(mesh.num_triangles(), 53364u);
+  EXPECT_EQ(mesh.num_vertices(), 26984u);
+  EXPECT_EQ(mesh.corner_uv.size(), 3u * 53364u);
+  EXPECT_TRUE(mesh.corner_normal.empty());
+  ASSERT_EQ(mesh.materials.size(), 1u);
+  ASSERT_EQ(mesh.textures.size(), 1u);
+  EXPECT_EQ(fs::path(mesh.textures[0].path).filename(), "texture_1001.png");
+  for (int32_t m : mesh.face_material) ASSERT_EQ(m, 0);
+  EXPECT_EQ(stats.polygons_triangulated, 0u);
+}
+
+}  // namespace
+}  // namespace tightex
