@@ -1,5 +1,7 @@
 #include "bake/bake.hpp"
 
+#include "core/raster.hpp"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -13,12 +15,8 @@ namespace {
 
 constexpr int kTile = 64;
 
-inline double edge(const Vec2& a, const Vec2& b, double px, double py) {
-  return (b.x() - a.x()) * (py - a.y()) - (b.y() - a.y()) * (px - a.x());
-}
-
 Rgba8 to_rgba(const std::array<float, 4>& c) {
-  auto q = [](float x) { return uint8_t(std::clamp(std::lround(x), 0l, 255l)); };
+  auto q = [](float x) { return uint8_t(std::clamp(x + 0.5f, 0.0f, 255.0f)); };
   return {q(c[0]), q(c[1]), q(c[2]), q(c[3])};
 }
 
@@ -54,14 +52,6 @@ void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& tr
         const int bx1 = std::min(bx0 + kTile, out.width), by1 = std::min(by0 + kTile, out.height);
         for (uint32_t t : bins[b]) {
           const BakeTriangle& tri = triangles[t];
-          const Vec2 &p0 = tri.target_px[0], &p1 = tri.target_px[1], &p2 = tri.target_px[2];
-          const double area2 = edge(p0, p1, p2.x(), p2.y());
-          if (area2 == 0 || !std::isfinite(area2)) continue;
-          const double sign = area2 > 0 ? 1.0 : -1.0;
-          const double xmin = std::min({p0.x(), p1.x(), p2.x()}), xmax = std::max({p0.x(), p1.x(), p2.x()});
-          const double ymin = std::min({p0.y(), p1.y(), p2.y()}), ymax = std::max({p0.y(), p1.y(), p2.y()});
-          const int ix0 = std::max(bx0, int(std::ceil(xmin - 0.5))), ix1 = std::min(bx1 - 1, int(std::floor(xmax - 0.5)));
-          const int iy0 = std::max(by0, int(std::ceil(ymin - 0.5))), iy1 = std::min(by1 - 1, int(std::floor(ymax - 0.5)));
           const Image* src = nullptr;
           Rgba8 flat{255, 255, 255, 255};
           if (tri.material >= 0) {
@@ -71,24 +61,18 @@ void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& tr
             else
               flat = flat_colour[size_t(tri.material)];
           }
-          for (int y = iy0; y <= iy1; ++y) {
-            const double py = y + 0.5;
-            for (int x = ix0; x <= ix1; ++x) {
-              const double px = x + 0.5;
-              const double w0 = sign * edge(p1, p2, px, py), w1 = sign * edge(p2, p0, px, py), w2 = sign * edge(p0, p1, px, py);
-              if (w0 < 0 || w1 < 0 || w2 < 0) continue;
-              Rgba8 c = flat;
-              if (src) {
-                const double s = 1.0 / (w0 + w1 + w2);
-                const Vec2 uv = (w0 * s) * tri.source_uv[0] + (w1 * s) * tri.source_uv[1] + (w2 * s) * tri.source_uv[2];
-                c = to_rgba(sample_bilinear(*src, uv.x(), uv.y()));
-              }
-              const size_t idx = size_t(y) * size_t(out.width) + size_t(x);
-              out.pixels[idx] = c;
-              local += !covered[idx];
-              covered[idx] = 1;
-            }
-          }
+          scan_triangle(tri.target_px[0], tri.target_px[1], tri.target_px[2], bx0, bx1, by0, by1, EdgeRule::kInclusive,
+                        [&](long x, long y, double w0, double w1, double w2) {
+                          Rgba8 c = flat;
+                          if (src) {
+                            const Vec2 uv = w0 * tri.source_uv[0] + w1 * tri.source_uv[1] + w2 * tri.source_uv[2];
+                            c = to_rgba(sample_bilinear(*src, uv.x(), uv.y()));
+                          }
+                          const size_t idx = size_t(y) * size_t(out.width) + size_t(x);
+                          out.pixels[idx] = c;
+                          local += !covered[idx];
+                          covered[idx] = 1;
+                        });
         }
       }
       filled += local;

@@ -19,6 +19,14 @@ std::array<float, 4> sample_bilinear(const Image& image, double u, double v) {
   const float tx = float(x - fx), ty = float(y - fy);
   // floor of huge values is clamped before the int conversion, so absurd UVs cannot overflow.
   const double lim = 1e9;
+  if (fx >= 0 && fy >= 0 && fx < image.width - 1 && fy < image.height - 1) {  // common case: no wrap
+    const size_t i0 = size_t(fy) * size_t(image.width) + size_t(fx);
+    const Rgba8 &p00 = image.pixels[i0], &p10 = image.pixels[i0 + 1], &p01 = image.pixels[i0 + size_t(image.width)],
+                &p11 = image.pixels[i0 + size_t(image.width) + 1];
+    const float w00 = (1 - tx) * (1 - ty), w10 = tx * (1 - ty), w01 = (1 - tx) * ty, w11 = tx * ty;
+    return {w00 * p00.r + w10 * p10.r + w01 * p01.r + w11 * p11.r, w00 * p00.g + w10 * p10.g + w01 * p01.g + w11 * p11.g,
+            w00 * p00.b + w10 * p10.b + w01 * p01.b + w11 * p11.b, w00 * p00.a + w10 * p10.a + w01 * p01.a + w11 * p11.a};
+  }
   const int x0 = wrap(int(std::fmod(std::clamp(fx, -lim, lim), double(image.width))), image.width);
   const int y0 = wrap(int(std::fmod(std::clamp(fy, -lim, lim), double(image.height))), image.height);
   const int x1 = x0 + 1 == image.width ? 0 : x0 + 1;

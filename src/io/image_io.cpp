@@ -97,8 +97,10 @@ constexpr int kJpegFullChromaQuality = 90;
 
 std::string errno_message(int error) { return std::generic_category().message(error); }
 
+// True if the data starts with `magic`, or is a file cut off inside it (at least two bytes long), so
+// that such a stub is reported as a truncated PNG or JPEG rather than an unknown format.
 bool starts_with(const unsigned char* data, size_t size, const unsigned char* magic, size_t magic_size) {
-  return size >= magic_size && std::memcmp(data, magic, magic_size) == 0;
+  return size >= std::min<size_t>(2, magic_size) && std::memcmp(data, magic, std::min(size, magic_size)) == 0;
 }
 
 bool is_png(const unsigned char* data, size_t size) {
@@ -371,6 +373,7 @@ void jpeg_progress(j_common_ptr cinfo) {
   const int scan = reinterpret_cast<j_decompress_ptr>(cinfo)->input_scan_number;
   if (scan > kMaxJpegScans) {
     JpegErrorManager& err = error_manager(cinfo);
+    err.pub.msg_code = 0;
     std::snprintf(err.message, sizeof(err.message), "more than %d progressive scans", kMaxJpegScans);
     std::longjmp(err.jump, 1);
   }
@@ -410,6 +413,7 @@ bool jpeg_decompress_guarded(JpegDecoder& d, Rgba8* out, bool cmyk) {
   jpeg_start_decompress(&d.cinfo);
   if (d.cinfo.output_width != d.cinfo.image_width || d.cinfo.output_height != d.cinfo.image_height ||
       d.cinfo.output_components != 4) {
+    d.err.pub.msg_code = 0;
     std::snprintf(d.err.message, sizeof(d.err.message), "unexpected decoder output layout");
     return false;
   }
@@ -422,6 +426,7 @@ bool jpeg_decompress_guarded(JpegDecoder& d, Rgba8* out, bool cmyk) {
     for (JDIMENSION i = 0; i < count; ++i) rows[i] = reinterpret_cast<JSAMPROW>(out + (size_t(first) + i) * width);
     // A memory source never suspends, so zero rows means the decoder is stuck: stop rather than spin.
     if (jpeg_read_scanlines(&d.cinfo, rows, count) == 0) {
+      d.err.pub.msg_code = 0;
       std::snprintf(d.err.message, sizeof(d.err.message), "decoder made no progress");
       return false;
     }
@@ -447,10 +452,15 @@ void cmyk_to_rgb(Image& image, bool adobe_inverted) {
   }
 }
 
+[[noreturn]] void fail_jpeg(const std::string& name, const JpegErrorManager& err) {
+  const char* what = err.pub.msg_code == JWRN_JPEG_EOF ? "truncated" : "corrupt";
+  fail_input("{}: {} JPEG (libjpeg: {})", name, what, err.message);
+}
+
 Image decode_jpeg(const unsigned char* data, size_t size, const std::string& name, size_t max_pixels) {
   JpegDecoder decoder;
   if (!jpeg_read_header_guarded(decoder, data, size)) {
-    fail_input("{}: corrupt JPEG (libjpeg: {})", name, decoder.err.message);
+    fail_jpeg(name, decoder.err);
   }
   const jpeg_decompress_struct& cinfo = decoder.cinfo;
   bool cmyk = false;
@@ -471,7 +481,7 @@ Image decode_jpeg(const unsigned char* data, size_t size, const std::string& nam
 
   Image image(int(cinfo.image_width), int(cinfo.image_height));
   if (!jpeg_decompress_guarded(decoder, image.pixels.data(), cmyk)) {
-    fail_input("{}: corrupt JPEG (libjpeg: {})", name, decoder.err.message);
+    fail_jpeg(name, decoder.err);
   }
   if (cmyk) cmyk_to_rgb(image, cinfo.saw_Adobe_marker != 0);
   return image;
@@ -539,15 +549,30 @@ Image decode_with_stb(const unsigned char* data, size_t size, const std::string&
   int width = 0, height = 0, channels = 0;
   // stbi_info parses only the header, so the size check happens before any pixel memory is allocated.
   if (!stbi_info_from_memory(data, int(size), &width, &height, &channels)) {
-    fail_input("{}: unrecognised image format (not PNG or JPEG, and stb_image cannot read it: {})", name, stb_reason());
+    fail_input("{}: unrecognised image format (not PNG or JPEG, and stb_image cannot read it: {})", name,
+               stb_reason());
   }
   check_dimensions(name, "image", uint64_t(std::max(width, 0)), uint64_t(std::max(height, 0)), max_pixels);
+  // Loaded with the file's own channel count, and widened to RGBA below, rather than asking stb for 4
+  // channels: stb 2.27 (Debian 12) converts a 16-bit PNM with its 8-bit channel converter when the
+  // requested count differs, reading past its buffer (found by fuzzing this function under ASan).
   std::unique_ptr<stbi_uc, StbImageDeleter> pixels(
-      stbi_load_from_memory(data, int(size), &width, &height, &channels, 4));
+      stbi_load_from_memory(data, int(size), &width, &height, &channels, 0));
   if (pixels == nullptr) fail_input("{}: corrupt image (stb_image: {})", name, stb_reason());
   check_dimensions(name, "image", uint64_t(std::max(width, 0)), uint64_t(std::max(height, 0)), max_pixels);
+  if (channels < 1 || channels > 4) fail_input("{}: unsupported image with {} channels", name, channels);
+
   Image image(width, height);
-  std::memcpy(image.pixels.data(), pixels.get(), image.pixels.size() * sizeof(Rgba8));
+  const stbi_uc* in = pixels.get();
+  for (Rgba8& p : image.pixels) {
+    switch (channels) {
+      case 1: p = Rgba8{in[0], in[0], in[0], 255}; break;
+      case 2: p = Rgba8{in[0], in[0], in[0], in[1]}; break;
+      case 3: p = Rgba8{in[0], in[1], in[2], 255}; break;
+      default: p = Rgba8{in[0], in[1], in[2], in[3]}; break;
+    }
+    in += channels;
+  }
   return image;
 }
 

@@ -11,6 +11,7 @@
 #include <random>
 #include <unordered_map>
 
+#include "core/raster.hpp"
 #include "core/surface.hpp"
 
 namespace tightex {
@@ -59,18 +60,11 @@ int texture_of(const TexturedMesh& m, size_t t) {
 template <typename F>
 void raster(const Vec2& a, const Vec2& b, const Vec2& c, int W, int H, F&& f) {
   const Vec2 p[3] = {{a.x() * W, (1 - a.y()) * H}, {b.x() * W, (1 - b.y()) * H}, {c.x() * W, (1 - c.y()) * H}};
-  auto edge = [](const Vec2& s, const Vec2& e, double x, double y) { return (e.x() - s.x()) * (y - s.y()) - (e.y() - s.y()) * (x - s.x()); };
-  const double area = edge(p[0], p[1], p[2].x(), p[2].y());
-  if (area == 0 || !std::isfinite(area)) return;
-  const double sg = area > 0 ? 1 : -1;
   const double x0 = std::min({p[0].x(), p[1].x(), p[2].x()}), x1 = std::max({p[0].x(), p[1].x(), p[2].x()});
   const double y0 = std::min({p[0].y(), p[1].y(), p[2].y()}), y1 = std::max({p[0].y(), p[1].y(), p[2].y()});
-  if (x1 - x0 > 4.0 * W || y1 - y0 > 4.0 * H) return;  // absurd span: a broken input triangle
-  for (long y = long(std::ceil(y0 - 0.5)); y <= long(std::floor(y1 - 0.5)); ++y)
-    for (long x = long(std::ceil(x0 - 0.5)); x <= long(std::floor(x1 - 0.5)); ++x) {
-      const double px = x + 0.5, py = y + 0.5;
-      if (sg * edge(p[1], p[2], px, py) >= 0 && sg * edge(p[2], p[0], px, py) >= 0 && sg * edge(p[0], p[1], px, py) >= 0) f(x, y);
-    }
+  if (!(x1 - x0 <= 4.0 * W && y1 - y0 <= 4.0 * H)) return;  // absurd or non-finite span: a broken input triangle
+  scan_triangle(p[0], p[1], p[2], long(std::floor(x0)) - 1, long(std::ceil(x1)) + 1, long(std::floor(y0)) - 1,
+                long(std::ceil(y1)) + 1, EdgeRule::kInclusive, [&](long x, long y, double, double, double) { f(x, y); });
 }
 
 double quantile(std::vector<std::pair<double, double>>& vw, double q) {
@@ -156,13 +150,14 @@ size_t count_charts(const TexturedMesh& m, double* seam_length) {
     if (j - i >= 2) {
       const uint64_t a = keyed[i].first >> 32, b = keyed[i].first & 0xffffffffu;
       bool differs = false;
-      for (size_t k = i + 1; k < j; ++k) {
-        const uint32_t h0 = keyed[i].second, h1 = keyed[k].second;
-        if (uv_at(h0, a) == uv_at(h1, a) && uv_at(h0, b) == uv_at(h1, b))
-          uf.unite(h0 / 3, h1 / 3);
-        else
-          differs = true;
-      }
+      for (size_t k0 = i; k0 < j; ++k0)
+        for (size_t k = k0 + 1; k < j; ++k) {
+          const uint32_t h0 = keyed[k0].second, h1 = keyed[k].second;
+          if (uv_at(h0, a) == uv_at(h1, a) && uv_at(h0, b) == uv_at(h1, b))
+            uf.unite(h0 / 3, h1 / 3);
+          else
+            differs = true;
+        }
       if (differs) {
         const uint32_t h = keyed[i].second;
         seam += (m.positions[m.triangles[h / 3][h % 3]] - m.positions[m.triangles[h / 3][(h % 3 + 1) % 3]]).norm();
@@ -250,15 +245,16 @@ Metrics measure(const TexturedMesh& in, const TexturedMesh& out, size_t psnr_sam
     for (size_t i = 0; i < nh;) {
       size_t j = i + 1;
       while (j < nh && keyed[j].first == keyed[i].first) ++j;
-      for (size_t k = i + 1; k < j; ++k) {
-        const uint32_t h0 = keyed[i].second, h1 = keyed[k].second;
+      for (size_t k0 = i; k0 < j; ++k0)
+      for (size_t k = k0 + 1; k < j; ++k) {
+        const uint32_t h0 = keyed[k0].second, h1 = keyed[k].second;
         auto uvp = [&](uint32_t h, uint32_t v) {
           for (int c = 0; c < 3; ++c)
             if (vid[out.triangles[h / 3][c]] == v) return out.corner_uv[3 * (h / 3) + size_t(c)];
           return Vec2(NAN, NAN);
         };
         const uint32_t a = uint32_t(keyed[i].first >> 32), b = uint32_t(keyed[i].first & 0xffffffffu);
-        if (uvp(h0, a) == uvp(h0 == h1 ? h0 : h1, a) && uvp(h0, b) == uvp(h1, b)) uf.unite(h0 / 3, h1 / 3);
+        if (uvp(h0, a) == uvp(h1, a) && uvp(h0, b) == uvp(h1, b)) uf.unite(h0 / 3, h1 / 3);
       }
       i = j;
     }
@@ -294,28 +290,10 @@ Metrics measure(const TexturedMesh& in, const TexturedMesh& out, size_t psnr_sam
       for (size_t t : tris[i]) {
         const Vec2 uv[3] = {out.sampled_uv(t, 0), out.sampled_uv(t, 1), out.sampled_uv(t, 2)};
         const Vec2 p[3] = {{uv[0].x() * W, (1 - uv[0].y()) * H}, {uv[1].x() * W, (1 - uv[1].y()) * H}, {uv[2].x() * W, (1 - uv[2].y()) * H}};
-        const double area = (p[1].x() - p[0].x()) * (p[2].y() - p[0].y()) - (p[1].y() - p[0].y()) * (p[2].x() - p[0].x());
-        if (area == 0) continue;
-        const int o[3] = {0, area > 0 ? 1 : 2, area > 0 ? 2 : 1};
-        const Vec2 q[3] = {p[o[0]], p[o[1]], p[o[2]]};
-        auto edge = [](const Vec2& s, const Vec2& e, double x, double y) { return (e.x() - s.x()) * (y - s.y()) - (e.y() - s.y()) * (x - s.x()); };
-        // top-left rule: include an edge's points only if it is a "top" or "left" edge
-        auto owns = [](const Vec2& s, const Vec2& e) { const double dx = e.x() - s.x(), dy = e.y() - s.y(); return dy < 0 || (dy == 0 && dx > 0); };
-        const double x0 = std::min({q[0].x(), q[1].x(), q[2].x()}), x1 = std::max({q[0].x(), q[1].x(), q[2].x()});
-        const double y0 = std::min({q[0].y(), q[1].y(), q[2].y()}), y1 = std::max({q[0].y(), q[1].y(), q[2].y()});
-        for (long y = std::max(0l, long(std::ceil(y0 - 0.5))); y <= std::min(long(H) - 1, long(std::floor(y1 - 0.5))); ++y)
-          for (long x = std::max(0l, long(std::ceil(x0 - 0.5))); x <= std::min(long(W) - 1, long(std::floor(x1 - 0.5))); ++x) {
-            const double px = x + 0.5, py = y + 0.5;
-            bool in = true;
-            for (int e = 0; e < 3 && in; ++e) {
-              const double v = edge(q[e], q[(e + 1) % 3], px, py);
-              in = v > 0 || (v == 0 && owns(q[e], q[(e + 1) % 3]));
-            }
-            if (in) {
-              uint8_t& c = cnt[size_t(y) * size_t(W) + size_t(x)];
-              if (c < 2) c++;
-            }
-          }
+        scan_triangle(p[0], p[1], p[2], 0, W, 0, H, EdgeRule::kTopLeft, [&](long x, long y, double, double, double) {
+          uint8_t& c = cnt[size_t(y) * size_t(W) + size_t(x)];
+          if (c < 2) c++;
+        });
       }
       for (uint8_t c : cnt) {
         total += c > 0;
