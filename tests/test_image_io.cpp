@@ -423,6 +423,24 @@ TEST_F(ImageIoTest, DecodesBmpThroughStb) {
   EXPECT_TRUE(loaded.pixels == image.pixels);
 }
 
+TEST_F(ImageIoTest, Decodes16BitPpmThroughStb) {
+  // Regression: stb_image 2.27 overran its buffer on every 16-bit PNM when asked for 4 channels.
+  Bytes ppm = {'P', '6', '\n', '3', ' ', '2', '\n', '6', '5', '5', '3', '5', '\n'};
+  const uint16_t samples[] = {0x0000, 0x1234, 0xffff, 0x8000, 0xfe01, 0x0100, 0x7f80, 0x4000, 0x0001,
+                              0xffff, 0xffff, 0xffff, 0x0000, 0x0000, 0x0000, 0xabcd, 0x00ff, 0xff00};
+  for (uint16_t v : samples) ppm.push_back(uint8_t(v >> 8)), ppm.push_back(uint8_t(v));  // big-endian
+  const Image image = decode_image(ppm.data(), ppm.size(), "deep.ppm");
+  ASSERT_EQ(image.width, 3);
+  ASSERT_EQ(image.height, 2);
+  for (size_t i = 0; i < 6; ++i) {
+    const Rgba8 p = image.pixels[i];
+    EXPECT_EQ(p.r, samples[3 * i] >> 8) << i;
+    EXPECT_EQ(p.g, samples[3 * i + 1] >> 8) << i;
+    EXPECT_EQ(p.b, samples[3 * i + 2] >> 8) << i;
+    EXPECT_EQ(p.a, 255);
+  }
+}
+
 // ---------------------------------------------------------------------------------------------------
 // Bad input
 

@@ -14,6 +14,7 @@
 #include "io/obj_reader.hpp"
 #include "io/obj_writer.hpp"
 #include "report/metrics.hpp"
+#include "report/preview.hpp"
 #include "tightex/tightex.hpp"
 
 namespace fs = std::filesystem;
@@ -61,7 +62,7 @@ int run_measure(int argc, char** argv) {
 int run_main(int argc, char** argv) {
   CLI::App app{"tightex: one compact texture per surface, from a scan's fragmented UV atlas\n"
                "(global parameterization by a harmonic map onto a square; Chen et al., arXiv 2406.04115)"};
-  std::string input, outdir, report_path, layout = "atlas", format = "png", holes = "fill";
+  std::string input, outdir, report_path, preview_path, layout = "atlas", format = "png", holes = "fill";
   int size = 4096;
   bool quiet = false, verbose = false;
   app.add_option("input", input, "textured model (OBJ + MTL + textures)")->required();
@@ -73,6 +74,7 @@ int run_main(int argc, char** argv) {
   app.add_option("--holes", holes, "fill: cap holes with scaffolding (paper §4.1); cut: open them into the seam")
       ->check(CLI::IsMember({"fill", "cut"}));
   app.add_option("--report", report_path, "where to write the JSON report (default OUTDIR/report.json)");
+  app.add_option("--preview", preview_path, "write a PNG of the input texture(s) beside the output texture");
   app.add_flag("-q,--quiet", quiet, "print nothing but errors");
   app.add_flag("-v,--verbose", verbose, "print the report's main figures");
   try {
@@ -110,6 +112,14 @@ int run_main(int argc, char** argv) {
   rep["peak_rss_mib"] = double(u.ru_maxrss) / 1024.0;
   rep["input"]["polygons_triangulated"] = read_stats.polygons_triangulated;
   rep["output"] = {{"directory", outdir}, {"obj", name + ".obj"}};
+  if (!preview_path.empty()) {
+    const fs::path p(preview_path);
+    const fs::path tmp = p.parent_path() / ("." + p.filename().string() + ".tmp");
+    save_image(tmp.string(), make_preview(mesh, result.output), ImageFormat::kPng);
+    std::error_code ec;
+    fs::rename(tmp, p, ec);
+    if (ec) fail_input("{}: cannot write preview ({})", preview_path, ec.message());
+  }
   if (report_path.empty()) report_path = (fs::path(outdir) / "report.json").string();
   write_text_atomically(report_path, rep.dump(2) + "\n");
 

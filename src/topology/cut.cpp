@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <numbers>
 #include <numeric>
 #include <queue>
 
@@ -120,7 +121,24 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats) {
   std::vector<char> cut_edge(g.num_edges(), 0);
 
   if (loops.size() == 1 && topo.genus() == 0) {
-    st.method = "disk";
+    // A disk is used as is, unless it is deep: a tube closed at one end (a vase, a scanned object
+    // resting on the ground) maps its far end into a tiny spot at the square's centre. When the farthest
+    // vertex from the boundary lies deeper than a flat round disk of the same perimeter allows
+    // (perimeter / 2 pi) by kDeepDisk, the disk is slit from the boundary to that vertex.
+    constexpr double kDeepDisk = 1.5;
+    double perimeter = 0;
+    std::vector<uint32_t> sources;
+    for (uint32_t h : loops[0]) perimeter += s.edge_length(h), sources.push_back(s.from(h));
+    std::vector<double> dist;
+    std::vector<uint32_t> pred;
+    dijkstra(g, nv, sources, g.length, dist, pred);
+    const uint32_t far = farthest(dist);
+    if (dist[far] > kDeepDisk * perimeter / (2 * std::numbers::pi)) {
+      st.method = "disk+slit";
+      for (uint32_t v = far; pred[v] != kNone; v = other_end(s, g, pred[v], v)) cut_edge[pred[v]] = 1;
+    } else {
+      st.method = "disk";
+    }
   } else if (loops.empty() && topo.genus() == 0) {
     // The paper's single seam: shortest path between two far-apart vertices (double sweep).
     st.method = "path";
