@@ -20,6 +20,9 @@ struct Options {
   int size = 4096;                 // atlas: the texture's side; per-component: the largest texture's side
   Layout layout = Layout::kAtlas;
   HoleMode holes = HoleMode::kFill;
+  /// Compute the METRICS.md figures into report["metrics"]. A caller that writes the result can turn
+  /// this off and run measure() beside the write (the CLI does).
+  bool measure = true;
   /// Called with a stage name and the fraction [0,1] done; may be called from the calling thread only.
   std::function<void(std::string_view stage, double fraction)> progress;
 };

@@ -571,9 +571,13 @@ Image decode_with_stb(const unsigned char* data, size_t size, const std::string&
                stb_reason());
   }
   check_dimensions(name, "image", uint64_t(std::max(width, 0)), uint64_t(std::max(height, 0)), max_pixels);
+  // stb 2.27 (Debian 12) reads 16-bit PNM samples in the wrong byte order; refusing beats wrong colours.
+  if (data[0] == 'P' && stbi_is_16_bit_from_memory(data, int(size))) {
+    fail_input("{}: 16-bit PNM images are not supported (convert to PNG)", name);
+  }
   // Loaded with the file's own channel count, and widened to RGBA below, rather than asking stb for 4
-  // channels: stb 2.27 (Debian 12) converts a 16-bit PNM with its 8-bit channel converter when the
-  // requested count differs, reading past its buffer (found by fuzzing this function under ASan).
+  // channels: when the counts differ stb 2.27 converts 16-bit data with its 8-bit converter and reads
+  // past its buffer (found by fuzzing this function under ASan, with a 16-bit PNM).
   std::unique_ptr<stbi_uc, StbImageDeleter> pixels(
       stbi_load_from_memory(data, int(size), &width, &height, &channels, 0));
   if (pixels == nullptr) fail_input("{}: corrupt image (stb_image: {})", name, stb_reason());

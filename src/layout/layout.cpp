@@ -40,27 +40,35 @@ struct Bisector {
       const double d = std::abs(acc - total / 2);
       if (d < best) best = d, split = k;
     }
-    const std::vector<uint32_t> a(items.begin(), items.begin() + long(split)), b(items.begin() + long(split), items.end());
-    double wa = 0;
-    for (uint32_t i : a) wa += weight[i];
-    const bool cut_x = r.w >= r.h;
-    const int extent = cut_x ? r.w : r.h, across = cut_x ? r.h : r.w;
-    int first = int(std::lround(extent * wa / total));
-    const int lo = min_extent(a.size(), across), hi = extent - min_extent(b.size(), across);
-    if (lo > hi) fail_input("texture of this size cannot hold {} components at {}x{} texels each; use a larger --size", out.size(), min_side, min_side);
-    first = std::clamp(first, lo, hi);
-    Rect ra = r, rb = r;
-    if (cut_x) {
-      ra.w = first;
-      rb.x = r.x + first;
-      rb.w = r.w - first;
-    } else {
-      ra.h = first;
-      rb.y = r.y + first;
-      rb.h = r.h - first;
+    // Cut across the longer side in proportion to the weights; when the minimum sizes make that
+    // impossible (many tiny components in a narrow strip), try the other side, then a split by count.
+    for (const size_t k : {split, items.size() / 2}) {
+      const std::vector<uint32_t> a(items.begin(), items.begin() + long(k)), b(items.begin() + long(k), items.end());
+      double wa = 0;
+      for (uint32_t i : a) wa += weight[i];
+      const double share = k == split ? wa / total : double(a.size()) / double(items.size());
+      for (const bool cut_x : {r.w >= r.h, r.w < r.h}) {
+        const int extent = cut_x ? r.w : r.h, across = cut_x ? r.h : r.w;
+        const int lo = min_extent(a.size(), across), hi = extent - min_extent(b.size(), across);
+        if (lo > hi) continue;
+        const int first = std::clamp(int(std::lround(extent * share)), lo, hi);
+        Rect ra = r, rb = r;
+        if (cut_x) {
+          ra.w = first;
+          rb.x = r.x + first;
+          rb.w = r.w - first;
+        } else {
+          ra.h = first;
+          rb.y = r.y + first;
+          rb.h = r.h - first;
+        }
+        place(a, ra);
+        place(b, rb);
+        return;
+      }
     }
-    place(a, ra);
-    place(b, rb);
+    fail_input("a {}x{} region cannot hold {} components at {}x{} texels each; use a larger --size", r.w, r.h,
+               items.size(), min_side, min_side);
   }
 };
 

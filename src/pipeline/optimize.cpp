@@ -160,9 +160,11 @@ Result optimize(const TexturedMesh& input, const Options& options) {
   clock.done("bake");
 
   // 7. Report.
-  progress("measure", 0);
-  const Metrics metrics = measure(input, out);
-  clock.done("measure");
+  if (options.measure) {
+    progress("measure", 0);
+    rep["metrics"] = to_json(measure(input, out));
+    clock.done("measure");
+  }
 
   rep["input"] = {{"file", input.source}, {"vertices", input.num_vertices()}, {"triangles", input.num_triangles()},
                   {"materials", input.materials.size()}, {"textures", input.textures.size()}};
@@ -185,6 +187,7 @@ Result optimize(const TexturedMesh& input, const Options& options) {
                      {"holes_filled", cs.holes_filled},
                      {"holes_cut", cs.holes_cut},
                      {"cut", cs.method},
+                     {"handle_loops", cs.handle_loops},
                      {"cut_edges", cs.cut_edges},
                      {"cut_length", cs.cut_length},
                      {"weights", map_stats[c].weights},
@@ -196,7 +199,6 @@ Result optimize(const TexturedMesh& input, const Options& options) {
   rep["preparation"]["holes_filled"] = holes_filled;
   rep["components"] = comps;
   rep["bake"] = {{"texels_filled", bs.texels_filled}, {"texels_dilated", bs.texels_dilated}};
-  rep["metrics"] = to_json(metrics);
   rep["timings"] = timings;
   rep["peak_rss_mib"] = peak_rss_mib();
   progress("done", 1);

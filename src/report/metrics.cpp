@@ -1,6 +1,7 @@
 #include "report/metrics.hpp"
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
 
 #include <Eigen/Geometry>
@@ -153,7 +154,7 @@ size_t count_charts(const TexturedMesh& m, double* seam_length) {
       for (size_t k0 = i; k0 < j; ++k0)
         for (size_t k = k0 + 1; k < j; ++k) {
           const uint32_t h0 = keyed[k0].second, h1 = keyed[k].second;
-          if (uv_at(h0, a) == uv_at(h1, a) && uv_at(h0, b) == uv_at(h1, b))
+          if (uv_at(h0, a) == uv_at(h1, a) && uv_at(h0, b) == uv_at(h1, b) && texture_of(m, h0 / 3) == texture_of(m, h1 / 3))
             uf.unite(h0 / 3, h1 / 3);
           else
             differs = true;
@@ -173,10 +174,10 @@ size_t count_charts(const TexturedMesh& m, double* seam_length) {
 
 Metrics measure(const TexturedMesh& in, const TexturedMesh& out, size_t psnr_samples) {
   Metrics r;
-  r.input = measure_texture_space(in);
-  r.output = measure_texture_space(out);
-  count_charts(in, &r.seam_length_input);
-  r.charts = count_charts(out, &r.seam_length);
+  tbb::parallel_invoke([&] { r.input = measure_texture_space(in); }, [&] { r.output = measure_texture_space(out); },
+                      [&] { count_charts(in, &r.seam_length_input); }, [&] { r.charts = count_charts(out, &r.seam_length); });
+
+
 
   // Correspondence: output triangle for each input triangle, by the sorted triple of corner positions.
   struct Key {
@@ -229,7 +230,7 @@ Metrics measure(const TexturedMesh& in, const TexturedMesh& out, size_t psnr_sam
   }
 
   // Flips and degenerates per chart majority; density and angle distortion.
-  {
+  auto flips = [&] {
     double seam_unused;
     (void)seam_unused;
     const auto vid = weld_positions(out);
@@ -254,7 +255,8 @@ Metrics measure(const TexturedMesh& in, const TexturedMesh& out, size_t psnr_sam
           return Vec2(NAN, NAN);
         };
         const uint32_t a = uint32_t(keyed[i].first >> 32), b = uint32_t(keyed[i].first & 0xffffffffu);
-        if (uvp(h0, a) == uvp(h1, a) && uvp(h0, b) == uvp(h1, b)) uf.unite(h0 / 3, h1 / 3);
+        if (uvp(h0, a) == uvp(h1, a) && uvp(h0, b) == uvp(h1, b) && texture_of(out, h0 / 3) == texture_of(out, h1 / 3))
+          uf.unite(h0 / 3, h1 / 3);
       }
       i = j;
     }
@@ -273,11 +275,11 @@ Metrics measure(const TexturedMesh& in, const TexturedMesh& out, size_t psnr_sam
       const long b = balance[uf.find(t)];
       if ((b >= 0 && sa[t] < 0) || (b < 0 && sa[t] > 0)) r.flipped++;
     }
-  }
+  };
 
   // Overlap: texel centres covered by two or more triangles of the same image; a centre exactly on a
   // shared edge is counted for one triangle only (top-left rule via a half-open test).
-  {
+  auto overlap = [&] {
     size_t overlapped = 0, total = 0;
     std::vector<std::vector<size_t>> tris(out.textures.size());
     for (size_t t = 0; t < out.num_triangles(); ++t)
@@ -301,10 +303,10 @@ Metrics measure(const TexturedMesh& in, const TexturedMesh& out, size_t psnr_sam
       }
     }
     r.overlap = total ? double(overlapped) / double(total) : 0.0;
-  }
+  };
 
   // Density, detail loss, angle distortion over matched triangles.
-  {
+  auto density = [&] {
     std::vector<std::pair<double, double>> logd, angle;
     double sum_at = 0, sum_a3 = 0, loss = 0, area_total = 0, angle_sum = 0;
     std::vector<double> dens(in.num_triangles(), 0), din(in.num_triangles(), 0);
@@ -351,10 +353,10 @@ Metrics measure(const TexturedMesh& in, const TexturedMesh& out, size_t psnr_sam
     r.detail_loss_area = area_total > 0 ? loss / area_total : 0;
     r.angle_distortion_mean = area_total > 0 ? angle_sum / area_total : 0;
     r.angle_distortion_p95 = quantile(angle, 0.95);
-  }
+  };
 
   // Surface PSNR: uniform samples by area on the input, fixed seed.
-  {
+  auto psnr = [&] {
     std::vector<double> cdf(in.num_triangles());
     double acc = 0;
     for (size_t t = 0; t < in.num_triangles(); ++t) cdf[t] = acc += area3[t];
@@ -384,7 +386,8 @@ Metrics measure(const TexturedMesh& in, const TexturedMesh& out, size_t psnr_sam
     r.psnr_samples = n / 3;
     const double mse = n ? se / double(n) : 0;
     r.surface_psnr = mse > 0 ? 10 * std::log10(255.0 * 255.0 / mse) : 99.0;
-  }
+  };
+  tbb::parallel_invoke(flips, overlap, density, psnr);
   return r;
 }
 

@@ -4,120 +4,67 @@
 #include <queue>
 
 #include "core/error.hpp"
+#include "topology/graph.hpp"
 #include "topology/topology.hpp"
 
 namespace tightex {
 
-namespace {
-
-/// Undirected edges of a manifold surface with vertex adjacency in CSR form.
-struct EdgeGraph {
-  std::vector<uint32_t> edge_halfedge;  // edge -> a halfedge of it (the one with the smaller id)
-  std::vector<uint32_t> halfedge_edge;  // halfedge -> edge
-  std::vector<double> length;
-  std::vector<uint32_t> offset, neighbor, via_edge;  // CSR: vertex -> (neighbor, edge)
-
-  explicit EdgeGraph(const Surface& s) {
-    const uint32_t nh = uint32_t(s.opposite.size());
-    halfedge_edge.assign(nh, kNone);
-    for (uint32_t h = 0; h < nh; ++h) {
-      const uint32_t o = s.opposite[h];
-      if (o != kNone && o < h) continue;
-      const uint32_t e = uint32_t(edge_halfedge.size());
-      edge_halfedge.push_back(h);
-      length.push_back(s.edge_length(h));
-      halfedge_edge[h] = e;
-      if (o != kNone) halfedge_edge[o] = e;
-    }
-    offset.assign(s.num_vertices() + 1, 0);
-    for (uint32_t h : edge_halfedge) {
-      offset[s.from(h) + 1]++;
-      offset[s.to(h) + 1]++;
-    }
-    std::partial_sum(offset.begin(), offset.end(), offset.begin());
-    neighbor.resize(offset.back());
-    via_edge.resize(offset.back());
-    std::vector<uint32_t> fill(offset.begin(), offset.end() - 1);
-    for (uint32_t e = 0; e < edge_halfedge.size(); ++e) {
-      const uint32_t h = edge_halfedge[e], a = s.from(h), b = s.to(h);
-      neighbor[fill[a]] = b, via_edge[fill[a]++] = e;
-      neighbor[fill[b]] = a, via_edge[fill[b]++] = e;
-    }
-  }
-  size_t num_edges() const { return edge_halfedge.size(); }
-};
-
-/// Dijkstra from a set of sources; `weight(e)` gives each edge's length. pred_edge is kNone at sources.
-void dijkstra(const EdgeGraph& g, size_t nv, const std::vector<uint32_t>& sources,
-              const std::vector<double>& weight, std::vector<double>& dist, std::vector<uint32_t>& pred_edge) {
-  dist.assign(nv, std::numeric_limits<double>::infinity());
-  pred_edge.assign(nv, kNone);
-  using Item = std::pair<double, uint32_t>;
-  std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
-  for (uint32_t s : sources) {
-    dist[s] = 0;
-    queue.push({0.0, s});
-  }
-  while (!queue.empty()) {
-    auto [d, v] = queue.top();
-    queue.pop();
-    if (d > dist[v]) continue;
-    for (uint32_t i = g.offset[v]; i < g.offset[v + 1]; ++i) {
-      const uint32_t w = g.neighbor[i], e = g.via_edge[i];
-      const double nd = d + weight[e];
-      if (nd < dist[w]) {
-        dist[w] = nd;
-        pred_edge[w] = e;
-        queue.push({nd, w});
-      }
-    }
-  }
-}
-
-uint32_t other_end(const Surface& s, const EdgeGraph& g, uint32_t e, uint32_t v) {
-  const uint32_t h = g.edge_halfedge[e];
-  return s.from(h) == v ? s.to(h) : s.from(h);
-}
-
-uint32_t farthest(const std::vector<double>& dist) {
-  uint32_t best = 0;
-  for (uint32_t v = 0; v < dist.size(); ++v)
-    if (std::isfinite(dist[v]) && dist[v] > dist[best]) best = v;
-  return best;
-}
-
-}  // namespace
 
 Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats) {
   CutStats st;
   st.before = topology_of(component);
-  auto loops = boundary_loops(component);
+  // Handles first: a genus-0 surface (with its holes) comes back, the handle loops capped.
+  Surface base;
+  if (st.before.genus() > 0) {
+    base = remove_handles(component, &st.handle_loops);
+  } else {
+    base = component;
+    base.vertex_parent.resize(base.num_vertices());
+    std::iota(base.vertex_parent.begin(), base.vertex_parent.end(), 0u);
+    base.face_parent.resize(base.num_faces());
+    std::iota(base.face_parent.begin(), base.face_parent.end(), 0u);
+  }
+  auto loops = boundary_loops(base);
 
-  // Holes: with kFill every loop but the longest is capped with scaffolding.
+  // Holes: the longest loop stays the disk boundary; with kFill the others are capped smallest first
+  // within the area budget.
   Surface s;
+  double component_area = 0;
+  for (const Tri& f : component.triangles)
+    component_area += triangle_area(component.positions[f[0]], component.positions[f[1]], component.positions[f[2]]);
   if (holes == HoleMode::kFill && loops.size() > 1) {
-    std::vector<double> loop_length(loops.size(), 0.0);
-    for (size_t i = 0; i < loops.size(); ++i)
-      for (uint32_t h : loops[i]) loop_length[i] += component.edge_length(h);
+    std::vector<double> loop_length(loops.size(), 0.0), cap_area(loops.size(), 0.0);
+    for (size_t i = 0; i < loops.size(); ++i) {
+      Vec3 c = Vec3::Zero();
+      for (uint32_t h : loops[i]) loop_length[i] += base.edge_length(h), c += base.positions[base.from(h)];
+      c /= double(loops[i].size());
+      for (uint32_t h : loops[i]) cap_area[i] += triangle_area(c, base.positions[base.from(h)], base.positions[base.to(h)]);
+    }
     const size_t keep = size_t(std::max_element(loop_length.begin(), loop_length.end()) - loop_length.begin());
+    std::vector<size_t> order(loops.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return cap_area[a] < cap_area[b]; });
     std::vector<std::vector<uint32_t>> fill;
-    for (size_t i = 0; i < loops.size(); ++i)
-      if (i != keep) fill.push_back(loops[i]);
+    double used = 0;
+    for (size_t i : order) {
+      if (i == keep || used + cap_area[i] > kFillBudget * component_area) continue;
+      used += cap_area[i];
+      fill.push_back(loops[i]);
+    }
     st.holes_filled = fill.size();
-    s = fill_holes(component, fill);
+    s = fill_holes(base, fill);
+    for (uint32_t& p : s.vertex_parent)
+      if (p != kNone) p = base.vertex_parent[p];
+    for (uint32_t& p : s.face_parent)
+      if (p != kNone) p = base.face_parent[p];
     loops = boundary_loops(s);
   } else {
-    s = component;
-    s.vertex_parent.resize(s.num_vertices());
-    std::iota(s.vertex_parent.begin(), s.vertex_parent.end(), 0u);
-    s.face_parent.resize(s.num_faces());
-    std::iota(s.face_parent.begin(), s.face_parent.end(), 0u);
+    s = std::move(base);
   }
   st.holes_cut = loops.empty() ? 0 : loops.size() - 1;
   const Topology topo = topology_of(s);
   const EdgeGraph g(s);
   const size_t nv = s.num_vertices();
-  const uint32_t nh = uint32_t(s.opposite.size());
   std::vector<char> cut_edge(g.num_edges(), 0);
 
   if (loops.size() == 1 && topo.genus() == 0) {
@@ -162,10 +109,8 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats) {
     st.method = "cut-graph";
     // Shortest-path tree T. Boundary edges cost nothing, so every hole acts as one point and T reaches
     // each hole through its nearest vertex.
-    std::vector<double> weight = g.length;
     std::vector<char> is_boundary_edge(g.num_edges(), 0);
-    for (uint32_t e = 0; e < g.num_edges(); ++e)
-      if (s.opposite[g.edge_halfedge[e]] == kNone) is_boundary_edge[e] = 1, weight[e] = 0;
+    for (uint32_t e = 0; e < g.num_edges(); ++e) is_boundary_edge[e] = s.opposite[g.edge_halfedge[e]] == kNone;
     std::vector<uint32_t> sources;
     size_t root_loop = kNone;
     if (!loops.empty()) {
@@ -186,38 +131,10 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats) {
       while (pred[v] != kNone && dist[v] > half) v = other_end(s, g, pred[v], v);
       sources.push_back(v);
     }
-    std::vector<double> dist;
-    std::vector<uint32_t> pred;
-    dijkstra(g, nv, sources, weight, dist, pred);
-    std::vector<char> in_tree(g.num_edges(), 0);
-    for (uint32_t v = 0; v < nv; ++v)
-      if (pred[v] != kNone) in_tree[pred[v]] = 1;
-
-    // Greedy dual tree over the edges not in T (faces + one node per hole), keeping the edges whose
-    // loops are longest, so the leftover edges close the shortest generator loops.
-    const uint32_t nf = uint32_t(s.num_faces());
-    std::vector<uint32_t> hole_node(nh, kNone);
-    for (size_t i = 0; i < loops.size(); ++i)
-      for (uint32_t h : loops[i]) hole_node[h] = nf + uint32_t(i);
-    std::vector<uint32_t> order;
-    for (uint32_t e = 0; e < g.num_edges(); ++e)
-      if (!in_tree[e]) order.push_back(e);
-    auto loop_len = [&](uint32_t e) {
-      const uint32_t h = g.edge_halfedge[e];
-      return dist[s.from(h)] + dist[s.to(h)] + g.length[e];
-    };
-    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return loop_len(a) > loop_len(b); });
-    detail::UnionFind dual(nf + loops.size());
-    std::vector<uint32_t> leftover;
-    for (uint32_t e : order) {
-      const uint32_t h = g.edge_halfedge[e], o = s.opposite[h];
-      const uint32_t a = h / 3, b = o == kNone ? hole_node[h] : o / 3;
-      if (dual.find(a) != dual.find(b)) {
-        dual.unite(a, b);
-      } else {
-        leftover.push_back(e);
-      }
-    }
+    const TreeCotree tc = tree_cotree(s, g, sources, loops);
+    const std::vector<double>& dist = tc.dist;
+    const std::vector<uint32_t>& pred = tc.pred;
+    const std::vector<uint32_t>& leftover = tc.leftover;
     // Marked edges: each generator loop (leftover edge + tree paths to the root) and each hole's tree
     // path to the root.
     std::vector<char> marked(g.num_edges(), 0);
@@ -239,6 +156,7 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats) {
     }
     // Dual spanning tree of the real faces crossing only unmarked interior edges; its complement,
     // pruned of dangling branches, is the cut graph. Always a valid cut to a disk, whatever `marked`.
+    const uint32_t nf = uint32_t(s.num_faces());
     auto dual_tree = [&](const std::vector<char>& forbidden, std::vector<char>& crossed) {
       crossed.assign(g.num_edges(), 0);
       std::vector<char> seen(nf, 0);
@@ -292,7 +210,7 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats) {
   disk.mesh = regroup(s, corner_vertex, groups);
   // regroup's maps point into `s`; compose with s's maps so they point into the component.
   for (uint32_t& p : disk.mesh.vertex_parent) p = s.vertex_parent[p];
-  for (uint32_t& p : disk.mesh.face_parent) p = s.face_parent[p];
+  for (uint32_t& p : disk.mesh.face_parent) p = s.face_parent[p];  // kNone stays kNone: scaffolding
   const Topology dt = topology_of(disk.mesh);
   const auto disk_loops = boundary_loops(disk.mesh);
   if (disk_loops.size() != 1 || dt.euler() != 1)

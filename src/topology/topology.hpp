@@ -16,7 +16,17 @@ std::vector<Surface> split_components(const Surface& s);
 /// vertex_parent = kNone and new triangles face_parent = kNone: they are scaffolding, never output.
 Surface fill_holes(const Surface& s, const std::vector<std::vector<uint32_t>>& loops);
 
+/// Topological denoising (§4.1): while the component has genus g > 0, finds a short non-separating
+/// loop (the shortest tree-cotree generator loop over roots placed on the handles) and cuts along it,
+/// which leaves two new boundary loops. Returns a genus-0 surface whose face_parent / vertex_parent
+/// map into `component`; loop_lengths gets each loop's 3D length.
+Surface remove_handles(const Surface& component, std::vector<double>* loop_lengths);
+
+/// kFill: holes (and the two sides of each cut handle) are capped with the §4.1 centroid fan while the
+/// caps' total area stays within kFillBudget of the component's area, smallest first; larger ones are
+/// opened into the disk boundary, since a large cap would waste its texels. kCut: none is capped.
 enum class HoleMode { kFill, kCut };
+constexpr double kFillBudget = 0.005;
 
 struct CutStats {
   Topology before;              // of the component as given (holes not yet filled)
@@ -24,7 +34,8 @@ struct CutStats {
   size_t holes_cut = 0;         // joined into the disk boundary
   size_t cut_edges = 0;         // interior edges cut open
   double cut_length = 0;        // their 3D length
-  std::string method;           // "disk", "path", "cut-graph"
+  std::string method;           // "disk", "disk+slit", "path", "cut-graph"
+  std::vector<double> handle_loops;  // 3D length of each handle loop cut (see remove_handles)
 };
 
 struct Disk {
@@ -34,8 +45,8 @@ struct Disk {
 };
 
 /// Turns a connected manifold surface into a topological disk (one boundary loop, Euler characteristic
-/// 1): holes are filled with scaffolding (kFill: all but the longest loop) or joined into the boundary
-/// (kCut); a closed genus-0 surface is cut along the shortest path between two far-apart vertices
+/// 1): handles are cut along short loops (remove_handles); holes are capped with scaffolding or joined
+/// into the boundary (see HoleMode; the longest loop is always kept as the boundary); a closed genus-0 surface is cut along the shortest path between two far-apart vertices
 /// (double Dijkstra sweep: the paper's single seam); otherwise a cut graph is built by tree-cotree
 /// (shortest-path tree + greedy dual tree, Erickson & Whittlesey 2005) and pruned of dangling branches.
 /// Throws InternalError if the result is not a disk (it always should be).

@@ -1,0 +1,140 @@
+// Edge graph of a manifold surface and the shortest-path machinery the cut and handle stages share.
+#pragma once
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <queue>
+#include <vector>
+
+#include "core/surface.hpp"
+
+namespace tightex {
+
+
+/// Undirected edges of a manifold surface with vertex adjacency in CSR form.
+struct EdgeGraph {
+  std::vector<uint32_t> edge_halfedge;  // edge -> a halfedge of it (the one with the smaller id)
+  std::vector<uint32_t> halfedge_edge;  // halfedge -> edge
+  std::vector<double> length;
+  std::vector<uint32_t> offset, neighbor, via_edge;  // CSR: vertex -> (neighbor, edge)
+
+  explicit EdgeGraph(const Surface& s) {
+    const uint32_t nh = uint32_t(s.opposite.size());
+    halfedge_edge.assign(nh, kNone);
+    for (uint32_t h = 0; h < nh; ++h) {
+      const uint32_t o = s.opposite[h];
+      if (o != kNone && o < h) continue;
+      const uint32_t e = uint32_t(edge_halfedge.size());
+      edge_halfedge.push_back(h);
+      length.push_back(s.edge_length(h));
+      halfedge_edge[h] = e;
+      if (o != kNone) halfedge_edge[o] = e;
+    }
+    offset.assign(s.num_vertices() + 1, 0);
+    for (uint32_t h : edge_halfedge) {
+      offset[s.from(h) + 1]++;
+      offset[s.to(h) + 1]++;
+    }
+    std::partial_sum(offset.begin(), offset.end(), offset.begin());
+    neighbor.resize(offset.back());
+    via_edge.resize(offset.back());
+    std::vector<uint32_t> fill(offset.begin(), offset.end() - 1);
+    for (uint32_t e = 0; e < edge_halfedge.size(); ++e) {
+      const uint32_t h = edge_halfedge[e], a = s.from(h), b = s.to(h);
+      neighbor[fill[a]] = b, via_edge[fill[a]++] = e;
+      neighbor[fill[b]] = a, via_edge[fill[b]++] = e;
+    }
+  }
+  size_t num_edges() const { return edge_halfedge.size(); }
+};
+
+/// Dijkstra from a set of sources; `weight(e)` gives each edge's length. pred_edge is kNone at sources.
+inline void dijkstra(const EdgeGraph& g, size_t nv, const std::vector<uint32_t>& sources,
+              const std::vector<double>& weight, std::vector<double>& dist, std::vector<uint32_t>& pred_edge) {
+  dist.assign(nv, std::numeric_limits<double>::infinity());
+  pred_edge.assign(nv, kNone);
+  using Item = std::pair<double, uint32_t>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
+  for (uint32_t s : sources) {
+    dist[s] = 0;
+    queue.push({0.0, s});
+  }
+  while (!queue.empty()) {
+    auto [d, v] = queue.top();
+    queue.pop();
+    if (d > dist[v]) continue;
+    for (uint32_t i = g.offset[v]; i < g.offset[v + 1]; ++i) {
+      const uint32_t w = g.neighbor[i], e = g.via_edge[i];
+      const double nd = d + weight[e];
+      if (nd < dist[w]) {
+        dist[w] = nd;
+        pred_edge[w] = e;
+        queue.push({nd, w});
+      }
+    }
+  }
+}
+
+inline uint32_t other_end(const Surface& s, const EdgeGraph& g, uint32_t e, uint32_t v) {
+  const uint32_t h = g.edge_halfedge[e];
+  return s.from(h) == v ? s.to(h) : s.from(h);
+}
+
+inline uint32_t farthest(const std::vector<double>& dist) {
+  uint32_t best = 0;
+  for (uint32_t v = 0; v < dist.size(); ++v)
+    if (std::isfinite(dist[v]) && dist[v] > dist[best]) best = v;
+  return best;
+}
+
+
+/// Tree-cotree (Eppstein; greedy form of Erickson & Whittlesey 2005): a shortest-path tree T from
+/// `sources` (boundary edges cost nothing, so every hole acts as one point), then a dual spanning tree
+/// over the edges not in T (faces plus one node per boundary loop) that keeps the edges whose loops are
+/// longest. The edges left over close the generator loops: 2g of them on a genus-g surface, each loop
+/// (leftover edge + tree paths to the root) non-separating, the shortest ones first.
+struct TreeCotree {
+  std::vector<double> dist;
+  std::vector<uint32_t> pred;      // tree edge towards the root, per vertex
+  std::vector<uint32_t> leftover;  // interior edges closing generator loops, shortest loop first
+  double loop_length(const Surface& s, const EdgeGraph& g, uint32_t e) const {
+    const uint32_t h = g.edge_halfedge[e];
+    return dist[s.from(h)] + dist[s.to(h)] + g.length[e];
+  }
+};
+
+inline TreeCotree tree_cotree(const Surface& s, const EdgeGraph& g, const std::vector<uint32_t>& sources,
+                              const std::vector<std::vector<uint32_t>>& loops) {
+  TreeCotree tc;
+  std::vector<double> weight = g.length;
+  for (uint32_t e = 0; e < g.num_edges(); ++e)
+    if (s.opposite[g.edge_halfedge[e]] == kNone) weight[e] = 0;
+  dijkstra(g, s.num_vertices(), sources, weight, tc.dist, tc.pred);
+  std::vector<char> in_tree(g.num_edges(), 0);
+  for (uint32_t v = 0; v < s.num_vertices(); ++v)
+    if (tc.pred[v] != kNone) in_tree[tc.pred[v]] = 1;
+  const uint32_t nf = uint32_t(s.num_faces());
+  std::vector<uint32_t> hole_node(s.opposite.size(), kNone);
+  for (size_t i = 0; i < loops.size(); ++i)
+    for (uint32_t h : loops[i]) hole_node[h] = nf + uint32_t(i);
+  std::vector<uint32_t> order;
+  for (uint32_t e = 0; e < g.num_edges(); ++e)
+    if (!in_tree[e]) order.push_back(e);
+  std::vector<double> len(g.num_edges());
+  for (uint32_t e : order) len[e] = tc.loop_length(s, g, e);
+  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return len[a] > len[b]; });
+  detail::UnionFind dual(nf + loops.size());
+  for (uint32_t e : order) {
+    const uint32_t h = g.edge_halfedge[e], o = s.opposite[h];
+    const uint32_t a = h / 3, b = o == kNone ? hole_node[h] : o / 3;
+    if (dual.find(a) != dual.find(b))
+      dual.unite(a, b);
+    else if (o != kNone)
+      tc.leftover.push_back(e);
+  }
+  std::reverse(tc.leftover.begin(), tc.leftover.end());
+  return tc;
+}
+
+}  // namespace tightex

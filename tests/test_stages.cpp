@@ -1,0 +1,788 @@
+// Invariants after each pipeline stage, over the catalogue of meshes generated in code
+// (mesh_catalogue.hpp): prepare_surface, split_components, cut_to_disk (both hole modes),
+// map_to_square, the whole optimize() pipeline, and the two layouts.
+//
+// Every check recomputes the property from the stage's output (topology counted independently of
+// topology_of, UV areas summed independently of count_folds, tilings painted texel by texel), so a
+// stage that breaks its contract fails here even when its own statistics claim success.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <random>
+#include <set>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "layout/layout.hpp"
+#include "mesh_catalogue.hpp"
+#include "param/param.hpp"
+#include "repair/repair.hpp"
+#include "report/metrics.hpp"
+#include "tightex/tightex.hpp"
+#include "topology/topology.hpp"
+
+namespace tightex {
+namespace {
+
+namespace cat = tightex::testing;
+
+// ---- what each catalogue entry should turn into ----
+
+struct Expected {
+  std::string name;
+  std::function<TexturedMesh()> make;
+  size_t components = 1;
+  long euler = 0;              // of the whole prepared surface (sum over components)
+  size_t boundary_loops = 0;   // of the whole prepared surface
+  std::multiset<std::pair<long, size_t>> per_component;  // (genus, boundary loops) of each component
+  size_t zero_area = 0, duplicates = 0, non_manifold_edges = 0, sliced_vertices = 0;
+  bool fills_rectangles = true;  // every component can fill its rectangle (not a lone triangle)
+  bool closed = false;           // every component closed: orientation checked by enclosed volume
+};
+
+const std::vector<Expected>& expectations() {
+  static const std::vector<Expected> all = [] {
+    std::vector<Expected> e;
+    auto add = [&](std::string name, std::function<TexturedMesh()> make, long euler, size_t loops,
+                   std::multiset<std::pair<long, size_t>> per) {
+      Expected x;
+      x.name = std::move(name);
+      x.make = std::move(make);
+      x.euler = euler;
+      x.boundary_loops = loops;
+      x.components = per.size();
+      x.per_component = std::move(per);
+      e.push_back(std::move(x));
+      return &e.back();
+    };
+    add("disk", cat::disk, 1, 1, {{0, 1}});
+    add("sphere", cat::sphere, 2, 0, {{0, 0}})->closed = true;
+    add("open_cylinder", cat::open_cylinder, 0, 2, {{0, 2}});
+    add("sphere_with_holes", cat::sphere_with_holes, 2 - cat::kSphereHoles, cat::kSphereHoles, {{0, cat::kSphereHoles}});
+    add("torus", cat::torus, 0, 0, {{1, 0}})->closed = true;
+    add("double_torus", cat::double_torus, -2, 0, {{2, 0}})->closed = true;
+    add("bowtie", cat::bowtie, 2, 2, {{0, 1}, {0, 1}})->sliced_vertices = 1;
+    {
+      Expected* x = add("non_manifold_edge", cat::non_manifold_edge, 3, 3, {{0, 1}, {0, 1}, {0, 1}});
+      x->non_manifold_edges = cat::kSpineSegments;
+      x->sliced_vertices = cat::kSpineSegments + 1;
+    }
+    {
+      Expected* x = add("degenerate_disk", cat::degenerate_disk, 1, 1, {{0, 1}});
+      x->zero_area = cat::kAddedZeroArea;
+      x->duplicates = cat::kAddedDuplicates;
+    }
+    add("obtuse_strip", cat::obtuse_strip, 1, 1, {{0, 1}});
+    add("single_triangle", cat::single_triangle, 1, 1, {{0, 1}})->fills_rectangles = false;
+    add("two_triangles", cat::two_triangles, 1, 1, {{0, 1}});
+    add("multi_component", cat::multi_component, 3, 3, {{1, 0}, {0, 1}, {0, 1}, {0, 1}});
+    return e;
+  }();
+  return all;
+}
+
+const Expected& expected(const std::string& name) {
+  for (const Expected& e : expectations())
+    if (e.name == name) return e;
+  throw std::runtime_error("no catalogue entry " + name);
+}
+
+std::vector<std::string> catalogue_names() {
+  std::vector<std::string> names;
+  for (const auto& [name, make] : cat::catalogue()) names.push_back(name);
+  return names;
+}
+
+// ---- independent checks ----
+
+bool same_bits(const Vec3& a, const Vec3& b) { return a.x() == b.x() && a.y() == b.y() && a.z() == b.z(); }
+
+/// A manifold surface as surface.hpp defines it: opposite is a symmetric pairing of halfedges running
+/// in opposite directions between the same two vertices, no undirected edge is used more than twice
+/// (and when twice, the two halfedges are paired), and the corners around each vertex form a single
+/// fan with at most one outgoing boundary halfedge.
+::testing::AssertionResult is_manifold(const Surface& s) {
+  const size_t nf = s.num_faces(), nv = s.num_vertices(), nh = 3 * nf;
+  if (s.opposite.size() != nh) return ::testing::AssertionFailure() << "opposite has " << s.opposite.size() << " entries for " << nf << " faces";
+  if (s.positions.size() != nv) return ::testing::AssertionFailure() << "positions";
+  for (uint32_t t = 0; t < nf; ++t) {
+    const Tri& f = s.triangles[t];
+    for (uint32_t v : f)
+      if (v >= nv) return ::testing::AssertionFailure() << "triangle " << t << " uses vertex " << v << " of " << nv;
+    if (f[0] == f[1] || f[1] == f[2] || f[2] == f[0]) return ::testing::AssertionFailure() << "triangle " << t << " repeats a vertex";
+  }
+  for (uint32_t h = 0; h < nh; ++h) {
+    const uint32_t o = s.opposite[h];
+    if (o == kNone) continue;
+    if (o >= nh || s.opposite[o] != h || o / 3 == h / 3 || s.from(o) != s.to(h) || s.to(o) != s.from(h))
+      return ::testing::AssertionFailure() << "halfedge " << h << " (" << s.from(h) << "->" << s.to(h) << ") has a bad opposite " << o;
+  }
+  std::map<std::pair<uint32_t, uint32_t>, std::vector<uint32_t>> edge_use;
+  for (uint32_t h = 0; h < nh; ++h) edge_use[{std::min(s.from(h), s.to(h)), std::max(s.from(h), s.to(h))}].push_back(h);
+  for (const auto& [edge, hs] : edge_use) {
+    if (hs.size() > 2)
+      return ::testing::AssertionFailure() << "edge (" << edge.first << ", " << edge.second << ") is used by " << hs.size() << " triangles";
+    if (hs.size() == 2 && s.opposite[hs[0]] != hs[1])
+      return ::testing::AssertionFailure() << "edge (" << edge.first << ", " << edge.second << ") is used twice but not paired";
+  }
+  // Fans: rotate around each vertex through its outgoing halfedges.
+  std::vector<std::vector<uint32_t>> outgoing(nv);
+  for (uint32_t h = 0; h < nh; ++h) outgoing[s.from(h)].push_back(h);
+  for (uint32_t v = 0; v < nv; ++v) {
+    if (outgoing[v].empty()) continue;
+    size_t boundary_out = 0;
+    for (uint32_t h : outgoing[v]) boundary_out += s.opposite[h] == kNone;
+    if (boundary_out > 1) return ::testing::AssertionFailure() << "vertex " << v << " has " << boundary_out << " outgoing boundary halfedges";
+    std::set<uint32_t> reached{outgoing[v][0]};
+    for (uint32_t h = outgoing[v][0];;) {  // clockwise: h -> opposite(prev(h))
+      const uint32_t o = s.opposite[Surface::prev(h)];
+      if (o == kNone || !reached.insert(o).second) break;
+      h = o;
+    }
+    for (uint32_t h = outgoing[v][0];;) {  // counter-clockwise: h -> next(opposite(h))
+      const uint32_t o = s.opposite[h];
+      if (o == kNone) break;
+      const uint32_t n = Surface::next(o);
+      if (!reached.insert(n).second) break;
+      h = n;
+    }
+    if (reached.size() != outgoing[v].size())
+      return ::testing::AssertionFailure() << "vertex " << v << " has " << outgoing[v].size() << " corners but its fan reaches " << reached.size();
+  }
+  return ::testing::AssertionSuccess();
+}
+
+struct Counts {
+  long vertices = 0, edges = 0, faces = 0;
+  size_t boundary_halfedges = 0;
+  long euler() const { return vertices - edges + faces; }
+};
+/// V, E, F counted from vertex pairs (valid for a manifold surface), without topology_of.
+Counts count(const Surface& s) {
+  Counts c;
+  std::set<uint32_t> used;
+  std::set<std::pair<uint32_t, uint32_t>> edges;
+  for (uint32_t h = 0; h < 3 * s.num_faces(); ++h) {
+    used.insert(s.from(h));
+    edges.insert({std::min(s.from(h), s.to(h)), std::max(s.from(h), s.to(h))});
+    c.boundary_halfedges += s.opposite[h] == kNone;
+  }
+  c.vertices = long(used.size());
+  c.edges = long(edges.size());
+  c.faces = long(s.num_faces());
+  return c;
+}
+
+/// (genus, boundary loops) of a connected manifold surface.
+std::pair<long, size_t> genus_and_loops(const Surface& s) {
+  const size_t loops = boundary_loops(s).size();
+  return {(2 - count(s).euler() - long(loops)) / 2, loops};
+}
+
+/// Per input triangle: how many times prepare_surface must keep it (0 or 1), and the group of
+/// triangles it is equal to (same welded vertices in the same cyclic order), computed from the input.
+struct InputTriangles {
+  std::vector<char> has_area;      // distinct welded vertices and non-zero 3D area
+  std::vector<uint32_t> group;     // index of the first equal triangle with area
+  size_t zero_area = 0, duplicates = 0;
+};
+InputTriangles classify(const TexturedMesh& m) {
+  InputTriangles r;
+  std::map<std::array<double, 3>, uint32_t> weld;
+  std::vector<uint32_t> id(m.num_vertices());
+  for (size_t v = 0; v < m.num_vertices(); ++v) {
+    const Vec3& p = m.positions[v];
+    id[v] = weld.try_emplace({p.x() + 0.0, p.y() + 0.0, p.z() + 0.0}, uint32_t(weld.size())).first->second;
+  }
+  std::map<std::array<uint32_t, 3>, uint32_t> first;
+  r.has_area.assign(m.num_triangles(), 0);
+  r.group.assign(m.num_triangles(), kNone);
+  for (uint32_t t = 0; t < m.num_triangles(); ++t) {
+    std::array<uint32_t, 3> f{id[m.triangles[t][0]], id[m.triangles[t][1]], id[m.triangles[t][2]]};
+    const Vec3 &a = m.positions[m.triangles[t][0]], &b = m.positions[m.triangles[t][1]], &c = m.positions[m.triangles[t][2]];
+    if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2] || (b - a).cross(c - a).norm() == 0.0) {
+      ++r.zero_area;
+      continue;
+    }
+    r.has_area[t] = 1;
+    std::rotate(f.begin(), std::min_element(f.begin(), f.end()), f.end());
+    const auto [it, inserted] = first.try_emplace(f, t);
+    r.group[t] = it->second;
+    r.duplicates += !inserted;
+  }
+  return r;
+}
+
+/// The (x, y) coordinate that a point on side k of the unit square (0: bottom, 1: right, 2: top,
+/// 3: left) has fixed, its value there, and the sign of "outward".
+struct Side {
+  int fixed_axis;
+  double value;
+  double outward;
+  int along_axis;
+  double along_sign;  // +1 when walking the side counter-clockwise increases the along coordinate
+};
+constexpr Side kSides[4] = {{1, 0.0, -1, 0, +1}, {0, 1.0, +1, 1, +1}, {1, 1.0, +1, 0, -1}, {0, 0.0, -1, 1, -1}};
+
+// ---- the catalogue itself ----
+
+class Catalogue : public ::testing::TestWithParam<std::string> {
+ protected:
+  const Expected& want() const { return expected(GetParam()); }
+  TexturedMesh mesh() const { return want().make(); }
+};
+
+std::string param_name(const ::testing::TestParamInfo<std::string>& info) { return info.param; }
+
+INSTANTIATE_TEST_SUITE_P(Meshes, Catalogue, ::testing::ValuesIn(catalogue_names()), param_name);
+
+TEST(CatalogueList, EveryEntryHasExpectations) {
+  for (const auto& name : catalogue_names()) EXPECT_NO_THROW(expected(name)) << name;
+  EXPECT_EQ(catalogue_names().size(), expectations().size());
+}
+
+// The generators themselves: complete meshes, outward orientation, the properties their names promise.
+TEST_P(Catalogue, GeneratorIsWellFormed) {
+  const TexturedMesh m = mesh();
+  EXPECT_EQ(m.source, GetParam());
+  ASSERT_GT(m.num_triangles(), 0u);
+  ASSERT_EQ(m.corner_uv.size(), 3 * m.num_triangles());
+  ASSERT_EQ(m.face_material.size(), m.num_triangles());
+  ASSERT_EQ(m.materials.size(), 1u);
+  ASSERT_EQ(m.textures.size(), 1u);
+  EXPECT_EQ(m.materials[0].texture, 0);
+  EXPECT_FALSE(m.textures[0].image.empty());
+  for (const Tri& f : m.triangles)
+    for (uint32_t v : f) ASSERT_LT(v, m.num_vertices());
+  for (const Vec2& uv : m.corner_uv) {
+    EXPECT_GE(uv.minCoeff(), 0.0);
+    EXPECT_LE(uv.maxCoeff(), 1.0);
+  }
+  for (int32_t mat : m.face_material) EXPECT_EQ(mat, 0);
+  if (want().closed) {
+    double volume = 0;  // divergence theorem: positive for outward-facing triangles
+    for (const Tri& f : m.triangles) volume += m.positions[f[0]].dot(m.positions[f[1]].cross(m.positions[f[2]])) / 6;
+    EXPECT_GT(volume, 0.0);
+  }
+  if (GetParam() == "obtuse_strip") {
+    // Some interior edge must have a negative cotangent weight (cot of both opposite angles summed).
+    std::map<std::pair<uint32_t, uint32_t>, double> weight;
+    for (const Tri& f : m.triangles)
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 &a = m.positions[f[k]], &b = m.positions[f[(k + 1) % 3]], &c = m.positions[f[(k + 2) % 3]];
+        const Vec3 u = a - c, v = b - c;
+        weight[{std::min(f[k], f[(k + 1) % 3]), std::max(f[k], f[(k + 1) % 3])}] += u.dot(v) / u.cross(v).norm();
+      }
+    size_t negative = 0;
+    for (const auto& [e, w] : weight) negative += w < 0;
+    EXPECT_GT(negative, 100u);
+  }
+}
+
+// ---- 1. prepare_surface ----
+
+TEST_P(Catalogue, PrepareSurface) {
+  const TexturedMesh m = mesh();
+  const Expected& e = want();
+  RepairStats st;
+  const Surface s = prepare_surface(m, &st);
+  ASSERT_TRUE(is_manifold(s));
+  ASSERT_EQ(s.face_parent.size(), s.num_faces());
+  ASSERT_EQ(s.vertex_parent.size(), s.num_vertices());
+
+  const Counts c = count(s);
+  EXPECT_EQ(c.euler(), e.euler);
+  const auto loops = boundary_loops(s);
+  EXPECT_EQ(loops.size(), e.boundary_loops);
+  size_t loop_halfedges = 0;
+  for (const auto& l : loops) loop_halfedges += l.size();
+  EXPECT_EQ(loop_halfedges, c.boundary_halfedges);
+  const Topology topo = topology_of(s);
+  EXPECT_EQ(topo.euler(), c.euler());
+  EXPECT_EQ(topo.boundary_loops, loops.size());
+
+  // Statistics: what the generator put in.
+  const InputTriangles in = classify(m);
+  EXPECT_EQ(in.zero_area, e.zero_area) << "catalogue";  // the generator did what it says
+  EXPECT_EQ(in.duplicates, e.duplicates) << "catalogue";
+  EXPECT_EQ(st.zero_area_triangles, e.zero_area);
+  EXPECT_EQ(st.duplicate_triangles, e.duplicates);
+  EXPECT_EQ(st.non_manifold_edges, e.non_manifold_edges);
+  EXPECT_EQ(st.sliced_vertices, e.sliced_vertices);
+  EXPECT_EQ(st.input_vertices, m.num_vertices());
+
+  // No triangle with area lost: of each group of equal triangles exactly one is kept, once, with the
+  // input's corners in the input's order; nothing without area is kept.
+  std::vector<size_t> kept(m.num_triangles(), 0);
+  for (uint32_t t = 0; t < s.num_faces(); ++t) {
+    const uint32_t p = s.face_parent[t];
+    ASSERT_LT(p, m.num_triangles());
+    kept[p]++;
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = s.triangles[t][k];
+      EXPECT_TRUE(same_bits(s.positions[v], m.positions[m.triangles[p][k]])) << "face " << t << " corner " << k;
+    }
+  }
+  std::map<uint32_t, size_t> group_kept;
+  for (uint32_t t = 0; t < m.num_triangles(); ++t) {
+    if (!in.has_area[t]) {
+      EXPECT_EQ(kept[t], 0u) << "zero-area input triangle " << t << " kept";
+      continue;
+    }
+    EXPECT_LE(kept[t], 1u) << "input triangle " << t;
+    group_kept[in.group[t]] += kept[t];
+  }
+  for (const auto& [g, n] : group_kept) EXPECT_EQ(n, 1u) << "triangle group of input triangle " << g;
+  EXPECT_EQ(s.num_faces(), m.num_triangles() - e.zero_area - e.duplicates);
+  for (uint32_t v = 0; v < s.num_vertices(); ++v) {
+    ASSERT_LT(s.vertex_parent[v], m.num_vertices());
+    EXPECT_TRUE(same_bits(s.positions[v], m.positions[s.vertex_parent[v]])) << "vertex " << v;
+  }
+}
+
+// ---- 2. split_components ----
+
+TEST_P(Catalogue, SplitComponents) {
+  const Expected& e = want();
+  const Surface s = prepare_surface(mesh(), nullptr);
+  const std::vector<Surface> comps = split_components(s);
+  ASSERT_EQ(comps.size(), e.components);
+  std::vector<size_t> seen(s.num_faces(), 0);
+  std::multiset<std::pair<long, size_t>> per;
+  uint32_t previous_first = 0;
+  size_t faces = 0;
+  for (size_t ci = 0; ci < comps.size(); ++ci) {
+    SCOPED_TRACE("component " + std::to_string(ci));
+    const Surface& c = comps[ci];
+    ASSERT_GT(c.num_faces(), 0u);
+    faces += c.num_faces();
+    ASSERT_TRUE(is_manifold(c));
+    std::vector<uint32_t> label;
+    EXPECT_EQ(face_components(c, label), 1u);
+    ASSERT_EQ(c.face_parent.size(), c.num_faces());
+    ASSERT_EQ(c.vertex_parent.size(), c.num_vertices());
+    for (uint32_t t = 0; t < c.num_faces(); ++t) {
+      const uint32_t p = c.face_parent[t];
+      ASSERT_LT(p, s.num_faces());
+      seen[p]++;
+      for (int k = 0; k < 3; ++k) {
+        EXPECT_EQ(c.vertex_parent[c.triangles[t][k]], s.triangles[p][k]);
+        // Adjacency carried over: same neighbour (mapped back), boundary stays boundary.
+        const uint32_t o = c.opposite[3 * t + k], so = s.opposite[3 * p + k];
+        if (o == kNone) {
+          EXPECT_EQ(so, kNone);
+        } else {
+          EXPECT_EQ(so, 3 * c.face_parent[o / 3] + o % 3);
+        }
+      }
+    }
+    for (uint32_t v = 0; v < c.num_vertices(); ++v) EXPECT_TRUE(same_bits(c.positions[v], s.positions[c.vertex_parent[v]]));
+    const uint32_t first = *std::min_element(c.face_parent.begin(), c.face_parent.end());
+    if (ci > 0) EXPECT_GT(first, previous_first) << "components not ordered by first triangle";
+    previous_first = first;
+    per.insert(genus_and_loops(c));
+  }
+  EXPECT_EQ(faces, s.num_faces());
+  for (uint32_t t = 0; t < s.num_faces(); ++t) EXPECT_EQ(seen[t], 1u) << "surface face " << t;
+  EXPECT_EQ(per, e.per_component);
+}
+
+// ---- 3. cut_to_disk ----
+
+/// Checks one disk against the component it was cut from.
+void check_disk(const Surface& comp, const Disk& disk, HoleMode mode, const CutStats& st) {
+  const Surface& d = disk.mesh;
+  ASSERT_TRUE(is_manifold(d));
+  ASSERT_EQ(d.face_parent.size(), d.num_faces());
+  ASSERT_EQ(d.vertex_parent.size(), d.num_vertices());
+  const auto loops = boundary_loops(d);
+  EXPECT_EQ(loops.size(), 1u);
+  EXPECT_EQ(count(d).euler(), 1);
+  std::vector<uint32_t> label;
+  EXPECT_EQ(face_components(d, label), 1u);
+
+  // Faces: each component face exactly once, with its corners in order; the rest is scaffolding.
+  std::vector<size_t> seen(comp.num_faces(), 0);
+  size_t scaffolding = 0;
+  for (uint32_t f = 0; f < d.num_faces(); ++f) {
+    const uint32_t p = d.face_parent[f];
+    if (p == kNone) {
+      ++scaffolding;
+      continue;
+    }
+    ASSERT_LT(p, comp.num_faces());
+    seen[p]++;
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = d.triangles[f][k];
+      EXPECT_EQ(d.vertex_parent[v], comp.triangles[p][k]) << "disk face " << f << " corner " << k;
+    }
+  }
+  for (uint32_t t = 0; t < comp.num_faces(); ++t) EXPECT_EQ(seen[t], 1u) << "component face " << t;
+  for (uint32_t v = 0; v < d.num_vertices(); ++v) {
+    if (d.vertex_parent[v] == kNone) continue;
+    ASSERT_LT(d.vertex_parent[v], comp.num_vertices());
+    EXPECT_TRUE(same_bits(d.positions[v], comp.positions[d.vertex_parent[v]]));
+  }
+  const auto comp_loops = boundary_loops(comp);
+  const Counts cc = count(comp);
+  const long genus = (2 - cc.euler() - long(comp_loops.size())) / 2;
+  if (mode == HoleMode::kCut) {
+    // Nothing is capped: every face and vertex of the disk comes from the component.
+    EXPECT_EQ(scaffolding, 0u);
+    EXPECT_EQ(st.holes_filled, 0u);
+    for (uint32_t p : d.vertex_parent) EXPECT_NE(p, kNone);
+  } else {
+    // Caps (of holes and of cut handles) stay within the area budget, so they waste few texels.
+    double comp_area = 0, cap_area = 0;
+    for (const Tri& f : comp.triangles) comp_area += triangle_area(comp.positions[f[0]], comp.positions[f[1]], comp.positions[f[2]]);
+    for (uint32_t f = 0; f < d.num_faces(); ++f)
+      if (d.face_parent[f] == kNone) cap_area += triangle_area(d.positions[d.triangles[f][0]], d.positions[d.triangles[f][1]], d.positions[d.triangles[f][2]]);
+    EXPECT_LE(cap_area, kFillBudget * comp_area * (1 + 1e-9));
+    if (genus == 0) EXPECT_EQ(scaffolding > 0, st.holes_filled > 0);
+  }
+  if (genus == 0 && !comp_loops.empty()) EXPECT_EQ(st.holes_filled + st.holes_cut, comp_loops.size() - 1);
+  // A component that already is a disk is not cut at all (the catalogue's disks are flat, so none is
+  // deep enough for a slit).
+  if (comp_loops.size() == 1 && cc.euler() == 1) {
+    EXPECT_EQ(st.cut_edges, 0u);
+    EXPECT_EQ(d.num_vertices(), comp.num_vertices());
+  } else {
+    EXPECT_GT(st.cut_edges, 0u);
+  }
+  EXPECT_EQ(st.before.euler(), cc.euler());
+  EXPECT_EQ(st.before.boundary_loops, comp_loops.size());
+
+  // disk.boundary: a closed walk along the boundary halfedges, each once, in the faces' orientation.
+  const auto& b = disk.boundary;
+  ASSERT_GE(b.size(), 3u);
+  EXPECT_EQ(b.size(), count(d).boundary_halfedges);
+  std::map<std::pair<uint32_t, uint32_t>, size_t> boundary_he;
+  for (uint32_t h = 0; h < 3 * d.num_faces(); ++h)
+    if (d.opposite[h] == kNone) boundary_he[{d.from(h), d.to(h)}]++;
+  std::set<uint32_t> distinct(b.begin(), b.end());
+  EXPECT_EQ(distinct.size(), b.size()) << "a boundary vertex appears twice";
+  for (size_t i = 0; i < b.size(); ++i) {
+    const auto key = std::make_pair(b[i], b[(i + 1) % b.size()]);
+    EXPECT_EQ(boundary_he.count(key), 1u) << "no boundary halfedge " << key.first << "->" << key.second;
+  }
+}
+
+TEST_P(Catalogue, CutToDisk) {
+  const std::vector<Surface> comps = split_components(prepare_surface(mesh(), nullptr));
+  for (HoleMode mode : {HoleMode::kFill, HoleMode::kCut}) {
+    for (size_t ci = 0; ci < comps.size(); ++ci) {
+      SCOPED_TRACE(std::string(mode == HoleMode::kFill ? "kFill" : "kCut") + " component " + std::to_string(ci));
+      CutStats st;
+      Disk disk;
+      try {
+        disk = cut_to_disk(comps[ci], mode, &st);
+      } catch (const std::exception& ex) {
+        ADD_FAILURE() << "cut_to_disk threw: " << ex.what();
+        continue;
+      }
+      check_disk(comps[ci], disk, mode, st);
+    }
+  }
+}
+
+// ---- 4. map_to_square ----
+
+/// Checks a map of `disk` onto the unit square made with `options`.
+void check_square_map(const Disk& disk, const std::vector<Vec2>& uv, const SquareMapOptions& options,
+                      const SquareMapStats& st) {
+  const Surface& d = disk.mesh;
+  ASSERT_EQ(uv.size(), d.num_vertices());
+  for (uint32_t v = 0; v < uv.size(); ++v) ASSERT_TRUE(uv[v].allFinite()) << "vertex " << v;
+  const auto& b = disk.boundary;
+  const size_t nb = b.size();
+  const double bump = options.bump_texels / double(std::max(1, std::min(options.rect_width, options.rect_height) - 1));
+  constexpr double kEps = 1e-12;
+
+  // Corners.
+  static const Vec2 kCorner[4] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  std::array<size_t, 4> at{};
+  for (int k = 0; k < 4; ++k) {
+    const auto it = std::find(b.begin(), b.end(), st.corners[k]);
+    ASSERT_NE(it, b.end()) << "corner " << k << " is not a boundary vertex";
+    at[k] = size_t(it - b.begin());
+  }
+  if (nb == 3) {
+    // A lone triangle cannot have four corners: three of them, the last repeated.
+    EXPECT_EQ(st.corners[3], st.corners[2]);
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(uv[st.corners[k]], kCorner[k]) << "corner " << k;
+  } else {
+    for (int k = 0; k < 4; ++k) EXPECT_EQ(uv[st.corners[k]], kCorner[k]) << "corner " << k;
+    // Corners in counter-clockwise boundary order, distinct.
+    for (int k = 1; k < 4; ++k) EXPECT_GT((at[k] + nb - at[0]) % nb, (at[k - 1] + nb - at[0]) % nb) << "corner " << k;
+
+    // Each side: its vertices on that side of the square (or lifted outward by at most the bump),
+    // moving monotonically along it.
+    size_t off_side = 0;
+    for (int k = 0; k < 4; ++k) {
+      const Side& side = kSides[k];
+      const size_t len = (at[(k + 1) % 4] + nb - at[k]) % nb;
+      double last_along = -1e300;
+      for (size_t j = 0; j <= len; ++j) {
+        const Vec2& p = uv[b[(at[k] + j) % nb]];
+        const double off = (p[side.fixed_axis] - side.value) * side.outward;  // > 0: outside
+        const double along = p[side.along_axis] * side.along_sign;
+        EXPECT_GE(off, -kEps) << "side " << k << " vertex " << j << " at (" << p.x() << ", " << p.y() << ") is inside";
+        EXPECT_LE(off, bump + kEps) << "side " << k << " vertex " << j << " beyond the bump";
+        if (off > kEps && j > 0 && j < len) ++off_side;
+        EXPECT_GE(p[side.along_axis], -kEps);
+        EXPECT_LE(p[side.along_axis], 1 + kEps);
+        if (j > 0) EXPECT_GT(along, last_along) << "side " << k << " vertex " << j << " goes backwards";
+        last_along = along;
+      }
+    }
+    EXPECT_LE(off_side, st.bumped_vertices) << "boundary vertices off the square that were not bumped";
+  }
+  // Interior strictly inside.
+  std::vector<char> on_boundary(d.num_vertices(), 0);
+  for (uint32_t v : b) on_boundary[v] = 1;
+  std::set<uint32_t> used;
+  for (const Tri& f : d.triangles) used.insert(f.begin(), f.end());
+  for (uint32_t v : used)
+    if (!on_boundary[v])
+      EXPECT_TRUE(uv[v].x() > 0 && uv[v].x() < 1 && uv[v].y() > 0 && uv[v].y() < 1)
+          << "interior vertex " << v << " at (" << uv[v].x() << ", " << uv[v].y() << ")";
+
+  // No fold, and the triangles cover the boundary polygon exactly once (total area = polygon area):
+  // with every triangle positive, that makes the map a bijection onto the polygon.
+  size_t folds = 0;
+  double area = 0;
+  for (const Tri& f : d.triangles) {
+    const double a = signed_area(uv[f[0]], uv[f[1]], uv[f[2]]);
+    folds += !(a > 0);
+    area += a;
+  }
+  EXPECT_EQ(folds, 0u);
+  EXPECT_EQ(count_folds(d, uv), folds);
+  EXPECT_EQ(st.flipped, 0u);
+  double polygon = 0;
+  for (size_t i = 0; i < nb; ++i) {
+    const Vec2 &p = uv[b[i]], &q = uv[b[(i + 1) % nb]];
+    polygon += 0.5 * (p.x() * q.y() - q.x() * p.y());
+  }
+  EXPECT_NEAR(area, polygon, 1e-9);
+  if (nb == 3) {
+    EXPECT_NEAR(polygon, 0.5, 1e-12);
+  } else {
+    EXPECT_GE(polygon, 1 - 1e-12);
+    EXPECT_LE(polygon, 1 + 4 * bump);
+  }
+  EXPECT_FALSE(st.weights.empty());
+}
+
+TEST_P(Catalogue, MapToSquare) {
+  const std::vector<Surface> comps = split_components(prepare_surface(mesh(), nullptr));
+  SquareMapOptions options;
+  options.rect_width = options.rect_height = 256;
+  size_t negative = 0;
+  for (HoleMode mode : {HoleMode::kFill, HoleMode::kCut}) {
+    for (size_t ci = 0; ci < comps.size(); ++ci) {
+      SCOPED_TRACE(std::string(mode == HoleMode::kFill ? "kFill" : "kCut") + " component " + std::to_string(ci));
+      const Disk disk = cut_to_disk(comps[ci], mode, nullptr);
+      SquareMapStats st;
+      const auto uv = map_to_square(disk, options, &st);
+      check_square_map(disk, uv, options, st);
+      negative += st.negative_weights;
+    }
+  }
+  if (GetParam() == "obtuse_strip") EXPECT_GT(negative, 0u) << "the obtuse mesh must exercise negative weights";
+}
+
+// A bump is sized in texels of the rectangle: a narrow rectangle gets a larger bump along its short
+// side; the map must stay valid for any rectangle shape.
+TEST(MapToSquare, NonSquareRectangles) {
+  for (const char* name : {"bowtie", "obtuse_strip", "sphere_with_holes"}) {
+    const auto comps = split_components(prepare_surface(expected(name).make(), nullptr));
+    for (auto [w, h] : {std::pair{16, 512}, std::pair{512, 16}, std::pair{4, 4}}) {
+      SCOPED_TRACE(std::string(name) + " " + std::to_string(w) + "x" + std::to_string(h));
+      SquareMapOptions options;
+      options.rect_width = w;
+      options.rect_height = h;
+      for (const Surface& c : comps) {
+        const Disk disk = cut_to_disk(c, HoleMode::kFill, nullptr);
+        SquareMapStats st;
+        const auto uv = map_to_square(disk, options, &st);
+        check_square_map(disk, uv, options, st);
+      }
+    }
+  }
+}
+
+// ---- 5. the whole pipeline ----
+
+/// Runs optimize() and checks the output model and the metrics of its report.
+void check_pipeline(const TexturedMesh& input, const Expected& e, const Options& options, bool check_fill) {
+  Result r;
+  try {
+    r = optimize(input, options);
+  } catch (const std::exception& ex) {
+    FAIL() << "optimize threw: " << ex.what();
+  }
+  const TexturedMesh& out = r.output;
+  ASSERT_EQ(out.corner_uv.size(), 3 * out.num_triangles());
+  ASSERT_EQ(out.face_material.size(), out.num_triangles());
+  EXPECT_EQ(out.num_triangles(), input.num_triangles() - e.zero_area - e.duplicates);
+  for (const Vec2& uv : out.corner_uv) {
+    ASSERT_TRUE(uv.allFinite());
+    EXPECT_TRUE(uv.x() >= 0 && uv.x() <= 1 && uv.y() >= 0 && uv.y() <= 1) << "(" << uv.x() << ", " << uv.y() << ")";
+  }
+  for (int32_t mat : out.face_material) {
+    ASSERT_GE(mat, 0);
+    ASSERT_LT(size_t(mat), out.materials.size());
+    ASSERT_GE(out.materials[size_t(mat)].texture, 0);
+  }
+
+  const nlohmann::json& m = r.report["metrics"];
+  ASSERT_TRUE(m.is_object()) << r.report.dump();
+  EXPECT_EQ(m["lost_triangles"].get<size_t>(), 0u);
+  EXPECT_EQ(m["flipped"].get<size_t>(), 0u);
+  EXPECT_EQ(m["degenerate"].get<size_t>(), 0u);
+  EXPECT_EQ(m["overlap"].get<double>(), 0.0);
+  EXPECT_EQ(m["charts"].get<size_t>(), e.components);
+  EXPECT_EQ(r.report["preparation"]["components"].get<size_t>(), e.components);
+  if (check_fill) {
+    EXPECT_GE(m["output"]["utilization"].get<double>(), 0.99);
+    // The input texture is a smooth gradient: the bake must reproduce it closely.
+    EXPECT_GT(m["surface_psnr_db"].get<double>(), 30.0);
+  }
+
+  // The report's metrics agree with measuring the output afresh.
+  const Metrics fresh = measure(input, out, 20000);
+  EXPECT_EQ(fresh.lost_triangles, 0u);
+  EXPECT_EQ(fresh.flipped, 0u);
+  EXPECT_EQ(fresh.charts, e.components);
+}
+
+TEST_P(Catalogue, OptimizeAtlas) {
+  Options options;
+  options.size = 256;
+  check_pipeline(mesh(), want(), options, want().fills_rectangles);
+}
+
+TEST_P(Catalogue, OptimizeCutHolesPerComponent) {
+  Options options;
+  options.size = 128;
+  options.holes = HoleMode::kCut;
+  options.layout = Layout::kPerComponent;
+  // Per component, tiny floaters get tiny images: fidelity is only meaningful for the big ones.
+  check_pipeline(mesh(), want(), options, want().fills_rectangles && want().components == 1);
+}
+
+// ---- 6. layouts ----
+
+/// Checks that `rects` tile width x height exactly, each at least min_side, with areas proportional to
+/// `areas` within a factor 1.5 for items whose share is at least 16 minimum squares.
+void check_atlas(const std::vector<double>& areas, const std::vector<Rect>& rects, int width, int height, int min_side) {
+  ASSERT_EQ(rects.size(), areas.size());
+  std::vector<int> cover(size_t(width) * size_t(height), 0);
+  long sum = 0;
+  for (size_t i = 0; i < rects.size(); ++i) {
+    const Rect& r = rects[i];
+    EXPECT_EQ(r.image, 0);
+    ASSERT_GE(r.w, min_side) << "rect " << i;
+    ASSERT_GE(r.h, min_side) << "rect " << i;
+    ASSERT_TRUE(r.x >= 0 && r.y >= 0 && r.x + r.w <= width && r.y + r.h <= height)
+        << "rect " << i << " (" << r.x << ", " << r.y << ", " << r.w << ", " << r.h << ") outside";
+    sum += long(r.w) * r.h;
+    for (int y = r.y; y < r.y + r.h; ++y)
+      for (int x = r.x; x < r.x + r.w; ++x) cover[size_t(y) * size_t(width) + size_t(x)]++;
+  }
+  EXPECT_EQ(sum, long(width) * height);
+  size_t overlapped = 0, uncovered = 0;
+  for (int c : cover) overlapped += c > 1, uncovered += c == 0;
+  EXPECT_EQ(overlapped, 0u);
+  EXPECT_EQ(uncovered, 0u);
+  double total = 0;
+  for (double a : areas) total += a;
+  for (size_t i = 0; i < areas.size(); ++i) {
+    const double ideal = areas[i] / total * double(width) * height;
+    if (ideal < 16.0 * min_side * min_side) continue;
+    const double got = double(rects[i].w) * rects[i].h;
+    EXPECT_LE(got, 1.5 * ideal) << "rect " << i << " of area share " << areas[i] / total;
+    EXPECT_GE(got, ideal / 1.5) << "rect " << i << " of area share " << areas[i] / total;
+  }
+}
+
+TEST(Layout, AtlasTilesTheTexture) {
+  std::mt19937 rng(12345);
+  std::vector<std::vector<double>> sets = {{1.0}, {1.0, 1.0}, {3.0, 1.0}, {1, 2, 3, 4, 5}, {10, 1e-6, 1e-9, 5, 0.5}};
+  {
+    std::lognormal_distribution<double> spread(0.0, 1.5);  // areas over ~3 orders of magnitude
+    for (int n : {7, 20, 60}) {
+      std::vector<double> a(static_cast<size_t>(n), 0.0);
+      for (double& x : a) x = spread(rng);
+      sets.push_back(a);
+    }
+  }
+  {  // the catalogue's multi-component mesh
+    const auto comps = split_components(prepare_surface(cat::multi_component(), nullptr));
+    std::vector<double> a;
+    for (const Surface& c : comps) {
+      double area = 0;
+      for (const Tri& f : c.triangles) area += triangle_area(c.positions[f[0]], c.positions[f[1]], c.positions[f[2]]);
+      a.push_back(area);
+    }
+    sets.push_back(a);
+  }
+  for (auto [w, h] : {std::pair{256, 256}, std::pair{300, 200}, std::pair{1024, 64}, std::pair{97, 131}}) {
+    for (size_t i = 0; i < sets.size(); ++i) {
+      SCOPED_TRACE("set " + std::to_string(i) + " in " + std::to_string(w) + "x" + std::to_string(h));
+      std::vector<Rect> rects;
+      ASSERT_NO_THROW(rects = layout_atlas(sets[i], w, h, 4));
+      check_atlas(sets[i], rects, w, h, 4);
+    }
+  }
+}
+
+TEST(Layout, AtlasAtCapacity) {
+  // 16 equal items exactly fill a 16x16 texture with 4x4 squares.
+  const std::vector<double> equal(16, 1.0);
+  const auto rects = layout_atlas(equal, 16, 16, 4);
+  check_atlas(equal, rects, 16, 16, 4);
+  for (const Rect& r : rects) {
+    EXPECT_EQ(r.w, 4);
+    EXPECT_EQ(r.h, 4);
+  }
+  // One more than fits: refused as bad input, not a crash or an overlapping layout.
+  EXPECT_THROW(layout_atlas(std::vector<double>(17, 1.0), 16, 16, 4), InputError);
+  // Many tiny items beside one big one: the tiny ones still get min_side squares.
+  std::vector<double> skewed(40, 1e-12);
+  skewed[0] = 1.0;
+  const auto r2 = layout_atlas(skewed, 128, 128, 4);
+  check_atlas(skewed, r2, 128, 128, 4);
+}
+
+TEST(Layout, PerComponent) {
+  const std::vector<double> areas = {2.0, 8.0, 0.5, 1e-9, 8.0 / 9.0};
+  const int size = 256;
+  const auto rects = layout_per_component(areas, size, 4);
+  ASSERT_EQ(rects.size(), areas.size());
+  int largest = 0;
+  for (size_t i = 0; i < rects.size(); ++i) {
+    const Rect& r = rects[i];
+    EXPECT_EQ(r.image, int(i));
+    EXPECT_EQ(r.x, 0);
+    EXPECT_EQ(r.y, 0);
+    EXPECT_EQ(r.w, r.h);
+    EXPECT_GE(r.w, 4);
+    largest = std::max(largest, r.w);
+    // side proportional to the square root of the area share
+    const double ideal = size * std::sqrt(areas[i] / 8.0);
+    if (ideal >= 4) EXPECT_NEAR(r.w, ideal, 1.0) << "component " << i;
+  }
+  EXPECT_EQ(largest, size);
+  EXPECT_EQ(rects[1].w, size);
+  EXPECT_EQ(rects[0].w, size / 2);
+  EXPECT_EQ(rects[4].w, 85);  // sqrt(1/9) * 256 = 85.33
+  EXPECT_EQ(rects[3].w, 4);   // a speck still gets min_side
+}
+
+}  // namespace
+}  // namespace tightex
