@@ -1,2 +1,130 @@
+// Per-stage benchmarks on generated meshes of 10k..1M triangles: a bumpy sphere (closed, genus 0,
+// cut along one path) and the same with holes. Speed is measured here, never asserted in tests.
+// Run: build/bench/tightex_bench --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <map>
+#include <numbers>
+
+#include "bake/bake.hpp"
+#include "layout/layout.hpp"
+#include "param/param.hpp"
+#include "repair/repair.hpp"
+#include "topology/topology.hpp"
+
+using namespace tightex;
+
+namespace {
+
+/// A UV sphere with a bumpy radius: about `triangles` triangles, a fragmented atlas (every quad of the
+/// grid its own chart, as the worst photogrammetry output), one 1024x1024 texture.
+TexturedMesh bumpy_sphere(int triangles) {
+  const int n = std::max(8, int(std::sqrt(triangles / 2.0)));
+  TexturedMesh m;
+  m.source = "bench";
+  auto index = [&](int i, int j) { return uint32_t(i * n + (j % n)); };
+  for (int i = 0; i < n; ++i) {
+    const double th = std::numbers::pi * (i + 0.5) / n;
+    for (int j = 0; j < n; ++j) {
+      const double ph = 2 * std::numbers::pi * j / n;
+      const double r = 1.0 + 0.1 * std::sin(5 * th) * std::cos(3 * ph);
+      m.positions.push_back(r * Vec3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)));
+    }
+  }
+  const uint32_t north = uint32_t(m.positions.size()), south = north + 1;
+  m.positions.push_back(Vec3(0, 0, 1.05));
+  m.positions.push_back(Vec3(0, 0, -1.05));
+  auto add = [&](Tri t) {
+    m.triangles.push_back(t);
+    for (int k = 0; k < 3; ++k) {
+      const double u = double(m.triangles.size() % 97) / 97.0, v = double(m.triangles.size() % 89) / 89.0;
+      m.corner_uv.push_back(Vec2(u + 0.005 * k, v + 0.005 * (k == 2)));
+    }
+    m.face_material.push_back(0);
+  };
+  for (int i = 0; i + 1 < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      add({index(i, j), index(i + 1, j), index(i + 1, j + 1)});
+      add({index(i, j), index(i + 1, j + 1), index(i, j + 1)});
+    }
+  for (int j = 0; j < n; ++j) {
+    add({north, index(0, j), index(0, j + 1)});
+    add({south, index(n - 1, j + 1), index(n - 1, j)});
+  }
+  Material mat;
+  mat.name = "m";
+  mat.texture = 0;
+  m.materials.push_back(mat);
+  Texture tex;
+  tex.path = "bench.png";
+  tex.image = Image(1024, 1024);
+  for (int y = 0; y < 1024; ++y)
+    for (int x = 0; x < 1024; ++x) tex.image.at(x, y) = {uint8_t(x), uint8_t(y), uint8_t(x ^ y), 255};
+  m.textures.push_back(std::move(tex));
+  return m;
+}
+
+const TexturedMesh& mesh_for(int triangles) {
+  static std::map<int, TexturedMesh> cache;
+  auto it = cache.find(triangles);
+  if (it == cache.end()) it = cache.emplace(triangles, bumpy_sphere(triangles)).first;
+  return it->second;
+}
+
+void BM_PrepareSurface(benchmark::State& state) {
+  const TexturedMesh& m = mesh_for(int(state.range(0)));
+  for (auto _ : state) benchmark::DoNotOptimize(prepare_surface(m, nullptr));
+  state.counters["triangles"] = double(m.num_triangles());
+}
+
+void BM_CutToDisk(benchmark::State& state) {
+  const Surface s = prepare_surface(mesh_for(int(state.range(0))), nullptr);
+  const auto comps = split_components(s);
+  for (auto _ : state) benchmark::DoNotOptimize(cut_to_disk(comps[0], HoleMode::kFill, nullptr));
+}
+
+void BM_MapToSquare(benchmark::State& state) {
+  const Surface s = prepare_surface(mesh_for(int(state.range(0))), nullptr);
+  const Disk d = cut_to_disk(split_components(s)[0], HoleMode::kFill, nullptr);
+  for (auto _ : state) benchmark::DoNotOptimize(map_to_square(d, {}, nullptr));
+}
+
+void BM_BakeTexture(benchmark::State& state) {
+  const TexturedMesh& m = mesh_for(int(state.range(0)));
+  const Surface s = prepare_surface(m, nullptr);
+  const Disk d = cut_to_disk(split_components(s)[0], HoleMode::kFill, nullptr);
+  const int size = int(state.range(1));
+  SquareMapOptions mo;
+  mo.rect_width = mo.rect_height = size;
+  const auto uv = map_to_square(d, mo, nullptr);
+  std::vector<BakeTriangle> tris;
+  for (uint32_t f = 0; f < d.mesh.num_faces(); ++f) {
+    if (d.mesh.face_parent[f] == kNone) continue;
+    const uint32_t t = s.face_parent[d.mesh.face_parent[f]];
+    BakeTriangle bt;
+    bt.material = 0;
+    for (int k = 0; k < 3; ++k) {
+      const Vec2& p = uv[d.mesh.triangles[f][k]];
+      bt.target_px[k] = Vec2(0.5 + p.x() * (size - 1), 0.5 + (1 - p.y()) * (size - 1));
+      bt.source_uv[k] = m.corner_uv[3 * t + size_t(k)];
+    }
+    tris.push_back(bt);
+  }
+  const std::vector<Rect> rects{Rect{0, 0, 0, size, size}};
+  for (auto _ : state) {
+    std::vector<Image> images{Image(size, size)};
+    bake_texture(m, tris, rects, images, nullptr);
+    benchmark::DoNotOptimize(images);
+  }
+  state.counters["texels/s"] = benchmark::Counter(double(size) * size, benchmark::Counter::kIsIterationInvariantRate);
+}
+
+}  // namespace
+
+BENCHMARK(BM_PrepareSurface)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CutToDisk)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_MapToSquare)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_BakeTexture)->Args({100000, 2048})->Args({100000, 4096})->Args({1000000, 8192})->Unit(benchmark::kMillisecond);
+
 BENCHMARK_MAIN();

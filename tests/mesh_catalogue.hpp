@@ -376,6 +376,24 @@ inline TexturedMesh multi_component() {
   return make_textured("multi_component", g.positions, g.triangles);
 }
 
+/// Number of floaters sphere_with_floaters() scatters around its sphere.
+constexpr int kFloaters = 150;
+
+/// A UV sphere (16 x 16) and kFloaters tiny separate triangles (sides ~0.02) on a helix around it:
+/// a scan with its usual debris, kFloaters + 1 components of very unequal area.
+inline TexturedMesh sphere_with_floaters() {
+  Geometry g = sphere_geometry(16, 16);
+  for (int i = 0; i < kFloaters; ++i) {
+    const double a = 2 * std::numbers::pi * i / 37.0, z = -1.5 + 3.0 * i / kFloaters;
+    const Vec3 c(2 * std::cos(a), 2 * std::sin(a), z);
+    Geometry t;
+    t.positions = {Vec3(0, 0, 0), Vec3(0.02, 0, 0), Vec3(0.005, 0.015, 0.004)};
+    t.triangles = {Tri{0, 1, 2}};
+    g.append(t, c);
+  }
+  return make_textured("sphere_with_floaters", g.positions, g.triangles);
+}
+
 /// Every catalogue entry by name, in a fixed order.
 inline std::vector<std::pair<std::string, std::function<TexturedMesh()>>> catalogue() {
   return {{"disk", disk},
@@ -390,7 +408,8 @@ inline std::vector<std::pair<std::string, std::function<TexturedMesh()>>> catalo
           {"obtuse_strip", obtuse_strip},
           {"single_triangle", single_triangle},
           {"two_triangles", two_triangles},
-          {"multi_component", multi_component}};
+          {"multi_component", multi_component},
+          {"sphere_with_floaters", sphere_with_floaters}};
 }
 
 }  // namespace tightex::testing

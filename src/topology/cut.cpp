@@ -68,24 +68,7 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats) {
   std::vector<char> cut_edge(g.num_edges(), 0);
 
   if (loops.size() == 1 && topo.genus() == 0) {
-    // A disk is used as is, unless it is deep: a tube closed at one end (a vase, a scanned object
-    // resting on the ground) maps its far end into a tiny spot at the square's centre. When the farthest
-    // vertex from the boundary lies deeper than a flat round disk of the same perimeter allows
-    // (perimeter / 2 pi) by kDeepDisk, the disk is slit from the boundary to that vertex.
-    constexpr double kDeepDisk = 1.5;
-    double perimeter = 0;
-    std::vector<uint32_t> sources;
-    for (uint32_t h : loops[0]) perimeter += s.edge_length(h), sources.push_back(s.from(h));
-    std::vector<double> dist;
-    std::vector<uint32_t> pred;
-    dijkstra(g, nv, sources, g.length, dist, pred);
-    const uint32_t far = farthest(dist);
-    if (dist[far] > kDeepDisk * perimeter / (2 * std::numbers::pi)) {
-      st.method = "disk+slit";
-      for (uint32_t v = far; pred[v] != kNone; v = other_end(s, g, pred[v], v)) cut_edge[pred[v]] = 1;
-    } else {
-      st.method = "disk";
-    }
+    st.method = "disk";
   } else if (loops.empty() && topo.genus() == 0) {
     // The paper's single seam: shortest path between two far-apart vertices (double sweep).
     st.method = "path";
@@ -202,6 +185,32 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats) {
     }
   }
 
+  // A deep disk maps its far end into a tiny spot (a tube closed at one end: a vase, an object resting
+  // on the ground). When the farthest vertex from the disk's boundary (the surface boundary and both
+  // sides of every cut) lies deeper than a flat round disk of that perimeter allows (perimeter / 2 pi)
+  // by kDeepDisk, the disk is slit from its boundary to that vertex.
+  {
+    constexpr double kDeepDisk = 1.5;
+    double perimeter = 0;
+    std::vector<uint32_t> sources;
+    for (uint32_t e = 0; e < g.num_edges(); ++e) {
+      const bool boundary = s.opposite[g.edge_halfedge[e]] == kNone;
+      if (!boundary && !cut_edge[e]) continue;
+      perimeter += (boundary ? 1.0 : 2.0) * g.length[e];
+      sources.push_back(s.from(g.edge_halfedge[e]));
+      sources.push_back(s.to(g.edge_halfedge[e]));
+    }
+    if (!sources.empty()) {
+      std::vector<double> dist;
+      std::vector<uint32_t> pred;
+      dijkstra(g, nv, sources, g.length, dist, pred);
+      const uint32_t far = farthest(dist);
+      if (dist[far] > kDeepDisk * perimeter / (2 * std::numbers::pi)) {
+        st.method += "+slit";
+        for (uint32_t v = far; pred[v] != kNone; v = other_end(s, g, pred[v], v)) cut_edge[pred[v]] = 1;
+      }
+    }
+  }
   for (uint32_t e = 0; e < g.num_edges(); ++e)
     if (cut_edge[e]) st.cut_edges++, st.cut_length += g.length[e];
   uint32_t groups = 0;
