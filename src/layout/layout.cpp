@@ -41,12 +41,19 @@ struct Bisector {
       if (d < best) best = d, split = k;
     }
     // Cut across the longer side in proportion to the weights; when the minimum sizes make that
-    // impossible (many tiny components in a narrow strip), try the other side, then a split by count.
-    for (const size_t k : {split, items.size() / 2}) {
+    // impossible (many tiny components in a narrow strip), try the other side, then other split points.
+    // Candidate split points: the area split first, then the others by distance from it.
+    std::vector<size_t> ks;
+    for (size_t k = 1; k < items.size(); ++k) ks.push_back(k);
+    std::stable_sort(ks.begin(), ks.end(), [&](size_t a, size_t b) {
+      const size_t da = a > split ? a - split : split - a, db = b > split ? b - split : split - b;
+      return da < db;
+    });
+    for (const size_t k : ks) {
       const std::vector<uint32_t> a(items.begin(), items.begin() + long(k)), b(items.begin() + long(k), items.end());
       double wa = 0;
       for (uint32_t i : a) wa += weight[i];
-      const double share = k == split ? wa / total : double(a.size()) / double(items.size());
+      const double share = wa / total;
       for (const bool cut_x : {r.w >= r.h, r.w < r.h}) {
         const int extent = cut_x ? r.w : r.h, across = cut_x ? r.h : r.w;
         const int lo = min_extent(a.size(), across), hi = extent - min_extent(b.size(), across);
@@ -77,7 +84,7 @@ struct Bisector {
 std::vector<Rect> layout_atlas(const std::vector<double>& areas, int width, int height, int min_side) {
   std::vector<Rect> out(areas.size());
   if (areas.empty()) return out;
-  if (long(areas.size()) * min_side * min_side > long(width) * height)
+  if (long(areas.size()) > long(width / min_side) * long(height / min_side))
     fail_input("a {}x{} texture cannot hold {} components at {}x{} texels each; use a larger --size", width, height,
                areas.size(), min_side, min_side);
   double total = 0;
