@@ -233,6 +233,15 @@ inline Geometry double_torus_geometry(int k = 3) {
   return polycube_geometry(voxels, k, 0.5);
 }
 
+/// Genus 25 (many small handles): an 11 x 11 x 1 slab of voxels with every (odd, odd) voxel taken out.
+inline Geometry holey_slab_geometry(int k = 1) {
+  std::vector<std::array<int, 3>> voxels;
+  for (int x = 0; x < 11; ++x)
+    for (int y = 0; y < 11; ++y)
+      if (!(x % 2 == 1 && y % 2 == 1)) voxels.push_back({x, y, 0});
+  return polycube_geometry(voxels, k, 0.2);
+}
+
 // ---- the catalogue (TexturedMesh generators) ----
 
 inline TexturedMesh disk() { auto g = disk_geometry(); return make_textured("disk", g.positions, g.triangles); }
@@ -247,17 +256,24 @@ inline TexturedMesh open_cylinder() {
 /// Number of caps sphere_with_holes() cuts out.
 constexpr int kSphereHoles = 3;
 
-/// The UV sphere with three caps removed (every triangle touching a vertex within chord distance 0.35
-/// of a cap centre). The vertices of the removed caps stay in `positions`, unused.
+/// The UV sphere with three holes: two caps removed (every triangle touching a vertex within chord
+/// distance 0.35 of the cap's centre) and one tiny hole (the 6 triangles around a single vertex, about
+/// 0.2% of the area: small enough for HoleMode::kFill to cap). The vertices of the removed triangles
+/// stay in `positions`, unused.
 inline TexturedMesh sphere_with_holes() {
   Geometry g = sphere_geometry();
-  const Vec3 centres[kSphereHoles] = {Vec3(0, 0, 1), Vec3(1, 0, 0), Vec3(-0.5, 0.8, -0.35).normalized()};
-  std::vector<char> in_cap(g.positions.size(), 0);
-  for (size_t v = 0; v < g.positions.size(); ++v)
-    for (const Vec3& c : centres) in_cap[v] |= (g.positions[v] - c).norm() < 0.35;
+  const Vec3 caps[2] = {Vec3(0, 0, 1), Vec3(1, 0, 0)};
+  const Vec3 tiny = Vec3(-0.5, 0.8, -0.35).normalized();
+  std::vector<char> removed(g.positions.size(), 0);
+  size_t nearest = 0;
+  for (size_t v = 0; v < g.positions.size(); ++v) {
+    for (const Vec3& c : caps) removed[v] |= (g.positions[v] - c).norm() < 0.35;
+    if ((g.positions[v] - tiny).norm() < (g.positions[nearest] - tiny).norm()) nearest = v;
+  }
+  removed[nearest] = 1;
   std::vector<Tri> kept;
   for (const Tri& f : g.triangles)
-    if (!in_cap[f[0]] && !in_cap[f[1]] && !in_cap[f[2]]) kept.push_back(f);
+    if (!removed[f[0]] && !removed[f[1]] && !removed[f[2]]) kept.push_back(f);
   return make_textured("sphere_with_holes", g.positions, kept);
 }
 
@@ -376,6 +392,44 @@ inline TexturedMesh multi_component() {
   return make_textured("multi_component", g.positions, g.triangles);
 }
 
+/// Number of handles of holey_slab().
+constexpr int kSlabHandles = 25;
+
+inline TexturedMesh holey_slab() {
+  auto g = holey_slab_geometry();
+  return make_textured("holey_slab", g.positions, g.triangles);
+}
+
+/// A deep disk: the open cylinder with its bottom end capped by a fan (a cup, or a vase), so its far
+/// end lies much deeper than a flat disk of the same perimeter would reach.
+inline TexturedMesh cup() {
+  const int segments = 32;
+  Geometry g = cylinder_geometry(12, segments, 0.5, 2.0);
+  const uint32_t centre = g.add(Vec3(0, 0, -1.0));
+  for (int i = 0; i < segments; ++i) g.triangles.push_back({centre, uint32_t((i + 1) % segments), uint32_t(i)});
+  return make_textured("cup", g.positions, g.triangles);
+}
+
+/// A Mobius strip of 2 x 40 triangles, consistently oriented everywhere except across the one edge
+/// where the strip closes with a half twist (no orientation can avoid such an edge).
+inline TexturedMesh mobius_strip() {
+  const int n = 40;
+  Geometry g;
+  for (int i = 0; i < n; ++i)
+    for (double w : {-0.3, 0.3}) {
+      const double t = 2 * std::numbers::pi * i / n;
+      g.add(Vec3((1 + w * std::cos(t / 2)) * std::cos(t), (1 + w * std::cos(t / 2)) * std::sin(t), w * std::sin(t / 2)));
+    }
+  for (int i = 0; i < n; ++i) {
+    const uint32_t a = uint32_t(2 * i), b = a + 1;
+    // After a full turn the half twist swaps the strip's two sides: vertex (t = 2 pi, w) is (0, -w).
+    const uint32_t c = i + 1 < n ? a + 2 : 1, d = i + 1 < n ? a + 3 : 0;
+    g.triangles.push_back({a, c, d});
+    g.triangles.push_back({a, d, b});
+  }
+  return make_textured("mobius_strip", g.positions, g.triangles);
+}
+
 /// Number of floaters sphere_with_floaters() scatters around its sphere.
 constexpr int kFloaters = 150;
 
@@ -402,6 +456,7 @@ inline std::vector<std::pair<std::string, std::function<TexturedMesh()>>> catalo
           {"sphere_with_holes", sphere_with_holes},
           {"torus", torus},
           {"double_torus", double_torus},
+          {"holey_slab", holey_slab},
           {"bowtie", bowtie},
           {"non_manifold_edge", non_manifold_edge},
           {"degenerate_disk", degenerate_disk},
@@ -409,6 +464,8 @@ inline std::vector<std::pair<std::string, std::function<TexturedMesh()>>> catalo
           {"single_triangle", single_triangle},
           {"two_triangles", two_triangles},
           {"multi_component", multi_component},
+          {"cup", cup},
+          {"mobius_strip", mobius_strip},
           {"sphere_with_floaters", sphere_with_floaters}};
 }
 

@@ -543,6 +543,14 @@ TEST_F(ImageIoTest, RandomBytesNeverCrash) {
   }
 }
 
+TEST_F(ImageIoTest, RadianceHdrDoesNotHang) {
+  // An RLE scanline whose run count is 0 made stb_image 2.27 loop forever; HDR is not read at all now.
+  const std::string header = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 1 +X 8\n";
+  Bytes hdr(header.begin(), header.end());
+  hdr.insert(hdr.end(), {2, 2, 0, 8, 0, 0, 0, 0});
+  expect_input_error([&] { decode_image(hdr.data(), hdr.size(), "sky.hdr"); }, "sky.hdr");
+}
+
 TEST_F(ImageIoTest, ZeroSizePngIsRefused) {
   // spng's encoder refuses to write a zero width, so the header is written by hand.
   const Bytes png = png_header_only(0, 1);

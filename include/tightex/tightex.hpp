@@ -10,6 +10,7 @@
 
 #include "core/mesh.hpp"
 #include "io/image_io.hpp"
+#include "layout/layout.hpp"
 #include "topology/topology.hpp"
 
 namespace tightex {
@@ -31,6 +32,24 @@ struct Result {
   TexturedMesh output;      // geometry of the input (same corner positions), new UVs, new textures
   nlohmann::json report;    // what was done and measured (see ../shared/METRICS.md)
 };
+
+/// The geometric half of the method (repair, components, handles, holes, cut, layout, map): needs the
+/// input's geometry and UVs, not its texture pixels, so a caller can decode textures meanwhile.
+struct Plan {
+  Surface surface;                       // repaired; face_parent -> input triangle
+  std::vector<Surface> components;       // face_parent -> surface face
+  std::vector<Disk> disks;               // face_parent -> component face (kNone: scaffolding)
+  std::vector<std::vector<Vec2>> uv;     // per disk vertex, unit square
+  std::vector<Rect> rects;               // per component
+  std::vector<std::pair<int, int>> image_size;
+  int num_images = 1;
+  nlohmann::json report;                 // what was done so far
+};
+Plan plan_charts(const TexturedMesh& input, const Options& options);
+
+/// The texture half: output model, bake, metrics. `input` must be the mesh the plan was made from
+/// (same triangles and UVs), now with its textures loaded.
+Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& options);
 
 /// Runs the whole method: repair, components, holes, cut, harmonic map, layout, bake, metrics.
 /// Requires a mesh as returned by read_obj (validated). Throws InputError for input it cannot handle

@@ -29,12 +29,17 @@
 
 // stb_image is the fallback for formats other than PNG and JPEG, which have hardened decoders above.
 // STB_IMAGE_STATIC keeps its functions private to this file, so another translation unit that also
-// compiles stb cannot clash with it; PNG and JPEG are compiled out because they never reach stb.
+// compiles stb cannot clash with it. PNG and JPEG are compiled out because they never reach stb. So is
+// Radiance HDR: stb 2.27 loops forever on an RLE count of 0 (found by fuzzing), and a float HDR image
+// is no 8-bit texture anyway; and Softimage PIC, which no texture pipeline produces. What remains:
+// BMP, TGA, PSD (composite), GIF (first frame), PNM.
 #define STB_IMAGE_STATIC
 #define STB_IMAGE_IMPLEMENTATION
 #define STBI_NO_STDIO
 #define STBI_NO_PNG
 #define STBI_NO_JPEG
+#define STBI_NO_HDR
+#define STBI_NO_PIC
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wunused-function"
 #pragma GCC diagnostic ignored "-Wsign-compare"

@@ -41,29 +41,29 @@ class StageClock {
 
 }  // namespace
 
-Result optimize(const TexturedMesh& input, const Options& options) {
+Plan plan_charts(const TexturedMesh& input, const Options& options) {
   auto progress = [&](std::string_view stage, double f) {
     if (options.progress) options.progress(stage, f);
   };
   if (options.size < 8 || options.size > 65536) fail_input("--size {} is out of range (8..65536)", options.size);
-  Result result;
-  nlohmann::json& rep = result.report;
+  Plan plan;
   nlohmann::json timings = nlohmann::json::array();
   StageClock clock(timings);
 
   // 1. Repair (§4.1): weld, drop degenerate and duplicate triangles, slice non-manifold elements.
   progress("repair", 0);
   RepairStats rs;
-  const Surface surface = prepare_surface(input, &rs);
+  const Surface& surface = plan.surface = prepare_surface(input, &rs);
   if (surface.num_faces() == 0)
     fail_input("{}: no triangle with non-zero area ({} zero-area, {} duplicate)", input.source, rs.zero_area_triangles, rs.duplicate_triangles);
   clock.done("repair");
 
   // 2. Components, holes, cut to a disk.
   progress("cut", 0);
-  const std::vector<Surface> components = split_components(surface);
+  const std::vector<Surface>& components = plan.components = split_components(surface);
   const size_t nc = components.size();
-  std::vector<Disk> disks(nc);
+  std::vector<Disk>& disks = plan.disks;
+  disks.resize(nc);
   std::vector<CutStats> cut_stats(nc);
   std::vector<double> areas(nc, 0.0);
   tbb::parallel_for(size_t(0), nc, [&](size_t c) {
@@ -74,9 +74,10 @@ Result optimize(const TexturedMesh& input, const Options& options) {
   clock.done("cut");
 
   // 3. Layout: a rectangle of texels per component.
-  std::vector<Rect> rects;
-  int num_images = 1;
-  std::vector<std::pair<int, int>> image_size;
+  std::vector<Rect>& rects = plan.rects;
+  int& num_images = plan.num_images;
+  num_images = 1;
+  std::vector<std::pair<int, int>>& image_size = plan.image_size;
   if (options.layout == Layout::kAtlas) {
     rects = layout_atlas(areas, options.size, options.size);
     image_size.push_back({options.size, options.size});
@@ -88,7 +89,8 @@ Result optimize(const TexturedMesh& input, const Options& options) {
 
   // 4. Harmonic map of each disk onto the unit square (§4.2).
   progress("map", 0);
-  std::vector<std::vector<Vec2>> uv(nc);
+  std::vector<std::vector<Vec2>>& uv = plan.uv;
+  uv.resize(nc);
   std::vector<SquareMapStats> map_stats(nc);
   std::vector<size_t> order(nc);
   std::iota(order.begin(), order.end(), 0);
@@ -100,6 +102,61 @@ Result optimize(const TexturedMesh& input, const Options& options) {
   });
   clock.done("map");
 
+  // What was done so far, for the report.
+  nlohmann::json& rep = plan.report;
+  rep["input"] = {{"file", input.source}, {"vertices", input.num_vertices()}, {"triangles", input.num_triangles()},
+                  {"materials", input.materials.size()}, {"textures", input.textures.size()}};
+  rep["options"] = {{"size", options.size}, {"layout", options.layout == Layout::kAtlas ? "atlas" : "per-component"},
+                    {"holes", options.holes == HoleMode::kFill ? "fill" : "cut"}, {"map", "harmonic"}};
+  rep["preparation"] = {{"input_vertices", rs.input_vertices},       {"welded_vertices", rs.welded_vertices},
+                        {"zero_area_dropped", rs.zero_area_triangles}, {"duplicates_dropped", rs.duplicate_triangles},
+                        {"non_manifold_edges_sliced", rs.non_manifold_edges}, {"inconsistent_edges_sliced", rs.inconsistent_edges},
+                        {"vertices_sliced", rs.sliced_vertices}, {"slits_closed", rs.slits_closed},      {"components", nc}};
+  nlohmann::json comps = nlohmann::json::array();
+  size_t holes_filled = 0;
+  for (size_t c = 0; c < nc; ++c) {
+    const CutStats& cs = cut_stats[c];
+    holes_filled += cs.holes_filled;
+    comps.push_back({{"triangles", components[c].num_faces()},
+                     {"area", areas[c]},
+                     {"euler", cs.before.euler()},
+                     {"boundary_loops", cs.before.boundary_loops},
+                     {"genus", cs.before.genus()},
+                     {"holes_filled", cs.holes_filled},
+                     {"holes_cut", cs.holes_cut},
+                     {"cut", cs.method},
+                     {"handle_loops", cs.handle_loops},
+                     {"cut_edges", cs.cut_edges},
+                     {"cut_length", cs.cut_length},
+                     {"weights", map_stats[c].weights},
+                     {"negative_cotangent_weights", map_stats[c].negative_weights},
+                     {"bumped_boundary_vertices", map_stats[c].bumped_vertices},
+                     {"flipped_in_map", map_stats[c].flipped},
+                     {"rect", {{"image", rects[c].image}, {"x", rects[c].x}, {"y", rects[c].y}, {"w", rects[c].w}, {"h", rects[c].h}}}});
+  }
+  rep["preparation"]["holes_filled"] = holes_filled;
+  rep["components"] = comps;
+  rep["timings"] = timings;
+  return plan;
+}
+
+Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& options) {
+  auto progress = [&](std::string_view stage, double f) {
+    if (options.progress) options.progress(stage, f);
+  };
+  Result result;
+  result.report = plan.report;
+  nlohmann::json& rep = result.report;
+  nlohmann::json& timings = rep["timings"];
+  StageClock clock(timings);
+  const Surface& surface = plan.surface;
+  const std::vector<Surface>& components = plan.components;
+  const std::vector<Disk>& disks = plan.disks;
+  const std::vector<Rect>& rects = plan.rects;
+  const std::vector<std::vector<Vec2>>& uv = plan.uv;
+  const std::vector<std::pair<int, int>>& image_size = plan.image_size;
+  const int num_images = plan.num_images;
+  const size_t nc = components.size();
   // 5. Output model: the input's positions and triangles (same corners, same winding), new UVs.
   TexturedMesh& out = result.output;
   out.source = input.source;
@@ -166,43 +223,13 @@ Result optimize(const TexturedMesh& input, const Options& options) {
     clock.done("measure");
   }
 
-  rep["input"] = {{"file", input.source}, {"vertices", input.num_vertices()}, {"triangles", input.num_triangles()},
-                  {"materials", input.materials.size()}, {"textures", input.textures.size()}};
-  rep["options"] = {{"size", options.size}, {"layout", options.layout == Layout::kAtlas ? "atlas" : "per-component"},
-                    {"holes", options.holes == HoleMode::kFill ? "fill" : "cut"}, {"map", "harmonic"}};
-  rep["preparation"] = {{"input_vertices", rs.input_vertices},       {"welded_vertices", rs.welded_vertices},
-                        {"zero_area_dropped", rs.zero_area_triangles}, {"duplicates_dropped", rs.duplicate_triangles},
-                        {"non_manifold_edges_sliced", rs.non_manifold_edges}, {"inconsistent_edges_sliced", rs.inconsistent_edges},
-                        {"vertices_sliced", rs.sliced_vertices}, {"slits_closed", rs.slits_closed},      {"components", nc}};
-  nlohmann::json comps = nlohmann::json::array();
-  size_t holes_filled = 0;
-  for (size_t c = 0; c < nc; ++c) {
-    const CutStats& cs = cut_stats[c];
-    holes_filled += cs.holes_filled;
-    comps.push_back({{"triangles", components[c].num_faces()},
-                     {"area", areas[c]},
-                     {"euler", cs.before.euler()},
-                     {"boundary_loops", cs.before.boundary_loops},
-                     {"genus", cs.before.genus()},
-                     {"holes_filled", cs.holes_filled},
-                     {"holes_cut", cs.holes_cut},
-                     {"cut", cs.method},
-                     {"handle_loops", cs.handle_loops},
-                     {"cut_edges", cs.cut_edges},
-                     {"cut_length", cs.cut_length},
-                     {"weights", map_stats[c].weights},
-                     {"negative_cotangent_weights", map_stats[c].negative_weights},
-                     {"bumped_boundary_vertices", map_stats[c].bumped_vertices},
-                     {"flipped_in_map", map_stats[c].flipped},
-                     {"rect", {{"image", rects[c].image}, {"x", rects[c].x}, {"y", rects[c].y}, {"w", rects[c].w}, {"h", rects[c].h}}}});
-  }
-  rep["preparation"]["holes_filled"] = holes_filled;
-  rep["components"] = comps;
   rep["bake"] = {{"texels_filled", bs.texels_filled}, {"texels_dilated", bs.texels_dilated}};
   rep["timings"] = timings;
   rep["peak_rss_mib"] = peak_rss_mib();
   progress("done", 1);
   return result;
 }
+
+Result optimize(const TexturedMesh& input, const Options& options) { return bake_plan(plan_charts(input, options), input, options); }
 
 }  // namespace tightex
