@@ -66,7 +66,15 @@ const std::vector<Expected>& expectations() {
     add("sphere_with_holes", cat::sphere_with_holes, 2 - cat::kSphereHoles, cat::kSphereHoles, {{0, cat::kSphereHoles}});
     add("torus", cat::torus, 0, 0, {{1, 0}})->closed = true;
     add("double_torus", cat::double_torus, -2, 0, {{2, 0}})->closed = true;
-    add("holey_slab", cat::holey_slab, 2 - 2 * cat::kSlabHandles, 0, {{cat::kSlabHandles, 0}})->closed = true;
+    {
+      // A perforated plate: 25 real holes through it, not noise. Cutting all 25 handles and joining
+      // the 50 loops into one boundary gives a comb-shaped disk that a map onto a square crowds badly
+      // (issue 3/4: ~17 dB today). The floor guards against regressions and misplaced colours (a
+      // mirrored result scores far lower), not the quality goal.
+      auto* e = add("holey_slab", cat::holey_slab, 2 - 2 * cat::kSlabHandles, 0, {{cat::kSlabHandles, 0}});
+      e->closed = true;
+      e->min_psnr = 15.0;
+    }
     add("bowtie", cat::bowtie, 2, 2, {{0, 1}, {0, 1}})->sliced_vertices = 1;
     {
       Expected* x = add("non_manifold_edge", cat::non_manifold_edge, 3, 3, {{0, 1}, {0, 1}, {0, 1}});

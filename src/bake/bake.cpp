@@ -44,7 +44,7 @@ void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& tr
       for (int ty = ty0; ty <= ty1; ++ty)
         for (int tx = tx0; tx <= tx1; ++tx) bins[size_t(ty) * size_t(tiles_x) + size_t(tx)].push_back(t);
     }
-    std::vector<uint8_t> covered(size_t(out.width) * size_t(out.height), 0);
+    std::vector<uint8_t, LargeBufferAllocator<uint8_t>> covered(size_t(out.width) * size_t(out.height), 0);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, bins.size()), [&](const tbb::blocked_range<size_t>& range) {
       size_t local = 0;
       for (size_t b = range.begin(); b < range.end(); ++b) {

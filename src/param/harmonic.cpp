@@ -235,6 +235,13 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
     uv = boundary_uv;
     if (!solve_interior(m, w, on_boundary, uv)) continue;
     st.flipped = count_folds(m, uv);
+    st.folds_per_attempt.push_back(st.flipped);
+    if (kind == Weights::kClamped && st.flipped)
+      for (const Tri& f : m.triangles)
+        if (!(signed_area(uv[f[0]], uv[f[1]], uv[f[2]]) > 0)) {
+          st.crowded_vertex = f[0];
+          break;
+        }
     st.weights = kind == Weights::kCotangent ? "cotangent" : kind == Weights::kClamped ? "clamped-cotangent" : "uniform";
     if (st.flipped == 0) break;
   }

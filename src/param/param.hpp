@@ -19,7 +19,11 @@ struct SquareMapStats {
   size_t flipped = 0;           // triangles with UV area <= 0 in the returned map (0 unless every weight failed)
   size_t negative_weights = 0;  // interior edges whose cotangent weight was negative
   std::array<uint32_t, 4> corners{};  // boundary vertices at (0,0), (1,0), (1,1), (0,1)
-  size_t bumped_vertices = 0;   // boundary vertices lifted off a side to keep a chord's triangles open
+  std::vector<size_t> folds_per_attempt;  // folded triangles of each weighting tried, in order
+  size_t bumped_vertices = 0;
+  /// A vertex of a triangle that folded even with positive weights: the map crowded a region below
+  /// floating-point precision there (harmonic maps crowd exponentially in protrusions). kNone if none.
+  uint32_t crowded_vertex = kNone;   // boundary vertices lifted off a side to keep a chord's triangles open
 };
 
 /// Maps a topological disk onto the unit square, boundary counter-clockwise.

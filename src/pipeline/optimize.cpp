@@ -66,12 +66,9 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   disks.resize(nc);
   std::vector<CutStats> cut_stats(nc);
   std::vector<double> areas(nc, 0.0);
-  tbb::parallel_for(size_t(0), nc, [&](size_t c) {
-    disks[c] = cut_to_disk(components[c], options.holes, &cut_stats[c]);
+  for (size_t c = 0; c < nc; ++c)
     for (const Tri& f : components[c].triangles)
       areas[c] += triangle_area(components[c].positions[f[0]], components[c].positions[f[1]], components[c].positions[f[2]]);
-  });
-  clock.done("cut");
 
   // 3. Layout: a rectangle of texels per component.
   std::vector<Rect>& rects = plan.rects;
@@ -87,20 +84,30 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
     for (const Rect& r : rects) image_size.push_back({r.w, r.h});
   }
 
-  // 4. Harmonic map of each disk onto the unit square (§4.2).
-  progress("map", 0);
+  // 4. Cut each component to a disk and map it onto the unit square (§4.2). Where even positive
+  //    weights fold (a region crowded below floating-point precision), the disk is slit to that
+  //    region and cut again, up to kCrowdingRounds times.
+  constexpr int kCrowdingRounds = 3;
+  progress("cut+map", 0);
   std::vector<std::vector<Vec2>>& uv = plan.uv;
   uv.resize(nc);
   std::vector<SquareMapStats> map_stats(nc);
-  std::vector<size_t> order(nc);
-  std::iota(order.begin(), order.end(), 0);
   tbb::parallel_for(size_t(0), nc, [&](size_t c) {
     SquareMapOptions mo;
     mo.rect_width = rects[c].w;
     mo.rect_height = rects[c].h;
-    uv[c] = map_to_square(disks[c], mo, &map_stats[c]);
+    std::vector<uint32_t> slit_to;
+    for (int round = 0;; ++round) {
+      disks[c] = cut_to_disk(components[c], options.holes, &cut_stats[c], slit_to);
+      uv[c] = map_to_square(disks[c], mo, &map_stats[c]);
+      const uint32_t crowded = map_stats[c].crowded_vertex;
+      if (crowded == kNone || round == kCrowdingRounds) break;
+      const uint32_t target = disks[c].mesh.vertex_parent[crowded];
+      if (target == kNone) break;  // crowded at scaffolding: nothing to slit to
+      slit_to.push_back(target);
+    }
   });
-  clock.done("map");
+  clock.done("cut+map");
 
   // What was done so far, for the report.
   nlohmann::json& rep = plan.report;
@@ -125,6 +132,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
                      {"holes_filled", cs.holes_filled},
                      {"holes_cut", cs.holes_cut},
                      {"cut", cs.method},
+                     {"slits", cs.slits},
                      {"handle_loops", cs.handle_loops},
                      {"cut_edges", cs.cut_edges},
                      {"cut_length", cs.cut_length},
@@ -132,6 +140,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
                      {"negative_cotangent_weights", map_stats[c].negative_weights},
                      {"bumped_boundary_vertices", map_stats[c].bumped_vertices},
                      {"flipped_in_map", map_stats[c].flipped},
+                     {"folds_per_weighting", map_stats[c].folds_per_attempt},
                      {"rect", {{"image", rects[c].image}, {"x", rects[c].x}, {"y", rects[c].y}, {"w", rects[c].w}, {"h", rects[c].h}}}});
   }
   rep["preparation"]["holes_filled"] = holes_filled;

@@ -108,7 +108,7 @@ ModelFigures measure_texture_space(const TexturedMesh& mesh) {
     const Image& img = mesh.textures[i].image;
     if (img.empty()) continue;
     const int W = img.width, H = img.height;
-    std::vector<uint8_t> cov(size_t(W) * size_t(H), 0);
+    std::vector<uint8_t, LargeBufferAllocator<uint8_t>> cov(size_t(W) * size_t(H), 0);
     for (size_t t : tris[i])
       raster(mesh.sampled_uv(t, 0), mesh.sampled_uv(t, 1), mesh.sampled_uv(t, 2), W, H, [&](long x, long y) {
         x %= W, y %= H;
@@ -288,7 +288,7 @@ Metrics measure(const TexturedMesh& in, const TexturedMesh& out, size_t psnr_sam
       const Image& img = out.textures[i].image;
       if (img.empty()) continue;
       const int W = img.width, H = img.height;
-      std::vector<uint8_t> cnt(size_t(W) * size_t(H), 0);
+      std::vector<uint8_t, LargeBufferAllocator<uint8_t>> cnt(size_t(W) * size_t(H), 0);
       for (size_t t : tris[i]) {
         const Vec2 uv[3] = {out.sampled_uv(t, 0), out.sampled_uv(t, 1), out.sampled_uv(t, 2)};
         const Vec2 p[3] = {{uv[0].x() * W, (1 - uv[0].y()) * H}, {uv[1].x() * W, (1 - uv[1].y()) * H}, {uv[2].x() * W, (1 - uv[2].y()) * H}};

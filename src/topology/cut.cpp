@@ -10,7 +10,7 @@
 namespace tightex {
 
 
-Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats) {
+Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, const std::vector<uint32_t>& slit_to) {
   CutStats st;
   st.before = topology_of(component);
   // Handles first: a genus-0 surface (with its holes) comes back, the handle loops capped.
@@ -186,30 +186,41 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats) {
   }
 
   // A deep disk maps its far end into a tiny spot (a tube closed at one end: a vase, an object resting
-  // on the ground). When the farthest vertex from the disk's boundary (the surface boundary and both
-  // sides of every cut) lies deeper than a flat round disk of that perimeter allows (perimeter / 2 pi)
-  // by kDeepDisk, the disk is slit from its boundary to that vertex.
+  // on the ground; harmonic maps crowd exponentially with depth, down to below double precision).
+  // While the farthest vertex from the disk's boundary (the surface boundary and both sides of every
+  // cut) lies deeper than a flat round disk of that perimeter allows (perimeter / 2 pi) by kDeepDisk,
+  // the disk is slit from its boundary to that vertex. Each slit lengthens the perimeter, so this ends;
+  // kMaxSlits bounds it all the same.
   {
     constexpr double kDeepDisk = 1.5;
-    double perimeter = 0;
-    std::vector<uint32_t> sources;
-    for (uint32_t e = 0; e < g.num_edges(); ++e) {
-      const bool boundary = s.opposite[g.edge_halfedge[e]] == kNone;
-      if (!boundary && !cut_edge[e]) continue;
-      perimeter += (boundary ? 1.0 : 2.0) * g.length[e];
-      sources.push_back(s.from(g.edge_halfedge[e]));
-      sources.push_back(s.to(g.edge_halfedge[e]));
-    }
-    if (!sources.empty()) {
+    constexpr int kMaxSlits = 16;
+    for (int slit = 0; slit < kMaxSlits; ++slit) {
+      double perimeter = 0;
+      std::vector<uint32_t> sources;
+      for (uint32_t e = 0; e < g.num_edges(); ++e) {
+        const bool boundary = s.opposite[g.edge_halfedge[e]] == kNone;
+        if (!boundary && !cut_edge[e]) continue;
+        perimeter += (boundary ? 1.0 : 2.0) * g.length[e];
+        sources.push_back(s.from(g.edge_halfedge[e]));
+        sources.push_back(s.to(g.edge_halfedge[e]));
+      }
+      if (sources.empty()) break;
       std::vector<double> dist;
       std::vector<uint32_t> pred;
       dijkstra(g, nv, sources, g.length, dist, pred);
-      const uint32_t far = farthest(dist);
-      if (dist[far] > kDeepDisk * perimeter / (2 * std::numbers::pi)) {
-        st.method += "+slit";
-        for (uint32_t v = far; pred[v] != kNone; v = other_end(s, g, pred[v], v)) cut_edge[pred[v]] = 1;
+      uint32_t far = farthest(dist);
+      if (size_t(slit) < slit_to.size()) {
+        far = kNone;  // requested slits first
+        for (uint32_t v = 0; v < nv && far == kNone; ++v)
+          if (s.vertex_parent[v] == slit_to[size_t(slit)]) far = v;
+        if (far == kNone || !std::isfinite(dist[far])) continue;
+      } else if (!(dist[far] > kDeepDisk * perimeter / (2 * std::numbers::pi))) {
+        break;
       }
+      st.slits++;
+      for (uint32_t v = far; pred[v] != kNone; v = other_end(s, g, pred[v], v)) cut_edge[pred[v]] = 1;
     }
+    if (st.slits) st.method += "+slit";
   }
   for (uint32_t e = 0; e < g.num_edges(); ++e)
     if (cut_edge[e]) st.cut_edges++, st.cut_length += g.length[e];

@@ -2,6 +2,8 @@
 // non-separating loop until the component has genus 0. Each cut leaves two boundary loops, which the
 // hole stage then treats like any hole (capped with scaffolding when small, opened into the seam
 // otherwise). The loops become seam; no triangle is added to the output or removed from it.
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 
 #include "core/error.hpp"
@@ -66,13 +68,18 @@ Surface remove_handles(const Surface& component, std::vector<double>* loop_lengt
         if (std::find(roots.begin(), roots.end(), v) == roots.end()) roots.push_back(v);
       if (roots.size() >= 8) break;
     }
+    // Roots in parallel; the winner is the shortest loop, ties to the earlier root (deterministic).
+    std::vector<std::vector<uint32_t>> candidate(roots.size());
+    std::vector<double> candidate_len(roots.size(), std::numeric_limits<double>::infinity());
+    tbb::parallel_for(size_t(0), roots.size(), [&](size_t i) {
+      double len = 0;
+      candidate[i] = shortest_loop_through(cur, g, roots[i], loops, &len);
+      if (!candidate[i].empty()) candidate_len[i] = len;
+    });
     std::vector<uint32_t> best;
     double best_len = std::numeric_limits<double>::infinity();
-    for (uint32_t r : roots) {
-      double len = 0;
-      auto loop = shortest_loop_through(cur, g, r, loops, &len);
-      if (!loop.empty() && len < best_len) best_len = len, best = std::move(loop);
-    }
+    for (size_t i = 0; i < roots.size(); ++i)
+      if (candidate_len[i] < best_len) best_len = candidate_len[i], best = std::move(candidate[i]);
     if (best.empty()) break;
     // Cut along the loop and cap the new boundary with centroid fans (scaffolding).
     std::vector<char> on_loop(g.num_edges(), 0);

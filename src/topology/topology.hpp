@@ -34,7 +34,8 @@ struct CutStats {
   size_t holes_cut = 0;         // joined into the disk boundary
   size_t cut_edges = 0;         // interior edges cut open
   double cut_length = 0;        // their 3D length
-  std::string method;           // "disk", "disk+slit", "path", "cut-graph"
+  std::string method;           // "disk", "path", "cut-graph", with "+slit" when deep parts were slit
+  size_t slits = 0;             // slits from the boundary to deep vertices
   std::vector<double> handle_loops;  // 3D length of each handle loop cut (see remove_handles)
 };
 
@@ -50,6 +51,9 @@ struct Disk {
 /// (double Dijkstra sweep: the paper's single seam); otherwise a cut graph is built by tree-cotree
 /// (shortest-path tree + greedy dual tree, Erickson & Whittlesey 2005) and pruned of dangling branches.
 /// Throws InternalError if the result is not a disk (it always should be).
-Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats);
+/// `slit_to`: component vertices to slit to as well (shortest path from the disk boundary), used when
+/// a map crowded a region there.
+Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats,
+                 const std::vector<uint32_t>& slit_to = {});
 
 }  // namespace tightex
