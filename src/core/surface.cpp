@@ -6,16 +6,21 @@
 
 namespace tightex {
 
-void build_opposite(Surface& s) {
+std::vector<std::pair<uint64_t, uint32_t>> halfedges_by_edge(const Surface& s) {
   const size_t nh = 3 * s.num_faces();
-  s.opposite.assign(nh, kNone);
-  // Sort halfedges by their undirected edge; neighbours in the sorted order are the candidates.
   std::vector<std::pair<uint64_t, uint32_t>> keyed(nh);
   for (uint32_t h = 0; h < nh; ++h) {
     const uint64_t a = s.from(h), b = s.to(h);
     keyed[h] = {std::min(a, b) << 32 | std::max(a, b), h};
   }
   std::sort(keyed.begin(), keyed.end());
+  return keyed;
+}
+
+void build_opposite(Surface& s) {
+  const size_t nh = 3 * s.num_faces();
+  s.opposite.assign(nh, kNone);
+  const auto keyed = halfedges_by_edge(s);
   for (size_t i = 0; i < nh;) {
     size_t j = i + 1;
     while (j < nh && keyed[j].first == keyed[i].first) ++j;

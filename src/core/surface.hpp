@@ -26,6 +26,10 @@ struct Surface {
   double edge_length(uint32_t h) const { return (positions[to(h)] - positions[from(h)]).norm(); }
 };
 
+/// Halfedges sorted by their undirected edge (key = min vertex << 32 | max vertex): the halfedges of
+/// one edge are neighbours in the result.
+std::vector<std::pair<uint64_t, uint32_t>> halfedges_by_edge(const Surface& s);
+
 /// Builds `opposite` for a mesh whose vertices are already manifold. Requires: every undirected edge
 /// is used by at most two triangles, in opposite directions. Throws InternalError otherwise.
 void build_opposite(Surface& s);

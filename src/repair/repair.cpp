@@ -88,12 +88,7 @@ Surface prepare_surface(const TexturedMesh& mesh, RepairStats* stats) {
   const size_t nh = 3 * s0.num_faces();
   s0.opposite.assign(nh, kNone);
   {
-    std::vector<std::pair<uint64_t, uint32_t>> keyed(nh);
-    for (uint32_t h = 0; h < nh; ++h) {
-      const uint64_t a = s0.from(h), b = s0.to(h);
-      keyed[h] = {std::min(a, b) << 32 | std::max(a, b), h};
-    }
-    std::sort(keyed.begin(), keyed.end());
+    const auto keyed = halfedges_by_edge(s0);
     for (size_t i = 0; i < nh;) {
       size_t j = i + 1;
       while (j < nh && keyed[j].first == keyed[i].first) ++j;

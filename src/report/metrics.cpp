@@ -125,20 +125,20 @@ ModelFigures measure_texture_space(const TexturedMesh& mesh) {
   return f;
 }
 
-size_t count_charts(const TexturedMesh& m, double* seam_length) {
+namespace {
+
+/// Chart of every triangle (union-find root): triangles joined through edges whose two endpoints have
+/// the same uv, and the same image, on both sides. Adds the seam's 3D length to *seam when given.
+std::vector<uint32_t> chart_ids(const TexturedMesh& m, double* seam) {
   const auto vid = weld_positions(m);
-  // Halfedges keyed by welded endpoints.
   const size_t nh = 3 * m.num_triangles();
-  std::vector<std::pair<uint64_t, uint32_t>> keyed(nh);
+  std::vector<std::pair<uint64_t, uint32_t>> keyed(nh);  // halfedges keyed by welded endpoints
   for (uint32_t h = 0; h < nh; ++h) {
     const uint64_t a = vid[m.triangles[h / 3][h % 3]], b = vid[m.triangles[h / 3][(h % 3 + 1) % 3]];
     keyed[h] = {std::min(a, b) << 32 | std::max(a, b), h};
   }
   std::sort(keyed.begin(), keyed.end());
   detail::UnionFind uf(m.num_triangles());
-  double seam = 0, area = 0;
-  for (size_t t = 0; t < m.num_triangles(); ++t)
-    area += triangle_area(m.positions[m.triangles[t][0]], m.positions[m.triangles[t][1]], m.positions[m.triangles[t][2]]);
   auto uv_at = [&](uint32_t h, uint64_t v) {
     const uint32_t t = h / 3;
     for (int k = 0; k < 3; ++k)
@@ -148,26 +148,36 @@ size_t count_charts(const TexturedMesh& m, double* seam_length) {
   for (size_t i = 0; i < nh;) {
     size_t j = i + 1;
     while (j < nh && keyed[j].first == keyed[i].first) ++j;
-    if (j - i >= 2) {
-      const uint64_t a = keyed[i].first >> 32, b = keyed[i].first & 0xffffffffu;
-      bool differs = false;
-      for (size_t k0 = i; k0 < j; ++k0)
-        for (size_t k = k0 + 1; k < j; ++k) {
-          const uint32_t h0 = keyed[k0].second, h1 = keyed[k].second;
-          if (uv_at(h0, a) == uv_at(h1, a) && uv_at(h0, b) == uv_at(h1, b) && texture_of(m, h0 / 3) == texture_of(m, h1 / 3))
-            uf.unite(h0 / 3, h1 / 3);
-          else
-            differs = true;
-        }
-      if (differs) {
-        const uint32_t h = keyed[i].second;
-        seam += (m.positions[m.triangles[h / 3][h % 3]] - m.positions[m.triangles[h / 3][(h % 3 + 1) % 3]]).norm();
+    const uint64_t a = keyed[i].first >> 32, b = keyed[i].first & 0xffffffffu;
+    bool differs = false;
+    for (size_t k0 = i; k0 < j; ++k0)
+      for (size_t k = k0 + 1; k < j; ++k) {
+        const uint32_t h0 = keyed[k0].second, h1 = keyed[k].second;
+        if (uv_at(h0, a) == uv_at(h1, a) && uv_at(h0, b) == uv_at(h1, b) && texture_of(m, h0 / 3) == texture_of(m, h1 / 3))
+          uf.unite(h0 / 3, h1 / 3);
+        else
+          differs = true;
       }
+    if (differs && seam) {
+      const uint32_t h = keyed[i].second;
+      *seam += (m.positions[m.triangles[h / 3][h % 3]] - m.positions[m.triangles[h / 3][(h % 3 + 1) % 3]]).norm();
     }
     i = j;
   }
+  std::vector<uint32_t> id(m.num_triangles());
+  for (uint32_t t = 0; t < m.num_triangles(); ++t) id[t] = uf.find(t);
+  return id;
+}
+
+}  // namespace
+
+size_t count_charts(const TexturedMesh& m, double* seam_length) {
+  double seam = 0, area = 0;
+  const auto id = chart_ids(m, &seam);
+  for (size_t t = 0; t < m.num_triangles(); ++t)
+    area += triangle_area(m.positions[m.triangles[t][0]], m.positions[m.triangles[t][1]], m.positions[m.triangles[t][2]]);
   size_t charts = 0;
-  for (uint32_t t = 0; t < m.num_triangles(); ++t) charts += uf.find(t) == t;
+  for (uint32_t t = 0; t < m.num_triangles(); ++t) charts += id[t] == t;
   if (seam_length) *seam_length = area > 0 ? seam / std::sqrt(area) : 0;
   return charts;
 }
@@ -231,40 +241,12 @@ Metrics measure(const TexturedMesh& in, const TexturedMesh& out, size_t psnr_sam
 
   // Flips and degenerates per chart majority; density and angle distortion.
   auto flips = [&] {
-    double seam_unused;
-    (void)seam_unused;
-    const auto vid = weld_positions(out);
-    // chart ids again (cheap relative to the rest) for the majority sign
-    const size_t nh = 3 * out.num_triangles();
-    std::vector<std::pair<uint64_t, uint32_t>> keyed(nh);
-    for (uint32_t h = 0; h < nh; ++h) {
-      const uint64_t a = vid[out.triangles[h / 3][h % 3]], b = vid[out.triangles[h / 3][(h % 3 + 1) % 3]];
-      keyed[h] = {std::min(a, b) << 32 | std::max(a, b), h};
-    }
-    std::sort(keyed.begin(), keyed.end());
-    detail::UnionFind uf(out.num_triangles());
-    for (size_t i = 0; i < nh;) {
-      size_t j = i + 1;
-      while (j < nh && keyed[j].first == keyed[i].first) ++j;
-      for (size_t k0 = i; k0 < j; ++k0)
-      for (size_t k = k0 + 1; k < j; ++k) {
-        const uint32_t h0 = keyed[k0].second, h1 = keyed[k].second;
-        auto uvp = [&](uint32_t h, uint32_t v) {
-          for (int c = 0; c < 3; ++c)
-            if (vid[out.triangles[h / 3][c]] == v) return out.corner_uv[3 * (h / 3) + size_t(c)];
-          return Vec2(NAN, NAN);
-        };
-        const uint32_t a = uint32_t(keyed[i].first >> 32), b = uint32_t(keyed[i].first & 0xffffffffu);
-        if (uvp(h0, a) == uvp(h1, a) && uvp(h0, b) == uvp(h1, b) && texture_of(out, h0 / 3) == texture_of(out, h1 / 3))
-          uf.unite(h0 / 3, h1 / 3);
-      }
-      i = j;
-    }
+    const auto chart = chart_ids(out, nullptr);  // for the majority sign
     std::vector<double> sa(out.num_triangles());
     std::unordered_map<uint32_t, long> balance;
     for (uint32_t t = 0; t < out.num_triangles(); ++t) {
       sa[t] = signed_area(out.corner_uv[3 * t], out.corner_uv[3 * t + 1], out.corner_uv[3 * t + 2]);
-      if (sa[t] != 0) balance[uf.find(t)] += sa[t] > 0 ? 1 : -1;
+      if (sa[t] != 0) balance[chart[t]] += sa[t] > 0 ? 1 : -1;
     }
     for (uint32_t t = 0; t < out.num_triangles(); ++t) {
       const double a3 = triangle_area(out.positions[out.triangles[t][0]], out.positions[out.triangles[t][1]], out.positions[out.triangles[t][2]]);
@@ -272,7 +254,7 @@ Metrics measure(const TexturedMesh& in, const TexturedMesh& out, size_t psnr_sam
         r.degenerate += a3 > 0;
         continue;
       }
-      const long b = balance[uf.find(t)];
+      const long b = balance[chart[t]];
       if ((b >= 0 && sa[t] < 0) || (b < 0 && sa[t] > 0)) r.flipped++;
     }
   };
