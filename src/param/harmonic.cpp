@@ -52,8 +52,11 @@ std::vector<double> edge_weights(const Surface& m, Weights kind, size_t* negativ
 }
 
 /// Solves the Dirichlet problem with the boundary fixed at `uv` of boundary vertices.
+using Solver = Eigen::CholmodSimplicialLLT<SpMat, Eigen::Lower>;
+
+/// The fallbacks change the weights, never the sparsity pattern: the symbolic analysis is done once.
 bool solve_interior(const Surface& m, const std::vector<double>& w, const std::vector<char>& on_boundary,
-                    std::vector<Vec2>& uv) {
+                    std::vector<Vec2>& uv, Solver& solver, bool& analyzed) {
   const size_t nv = m.num_vertices();
   std::vector<int> unknown(nv, -1);
   int n = 0;
@@ -83,8 +86,11 @@ bool solve_interior(const Surface& m, const std::vector<double>& w, const std::v
   for (int i = 0; i < n; ++i) trips.emplace_back(i, i, diag[size_t(i)]);
   SpMat A(n, n);
   A.setFromTriplets(trips.begin(), trips.end());
-  Eigen::CholmodSupernodalLLT<SpMat, Eigen::Lower> solver;
-  solver.compute(A);
+  if (!analyzed) {
+    solver.analyzePattern(A);
+    analyzed = true;
+  }
+  solver.factorize(A);
   if (solver.info() != Eigen::Success) return false;
   Eigen::MatrixX2d x = solver.solve(rhs);
   if (solver.info() != Eigen::Success || !x.allFinite()) return false;
@@ -228,12 +234,14 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
 
   // Alg. 2 with the fold-free fallbacks.
   const std::vector<Vec2> boundary_uv = uv;
+  Solver solver;
+  bool analyzed = false;
   for (Weights kind : {Weights::kCotangent, Weights::kClamped, Weights::kUniform}) {
     size_t negative = 0;
     const auto w = edge_weights(m, kind, &negative);
     if (kind == Weights::kCotangent) st.negative_weights = negative;
     uv = boundary_uv;
-    if (!solve_interior(m, w, on_boundary, uv)) continue;
+    if (!solve_interior(m, w, on_boundary, uv, solver, analyzed)) continue;
     st.flipped = count_folds(m, uv);
     st.folds_per_attempt.push_back(st.flipped);
     if (kind == Weights::kClamped && st.flipped)

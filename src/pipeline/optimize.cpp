@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <numeric>
+#include <optional>
 
 #include "bake/bake.hpp"
 #include "core/error.hpp"
@@ -97,8 +98,13 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
     mo.rect_width = rects[c].w;
     mo.rect_height = rects[c].h;
     std::vector<uint32_t> slit_to;
+    std::optional<Denoised> denoised;  // the handles are searched once, whatever the rounds
+    if (topology_of(components[c]).genus() > 0) {
+      denoised.emplace();
+      denoised->surface = remove_handles(components[c], &denoised->handle_loops);
+    }
     for (int round = 0;; ++round) {
-      disks[c] = cut_to_disk(components[c], options.holes, &cut_stats[c], slit_to);
+      disks[c] = cut_to_disk(components[c], options.holes, &cut_stats[c], slit_to, denoised ? &*denoised : nullptr);
       uv[c] = map_to_square(disks[c], mo, &map_stats[c]);
       const uint32_t crowded = map_stats[c].crowded_vertex;
       if (crowded == kNone || round == kCrowdingRounds) break;

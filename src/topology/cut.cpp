@@ -10,12 +10,16 @@
 namespace tightex {
 
 
-Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, const std::vector<uint32_t>& slit_to) {
+Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, const std::vector<uint32_t>& slit_to,
+                 const Denoised* denoised) {
   CutStats st;
   st.before = topology_of(component);
   // Handles first: a genus-0 surface (with its holes) comes back, the handle loops capped.
   Surface base;
-  if (st.before.genus() > 0) {
+  if (denoised) {
+    base = denoised->surface;
+    st.handle_loops = denoised->handle_loops;
+  } else if (st.before.genus() > 0) {
     base = remove_handles(component, &st.handle_loops);
   } else {
     base = component;

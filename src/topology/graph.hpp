@@ -118,14 +118,13 @@ inline TreeCotree tree_cotree(const Surface& s, const EdgeGraph& g, const std::v
   std::vector<uint32_t> hole_node(s.opposite.size(), kNone);
   for (size_t i = 0; i < loops.size(); ++i)
     for (uint32_t h : loops[i]) hole_node[h] = nf + uint32_t(i);
-  std::vector<uint32_t> order;
+  // Longest loop first; ties by edge id, so the result does not depend on the sort's stability.
+  std::vector<std::pair<double, uint32_t>> order;
   for (uint32_t e = 0; e < g.num_edges(); ++e)
-    if (!in_tree[e]) order.push_back(e);
-  std::vector<double> len(g.num_edges());
-  for (uint32_t e : order) len[e] = tc.loop_length(s, g, e);
-  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return len[a] > len[b]; });
+    if (!in_tree[e]) order.push_back({-tc.loop_length(s, g, e), e});
+  std::sort(order.begin(), order.end());
   detail::UnionFind dual(nf + loops.size());
-  for (uint32_t e : order) {
+  for (auto [neg_len, e] : order) {
     const uint32_t h = g.edge_halfedge[e], o = s.opposite[h];
     const uint32_t a = h / 3, b = o == kNone ? hole_node[h] : o / 3;
     if (dual.find(a) != dual.find(b))

@@ -53,7 +53,13 @@ struct Disk {
 /// Throws InternalError if the result is not a disk (it always should be).
 /// `slit_to`: component vertices to slit to as well (shortest path from the disk boundary), used when
 /// a map crowded a region there.
+/// `denoised`: remove_handles(component) computed earlier (its loop lengths in `handle_loops`), so that
+/// cutting again with more slits does not search the handles again; null: computed here.
+struct Denoised {
+  Surface surface;
+  std::vector<double> handle_loops;
+};
 Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats,
-                 const std::vector<uint32_t>& slit_to = {});
+                 const std::vector<uint32_t>& slit_to = {}, const Denoised* denoised = nullptr);
 
 }  // namespace tightex
