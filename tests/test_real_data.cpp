@@ -80,3 +80,32 @@ TEST(RealDataPresence, SkipsCleanlyWithoutSharedData) {
 }
 
 }  // namespace
+
+namespace {
+
+std::string file_bytes(const fs::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(f), {});
+}
+
+// Same input and options: byte-identical output, whatever the scheduling (run once on one core).
+TEST(RealDataDeterminism, SameInputGivesByteIdenticalOutput) {
+  const fs::path input = fs::path(TIGHTEX_SHARED_DATA) / "fuze" / "fuze.obj";
+  if (!fs::exists(input)) GTEST_SKIP() << "../shared/data/fuze not present";
+  const fs::path a = fs::temp_directory_path() / "tightex_det_a", b = fs::temp_directory_path() / "tightex_det_b";
+  fs::remove_all(a);
+  fs::remove_all(b);
+  const std::string cli = std::string(TIGHTEX_CLI) + " '" + input.string() + "' --size 1024 --quiet -o ";
+  ASSERT_EQ(std::system((cli + "'" + a.string() + "'").c_str()), 0);
+  ASSERT_EQ(std::system(("taskset -c 0 " + cli + "'" + b.string() + "' 2>/dev/null || " + cli + "'" + b.string() + "'").c_str()), 0);
+  for (const char* name : {"fuze.obj", "fuze.mtl", "fuze_tightex.png"}) {
+    SCOPED_TRACE(name);
+    const std::string x = file_bytes(a / name), y = file_bytes(b / name);
+    EXPECT_FALSE(x.empty());
+    EXPECT_TRUE(x == y);
+  }
+  fs::remove_all(a);
+  fs::remove_all(b);
+}
+
+}  // namespace
