@@ -97,20 +97,29 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
     SquareMapOptions mo;
     mo.rect_width = rects[c].w;
     mo.rect_height = rects[c].h;
-    std::vector<uint32_t> slit_to;
-    std::optional<Denoised> denoised;  // the handles are searched once, whatever the rounds
-    if (topology_of(components[c]).genus() > 0) {
-      denoised.emplace();
-      denoised->surface = remove_handles(components[c], &denoised->handle_loops);
-    }
-    for (int round = 0;; ++round) {
-      disks[c] = cut_to_disk(components[c], options.holes, &cut_stats[c], slit_to, denoised ? &*denoised : nullptr);
+    try {
+      std::vector<uint32_t> slit_to;
+      std::optional<Denoised> denoised;  // the handles are searched once, whatever the rounds
+      if (topology_of(components[c]).genus() > 0) {
+        denoised.emplace();
+        denoised->surface = remove_handles(components[c], &denoised->handle_loops);
+      }
+      for (int round = 0;; ++round) {
+        disks[c] = cut_to_disk(components[c], options.holes, &cut_stats[c], slit_to, denoised ? &*denoised : nullptr);
+        uv[c] = map_to_square(disks[c], mo, &map_stats[c]);
+        const uint32_t crowded = map_stats[c].crowded_vertex;
+        if (crowded == kNone || round == kCrowdingRounds) break;
+        const uint32_t target = disks[c].mesh.vertex_parent[crowded];
+        if (target == kNone) break;  // crowded at scaffolding: nothing to slit to
+        slit_to.push_back(target);
+      }
+    } catch (const InternalError& e) {
+      // A component the full method cannot handle still gets one chart: the plain cut graph and the
+      // fold-free map. The report says so; the run goes on.
+      cut_stats[c] = CutStats{};
+      disks[c] = cut_to_disk(components[c], options.holes, &cut_stats[c], {}, nullptr, true);
+      cut_stats[c].fallback_reason = e.what();
       uv[c] = map_to_square(disks[c], mo, &map_stats[c]);
-      const uint32_t crowded = map_stats[c].crowded_vertex;
-      if (crowded == kNone || round == kCrowdingRounds) break;
-      const uint32_t target = disks[c].mesh.vertex_parent[crowded];
-      if (target == kNone) break;  // crowded at scaffolding: nothing to slit to
-      slit_to.push_back(target);
     }
   });
   clock.done("cut+map");
@@ -139,6 +148,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
                      {"holes_cut", cs.holes_cut},
                      {"cut", cs.method},
                      {"slits", cs.slits},
+                     {"fallback", cs.fallback_reason},
                      {"handle_loops", cs.handle_loops},
                      {"cut_edges", cs.cut_edges},
                      {"cut_length", cs.cut_length},

@@ -11,12 +11,19 @@ namespace tightex {
 
 
 Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, const std::vector<uint32_t>& slit_to,
-                 const Denoised* denoised) {
+                 const Denoised* denoised, bool plain) {
   CutStats st;
   st.before = topology_of(component);
   // Handles first: a genus-0 surface (with its holes) comes back, the handle loops capped.
   Surface base;
-  if (denoised) {
+  if (plain) {
+    // Safety net: no handle search, no caps, no slits; the cut graph below works for any genus.
+    base = component;
+    base.vertex_parent.resize(base.num_vertices());
+    std::iota(base.vertex_parent.begin(), base.vertex_parent.end(), 0u);
+    base.face_parent.resize(base.num_faces());
+    std::iota(base.face_parent.begin(), base.face_parent.end(), 0u);
+  } else if (denoised) {
     base = denoised->surface;
     st.handle_loops = denoised->handle_loops;
   } else if (st.before.genus() > 0) {
@@ -36,7 +43,7 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, cons
   double component_area = 0;
   for (const Tri& f : component.triangles)
     component_area += triangle_area(component.positions[f[0]], component.positions[f[1]], component.positions[f[2]]);
-  if (holes == HoleMode::kFill && loops.size() > 1) {
+  if (!plain && holes == HoleMode::kFill && loops.size() > 1) {
     std::vector<double> loop_length(loops.size(), 0.0), cap_area(loops.size(), 0.0);
     for (size_t i = 0; i < loops.size(); ++i) {
       Vec3 c = Vec3::Zero();
@@ -197,7 +204,7 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, cons
   // kMaxSlits bounds it all the same.
   {
     constexpr double kDeepDisk = 1.5;
-    constexpr int kMaxSlits = 16;
+    const int kMaxSlits = plain ? 0 : 16;
     for (int slit = 0; slit < kMaxSlits; ++slit) {
       double perimeter = 0;
       std::vector<uint32_t> sources;
@@ -225,6 +232,7 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, cons
       for (uint32_t v = far; pred[v] != kNone; v = other_end(s, g, pred[v], v)) cut_edge[pred[v]] = 1;
     }
     if (st.slits) st.method += "+slit";
+    if (plain) st.method += " (plain fallback)";
   }
   for (uint32_t e = 0; e < g.num_edges(); ++e)
     if (cut_edge[e]) st.cut_edges++, st.cut_length += g.length[e];

@@ -36,6 +36,7 @@ struct CutStats {
   double cut_length = 0;        // their 3D length
   std::string method;           // "disk", "path", "cut-graph", with "+slit" when deep parts were slit
   size_t slits = 0;             // slits from the boundary to deep vertices
+  std::string fallback_reason;  // non-empty: the full method failed here and the plain cut was used
   std::vector<double> handle_loops;  // 3D length of each handle loop cut (see remove_handles)
 };
 
@@ -59,7 +60,10 @@ struct Denoised {
   Surface surface;
   std::vector<double> handle_loops;
 };
+/// `plain`: the safety net used when the full method throws on a component: no handle search, no caps,
+/// no slits, only the cut graph (the complement of a dual spanning tree, pruned), which makes a disk
+/// of any connected manifold surface.
 Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats,
-                 const std::vector<uint32_t>& slit_to = {}, const Denoised* denoised = nullptr);
+                 const std::vector<uint32_t>& slit_to = {}, const Denoised* denoised = nullptr, bool plain = false);
 
 }  // namespace tightex
