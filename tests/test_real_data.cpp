@@ -2,6 +2,8 @@
 // measured independently of the tool's own report (METRICS.md). Skips when the data is absent.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -31,7 +33,7 @@ class RealData : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(RealData, CliOutputIsOneFoldFreeChartPerComponentFillingTheTexture) {
   const std::string input = GetParam();
-  const fs::path out = fs::temp_directory_path() / ("tightex_real_" + fs::path(input).parent_path().filename().string());
+  const fs::path out = fs::temp_directory_path() / ("tightex_real_" + fs::path(input).parent_path().filename().string() + "_" + std::to_string(::getpid()));
   fs::remove_all(out);
   const std::string cmd = std::string(TIGHTEX_CLI) + " '" + input + "' -o '" + out.string() + "' --quiet";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
@@ -92,7 +94,8 @@ std::string file_bytes(const fs::path& p) {
 TEST(RealDataDeterminism, SameInputGivesByteIdenticalOutput) {
   const fs::path input = fs::path(TIGHTEX_SHARED_DATA) / "fuze" / "fuze.obj";
   if (!fs::exists(input)) GTEST_SKIP() << "../shared/data/fuze not present";
-  const fs::path a = fs::temp_directory_path() / "tightex_det_a", b = fs::temp_directory_path() / "tightex_det_b";
+  const std::string pid = std::to_string(::getpid());
+  const fs::path a = fs::temp_directory_path() / ("tightex_det_a_" + pid), b = fs::temp_directory_path() / ("tightex_det_b_" + pid);
   fs::remove_all(a);
   fs::remove_all(b);
   const std::string cli = std::string(TIGHTEX_CLI) + " '" + input.string() + "' --size 1024 --quiet -o ";

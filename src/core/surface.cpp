@@ -1,6 +1,7 @@
 #include "core/surface.hpp"
 
 #include <algorithm>
+#include <numeric>
 
 #include "core/error.hpp"
 
@@ -15,6 +16,15 @@ std::vector<std::pair<uint64_t, uint32_t>> halfedges_by_edge(const Surface& s) {
   }
   std::sort(keyed.begin(), keyed.end());
   return keyed;
+}
+
+Surface with_identity_parents(const Surface& s) {
+  Surface r = s;
+  r.vertex_parent.resize(r.num_vertices());
+  std::iota(r.vertex_parent.begin(), r.vertex_parent.end(), 0u);
+  r.face_parent.resize(r.num_faces());
+  std::iota(r.face_parent.begin(), r.face_parent.end(), 0u);
+  return r;
 }
 
 void build_opposite(Surface& s) {

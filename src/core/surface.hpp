@@ -30,6 +30,9 @@ struct Surface {
 /// one edge are neighbours in the result.
 std::vector<std::pair<uint64_t, uint32_t>> halfedges_by_edge(const Surface& s);
 
+/// A copy whose vertex_parent / face_parent map each element to itself (the start of a stage's maps).
+Surface with_identity_parents(const Surface& s);
+
 /// Builds `opposite` for a mesh whose vertices are already manifold. Requires: every undirected edge
 /// is used by at most two triangles, in opposite directions. Throws InternalError otherwise.
 void build_opposite(Surface& s);

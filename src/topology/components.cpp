@@ -37,11 +37,7 @@ std::vector<Surface> split_components(const Surface& s) {
 }
 
 Surface fill_holes(const Surface& s, const std::vector<std::vector<uint32_t>>& loops) {
-  Surface r = s;
-  r.face_parent.resize(s.num_faces());
-  std::iota(r.face_parent.begin(), r.face_parent.end(), 0u);
-  r.vertex_parent.resize(s.num_vertices());
-  std::iota(r.vertex_parent.begin(), r.vertex_parent.end(), 0u);
+  Surface r = with_identity_parents(s);
   for (const auto& loop : loops) {
     Vec3 centroid = Vec3::Zero();
     for (uint32_t h : loop) centroid += s.positions[s.from(h)];

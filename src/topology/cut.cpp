@@ -18,22 +18,14 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, cons
   Surface base;
   if (plain) {
     // Safety net: no handle search, no caps, no slits; the cut graph below works for any genus.
-    base = component;
-    base.vertex_parent.resize(base.num_vertices());
-    std::iota(base.vertex_parent.begin(), base.vertex_parent.end(), 0u);
-    base.face_parent.resize(base.num_faces());
-    std::iota(base.face_parent.begin(), base.face_parent.end(), 0u);
+    base = with_identity_parents(component);
   } else if (denoised) {
     base = denoised->surface;
     st.handle_loops = denoised->handle_loops;
   } else if (st.before.genus() > 0) {
     base = remove_handles(component, &st.handle_loops);
   } else {
-    base = component;
-    base.vertex_parent.resize(base.num_vertices());
-    std::iota(base.vertex_parent.begin(), base.vertex_parent.end(), 0u);
-    base.face_parent.resize(base.num_faces());
-    std::iota(base.face_parent.begin(), base.face_parent.end(), 0u);
+    base = with_identity_parents(component);
   }
   auto loops = boundary_loops(base);
 
@@ -85,10 +77,8 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, cons
     st.method = "path";
     std::vector<double> dist;
     std::vector<uint32_t> pred;
-    dijkstra(g, nv, {s.triangles[0][0]}, g.length, dist, pred);
-    const uint32_t a = farthest(dist);
-    dijkstra(g, nv, {a}, g.length, dist, pred);
-    uint32_t b = farthest(dist);
+    uint32_t a = 0;
+    const uint32_t b = double_sweep(s, g, &a, dist, pred);
     size_t path_edges = 0;
     for (uint32_t v = b; pred[v] != kNone; v = other_end(s, g, pred[v], v)) cut_edge[pred[v]] = 1, ++path_edges;
     if (path_edges < 2) {
@@ -117,10 +107,8 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, cons
       // Closed surface of higher genus: root near the middle of a diameter, so generator loops are short.
       std::vector<double> dist;
       std::vector<uint32_t> pred;
-      dijkstra(g, nv, {s.triangles[0][0]}, g.length, dist, pred);
-      const uint32_t a = farthest(dist);
-      dijkstra(g, nv, {a}, g.length, dist, pred);
-      uint32_t v = farthest(dist);
+      uint32_t a = 0;
+      uint32_t v = double_sweep(s, g, &a, dist, pred);
       const double half = dist[v] / 2;
       while (pred[v] != kNone && dist[v] > half) v = other_end(s, g, pred[v], v);
       sources.push_back(v);

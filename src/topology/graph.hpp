@@ -89,6 +89,16 @@ inline uint32_t farthest(const std::vector<double>& dist) {
 }
 
 
+/// Double sweep: the vertex farthest from an arbitrary start is one end `a` of an approximate
+/// diameter; the sweep from `a` gives dist/pred, whose farthest vertex is the other end (returned).
+inline uint32_t double_sweep(const Surface& s, const EdgeGraph& g, uint32_t* a, std::vector<double>& dist,
+                             std::vector<uint32_t>& pred) {
+  dijkstra(g, s.num_vertices(), {s.triangles[0][0]}, g.length, dist, pred);
+  *a = farthest(dist);
+  dijkstra(g, s.num_vertices(), {*a}, g.length, dist, pred);
+  return farthest(dist);
+}
+
 /// Tree-cotree (Eppstein; greedy form of Erickson & Whittlesey 2005): a shortest-path tree T from
 /// `sources` (boundary edges cost nothing, so every hole acts as one point), then a dual spanning tree
 /// over the edges not in T (faces plus one node per boundary loop) that keeps the edges whose loops are

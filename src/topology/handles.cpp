@@ -49,11 +49,7 @@ std::vector<uint32_t> shortest_loop_through(const Surface& s, const EdgeGraph& g
 }  // namespace
 
 Surface remove_handles(const Surface& component, std::vector<double>* loop_lengths) {
-  Surface cur = component;
-  cur.vertex_parent.resize(cur.num_vertices());
-  std::iota(cur.vertex_parent.begin(), cur.vertex_parent.end(), 0u);
-  cur.face_parent.resize(cur.num_faces());
-  std::iota(cur.face_parent.begin(), cur.face_parent.end(), 0u);
+  Surface cur = with_identity_parents(component);
   const long genus = topology_of(cur).genus();
   for (long k = 0; k < genus; ++k) {
     const EdgeGraph g(cur);
