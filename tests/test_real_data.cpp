@@ -2,6 +2,7 @@
 // measured independently of the tool's own report (METRICS.md). Skips when the data is absent.
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cstdlib>
@@ -109,6 +110,26 @@ TEST(RealDataDeterminism, SameInputGivesByteIdenticalOutput) {
   }
   fs::remove_all(a);
   fs::remove_all(b);
+}
+
+}  // namespace
+
+namespace {
+
+// Resource guard: refused before anything is allocated or written, exit code 1, no output left.
+TEST(RealDataGuards, OversizeAndOverBudgetRunsAreRefusedWithoutOutput) {
+  const fs::path input = fs::path(TIGHTEX_SHARED_DATA) / "fuze" / "fuze.obj";
+  if (!fs::exists(input)) GTEST_SKIP() << "../shared/data/fuze not present";
+  const fs::path out = fs::temp_directory_path() / ("tightex_guard_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  const std::string cli = std::string(TIGHTEX_CLI) + " '" + input.string() + "' -o '" + out.string() + "' --quiet 2>/dev/null ";
+  for (const char* options : {"--size 20000", "--max-memory 1"}) {
+    SCOPED_TRACE(options);
+    const int status = std::system((cli + options).c_str());
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 1);
+    EXPECT_FALSE(fs::exists(out));
+  }
 }
 
 }  // namespace

@@ -66,10 +66,15 @@ int run_main(int argc, char** argv) {
                "(global parameterization by a harmonic map onto a square; Chen et al., arXiv 2406.04115)"};
   std::string input, outdir, report_path, preview_path, layout = "atlas", format = "png", holes = "fill";
   int size = 4096;
-  bool quiet = false, verbose = false;
+  bool quiet = false, verbose = false, force = false;
+  double max_memory_mib = 0;
   app.add_option("input", input, "textured model (OBJ + MTL + textures)")->required();
   app.add_option("-o,--output", outdir, "output directory")->required();
-  app.add_option("--size", size, "texture side in texels (per-component: of the largest component)")->check(CLI::Range(8, 65536));
+  app.add_option("--size", size, "texture side in texels (per-component: of the largest component); above 16384 needs --force")
+      ->check(CLI::Range(8, 65536));
+  app.add_flag("--force", force, "allow --size above 16384");
+  app.add_option("--max-memory", max_memory_mib, "refuse inputs whose estimated memory exceeds this many MiB (default: 90% of RAM)")
+      ->check(CLI::PositiveNumber);
   app.add_option("--layout", layout, "atlas: all components in one texture; per-component: one texture each (the paper's)")
       ->check(CLI::IsMember({"atlas", "per-component"}));
   app.add_option("--format", format, "texture file format")->check(CLI::IsMember({"png", "jpg"}));
@@ -84,6 +89,11 @@ int run_main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 1;
   }
+  if (size > 16384 && !force)
+    fail_input("--size {} is above 16384 ({:.1f} GiB of RGBA texture); add --force to allow it", size,
+               double(size) * size * 4 / double(1 << 30));
+  if (max_memory_mib <= 0)
+    max_memory_mib = 0.9 * double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE)) / double(1 << 20);
   const bool show_progress = !quiet && isatty(STDERR_FILENO);
   const auto t0 = std::chrono::steady_clock::now();
 
@@ -96,6 +106,22 @@ int run_main(int argc, char** argv) {
   geometry_only.load_textures = false;
   const TexturedMesh geometry = read_obj(input, geometry_only, &read_stats);
   const double read_s = seconds_since(t0);
+
+  // Resource guard, before any pixel is allocated: decoded input textures (RGBA), the mesh and its
+  // stages (~1.2 KB a triangle, measured peak on the scans), and for the atlas the output texture with
+  // its coverage masks (~7 bytes a texel). Per-component outputs are checked once the layout is known.
+  auto guard = [&](double bytes, const std::string& what) {
+    if (bytes / double(1 << 20) > max_memory_mib)
+      fail_input("{}: {} needs about {:.0f} MiB, more than the limit of {:.0f} MiB (--max-memory)", input, what,
+                 bytes / double(1 << 20), max_memory_mib);
+  };
+  double estimate = double(geometry.num_triangles()) * 1200.0;
+  for (const Texture& t : geometry.textures) {
+    const auto [w, h] = image_dimensions(t.path);
+    estimate += double(w) * double(h) * 4.0;
+  }
+  if (layout == "atlas") estimate += double(size) * double(size) * 7.0;
+  guard(estimate, "this model at this --size");
 
   Options opt;
   opt.size = size;
@@ -126,6 +152,11 @@ int run_main(int argc, char** argv) {
       });
   if (texture_error) std::rethrow_exception(texture_error);  // a bad texture is the user's first problem
   if (plan_error) std::rethrow_exception(plan_error);
+  if (layout != "atlas") {
+    double out_texels = 0;
+    for (const auto& [w, h] : plan.image_size) out_texels += double(w) * double(h);
+    guard(estimate + out_texels * 7.0, "this model's per-component textures");
+  }
   Result result = bake_plan(plan, mesh, opt);
   if (show_progress) fmt::print(stderr, "\r\033[K");
 

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <climits>
+#include <fstream>
 #include <csetjmp>
 #include <cstdint>
 #include <cstdio>
@@ -638,6 +639,41 @@ void save_image(const std::string& path, const Image& image, ImageFormat format,
       break;
   }
   out.commit();
+}
+
+}  // namespace tightex
+
+namespace tightex {
+
+std::pair<int, int> image_dimensions(const std::string& path) {
+  // Only the header is read: the size of a texture is known before its pixels are allocated.
+  std::ifstream f(path, std::ios::binary);
+  if (!f) return {0, 0};
+  std::vector<unsigned char> head(64 * 1024);
+  f.read(reinterpret_cast<char*>(head.data()), std::streamsize(head.size()));
+  head.resize(size_t(f.gcount()));
+  const size_t n = head.size();
+  auto be32 = [&](size_t i) { return (uint32_t(head[i]) << 24) | (uint32_t(head[i + 1]) << 16) | (uint32_t(head[i + 2]) << 8) | head[i + 3]; };
+  static const unsigned char kPng[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (n >= 24 && std::equal(kPng, kPng + 8, head.begin())) {
+    const uint32_t w = be32(16), h = be32(20);
+    return {int(std::min<uint32_t>(w, INT_MAX)), int(std::min<uint32_t>(h, INT_MAX))};
+  }
+  if (n >= 4 && head[0] == 0xFF && head[1] == 0xD8) {  // JPEG: walk the markers to a start-of-frame
+    size_t i = 2;
+    while (i + 9 < n) {
+      if (head[i] != 0xFF) return {0, 0};
+      const unsigned char m = head[i + 1];
+      const size_t len = (size_t(head[i + 2]) << 8) | head[i + 3];
+      if (m >= 0xC0 && m <= 0xCF && m != 0xC4 && m != 0xC8 && m != 0xCC)
+        return {int((head[i + 7] << 8) | head[i + 8]), int((head[i + 5] << 8) | head[i + 6])};
+      i += 2 + len;
+    }
+    return {0, 0};
+  }
+  int w = 0, h = 0, c = 0;
+  if (stbi_info_from_memory(head.data(), int(n), &w, &h, &c)) return {w, h};
+  return {0, 0};
 }
 
 }  // namespace tightex

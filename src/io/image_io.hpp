@@ -3,6 +3,7 @@
 // 8-bit RGBA on load: grey, grey+alpha, palette, RGB, RGBA, 8 and 16 bits per channel.
 #pragma once
 #include <string>
+#include <utility>
 
 #include "core/image.hpp"
 
@@ -18,6 +19,10 @@ Image load_image(const std::string& path, size_t max_pixels = size_t(1) << 30);
 /// in error messages.
 Image decode_image(const unsigned char* data, size_t size, const std::string& name,
                    size_t max_pixels = size_t(1) << 30);
+
+/// Width and height from the file's header alone ({0, 0} when unknown), so memory can be estimated
+/// before any pixel is allocated.
+std::pair<int, int> image_dimensions(const std::string& path);
 
 /// Writes an image (RGB; alpha is dropped when it is 255 everywhere). PNG uses fast compression
 /// settings (tightex writes 8K textures; zlib level 9 would dominate the run time). `jpeg_quality`
