@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# The test suite built with AddressSanitizer + UndefinedBehaviorSanitizer (CMake preset "asan",
+# ./build-asan). Any report fails the run.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/setup.sh
+generator=()
+command -v ninja >/dev/null && generator=(-G Ninja)
+[ -f build-asan/CMakeCache.txt ] || cmake --preset asan "${generator[@]}" >/dev/null
+cmake --build build-asan --parallel "$(nproc)"
+export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
+export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+ctest --test-dir build-asan --output-on-failure --timeout 900 -j "$(nproc)"
