@@ -1,0 +1,139 @@
+// A catalogue of hostile and awkward inputs, generated here, each run through the tightex command:
+// bad input must exit 1 (never a signal) with one line that names the file, and leave no model behind;
+// awkward but valid input must succeed with no lost and no flipped triangle.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "io/image_io.hpp"
+#include "io/obj_reader.hpp"
+#include "report/metrics.hpp"
+
+namespace fs = std::filesystem;
+using namespace tightex;
+
+namespace {
+
+struct Case {
+  std::string name;
+  std::string obj;           // OBJ text; "mtllib m.mtl" refers to the MTL below
+  std::string mtl;           // empty: no MTL file written
+  bool texture = true;       // write t.png (a small gradient)
+  std::string texture_bytes; // non-empty: write these bytes as t.png instead (a corrupt texture)
+  bool valid = false;
+};
+
+// A 4x4 grid of quads with UVs, as OBJ text (positions, vt, faces). `face_prefix` lets a case insert
+// statements before the faces.
+std::string grid_obj(const std::string& header = "mtllib m.mtl\nusemtl a\n", bool quads = false, bool crlf = false) {
+  std::string s = header;
+  const int n = 5;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) s += "v " + std::to_string(i) + " " + std::to_string(j) + " 0\n";
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) s += "vt " + std::to_string(i / 4.0 * 0.5) + " " + std::to_string(j / 4.0 * 0.5) + "\n";
+  for (int j = 0; j + 1 < n; ++j)
+    for (int i = 0; i + 1 < n; ++i) {
+      const int a = j * n + i + 1, b = a + 1, c = a + n + 1, d = a + n;
+      auto corner = [](int v) { return std::to_string(v) + "/" + std::to_string(v); };
+      if (quads)
+        s += "f " + corner(a) + " " + corner(b) + " " + corner(c) + " " + corner(d) + "\n";
+      else
+        s += "f " + corner(a) + " " + corner(b) + " " + corner(c) + "\nf " + corner(a) + " " + corner(c) + " " + corner(d) + "\n";
+    }
+  if (crlf) {
+    std::string t;
+    for (char ch : s) {
+      if (ch == '\n') t += '\r';
+      t += ch;
+    }
+    return t;
+  }
+  return s;
+}
+
+const std::string kMtl = "newmtl a\nKd 1 1 1\nmap_Kd t.png\n";
+
+std::vector<Case> catalogue() {
+  std::vector<Case> c;
+  c.push_back({"valid_grid", grid_obj(), kMtl, true, "", true});
+  c.push_back({"valid_quads", grid_obj("mtllib m.mtl\nusemtl a\n", true), kMtl, true, "", true});
+  c.push_back({"valid_crlf", grid_obj("mtllib m.mtl\nusemtl a\n", false, true), kMtl, true, "", true});
+  c.push_back({"valid_map_options", grid_obj(), "newmtl a\nmap_Kd -s 2 2 1 -o 0.1 0 0 -bm 1 t.png\n", true, "", true});
+  c.push_back({"valid_uv_outside_unit_square", [] {
+                 std::string s = grid_obj();
+                 for (size_t p = s.find("vt "); p != std::string::npos; p = s.find("vt ", p + 1)) s.replace(p, 3, "vt 3");
+                 return s;
+               }(), kMtl, true, "", true});
+  c.push_back({"valid_no_material", grid_obj(""), "", false, "", true});
+  c.push_back({"empty_file", "", "", false, "", false});
+  c.push_back({"only_comments", "# nothing\n\n", "", false, "", false});
+  c.push_back({"no_texture_coordinates", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "", false, "", false});
+  c.push_back({"index_out_of_range", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 4/1\n", "", false, "", false});
+  c.push_back({"zero_index", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 0/1 2/1 3/1\n", "", false, "", false});
+  c.push_back({"negative_index_too_far", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf -1/1 -2/1 -9/1\n", "", false, "", false});
+  c.push_back({"nan_coordinate", "v 0 0 nan\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/1\n", "", false, "", false});
+  c.push_back({"inf_coordinate", "v 0 0 inf\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/1\n", "", false, "", false});
+  c.push_back({"overflowing_coordinate", "v 0 0 1e300\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/1\n", "", false, "", false});
+  c.push_back({"malformed_number", "v 0 0 abc\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/1\n", "", false, "", false});
+  c.push_back({"two_corner_face", "v 0 0 0\nv 1 0 0\nvt 0 0\nf 1/1 2/1\n", "", false, "", false});
+  c.push_back({"only_degenerate_triangles", "v 0 0 0\nv 1 0 0\nv 2 0 0\nvt 0 0\nf 1/1 2/1 3/1\nf 1/1 1/1 2/1\n", "", false, "", false});
+  c.push_back({"missing_mtl", grid_obj(), "", false, "", false});
+  c.push_back({"missing_material", grid_obj("mtllib m.mtl\nusemtl nope\n"), kMtl, true, "", false});
+  c.push_back({"missing_texture", grid_obj(), kMtl, false, "", false});
+  c.push_back({"corrupt_texture", grid_obj(), kMtl, false, "\x89PNG\r\n\x1a\n garbage garbage", false});
+  c.push_back({"binary_garbage", std::string("\x00\x01\x02\xff\xfe", 5) + "v 1 2", "", false, "", false});
+  return c;
+}
+
+class HostileCli : public ::testing::TestWithParam<Case> {};
+
+TEST_P(HostileCli, RefusedCleanlyOrProcessedCorrectly) {
+  const Case& k = GetParam();
+  const fs::path dir = fs::temp_directory_path() / ("tightex_hostile_" + k.name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "in.obj", std::ios::binary) << k.obj;
+  if (!k.mtl.empty()) std::ofstream(dir / "m.mtl", std::ios::binary) << k.mtl;
+  if (!k.texture_bytes.empty()) {
+    std::ofstream(dir / "t.png", std::ios::binary) << k.texture_bytes;
+  } else if (k.texture) {
+    Image img(16, 16);
+    for (int y = 0; y < 16; ++y)
+      for (int x = 0; x < 16; ++x) img.at(x, y) = {uint8_t(x * 16), uint8_t(y * 16), 128, 255};
+    save_image((dir / "t.png").string(), img, ImageFormat::kPng);
+  }
+  const fs::path out = dir / "out";
+  const std::string cmd = std::string(TIGHTEX_CLI) + " '" + (dir / "in.obj").string() + "' -o '" + out.string() +
+                          "' --size 64 --quiet 2> '" + (dir / "stderr.txt").string() + "'";
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by a signal";
+  std::ifstream err_file(dir / "stderr.txt");
+  const std::string err((std::istreambuf_iterator<char>(err_file)), {});
+  if (k.valid) {
+    ASSERT_EQ(WEXITSTATUS(status), 0) << err;
+    const TexturedMesh in = read_obj((dir / "in.obj").string());
+    const TexturedMesh result = read_obj((out / "in.obj").string());
+    const Metrics m = measure(in, result, 20000);
+    EXPECT_EQ(m.lost_triangles, 0u);
+    EXPECT_EQ(m.flipped, 0u);
+  } else {
+    EXPECT_EQ(WEXITSTATUS(status), 1) << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;  // one line
+    EXPECT_NE(err.find("error"), std::string::npos) << err;
+    EXPECT_TRUE(err.find("in.obj") != std::string::npos || err.find("m.mtl") != std::string::npos ||
+                err.find("t.png") != std::string::npos)
+        << "the message names no file: " << err;
+    EXPECT_FALSE(fs::exists(out / "in.obj")) << "a failed run left a model behind";
+  }
+  fs::remove_all(dir);
+}
+
+INSTANTIATE_TEST_SUITE_P(Catalogue, HostileCli, ::testing::ValuesIn(catalogue()),
+                         [](const ::testing::TestParamInfo<Case>& info) { return info.param.name; });
+
+}  // namespace
