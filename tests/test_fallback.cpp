@@ -2,6 +2,8 @@
 // must still give a disk, and the map onto the square must still be fold-free.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "mesh_catalogue.hpp"
 #include "param/param.hpp"
 #include "repair/repair.hpp"
@@ -27,4 +29,27 @@ TEST(PlainCutFallback, EveryCatalogueComponentBecomesAFoldFreeDisk) {
       EXPECT_EQ(count_folds(d.mesh, uv), 0u);
     }
   }
+}
+
+#include "core/error.hpp"
+#include "tightex/tightex.hpp"
+
+// The library's entry point refuses a mesh it cannot trust with an InputError naming the element.
+TEST(LibraryEntry, RefusesNonFiniteAndOutOfRangeInput) {
+  const TexturedMesh good = tightex::testing::catalogue().front().second();
+  Options opt;
+  opt.size = 64;
+  TexturedMesh nan_position = good;
+  nan_position.positions[3].y() = std::nan("");
+  EXPECT_THROW(optimize(nan_position, opt), InputError);
+  TexturedMesh bad_index = good;
+  bad_index.triangles[0][1] = uint32_t(good.positions.size() + 5);
+  EXPECT_THROW(optimize(bad_index, opt), InputError);
+  TexturedMesh bad_uv = good;
+  bad_uv.corner_uv[4].x() = INFINITY;
+  EXPECT_THROW(optimize(bad_uv, opt), InputError);
+  TexturedMesh bad_material = good;
+  bad_material.face_material[0] = 7;
+  EXPECT_THROW(optimize(bad_material, opt), InputError);
+  EXPECT_NO_THROW(optimize(good, opt));
 }
