@@ -84,8 +84,8 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
     fail_input("{}: no triangle with non-zero area ({} zero-area, {} duplicate)", input.source, rs.zero_area_triangles, rs.duplicate_triangles);
   clock.done("repair");
 
-  // 2. Components, holes, cut to a disk.
-  progress("cut", 0);
+  // 2. Connected components and their areas (the layout needs only the areas).
+  progress("components", 0);
   const std::vector<Surface>& components = plan.components = split_components(surface);
   const size_t nc = components.size();
   std::vector<Disk>& disks = plan.disks;
