@@ -631,6 +631,61 @@ TEST_P(Catalogue, MapToSquare) {
   if (GetParam() == "obtuse_strip") EXPECT_GT(negative, 0u) << "the obtuse mesh must exercise negative weights";
 }
 
+/// Area-weighted P5 and P95 of log2(UV area / target) over the faces that have a parent (not scaffolding),
+/// the targets scaled to the same total as the areas.
+std::pair<double, double> density_error(const Disk& disk, const std::vector<Vec2>& uv, const std::vector<double>& target) {
+  const Surface& m = disk.mesh;
+  double total = 0, sum_t = 0;
+  for (size_t f = 0; f < m.num_faces(); ++f)
+    if (m.face_parent[f] != kNone) total += signed_area(uv[m.triangles[f][0]], uv[m.triangles[f][1]], uv[m.triangles[f][2]]), sum_t += target[f];
+  std::vector<std::pair<double, double>> vw;
+  for (size_t f = 0; f < m.num_faces(); ++f)
+    if (m.face_parent[f] != kNone)
+      vw.push_back({std::log2(signed_area(uv[m.triangles[f][0]], uv[m.triangles[f][1]], uv[m.triangles[f][2]]) / (target[f] * total / sum_t)), target[f]});
+  std::sort(vw.begin(), vw.end());
+  auto q = [&](double p) {
+    double acc = 0;
+    for (const auto& [v, w] : vw)
+      if ((acc += w) >= p * sum_t) return v;
+    return vw.back().first;
+  };
+  return {q(0.05), q(0.95)};
+}
+
+// The area map: fold-free, fills the square like the harmonic map, and spreads texels evenly: the
+// density of 90% of the surface within a factor 2 of the mean, never worse than the harmonic map's.
+TEST_P(Catalogue, AreaMapEvensTheDensity) {
+  const std::vector<Surface> comps = split_components(prepare_surface(mesh(), nullptr));
+  for (size_t ci = 0; ci < comps.size(); ++ci) {
+    SCOPED_TRACE("component " + std::to_string(ci));
+    const Disk disk = cut_to_disk(comps[ci], HoleMode::kFill, nullptr);
+    if (disk.mesh.num_faces() < 8) continue;  // a few triangles: nothing to even out
+    SquareMapOptions options;
+    options.rect_width = options.rect_height = 256;
+    std::vector<double> area3(disk.mesh.num_faces());
+    for (size_t f = 0; f < area3.size(); ++f) {
+      const Tri& t = disk.mesh.triangles[f];
+      area3[f] = triangle_area(disk.mesh.positions[t[0]], disk.mesh.positions[t[1]], disk.mesh.positions[t[2]]) *
+                 (disk.mesh.face_parent[f] == kNone ? 0.25 : 1.0);
+    }
+    SquareMapStats hs, st;
+    const auto harmonic = map_to_square(disk, options, &hs);
+    options.face_target = area3;
+    const auto uv = map_to_square(disk, options, &st);
+    check_square_map(disk, uv, options, st);
+    const auto [h5, h95] = density_error(disk, harmonic, area3);
+    const auto [p5, p95] = density_error(disk, uv, area3);
+    const double harmonic_spread = std::max(-h5, h95), spread = std::max(-p5, p95);
+    EXPECT_LE(spread, std::max(1.0, harmonic_spread + 0.05)) << "harmonic P5/P95 " << h5 << "/" << h95 << ", area " << p5 << "/" << p95
+        << " (" << st.iterations << " iterations, " << st.stopped << ", before " << st.spread_before_p5 << "/" << st.spread_before_p95
+        << ", refine " << st.refine_iterations << " " << st.refine_stopped << ", rounds " << st.correction_rounds << ")";
+    // Only interior vertices move (the boundary is placed by target length): a strip whose vertices all
+    // lie on its boundary (the Mobius strip's) keeps the harmonic map's density.
+    const size_t interior = disk.mesh.num_vertices() - disk.boundary.size();
+    if (harmonic_spread > 1.5 && 2 * interior >= disk.mesh.num_vertices()) EXPECT_LT(spread, harmonic_spread - 0.5) << "the area map must improve on a crowded harmonic map" << " (" << st.iterations << " iterations, " << st.stopped << ", before " << st.spread_before_p5 << "/" << st.spread_before_p95 << ", faces " << disk.mesh.num_faces() << ")";
+  }
+}
+
 // A bump is sized in texels of the rectangle: a narrow rectangle gets a larger bump along its short
 // side; the map must stay valid for any rectangle shape.
 TEST(MapToSquare, NonSquareRectangles) {
@@ -706,6 +761,18 @@ TEST_P(Catalogue, OptimizeCutHolesPerComponent) {
   options.holes = HoleMode::kCut;
   options.layout = Layout::kPerComponent;
   check_pipeline(mesh(), want(), options, want().fills_rectangles);
+}
+
+// Every map through the whole pipeline: one fold-free chart per component (area is the default and
+// runs in OptimizeAtlas).
+TEST_P(Catalogue, OptimizeHarmonicAndTexelMaps) {
+  for (MapKind kind : {MapKind::kHarmonic, MapKind::kTexel}) {
+    SCOPED_TRACE(kind == MapKind::kHarmonic ? "harmonic" : "texel");
+    Options options;
+    options.size = 128;
+    options.map = kind;
+    check_pipeline(mesh(), want(), options, want().fills_rectangles);
+  }
 }
 
 // ---- 6. layouts ----

@@ -17,10 +17,25 @@ namespace tightex {
 
 enum class Layout { kAtlas, kPerComponent };
 
+/// How texels are spread over the surface (issue 4). kHarmonic: the paper's map exactly (cotangent
+/// harmonic, boundary by arc length). kArea: the same number of texels per unit of 3D area everywhere.
+/// kTexel: the input's own texel density per triangle, so what the scanner captured in detail keeps its
+/// detail. All three are fold-free and fill each component's rectangle.
+enum class MapKind { kHarmonic, kArea, kTexel };
+
 struct Options {
   int size = 4096;                 // atlas: the texture's side; per-component: the largest texture's side
   Layout layout = Layout::kAtlas;
   HoleMode holes = HoleMode::kFill;
+  /// Default kArea, chosen by measurement on ../shared/data (BENCHMARKS.md): at equal budgets it beats
+  /// kTexel or ties on every model (these scans' atlas density follows the packing of their charts more
+  /// than the detail captured) and costs less.
+  MapKind map = MapKind::kArea;
+  /// Angle/area trade-off of the area and texel maps: 0 = the harmonic map's density (least angle
+  /// distortion), 1 = the target density exactly; between, the geometric blend of the two.
+  double balance = 1.0;
+  /// Least-squares fit of the baked texels to the input under bilinear read-back (BakeOptions::fit).
+  bool fit = true;
   /// Compute the METRICS.md figures into report["metrics"]. A caller that writes the result can turn
   /// this off and run measure() beside the write (the CLI does).
   bool measure = true;
@@ -50,6 +65,14 @@ Plan plan_charts(const TexturedMesh& input, const Options& options);
 /// The texture half: output model, bake, metrics. `input` must be the mesh the plan was made from
 /// (same triangles and UVs), now with its textures loaded.
 Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& options);
+
+/// The texture side that holds `texels` texels in one square: sqrt rounded up to a multiple of 4
+/// (block-compression friendly), at least 64.
+int size_for_texels(double texels);
+
+/// Texels the input model actually uses (texel centres covered by some triangle, over all its
+/// textures; METRICS.md "used texels"). Needs only the textures' sizes, not their pixels.
+double input_used_texels(const TexturedMesh& input);
 
 /// Runs the whole method: repair, components, holes, cut, harmonic map, layout, bake, metrics.
 /// Requires a mesh as returned by read_obj (validated). Throws InputError for input it cannot handle

@@ -20,16 +20,237 @@ Rgba8 to_rgba(const std::array<float, 4>& c) {
   return {q(c[0]), q(c[1]), q(c[2]), q(c[3])};
 }
 
+/// What sampling one triangle needs, computed once.
+struct TriangleSampler {
+  const Image* src = nullptr;
+  Rgba8 flat{255, 255, 255, 255};
+  Vec2 uv0, du_dx, du_dy;    // source uv at target pixel (0,0) and its derivatives (affine per triangle)
+  double bary_x[3], bary_y[3], bary_0[3];  // barycentric weights as affine functions of the target pixel
+  double footprint_x = 0, footprint_y = 0;  // input pixels spanned by one output texel along x and y
+  double weight = 0;         // 3D area per output texel (least-squares fit)
+  bool valid = false;
+
+  void init(const BakeTriangle& tri, const Image* source, Rgba8 flat_colour) {
+    src = source;
+    flat = flat_colour;
+    corner_uv = tri.source_uv;
+    const Vec2 &p0 = tri.target_px[0], &p1 = tri.target_px[1], &p2 = tri.target_px[2];
+    const double det = (p1.x() - p0.x()) * (p2.y() - p0.y()) - (p1.y() - p0.y()) * (p2.x() - p0.x());
+    if (!(std::abs(det) > 0) || !std::isfinite(det)) return;
+    // w1, w2 from the 2x2 inverse; w0 = 1 - w1 - w2.
+    const double i00 = (p2.y() - p0.y()) / det, i01 = -(p2.x() - p0.x()) / det;
+    const double i10 = -(p1.y() - p0.y()) / det, i11 = (p1.x() - p0.x()) / det;
+    bary_x[1] = i00, bary_y[1] = i01, bary_0[1] = -(i00 * p0.x() + i01 * p0.y());
+    bary_x[2] = i10, bary_y[2] = i11, bary_0[2] = -(i10 * p0.x() + i11 * p0.y());
+    bary_x[0] = -bary_x[1] - bary_x[2], bary_y[0] = -bary_y[1] - bary_y[2], bary_0[0] = 1 - bary_0[1] - bary_0[2];
+    uv0 = Vec2::Zero(), du_dx = Vec2::Zero(), du_dy = Vec2::Zero();
+    for (int k = 0; k < 3; ++k) {
+      uv0 += bary_0[k] * tri.source_uv[k];
+      du_dx += bary_x[k] * tri.source_uv[k];
+      du_dy += bary_y[k] * tri.source_uv[k];
+    }
+    if (src) {
+      footprint_x = std::hypot(du_dx.x() * src->width, du_dx.y() * src->height);
+      footprint_y = std::hypot(du_dy.x() * src->width, du_dy.y() * src->height);
+    }
+    weight = tri.area3 / (0.5 * std::abs(det));
+    valid = std::isfinite(weight);
+  }
+
+  /// Mean colour over a box of side `box` output texels centred at target pixel position (x, y); the
+  /// sample points are kept inside the triangle (barycentrics clamped), so a texel on a chart's edge
+  /// never averages in the input's empty space beyond the triangle.
+  std::array<float, 4> colour(double x, double y, double box, int max_samples) const {
+    if (!src) return {float(flat.r), float(flat.g), float(flat.b), float(flat.a)};
+    const int nx = std::clamp(int(std::ceil(footprint_x * box - 1e-9)), 1, max_samples);
+    const int ny = std::clamp(int(std::ceil(footprint_y * box - 1e-9)), 1, max_samples);
+    std::array<float, 4> sum{0, 0, 0, 0};
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        const double sx = x + box * ((i + 0.5) / nx - 0.5), sy = y + box * ((j + 0.5) / ny - 0.5);
+        double w[3], total = 0;
+        for (int k = 0; k < 3; ++k) total += w[k] = std::max(0.0, bary_0[k] + bary_x[k] * sx + bary_y[k] * sy);
+        Vec2 uv = uv0 + sx * du_dx + sy * du_dy;
+        if (w[0] == 0 || w[1] == 0 || w[2] == 0) {  // outside: the nearest point of the triangle (approximately)
+          uv = Vec2::Zero();
+          for (int k = 0; k < 3; ++k) uv += (w[k] / total) * corner_uv[k];
+        }
+        const auto c = sample_bilinear(*src, uv.x(), uv.y());
+        for (int ch = 0; ch < 4; ++ch) sum[size_t(ch)] += c[size_t(ch)];
+      }
+    const float inv = 1.0f / float(nx * ny);
+    for (float& c : sum) c *= inv;
+    return sum;
+  }
+  std::array<Vec2, 3> corner_uv;
+};
+
+constexpr int kHalo = 3;
+
+/// The least-squares fit of one tile (see BakeOptions::fit): texels of the tile and a halo around it are
+/// unknowns, starting from the plain bake `base`; samples at the four points (+-1/4, +-1/4) of each
+/// texel that lies inside some triangle (and whose bilinear taps stay inside the region); minimises
+/// sum w_s (bilinear(c, s) - input(s))^2 + lambda |c - base|^2 by conjugate gradients, per channel.
+/// Writes the tile's own texels (not the halo) to `out`.
+void fit_tile(const Image& base, Image& out, const std::vector<BakeTriangle>& triangles, const std::vector<TriangleSampler>& samplers,
+              const std::vector<uint32_t>& tris, int bx0, int by0, const BakeOptions& options, int max_samples) {
+  const int bx1 = std::min(bx0 + kTile, out.width), by1 = std::min(by0 + kTile, out.height);
+  const int rx0 = std::max(0, bx0 - kHalo), ry0 = std::max(0, by0 - kHalo);
+  const int rx1 = std::min(out.width, bx1 + kHalo), ry1 = std::min(out.height, by1 + kHalo);
+  const int rw = rx1 - rx0, rh = ry1 - ry0;
+  const size_t n = size_t(rw) * size_t(rh);
+  static constexpr double kOff[4][2] = {{-0.25, -0.25}, {0.25, -0.25}, {-0.25, 0.25}, {0.25, 0.25}};
+  // Samples: per class k and texel, the target colour and weight (0: none).
+  std::vector<std::array<float, 3>> target(4 * n);
+  std::vector<float> weight(4 * n, 0.0f);
+  double weight_sum = 0;
+  size_t samples = 0;
+  for (uint32_t t : tris) {
+    const TriangleSampler& smp = samplers[t];
+    if (!smp.valid || !(smp.weight > 0)) continue;
+    const BakeTriangle& tri = triangles[t];
+    for (int k = 0; k < 4; ++k) {
+      const Vec2 off(kOff[k][0], kOff[k][1]);
+      scan_triangle(tri.target_px[0] - off, tri.target_px[1] - off, tri.target_px[2] - off, rx0 + 1, rx1 - 1, ry0 + 1, ry1 - 1,
+                    EdgeRule::kInclusive, [&](long x, long y, double, double, double) {
+                      const size_t i = size_t(k) * n + size_t(y - ry0) * size_t(rw) + size_t(x - rx0);
+                      if (weight[i] > 0) return;
+                      const auto c = smp.colour(double(x) + 0.5 + off.x(), double(y) + 0.5 + off.y(), 0.5, max_samples);
+                      target[i] = {c[0], c[1], c[2]};
+                      weight[i] = float(smp.weight);
+                      weight_sum += smp.weight;
+                      ++samples;
+                    });
+    }
+  }
+  if (samples == 0) return;
+  const float lambda = float(options.fit_lambda * weight_sum / double(samples));
+  // Bilinear taps of a sample of class k at local texel i: (offset index, weight).
+  auto taps = [&](int k, size_t i, auto&& f) {
+    const int dx0 = kOff[k][0] < 0 ? -1 : 0, dy0 = kOff[k][1] < 0 ? -1 : 0;
+    const float wx1 = kOff[k][0] < 0 ? 0.75f : 0.25f, wy1 = kOff[k][1] < 0 ? 0.75f : 0.25f;  // weight of the +1 tap
+    const long base_i = long(i) + dy0 * rw + dx0;
+    f(size_t(base_i), (1 - wx1) * (1 - wy1));
+    f(size_t(base_i + 1), wx1 * (1 - wy1));
+    f(size_t(base_i + rw), (1 - wx1) * wy1);
+    f(size_t(base_i + rw + 1), wx1 * wy1);
+  };
+  // A = B^T W B + lambda I as a 9-point stencil per texel: every sample's 4 taps lie in a 2x2 block.
+  std::vector<std::array<float, 9>> stencil(n);
+  for (size_t i = 0; i < n; ++i) stencil[i] = {0, 0, 0, 0, lambda, 0, 0, 0, 0};
+  for (int k = 0; k < 4; ++k)
+    for (size_t i = 0; i < n; ++i) {
+      const float w = weight[size_t(k) * n + i];
+      if (w == 0) continue;
+      size_t tj[4];
+      float tw[4];
+      int m = 0;
+      taps(k, i, [&](size_t j, float wt) { tj[m] = j, tw[m] = wt, ++m; });
+      for (int a = 0; a < 4; ++a)
+        for (int b2 = 0; b2 < 4; ++b2) {
+          const long d = long(tj[b2]) - long(tj[a]);  // 0, +-1, +-rw, +-(rw+-1)
+          const int dy = d > 1 ? 1 : d < -1 ? -1 : 0, dx = int(d - long(dy) * rw);
+          stencil[tj[a]][size_t((dy + 1) * 3 + dx + 1)] += w * tw[a] * tw[b2];
+        }
+    }
+  using Vec = std::vector<std::array<float, 3>>;
+  auto apply = [&](const Vec& v, Vec& result) {
+    for (int y = 0; y < rh; ++y)
+      for (int xx = 0; xx < rw; ++xx) {
+        const size_t i = size_t(y) * size_t(rw) + size_t(xx);
+        const auto& st = stencil[i];
+        float s0 = 0, s1 = 0, s2 = 0;
+        for (int dy = -1; dy <= 1; ++dy) {
+          if (y + dy < 0 || y + dy >= rh) continue;
+          for (int dx = -1; dx <= 1; ++dx) {
+            if (xx + dx < 0 || xx + dx >= rw) continue;
+            const float c = st[size_t((dy + 1) * 3 + dx + 1)];
+            if (c == 0) continue;
+            const auto& vj = v[size_t(long(i) + dy * rw + dx)];
+            s0 += c * vj[0], s1 += c * vj[1], s2 += c * vj[2];
+          }
+        }
+        result[i] = {s0, s1, s2};
+      }
+  };
+  Vec x(n), rhs(n), r(n), p(n), ap(n);
+  for (int y = ry0; y < ry1; ++y)
+    for (int xx = rx0; xx < rx1; ++xx) {
+      const Rgba8& c = base.at(xx, y);
+      const size_t i = size_t(y - ry0) * size_t(rw) + size_t(xx - rx0);
+      x[i] = {float(c.r), float(c.g), float(c.b)};
+      rhs[i] = {lambda * x[i][0], lambda * x[i][1], lambda * x[i][2]};
+    }
+  for (int k = 0; k < 4; ++k)
+    for (size_t i = 0; i < n; ++i) {
+      const float w = weight[size_t(k) * n + i];
+      if (w == 0) continue;
+      const auto& tg = target[size_t(k) * n + i];
+      taps(k, i, [&](size_t j, float tw) {
+        for (int c = 0; c < 3; ++c) rhs[j][size_t(c)] += w * tw * tg[size_t(c)];
+      });
+    }
+  apply(x, ap);
+  double rr[3] = {0, 0, 0};
+  for (size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) {
+      r[i][size_t(c)] = rhs[i][size_t(c)] - ap[i][size_t(c)];
+      p[i][size_t(c)] = r[i][size_t(c)];
+      rr[c] += double(r[i][size_t(c)]) * r[i][size_t(c)];
+    }
+  for (int it = 0; it < options.fit_iterations; ++it) {
+    apply(p, ap);
+    double pap[3] = {0, 0, 0};
+    for (size_t i = 0; i < n; ++i)
+      for (int c = 0; c < 3; ++c) pap[c] += double(p[i][size_t(c)]) * ap[i][size_t(c)];
+    double alpha[3], rr_new[3] = {0, 0, 0};
+    for (int c = 0; c < 3; ++c) alpha[c] = pap[c] > 0 ? rr[c] / pap[c] : 0.0;
+    for (size_t i = 0; i < n; ++i)
+      for (int c = 0; c < 3; ++c) {
+        x[i][size_t(c)] += float(alpha[c]) * p[i][size_t(c)];
+        r[i][size_t(c)] -= float(alpha[c]) * ap[i][size_t(c)];
+        rr_new[c] += double(r[i][size_t(c)]) * r[i][size_t(c)];
+      }
+    for (int c = 0; c < 3; ++c) {
+      const double beta = rr[c] > 0 ? rr_new[c] / rr[c] : 0.0;
+      for (size_t i = 0; i < n; ++i) p[i][size_t(c)] = r[i][size_t(c)] + float(beta) * p[i][size_t(c)];
+      rr[c] = rr_new[c];
+    }
+  }
+  auto q = [](float v) { return uint8_t(std::clamp(v + 0.5f, 0.0f, 255.0f)); };
+  for (int y = by0; y < by1; ++y)
+    for (int xx = bx0; xx < bx1; ++xx) {
+      const auto& v = x[size_t(y - ry0) * size_t(rw) + size_t(xx - rx0)];
+      Rgba8& o = out.at(xx, y);
+      o.r = q(v[0]), o.g = q(v[1]), o.b = q(v[2]);
+    }
+}
+
 }  // namespace
 
 void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& triangles,
-                  const std::vector<Rect>& rects, std::vector<Image>& images, BakeStats* stats) {
+                  const std::vector<Rect>& rects, std::vector<Image>& images, BakeStats* stats, const BakeOptions& options) {
   std::vector<Rgba8> flat_colour(input.materials.size());
   for (size_t m = 0; m < input.materials.size(); ++m) {
     const auto& kd = input.materials[m].kd;
     flat_colour[m] = to_rgba({float(kd[0] * 255), float(kd[1] * 255), float(kd[2] * 255), 255.f});
   }
-  std::atomic<size_t> filled{0}, dilated{0};
+  std::vector<TriangleSampler> samplers(triangles.size());
+  tbb::parallel_for(size_t(0), triangles.size(), [&](size_t t) {
+    const BakeTriangle& tri = triangles[t];
+    const Image* src = nullptr;
+    Rgba8 flat{255, 255, 255, 255};
+    if (tri.material >= 0) {
+      const Material& mat = input.materials[size_t(tri.material)];
+      if (mat.texture >= 0 && !input.textures[size_t(mat.texture)].image.empty())
+        src = &input.textures[size_t(mat.texture)].image;
+      else
+        flat = flat_colour[size_t(tri.material)];
+    }
+    samplers[t].init(tri, src, flat);
+  });
+  const int max_samples = std::max(1, options.max_footprint_samples);
+  std::atomic<size_t> filled{0}, dilated{0}, filtered{0}, tiles_fitted{0}, tiles_total{0};
   for (uint32_t img = 0; img < images.size(); ++img) {
     Image& out = images[img];
     const int tiles_x = (out.width + kTile - 1) / kTile, tiles_y = (out.height + kTile - 1) / kTile;
@@ -46,27 +267,25 @@ void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& tr
     }
     std::vector<uint8_t, LargeBufferAllocator<uint8_t>> covered(size_t(out.width) * size_t(out.height), 0);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, bins.size()), [&](const tbb::blocked_range<size_t>& range) {
-      size_t local = 0;
+      size_t local = 0, local_filtered = 0;
       for (size_t b = range.begin(); b < range.end(); ++b) {
         const int bx0 = int(b % size_t(tiles_x)) * kTile, by0 = int(b / size_t(tiles_x)) * kTile;
         const int bx1 = std::min(bx0 + kTile, out.width), by1 = std::min(by0 + kTile, out.height);
         for (uint32_t t : bins[b]) {
           const BakeTriangle& tri = triangles[t];
-          const Image* src = nullptr;
-          Rgba8 flat{255, 255, 255, 255};
-          if (tri.material >= 0) {
-            const Material& mat = input.materials[size_t(tri.material)];
-            if (mat.texture >= 0 && !input.textures[size_t(mat.texture)].image.empty())
-              src = &input.textures[size_t(mat.texture)].image;
-            else
-              flat = flat_colour[size_t(tri.material)];
-          }
+          const TriangleSampler& smp = samplers[t];
+          const bool minified = smp.footprint_x > 1 || smp.footprint_y > 1;
           scan_triangle(tri.target_px[0], tri.target_px[1], tri.target_px[2], bx0, bx1, by0, by1, EdgeRule::kInclusive,
                         [&](long x, long y, double w0, double w1, double w2) {
-                          Rgba8 c = flat;
-                          if (src) {
-                            const Vec2 uv = w0 * tri.source_uv[0] + w1 * tri.source_uv[1] + w2 * tri.source_uv[2];
-                            c = to_rgba(sample_bilinear(*src, uv.x(), uv.y()));
+                          Rgba8 c = smp.flat;
+                          if (smp.src) {
+                            if (minified && smp.valid) {
+                              c = to_rgba(smp.colour(double(x) + 0.5, double(y) + 0.5, 1.0, max_samples));
+                              ++local_filtered;
+                            } else {
+                              const Vec2 uv = w0 * tri.source_uv[0] + w1 * tri.source_uv[1] + w2 * tri.source_uv[2];
+                              c = to_rgba(sample_bilinear(*smp.src, uv.x(), uv.y()));
+                            }
                           }
                           const size_t idx = size_t(y) * size_t(out.width) + size_t(x);
                           out.pixels[idx] = c;
@@ -76,6 +295,7 @@ void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& tr
         }
       }
       filled += local;
+      filtered += local_filtered;
     });
 
     // Dilation inside each rectangle, layer by layer (deterministic: a layer reads only earlier layers).
@@ -123,10 +343,36 @@ void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& tr
       }
       dilated += local;
     });
+
+    if (options.fit) {
+      const Image base = out;
+      tbb::parallel_for(size_t(0), bins.size(), [&](size_t b) {
+        const int tx = int(b % size_t(tiles_x)), ty = int(b / size_t(tiles_x));
+        std::vector<uint32_t> tris;
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int nx = tx + dx, ny = ty + dy;
+            if (nx < 0 || ny < 0 || nx >= tiles_x || ny >= tiles_y) continue;
+            const auto& bin = bins[size_t(ny) * size_t(tiles_x) + size_t(nx)];
+            tris.insert(tris.end(), bin.begin(), bin.end());
+          }
+        std::sort(tris.begin(), tris.end());
+        tris.erase(std::unique(tris.begin(), tris.end()), tris.end());
+        if (!bins[b].empty()) ++tiles_total;
+        bool worth = false;
+        for (uint32_t t : bins[b]) worth = worth || (samplers[t].src && samplers[t].valid && std::max(samplers[t].footprint_x, samplers[t].footprint_y) > 0.5);
+        if (!worth) return;
+        fit_tile(base, out, triangles, samplers, tris, tx * kTile, ty * kTile, options, max_samples);
+        ++tiles_fitted;
+      });
+    }
   }
   if (stats) {
     stats->texels_filled = filled;
     stats->texels_dilated = dilated;
+    stats->texels_footprint_filtered = filtered;
+    stats->tiles_fitted = tiles_fitted;
+    stats->tiles = tiles_total;
   }
 }
 

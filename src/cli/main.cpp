@@ -64,14 +64,26 @@ int run_measure(int argc, char** argv) {
 int run_main(int argc, char** argv) {
   CLI::App app{"tightex: one compact texture per surface, from a scan's fragmented UV atlas\n"
                "(global parameterization by a harmonic map onto a square; Chen et al., arXiv 2406.04115)"};
-  std::string input, outdir, report_path, preview_path, layout = "atlas", format = "png", holes = "fill";
-  int size = 4096;
-  bool quiet = false, verbose = false, force = false;
+  std::string input, outdir, report_path, preview_path, layout = "atlas", format = "png", holes = "fill", map = "area";
+  int size = 0;
+  double texels = 0, balance = 1.0;
+  bool quiet = false, verbose = false, force = false, no_fit = false;
   double max_memory_mib = 0;
   app.add_option("input", input, "textured model (OBJ + MTL + textures)")->required();
   app.add_option("-o,--output", outdir, "output directory")->required();
-  app.add_option("--size", size, "texture side in texels (per-component: of the largest component); above 16384 needs --force")
+  auto* size_opt = app.add_option("--size", size, "texture side in texels (per-component: of the largest component); above 16384 needs --force. "
+                                   "Default: the side that holds as many texels as the input uses (see --texels)")
       ->check(CLI::Range(8, 65536));
+  app.add_option("--texels", texels, "texel budget: the texture is the smallest square (side a multiple of 4) holding this many texels. "
+                                     "Default: the input's used texels, so the output keeps the input's information")
+      ->check(CLI::PositiveNumber)->excludes(size_opt);
+  app.add_option("--map", map, "area (default): the same texels per unit of 3D area everywhere; texel: the input's own "
+                               "texel density per triangle; harmonic: the paper's map exactly")
+      ->check(CLI::IsMember({"texel", "area", "harmonic"}));
+  app.add_option("--balance", balance, "area/texel maps: 1 = target density exactly, 0 = the harmonic map's density (least angle "
+                                       "distortion); between: a geometric blend")
+      ->check(CLI::Range(0.0, 1.0));
+  app.add_flag("--no-fit", no_fit, "bake each texel by sampling only, without the least-squares fit to the input");
   app.add_flag("--force", force, "allow --size above 16384");
   app.add_option("--max-memory", max_memory_mib, "refuse inputs whose estimated memory exceeds this many MiB (default: 90% of RAM)")
       ->check(CLI::PositiveNumber);
@@ -89,14 +101,7 @@ int run_main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 1;
   }
-  if (size > 16384 && !force)
-    fail_input("--size {} is above 16384 ({:.1f} GiB of RGBA texture); add --force to allow it", size,
-               double(size) * size * 4 / double(1 << 30));
-  if (max_memory_mib <= 0)
-    max_memory_mib = 0.9 * double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE)) / double(1 << 20);
-  const bool show_progress = !quiet && isatty(STDERR_FILENO);
   const auto t0 = std::chrono::steady_clock::now();
-
   if (fs::is_directory(input)) fail_input("{}: is a directory, not a model file", input);
   // Geometry first (milliseconds); the texture pixels are decoded while the geometric stages run,
   // since only the bake needs them. The OBJ is parsed twice: cheap, and every texture error keeps its
@@ -104,8 +109,23 @@ int run_main(int argc, char** argv) {
   ObjReadStats read_stats;
   ObjReadOptions geometry_only;
   geometry_only.load_textures = false;
-  const TexturedMesh geometry = read_obj(input, geometry_only, &read_stats);
+  TexturedMesh geometry = read_obj(input, geometry_only, &read_stats);
   const double read_s = seconds_since(t0);
+  for (Texture& t : geometry.textures) std::tie(t.width, t.height) = image_dimensions(t.path);
+  double budget_texels = texels;
+  if (size == 0) {
+    if (budget_texels == 0) budget_texels = std::ceil(input_used_texels(geometry) / 4.0) * 4.0;
+    if (budget_texels == 0) budget_texels = 1024.0 * 1024.0;  // no texture of known size: a 1K map
+    size = size_for_texels(budget_texels);
+    if (size > 16384 && !force) size = 16384;
+  }
+  if (size > 16384 && !force)
+    fail_input("--size {} is above 16384 ({:.1f} GiB of RGBA texture); add --force to allow it", size,
+               double(size) * size * 4 / double(1 << 30));
+  const bool show_progress = !quiet && isatty(STDERR_FILENO);
+  if (max_memory_mib <= 0)
+    max_memory_mib = 0.9 * double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE)) / double(1 << 20);
+
 
   // Resource guard, before any pixel is allocated: decoded input textures (RGBA), the mesh and its
   // stages (~1.2 KB a triangle, measured peak on the scans), and for the atlas the output texture with
@@ -116,10 +136,7 @@ int run_main(int argc, char** argv) {
                  bytes / double(1 << 20), max_memory_mib);
   };
   double estimate = double(geometry.num_triangles()) * 1200.0;
-  for (const Texture& t : geometry.textures) {
-    const auto [w, h] = image_dimensions(t.path);
-    estimate += double(w) * double(h) * 4.0;
-  }
+  for (const Texture& t : geometry.textures) estimate += double(t.width) * double(t.height) * 4.0;
   if (layout == "atlas") estimate += double(size) * double(size) * 7.0;
   guard(estimate, "this model at this --size");
 
@@ -127,6 +144,9 @@ int run_main(int argc, char** argv) {
   opt.size = size;
   opt.layout = layout == "atlas" ? Layout::kAtlas : Layout::kPerComponent;
   opt.holes = holes == "fill" ? HoleMode::kFill : HoleMode::kCut;
+  opt.map = map == "harmonic" ? MapKind::kHarmonic : map == "area" ? MapKind::kArea : MapKind::kTexel;
+  opt.balance = balance;
+  opt.fit = !no_fit;
   opt.measure = false;
   if (show_progress)
     opt.progress = [](std::string_view stage, double) { fmt::print(stderr, "\r\033[Ktightex: {}...", stage); };

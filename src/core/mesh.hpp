@@ -32,6 +32,9 @@ struct Material {
 struct Texture {
   std::string path;
   Image image;
+  /// The size when the pixels are not loaded (yet): read from the file's header by a caller that
+  /// decodes later. 0 when unknown. A loaded image's own size always wins (see texture_size).
+  int width = 0, height = 0;
 };
 
 struct TexturedMesh {
@@ -49,6 +52,13 @@ struct TexturedMesh {
   /// Texture coordinate at a corner after the material's -s/-o transform (what a renderer samples).
   Vec2 sampled_uv(size_t triangle, int corner) const;
 };
+
+/// Width and height of texture i: its pixels' if loaded, else the header size recorded in the Texture.
+std::pair<int, int> texture_size(const TexturedMesh& mesh, int i);
+
+/// Texels the input gives triangle t: its UV area (after -s/-o) times its texture's size; 0 without a
+/// texture or when the texture's size is unknown.
+double input_texel_area(const TexturedMesh& mesh, size_t t);
 
 /// 3D area of a triangle.
 double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c);

@@ -12,6 +12,25 @@ struct SquareMapOptions {
   // (see map_to_square) in texels; the map itself is computed on the unit square.
   int rect_width = 1024, rect_height = 1024;
   double bump_texels = 0.3;  // < 0.5: a bump stays inside the chart's own outermost texels
+
+  // Beyond the paper (issue 4): the texel density. Empty: the paper's harmonic map. Otherwise a target
+  // UV area for every disk face (any common scale; > 0), e.g. its 3D area (uniform density) or the
+  // texels the input gave it. The harmonic map is then only the start: see map_to_square.
+  std::vector<double> face_target;
+  /// The trade-off between angle and area distortion: 0 keeps the harmonic map's density (least angle
+  /// distortion), 1 aims at face_target exactly; in between, the target is the geometric blend
+  /// harmonic^(1-balance) * target^balance per face.
+  double balance = 1.0;
+  int max_iterations = 60;
+  double tolerance_log2 = 0.15;  // stop once P5..P95 of log2(area / target) lies within +-this
+  /// Symmetric Dirichlet steps after the reweighting (refine_map). Measured on meshroom_esp32cam, area
+  /// map, --size 1024: 0 steps 40.98 dB, 2: 41.37, 4: 41.36, 8 (converged): 41.35; each step costs one
+  /// factorisation of twice the interior's size.
+  int refine_iterations = 4;
+  /// Rounds of target correction after that (each: the targets scaled by target/area, 2 more steps).
+  /// Off by default: measured on ../shared/data it narrowed no model's density error once the best
+  /// reweighting iterate is kept, and cost meshroom_esp32cam 0.2 dB (41.17 vs 41.36 at --size 1024).
+  int correction_rounds = 0;
 };
 
 struct SquareMapStats {
@@ -23,7 +42,16 @@ struct SquareMapStats {
   size_t bumped_vertices = 0;
   /// A vertex of a triangle that folded even with positive weights: the map crowded a region below
   /// floating-point precision there (harmonic maps crowd exponentially in protrusions). kNone if none.
-  uint32_t crowded_vertex = kNone;   // boundary vertices lifted off a side to keep a chord's triangles open
+  uint32_t crowded_vertex = kNone;
+  // Density iterations (face_target given): P5/P95 of log2(area / target), weighted by target, before
+  // (the harmonic map with the density-placed boundary) and after.
+  int iterations = 0;
+  double spread_before_p5 = 0, spread_before_p95 = 0, spread_p5 = 0, spread_p95 = 0;
+  std::string stopped;  // "converged", "iterations", "stalled" or "fold" (the last fold-free iterate is kept)
+  std::vector<double> blended_target;  // internal: the targets the iterations aimed at (cleared on return)
+  int refine_iterations = 0, correction_rounds = 0;
+  double refine_energy_before = 0, refine_energy = 0;
+  std::string refine_stopped;
 };
 
 /// Maps a topological disk onto the unit square, boundary counter-clockwise.
@@ -38,7 +66,30 @@ struct SquareMapStats {
 /// A chord (interior edge between two boundary vertices on one side of the square) would squash every
 /// triangle beyond it onto the side; the boundary between its ends is lifted outward by a sine bump of
 /// `bump_texels`, so those triangles keep positive area.
+///
+/// Density (options.face_target given): the boundary is placed by target length instead of arc length
+/// (each boundary edge's 3D length times the square root of its face's target density, so the sides
+/// slide to where the density wants them), and the interior is re-solved with reweighted positive
+/// edge weights: an iteratively reweighted Tutte embedding (in the spirit of Yoshizawa, Belyaev and
+/// Seidel 2004's stretch minimisation). Each step multiplies an edge's weight by the square root of
+/// the area ratio (UV area / target) of its two faces: a squeezed region's springs slacken and it
+/// expands. Every step is a convex-combination map onto the convex square, so by Tutte/Floater it
+/// cannot fold; a step that folds numerically is rejected and the last fold-free map kept. The
+/// sparsity pattern never changes: the symbolic factorisation is reused by every step.
 std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& options, SquareMapStats* stats);
+
+struct SlimStats {
+  int iterations = 0;
+  double energy_before = 0, energy = 0;  // area-weighted symmetric Dirichlet energy (2 per unit area = isometric)
+  std::string stopped;                   // "converged", "iterations", "no descent" or "solver"
+};
+
+/// Lowers the symmetric Dirichlet energy |J|^2 + |J^-1|^2 of every face, measured against its target
+/// shape (the 3D triangle scaled to area target[f]), weighted by target area; vertices with fixed[v]
+/// stay. uv must be fold-free; it stays fold-free (the line search stops short of any triangle's
+/// collapse). SLIM (Rabinovich et al. 2017): a reweighted proxy solved with CHOLMOD, pattern analysed once.
+SlimStats refine_map(const Surface& mesh, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,
+                     std::vector<Vec2>& uv);
 
 /// Number of triangles whose UV signed area is not strictly positive.
 size_t count_folds(const Surface& mesh, const std::vector<Vec2>& uv);

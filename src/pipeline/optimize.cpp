@@ -3,6 +3,7 @@
 #include <sys/resource.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <numeric>
@@ -43,6 +44,71 @@ class StageClock {
 }  // namespace
 
 namespace {
+
+const char* map_name(MapKind m) { return m == MapKind::kHarmonic ? "harmonic" : m == MapKind::kArea ? "area" : "texel"; }
+
+/// Target texel density (texels per unit of 3D area, any common scale) of each face of a component.
+struct ComponentDensity {
+  std::vector<double> face;  // per component face
+  double median = 1.0;       // area-weighted median of face
+  double texels = 0.0;       // sum of density x 3D area: the component's share of the texture
+  bool textured = true;      // false: no face had a texture of known size (area map used)
+};
+
+/// Scaffolding (hole caps) is not surface: it gets a quarter of the component's median density, so the
+/// texels it wastes stay few without squeezing the rim of the hole.
+constexpr double kScaffoldDensity = 0.25;
+/// The input's density is followed within a factor of 16 of its median: a triangle the input gave no
+/// texels (degenerate UVs) or absurdly many must not take the map to an extreme.
+constexpr double kDensityRange = 16.0;
+
+ComponentDensity component_density(const TexturedMesh& input, const Surface& surface, const Surface& comp, MapKind map) {
+  ComponentDensity d;
+  const size_t nf = comp.num_faces();
+  d.face.assign(nf, 1.0);
+  std::vector<double> a3(nf);
+  for (size_t f = 0; f < nf; ++f) a3[f] = triangle_area(comp.positions[comp.triangles[f][0]], comp.positions[comp.triangles[f][1]], comp.positions[comp.triangles[f][2]]);
+  if (map == MapKind::kTexel) {
+    std::vector<std::pair<double, double>> vw;
+    for (size_t f = 0; f < nf; ++f) {
+      const size_t t = surface.face_parent[comp.face_parent[f]];
+      d.face[f] = a3[f] > 0 ? input_texel_area(input, t) / a3[f] : 0.0;
+      if (d.face[f] > 0 && std::isfinite(d.face[f])) vw.push_back({d.face[f], a3[f]});
+    }
+    if (vw.empty()) {
+      d.textured = false;
+      d.face.assign(nf, 1.0);
+    } else {
+      std::sort(vw.begin(), vw.end());
+      double total = 0, acc = 0;
+      for (const auto& [v, w] : vw) total += w;
+      d.median = vw.back().first;
+      for (const auto& [v, w] : vw)
+        if ((acc += w) >= 0.5 * total) {
+          d.median = v;
+          break;
+        }
+      for (double& x : d.face) x = std::isfinite(x) ? std::clamp(x, d.median / kDensityRange, d.median * kDensityRange) : d.median;
+    }
+  }
+  for (size_t f = 0; f < nf; ++f) d.texels += d.face[f] * a3[f];
+  return d;
+}
+
+/// The map's per-face targets for a disk cut from component `comp` (nothing for the harmonic map).
+void set_face_targets(const Disk& disk, const ComponentDensity& density, const Options& options, SquareMapOptions& mo) {
+  mo.face_target.clear();
+  mo.balance = options.balance;
+  if (options.map == MapKind::kHarmonic) return;
+  const Surface& m = disk.mesh;
+  mo.face_target.resize(m.num_faces());
+  for (size_t f = 0; f < m.num_faces(); ++f) {
+    const double a3 = triangle_area(m.positions[m.triangles[f][0]], m.positions[m.triangles[f][1]], m.positions[m.triangles[f][2]]);
+    const uint32_t cf = m.face_parent[f];
+    const double dens = cf == kNone ? kScaffoldDensity * density.median : density.face[cf];
+    mo.face_target[f] = std::max(a3 * dens, 1e-300);
+  }
+}
 
 /// The library's entry check (read_obj guarantees all of this; a mesh built in code may not).
 void validate(const TexturedMesh& m) {
@@ -95,6 +161,25 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   for (size_t c = 0; c < nc; ++c)
     for (const Tri& f : components[c].triangles)
       areas[c] += triangle_area(components[c].positions[f[0]], components[c].positions[f[1]], components[c].positions[f[2]]);
+  // Target texel density per component face (area and texel maps); the layout shares the texture out
+  // by each component's target texels.
+  std::vector<ComponentDensity> density(nc);
+  std::vector<double> shares = areas;
+  if (options.map != MapKind::kHarmonic) {
+    tbb::parallel_for(size_t(0), nc, [&](size_t c) { density[c] = component_density(input, surface, components[c], options.map); });
+    for (size_t c = 0; c < nc; ++c) shares[c] = density[c].texels;
+    // Components without any texture share by area at the overall mean density.
+    double sum_texels = 0, sum_area = 0;
+    for (size_t c = 0; c < nc; ++c)
+      if (density[c].textured) sum_texels += density[c].texels, sum_area += areas[c];
+    const double mean = sum_area > 0 && sum_texels > 0 ? sum_texels / sum_area : 1.0;
+    for (size_t c = 0; c < nc; ++c)
+      if (!density[c].textured) {
+        for (double& d : density[c].face) d *= mean;
+        density[c].median *= mean;
+        shares[c] = areas[c] * mean;
+      }
+  }
 
   // 3. Layout: a rectangle of texels per component.
   std::vector<Rect>& rects = plan.rects;
@@ -102,10 +187,10 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   num_images = 1;
   std::vector<std::pair<int, int>>& image_size = plan.image_size;
   if (options.layout == Layout::kAtlas) {
-    rects = layout_atlas(areas, options.size, options.size);
+    rects = layout_atlas(shares, options.size, options.size);
     image_size.push_back({options.size, options.size});
   } else {
-    rects = layout_per_component(areas, options.size);
+    rects = layout_per_component(shares, options.size);
     num_images = int(nc);
     for (const Rect& r : rects) image_size.push_back({r.w, r.h});
   }
@@ -131,6 +216,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
       }
       for (int round = 0;; ++round) {
         disks[c] = cut_to_disk(components[c], options.holes, &cut_stats[c], slit_to, denoised ? &*denoised : nullptr);
+        set_face_targets(disks[c], density[c], options, mo);
         uv[c] = map_to_square(disks[c], mo, &map_stats[c]);
         const uint32_t crowded = map_stats[c].crowded_vertex;
         if (crowded == kNone || round == kCrowdingRounds) break;
@@ -144,6 +230,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
       cut_stats[c] = CutStats{};
       disks[c] = cut_to_disk(components[c], options.holes, &cut_stats[c], {}, nullptr, true);
       cut_stats[c].fallback_reason = e.what();
+      set_face_targets(disks[c], density[c], options, mo);
       uv[c] = map_to_square(disks[c], mo, &map_stats[c]);
     }
   });
@@ -154,7 +241,8 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   rep["input"] = {{"file", input.source}, {"vertices", input.num_vertices()}, {"triangles", input.num_triangles()},
                   {"materials", input.materials.size()}, {"textures", input.textures.size()}};
   rep["options"] = {{"size", options.size}, {"layout", options.layout == Layout::kAtlas ? "atlas" : "per-component"},
-                    {"holes", options.holes == HoleMode::kFill ? "fill" : "cut"}, {"map", "harmonic"}};
+                    {"holes", options.holes == HoleMode::kFill ? "fill" : "cut"}, {"map", map_name(options.map)},
+                    {"balance", options.balance}, {"fit", options.fit}};
   rep["preparation"] = {{"input_vertices", rs.input_vertices},       {"welded_vertices", rs.welded_vertices},
                         {"zero_area_dropped", rs.zero_area_triangles}, {"duplicates_dropped", rs.duplicate_triangles},
                         {"non_manifold_edges_sliced", rs.non_manifold_edges}, {"inconsistent_edges_sliced", rs.inconsistent_edges},
@@ -182,6 +270,14 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
                      {"bumped_boundary_vertices", map_stats[c].bumped_vertices},
                      {"flipped_in_map", map_stats[c].flipped},
                      {"folds_per_weighting", map_stats[c].folds_per_attempt},
+                     {"density_iterations", map_stats[c].iterations},
+                     {"density_stopped", map_stats[c].stopped},
+                     {"density_correction_rounds", map_stats[c].correction_rounds},
+                     {"density_error_log2_before", {map_stats[c].spread_before_p5, map_stats[c].spread_before_p95}},
+                     {"density_error_log2", {map_stats[c].spread_p5, map_stats[c].spread_p95}},
+                     {"refine_iterations", map_stats[c].refine_iterations},
+                     {"refine_energy", {map_stats[c].refine_energy_before, map_stats[c].refine_energy}},
+                     {"refine_stopped", map_stats[c].refine_stopped},
                      {"rect", {{"image", rects[c].image}, {"x", rects[c].x}, {"y", rects[c].y}, {"w", rects[c].w}, {"h", rects[c].h}}}});
   }
   rep["preparation"]["holes_filled"] = holes_filled;
@@ -226,6 +322,7 @@ Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& opt
       BakeTriangle bt;
       bt.image = uint32_t(r.image);
       bt.material = input.face_material[t];
+      bt.area3 = triangle_area(input.positions[input.triangles[t][0]], input.positions[input.triangles[t][1]], input.positions[input.triangles[t][2]]);
       out.triangles.push_back(input.triangles[t]);
       for (int k = 0; k < 3; ++k) {
         const Vec2& s = uv[c][d.mesh.triangles[f][k]];
@@ -262,7 +359,9 @@ Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& opt
   std::vector<Image> images;
   for (Texture& t : out.textures) images.push_back(std::move(t.image));
   BakeStats bs;
-  bake_texture(input, bake_tris, rects, images, &bs);
+  BakeOptions bo;
+  bo.fit = options.fit;
+  bake_texture(input, bake_tris, rects, images, &bs, bo);
   for (size_t i = 0; i < images.size(); ++i) out.textures[i].image = std::move(images[i]);
   clock.done("bake");
 
@@ -273,12 +372,20 @@ Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& opt
     clock.done("measure");
   }
 
-  rep["bake"] = {{"texels_filled", bs.texels_filled}, {"texels_dilated", bs.texels_dilated}};
+  rep["bake"] = {{"texels_filled", bs.texels_filled}, {"texels_dilated", bs.texels_dilated},
+                 {"texels_footprint_filtered", bs.texels_footprint_filtered}, {"tiles_fitted", bs.tiles_fitted}, {"tiles", bs.tiles}};
   rep["timings"] = timings;
   rep["peak_rss_mib"] = peak_rss_mib();
   progress("done", 1);
   return result;
 }
+
+int size_for_texels(double texels) {
+  const double side = std::ceil(std::sqrt(std::max(texels, 0.0)) / 4.0) * 4.0;
+  return int(std::clamp(side, 64.0, 65536.0));
+}
+
+double input_used_texels(const TexturedMesh& input) { return measure_texture_space(input).used_texels; }
 
 Result optimize(const TexturedMesh& input, const Options& options) { return bake_plan(plan_charts(input, options), input, options); }
 

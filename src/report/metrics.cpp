@@ -105,9 +105,8 @@ ModelFigures measure_texture_space(const TexturedMesh& mesh) {
     if (tex >= 0) tris[size_t(tex)].push_back(t);
   }
   for (size_t i = 0; i < mesh.textures.size(); ++i) {
-    const Image& img = mesh.textures[i].image;
-    if (img.empty()) continue;
-    const int W = img.width, H = img.height;
+    const auto [W, H] = texture_size(mesh, int(i));
+    if (W <= 0 || H <= 0) continue;
     std::vector<uint8_t, LargeBufferAllocator<uint8_t>> cov(size_t(W) * size_t(H), 0);
     for (size_t t : tris[i])
       raster(mesh.sampled_uv(t, 0), mesh.sampled_uv(t, 1), mesh.sampled_uv(t, 2), W, H, [&](long x, long y) {

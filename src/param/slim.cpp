@@ -1,0 +1,226 @@
+// Beyond the paper: from a fold-free map, minimise the symmetric Dirichlet energy of each triangle
+// against its target shape (the 3D triangle scaled to its target UV area), with the boundary held.
+// Scalable Locally Injective Maps (Rabinovich, Lipman, Sorkine-Hornung 2017): each step solves a
+// reweighted Laplacian-like proxy, then a line search that never lets a triangle reach zero area.
+#include <Eigen/CholmodSupport>
+#include <Eigen/Sparse>
+#include <algorithm>
+#include <cmath>
+
+#include "param/param.hpp"
+
+namespace tightex {
+
+namespace {
+
+using SpMat = Eigen::SparseMatrix<double>;
+using Mat2 = Eigen::Matrix2d;
+
+/// Per face: the gradients of the three hat functions on the target triangle, and its area.
+struct TargetFrame {
+  std::array<Vec2, 3> g;
+  double area = 0;
+};
+
+std::vector<TargetFrame> target_frames(const Surface& m, const std::vector<double>& target) {
+  std::vector<TargetFrame> fr(m.num_faces());
+  for (size_t f = 0; f < m.num_faces(); ++f) {
+    const Vec3 &a = m.positions[m.triangles[f][0]], &b = m.positions[m.triangles[f][1]], &c = m.positions[m.triangles[f][2]];
+    const Vec3 e1 = b - a, e2 = c - a;
+    const double l1 = e1.norm(), cross = e1.cross(e2).norm();
+    if (!(l1 > 0) || !(cross > 0) || !(target[f] > 0)) continue;  // area 0: the face does not count
+    const double s = std::sqrt(target[f] / (0.5 * cross));
+    const std::array<Vec2, 3> p = {Vec2(0, 0), Vec2(s * l1, 0), Vec2(s * e1.dot(e2) / l1, s * cross / l1)};
+    const double area2 = 2.0 * target[f];
+    auto perp = [](const Vec2& v) { return Vec2(-v.y(), v.x()); };
+    fr[f].g = {perp(p[2] - p[1]) / area2, perp(p[0] - p[2]) / area2, perp(p[1] - p[0]) / area2};
+    fr[f].area = target[f];
+  }
+  return fr;
+}
+
+Mat2 jacobian(const TargetFrame& fr, const Vec2& x0, const Vec2& x1, const Vec2& x2) {
+  return x0 * fr.g[0].transpose() + x1 * fr.g[1].transpose() + x2 * fr.g[2].transpose();
+}
+
+/// Signed-free SVD of a 2x2 matrix with positive determinant: J = U diag(sigma) V^T, U and V rotations,
+/// sigma(0) >= sigma(1) > 0 (closed form: J = [a b; c d] splits into a similarity and an anti-similarity).
+void svd2(const Mat2& J, Mat2& U, Vec2& sigma, Mat2& V) {
+  const double e = 0.5 * (J(0, 0) + J(1, 1)), f = 0.5 * (J(0, 0) - J(1, 1));
+  const double g = 0.5 * (J(1, 0) + J(0, 1)), h = 0.5 * (J(1, 0) - J(0, 1));
+  const double q = std::hypot(e, h), r = std::hypot(f, g);
+  sigma = Vec2(q + r, q - r);
+  const double a1 = std::atan2(g, f), a2 = std::atan2(h, e);
+  const double theta = 0.5 * (a2 - a1), phi = 0.5 * (a2 + a1);  // U = rot(phi), V^T = rot(theta)
+  U << std::cos(phi), -std::sin(phi), std::sin(phi), std::cos(phi);
+  V << std::cos(theta), std::sin(theta), -std::sin(theta), std::cos(theta);
+}
+
+/// Symmetric Dirichlet energy |J|^2 + |J^-1|^2 of every face, area-weighted; +inf if any face folds.
+double energy(const Surface& m, const std::vector<TargetFrame>& fr, const std::vector<Vec2>& uv) {
+  double e = 0;
+  for (size_t f = 0; f < m.num_faces(); ++f) {
+    if (fr[f].area <= 0) continue;
+    const Tri& t = m.triangles[f];
+    const Mat2 J = jacobian(fr[f], uv[t[0]], uv[t[1]], uv[t[2]]);
+    const double det = J.determinant();
+    if (!(det > 0)) return INFINITY;
+    const double n2 = J.squaredNorm();
+    e += fr[f].area * (n2 + n2 / (det * det));
+  }
+  return e;
+}
+
+/// Largest t in (0, 1] such that no triangle's signed area reaches zero on uv + s d, s in [0, t).
+double max_step(const Surface& m, const std::vector<Vec2>& uv, const std::vector<Vec2>& d) {
+  double t_max = 1.0;
+  for (const Tri& t : m.triangles) {
+    const Vec2 a = uv[t[1]] - uv[t[0]], b = uv[t[2]] - uv[t[0]];
+    const Vec2 da = d[t[1]] - d[t[0]], db = d[t[2]] - d[t[0]];
+    // 2 area(s) = cross(a + s da, b + s db) = c0 + c1 s + c2 s^2
+    const double c0 = a.x() * b.y() - a.y() * b.x();
+    const double c1 = a.x() * db.y() - a.y() * db.x() + da.x() * b.y() - da.y() * b.x();
+    const double c2 = da.x() * db.y() - da.y() * db.x();
+    double root = INFINITY;
+    if (std::abs(c2) < 1e-300 * std::max(1.0, std::abs(c1))) {
+      if (c1 < 0) root = -c0 / c1;
+    } else {
+      const double disc = c1 * c1 - 4 * c2 * c0;
+      if (disc >= 0) {
+        const double sq = std::sqrt(disc);
+        const double q = -0.5 * (c1 + (c1 >= 0 ? sq : -sq));
+        for (double r : {q / c2, q != 0 ? c0 / q : INFINITY})
+          if (r > 0) root = std::min(root, r);
+      }
+    }
+    if (root < t_max) t_max = root;
+  }
+  return t_max;
+}
+
+}  // namespace
+
+SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,
+                     std::vector<Vec2>& uv) {
+  SlimStats st;
+  const size_t nv = m.num_vertices();
+  const auto fr = target_frames(m, target);
+  std::vector<int> index(nv, -1);
+  int n = 0;
+  for (size_t v = 0; v < nv; ++v)
+    if (!fixed[v]) index[v] = n++;
+  st.energy_before = st.energy = energy(m, fr, uv);
+  if (n == 0 || !std::isfinite(st.energy)) return st;
+  Eigen::CholmodSimplicialLLT<SpMat, Eigen::Lower> solver;
+  bool analyzed = false;
+  // The matrix's pattern is the same every step: build it once, and where each face's 2x2 blocks land
+  // in its value array, so a step only overwrites values.
+  SpMat A(2 * n, 2 * n);
+  std::vector<int> slot(m.num_faces() * 36, -1);  // face, (i, j) corner pair, (a, b) coordinate pair
+  {
+    // Every lower-triangle entry (row >= col) a face contributes, with its slot number.
+    auto for_each_entry = [&](auto&& f) {
+      for (size_t face = 0; face < m.num_faces(); ++face)
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) {
+            const int ii = index[m.triangles[face][i]], jj = index[m.triangles[face][j]];
+            if (ii < 0 || jj < 0) continue;
+            for (int a = 0; a < 2; ++a)
+              for (int b = 0; b < 2; ++b)
+                if (2 * ii + a >= 2 * jj + b) f(face * 36 + size_t((i * 3 + j) * 4 + a * 2 + b), 2 * ii + a, 2 * jj + b);
+          }
+    };
+    std::vector<Eigen::Triplet<double>> trips;
+    trips.reserve(m.num_faces() * 24);
+    for_each_entry([&](size_t, int row, int col) { trips.emplace_back(row, col, 1.0); });
+    A.setFromTriplets(trips.begin(), trips.end());
+    A.makeCompressed();
+    for_each_entry([&](size_t s, int row, int col) {
+      const int* begin = A.innerIndexPtr() + A.outerIndexPtr()[col];
+      const int* end = A.innerIndexPtr() + A.outerIndexPtr()[col + 1];
+      slot[s] = int(std::lower_bound(begin, end, row) - A.innerIndexPtr());
+    });
+  }
+  std::vector<Vec2> d(nv), trial(nv);
+  for (int it = 0; it < iterations; ++it) {
+    std::fill(A.valuePtr(), A.valuePtr() + A.nonZeros(), 0.0);
+    double* values = A.valuePtr();
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(2 * n);
+    for (size_t f = 0; f < m.num_faces(); ++f) {
+      const TargetFrame& F = fr[f];
+      if (F.area <= 0) continue;
+      const Tri& t = m.triangles[f];
+      const Mat2 J = jacobian(F, uv[t[0]], uv[t[1]], uv[t[2]]);
+      Mat2 U, V;
+      Vec2 sigma;
+      svd2(J, U, sigma, V);
+      const Mat2 R = U * V.transpose();
+      Vec2 w2;
+      for (int k = 0; k < 2; ++k) {
+        const double s = sigma(k);
+        w2(k) = std::abs(s - 1) < 1e-8 ? 4.0 : (s - 1 / (s * s * s)) / (s - 1);  // w^2 of SLIM's symmetric Dirichlet weights
+      }
+      const Mat2 M = U * w2.asDiagonal() * U.transpose();
+      const Mat2 MR = M * R;
+      for (int i = 0; i < 3; ++i) {
+        const int ii = index[t[i]];
+        if (ii < 0) continue;
+        const Vec2 b = F.area * MR * F.g[i];
+        rhs(2 * ii) += b.x();
+        rhs(2 * ii + 1) += b.y();
+        for (int j = 0; j < 3; ++j) {
+          const Mat2 H = F.area * F.g[i].dot(F.g[j]) * M;
+          const int jj = index[t[j]];
+          if (jj < 0) {
+            const Vec2 r = H * uv[t[j]];
+            rhs(2 * ii) -= r.x();
+            rhs(2 * ii + 1) -= r.y();
+            continue;
+          }
+          const int* sl = &slot[f * 36 + size_t((i * 3 + j) * 4)];
+          for (int a = 0; a < 2; ++a)
+            for (int b2 = 0; b2 < 2; ++b2)
+              if (sl[a * 2 + b2] >= 0) values[sl[a * 2 + b2]] += H(a, b2);
+        }
+      }
+    }
+    if (!analyzed) {
+      solver.analyzePattern(A);
+      analyzed = true;
+    }
+    solver.factorize(A);
+    if (solver.info() != Eigen::Success) {
+      st.stopped = "solver";
+      break;
+    }
+    const Eigen::VectorXd x = solver.solve(rhs);
+    if (solver.info() != Eigen::Success || !x.allFinite()) {
+      st.stopped = "solver";
+      break;
+    }
+    for (size_t v = 0; v < nv; ++v) d[v] = index[v] < 0 ? Vec2(0, 0) : Vec2(Vec2(x(2 * index[v]), x(2 * index[v] + 1)) - uv[v]);
+    double t = std::min(1.0, 0.9 * max_step(m, uv, d));
+    double e_new = INFINITY;
+    for (int tries = 0; tries < 40; ++tries, t *= 0.5) {
+      for (size_t v = 0; v < nv; ++v) trial[v] = uv[v] + t * d[v];
+      e_new = energy(m, fr, trial);
+      if (e_new < st.energy) break;
+    }
+    if (!(e_new < st.energy)) {
+      st.stopped = "no descent";
+      break;
+    }
+    uv.swap(trial);
+    const double gain = (st.energy - e_new) / st.energy;
+    st.energy = e_new;
+    ++st.iterations;
+    if (gain < 1e-3) {
+      st.stopped = "converged";
+      break;
+    }
+  }
+  if (st.stopped.empty()) st.stopped = "iterations";
+  return st;
+}
+
+}  // namespace tightex
