@@ -195,10 +195,10 @@ inline TexturedMesh mesh_from_bytes(const uint8_t* data, size_t size, Options& o
     m.corner_uv.emplace_back(u, v);
   }
   if (flags & 4) {
-    const int side = (flags & 8) ? 1 : 4;
-    Image img(side, side);
-    for (int y = 0; y < side; ++y)
-      for (int x = 0; x < side; ++x) img.at(x, y) = {uint8_t(x * 60 + 10), uint8_t(y * 60 + 10), 128, 255};
+    Image img(4, 4);
+    for (int y = 0; y < 4; ++y)
+      for (int x = 0; x < 4; ++x) img.at(x, y) = {uint8_t(x * 60 + 10), uint8_t(y * 60 + 10), 128, 255};
+    if (flags & 8) img = Image(1, 1, img.at(1, 2));
     m.textures.push_back(Texture{"fuzz-texture", std::move(img)});
     mat.texture = 0;
     m.materials.push_back(mat);
