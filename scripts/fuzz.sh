@@ -47,8 +47,8 @@ for h in "${harnesses[@]}"; do
     -artifact_prefix="build-fuzz/crashes/$h/" </dev/null >"$log" 2>&1 || rc=$?
   # Totals: the last status line (execs, cov, ft, corpus) and the final stats.
   last=$(grep -E '^#[0-9]+' "$log" | tail -1 || true)
-  execs=$(grep -Eo 'stat::number_of_executed_units: *[0-9]+' "$log" | grep -Eo '[0-9]+$' || true)
-  rate=$(grep -Eo 'stat::average_exec_per_sec: *[0-9]+' "$log" | grep -Eo '[0-9]+$' || true)
+  execs=$(grep -Eo 'stat::number_of_executed_units: *[0-9]+' "$log" | grep -Eo '[0-9]+$' | tail -1 || true)
+  rate=$(grep -Eo 'stat::average_exec_per_sec: *[0-9]+' "$log" | grep -Eo '[0-9]+$' | tail -1 || true)
   crashes=$(find "build-fuzz/crashes/$h" -type f | wc -l)
   findings=$(grep -c '^FINDING' "$log" || true)
   echo "   last: $last"
