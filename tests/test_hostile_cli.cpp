@@ -1,6 +1,7 @@
 // A catalogue of hostile and awkward inputs, generated here, each run through the tightex command:
-// bad input must exit 1 (never a signal) with one line that names the file, and leave no model behind;
-// awkward but valid input must succeed with no lost and no flipped triangle.
+// bad input (and an output folder that cannot be created) must exit 1 (never a signal) with one line that
+// names the file, and leave no model behind; awkward but valid input (quads, CRLF, 16-bit, grey and alpha
+// textures, spaces in folder and file names, ...) must succeed with no lost and no flipped triangle.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -8,6 +9,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <stdexcept>
 
 #include "io/image_io.hpp"
 #include "io/obj_reader.hpp"
@@ -23,9 +26,20 @@ struct Case {
   std::string obj;           // OBJ text; "mtllib m.mtl" refers to the MTL below
   std::string mtl;           // empty: no MTL file written
   bool texture = true;       // write t.png (a small gradient)
-  std::string texture_bytes; // non-empty: write these bytes as t.png instead (a corrupt texture)
+  std::string texture_bytes; // non-empty: write these bytes as t.png instead (a corrupt or unusual texture)
   bool valid = false;
+  std::string folder;        // the model's folder inside the test's own (may contain spaces)
+  std::string obj_name = "in.obj", mtl_name = "m.mtl", texture_name = "t.png";
+  bool out_under_file = false;  // -o names a path below a regular file: nothing can be written there
 };
+
+// An 8x8 PNG of the fuzz seed corpus (fuzz/corpus/fuzz_image: one file per colour type and bit depth).
+std::string seed_png(const std::string& name) {
+  std::ifstream in(fs::path(TIGHTEX_FUZZ_CORPUS) / "fuzz_image" / name, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  if (bytes.empty()) throw std::runtime_error("missing seed image " + name);
+  return bytes;
+}
 
 // A 4x4 grid of quads with UVs, as OBJ text (positions, vt, faces). `face_prefix` lets a case insert
 // statements before the faces.
@@ -70,6 +84,11 @@ std::vector<Case> catalogue() {
                  return s;
                }(), kMtl, true, "", true});
   c.push_back({"valid_no_material", grid_obj(""), "", false, "", true});
+  for (const char* png : {"rgb16", "rgba16", "grey16", "grey8", "greyalpha8", "rgba8"})
+    c.push_back({std::string("valid_texture_") + png, grid_obj(), kMtl, true, seed_png(std::string(png) + ".png"), true});
+  c.push_back({"valid_spaces_in_names", grid_obj("mtllib my materials.mtl\nusemtl a\n"),
+               "newmtl a\nmap_Kd my texture.png\n", true, "", true, "my scans", "my model.obj", "my materials.mtl",
+               "my texture.png"});
   c.push_back({"empty_file", "", "", false, "", false});
   c.push_back({"only_comments", "# nothing\n\n", "", false, "", false});
   c.push_back({"no_texture_coordinates", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "", false, "", false});
@@ -87,6 +106,11 @@ std::vector<Case> catalogue() {
   c.push_back({"missing_texture", grid_obj(), kMtl, false, "", false});
   c.push_back({"corrupt_texture", grid_obj(), kMtl, false, "\x89PNG\r\n\x1a\n garbage garbage", false});
   c.push_back({"binary_garbage", std::string("\x00\x01\x02\xff\xfe", 5) + "v 1 2", "", false, "", false});
+  {
+    Case k{"output_under_a_file", grid_obj(), kMtl, true, "", false};
+    k.out_under_file = true;
+    c.push_back(k);
+  }
   return c;
 }
 
@@ -96,19 +120,21 @@ TEST_P(HostileCli, RefusedCleanlyOrProcessedCorrectly) {
   const Case& k = GetParam();
   const fs::path dir = fs::temp_directory_path() / ("tightex_hostile_" + k.name + "_" + std::to_string(::getpid()));
   fs::remove_all(dir);
-  fs::create_directories(dir);
-  std::ofstream(dir / "in.obj", std::ios::binary) << k.obj;
-  if (!k.mtl.empty()) std::ofstream(dir / "m.mtl", std::ios::binary) << k.mtl;
+  const fs::path model = dir / k.folder;
+  fs::create_directories(model);
+  std::ofstream(model / k.obj_name, std::ios::binary) << k.obj;
+  if (!k.mtl.empty()) std::ofstream(model / k.mtl_name, std::ios::binary) << k.mtl;
   if (!k.texture_bytes.empty()) {
-    std::ofstream(dir / "t.png", std::ios::binary) << k.texture_bytes;
+    std::ofstream(model / k.texture_name, std::ios::binary) << k.texture_bytes;
   } else if (k.texture) {
     Image img(16, 16);
     for (int y = 0; y < 16; ++y)
       for (int x = 0; x < 16; ++x) img.at(x, y) = {uint8_t(x * 16), uint8_t(y * 16), 128, 255};
-    save_image((dir / "t.png").string(), img, ImageFormat::kPng);
+    save_image((model / k.texture_name).string(), img, ImageFormat::kPng);
   }
-  const fs::path out = dir / "out";
-  const std::string cmd = std::string(TIGHTEX_CLI) + " '" + (dir / "in.obj").string() + "' -o '" + out.string() +
+  if (k.out_under_file) std::ofstream(dir / "blocker") << "a file, not a folder";
+  const fs::path out = k.out_under_file ? dir / "blocker" / "out" : dir / (k.folder.empty() ? "out" : k.folder + " out");
+  const std::string cmd = std::string(TIGHTEX_CLI) + " '" + (model / k.obj_name).string() + "' -o '" + out.string() +
                           "' --size 64 --quiet 2> '" + (dir / "stderr.txt").string() + "'";
   const int status = std::system(cmd.c_str());
   ASSERT_TRUE(WIFEXITED(status)) << "killed by a signal";
@@ -116,8 +142,8 @@ TEST_P(HostileCli, RefusedCleanlyOrProcessedCorrectly) {
   const std::string err((std::istreambuf_iterator<char>(err_file)), {});
   if (k.valid) {
     ASSERT_EQ(WEXITSTATUS(status), 0) << err;
-    const TexturedMesh in = read_obj((dir / "in.obj").string());
-    const TexturedMesh result = read_obj((out / "in.obj").string());
+    const TexturedMesh in = read_obj((model / k.obj_name).string());
+    const TexturedMesh result = read_obj((out / k.obj_name).string());
     const Metrics m = measure(in, result, 20000);
     EXPECT_EQ(m.lost_triangles, 0u);
     EXPECT_EQ(m.flipped, 0u);
@@ -126,9 +152,9 @@ TEST_P(HostileCli, RefusedCleanlyOrProcessedCorrectly) {
     EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;  // one line
     EXPECT_NE(err.find("error"), std::string::npos) << err;
     EXPECT_TRUE(err.find("in.obj") != std::string::npos || err.find("m.mtl") != std::string::npos ||
-                err.find("t.png") != std::string::npos)
+                err.find("t.png") != std::string::npos || (k.out_under_file && err.find("blocker/out") != std::string::npos))
         << "the message names no file: " << err;
-    EXPECT_FALSE(fs::exists(out / "in.obj")) << "a failed run left a model behind";
+    EXPECT_FALSE(fs::exists(out / k.obj_name)) << "a failed run left a model behind";
   }
   fs::remove_all(dir);
 }

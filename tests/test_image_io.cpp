@@ -551,6 +551,22 @@ TEST_F(ImageIoTest, RadianceHdrDoesNotHang) {
   expect_input_error([&] { decode_image(hdr.data(), hdr.size(), "sky.hdr"); }, "sky.hdr");
 }
 
+TEST_F(ImageIoTest, PnmHeaderNumberTooLongIsRefused) {
+  // stb_image 2.27 parses PNM header numbers into an int without an overflow check: a 10-digit width was
+  // signed overflow (found by fuzz_image under UBSan; the input is fuzz/corpus/fuzz_image/
+  // regress-pnm-width-overflow.ppm). Refused before stb sees it, also by the header-only size query.
+  const std::string header = "P6\n# comment\n8866666666 2\n255\n";
+  Bytes ppm(header.begin(), header.end());
+  ppm.insert(ppm.end(), 12, 7);
+  expect_input_error([&] { decode_image(ppm.data(), ppm.size(), "wide.ppm"); }, "wide.ppm: corrupt PNM header");
+  write_bytes(path("wide.ppm"), ppm);
+  EXPECT_EQ(image_dimensions(path("wide.ppm")), (std::pair<int, int>{0, 0}));
+  // Nine digits still reach the size check.
+  const std::string nine = "P5 999999999 1 255\n";
+  expect_input_error([&] { decode_image(reinterpret_cast<const unsigned char*>(nine.data()), nine.size(), "nine.pgm", size_t(1) << 20); },
+                     "999999999x1 pixels, more than the limit");
+}
+
 TEST_F(ImageIoTest, ZeroSizePngIsRefused) {
   // spng's encoder refuses to write a zero width, so the header is written by hand.
   const Bytes png = png_header_only(0, 1);

@@ -568,8 +568,31 @@ struct StbImageDeleter {
   void operator()(stbi_uc* pixels) const { stbi_image_free(pixels); }
 };
 
+// stb 2.27 reads the numbers of a binary PNM header (P5, P6) into an int without an overflow check:
+// a width of ten or more digits is signed overflow, undefined behaviour (found by fuzz_image under UBSan;
+// stb 2.28 refuses such numbers). This scans the header the way stb does (blanks, '#' comments up to the
+// end of the line, three decimal numbers) and reports a number of more than 9 digits, which cannot
+// overflow stb's "value * 10 + digit" and is far beyond any size check_dimensions lets through.
+bool pnm_header_number_too_long(const unsigned char* data, size_t size) {
+  if (size < 2 || data[0] != 'P' || (data[1] != '5' && data[1] != '6')) return false;
+  auto blank = [](unsigned char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\v' || c == '\f' || c == '\r'; };
+  size_t i = 2;
+  for (int number = 0; number < 3; ++number) {
+    for (;;) {
+      while (i < size && blank(data[i])) ++i;
+      if (i >= size || data[i] != '#') break;
+      while (i < size && data[i] != '\n' && data[i] != '\r') ++i;
+    }
+    size_t digits = 0;
+    for (; i < size && data[i] >= '0' && data[i] <= '9'; ++i)
+      if (++digits > 9) return true;
+  }
+  return false;
+}
+
 Image decode_with_stb(const unsigned char* data, size_t size, const std::string& name, size_t max_pixels) {
   if (size > size_t(INT_MAX)) fail_input("{}: unrecognised image format", name);
+  if (pnm_header_number_too_long(data, size)) fail_input("{}: corrupt PNM header (a number of more than 9 digits)", name);
   int width = 0, height = 0, channels = 0;
   // stbi_info parses only the header, so the size check happens before any pixel memory is allocated.
   if (!stbi_info_from_memory(data, int(size), &width, &height, &channels)) {
@@ -672,6 +695,7 @@ std::pair<int, int> image_dimensions(const std::string& path) {
     return {0, 0};
   }
   int w = 0, h = 0, c = 0;
+  if (pnm_header_number_too_long(head.data(), n)) return {0, 0};
   if (stbi_info_from_memory(head.data(), int(n), &w, &h, &c)) return {w, h};
   return {0, 0};
 }
