@@ -210,12 +210,13 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
     try {
       std::vector<uint32_t> slit_to;
       std::optional<Denoised> denoised;  // the handles are searched once, whatever the rounds
+      const std::vector<char> seams = find_texture_seams(input, surface, components[c]);  // cuts prefer them
       if (topology_of(components[c]).genus() > 0) {
         denoised.emplace();
-        denoised->surface = remove_handles(components[c], &denoised->handle_loops);
+        denoised->surface = remove_handles(components[c], &denoised->handle_loops, seams);
       }
       for (int round = 0;; ++round) {
-        disks[c] = cut_to_disk(components[c], options.holes, &cut_stats[c], slit_to, denoised ? &*denoised : nullptr);
+        disks[c] = cut_to_disk(components[c], options.holes, &cut_stats[c], slit_to, denoised ? &*denoised : nullptr, false, seams);
         set_face_targets(disks[c], density[c], options, mo);
         uv[c] = map_to_square(disks[c], mo, &map_stats[c]);
         const uint32_t crowded = map_stats[c].crowded_vertex;
@@ -265,6 +266,8 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
                      {"handle_loops", cs.handle_loops},
                      {"cut_edges", cs.cut_edges},
                      {"cut_length", cs.cut_length},
+                     {"seam_length", cs.seam_length},
+                     {"seam_on_input_seams", cs.seam_on_input_seams},
                      {"weights", map_stats[c].weights},
                      {"negative_cotangent_weights", map_stats[c].negative_weights},
                      {"bumped_boundary_vertices", map_stats[c].bumped_vertices},

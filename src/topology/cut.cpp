@@ -11,7 +11,7 @@ namespace tightex {
 
 
 Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, const std::vector<uint32_t>& slit_to,
-                 const Denoised* denoised, bool plain) {
+                 const Denoised* denoised, bool plain, const std::vector<char>& seams) {
   CutStats st;
   st.before = topology_of(component);
   // Handles first: a genus-0 surface (with its holes) comes back, the handle loops capped.
@@ -23,7 +23,7 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, cons
     base = denoised->surface;
     st.handle_loops = denoised->handle_loops;
   } else if (st.before.genus() > 0) {
-    base = remove_handles(component, &st.handle_loops);
+    base = remove_handles(component, &st.handle_loops, seams);
   } else {
     base = with_identity_parents(component);
   }
@@ -66,19 +66,21 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, cons
   }
   st.holes_cut = loops.empty() ? 0 : loops.size() - 1;
   const Topology topo = topology_of(s);
-  const EdgeGraph g(s);
+  const EdgeGraph g(s, plain ? std::vector<char>{} : seams);
   const size_t nv = s.num_vertices();
   std::vector<char> cut_edge(g.num_edges(), 0);
 
   if (loops.size() == 1 && topo.genus() == 0) {
     st.method = "disk";
   } else if (loops.empty() && topo.genus() == 0) {
-    // The paper's single seam: shortest path between two far-apart vertices (double sweep).
+    // The paper's single seam: shortest path between two far-apart vertices (double sweep); the
+    // shortest by cost, so it follows the input's texture seams where that costs little.
     st.method = "path";
     std::vector<double> dist;
     std::vector<uint32_t> pred;
     uint32_t a = 0;
     const uint32_t b = double_sweep(s, g, &a, dist, pred);
+    dijkstra(g, nv, {a}, g.cost, dist, pred);  // the path between them prefers the input's seams
     size_t path_edges = 0;
     for (uint32_t v = b; pred[v] != kNone; v = other_end(s, g, pred[v], v)) cut_edge[pred[v]] = 1, ++path_edges;
     if (path_edges < 2) {
@@ -237,6 +239,18 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, cons
     fail_internal("cut_to_disk: result has {} boundary loops and Euler characteristic {} (expected a disk)",
                   disk_loops.size(), dt.euler());
   for (uint32_t h : disk_loops[0]) disk.boundary.push_back(disk.mesh.from(h));
+  // The seam this component gets in the output (METRICS.md): its edges whose two triangles end up apart
+  // (handle loops, hole connections, the cut graph, slits), each counted once from both sides, and the
+  // part of it that lies on the input's texture seams.
+  for (uint32_t h = 0; h < disk.mesh.opposite.size(); ++h) {
+    const uint32_t f = disk.mesh.face_parent[h / 3], o = disk.mesh.opposite[h];
+    if (f == kNone || (o != kNone && disk.mesh.face_parent[o / 3] != kNone)) continue;
+    const uint32_t ch = 3 * f + h % 3;
+    if (component.opposite[ch] == kNone) continue;  // the surface's own boundary
+    const double half = 0.5 * component.edge_length(ch);
+    st.seam_length += half;
+    if (!seams.empty() && seams[ch]) st.seam_on_input_seams += half;
+  }
   if (stats) *stats = st;
   return disk;
 }

@@ -12,22 +12,37 @@
 namespace tightex {
 
 
+/// Shortest paths (handle loops, hole connections, the cut graph) pay this fraction of an edge's length
+/// on an edge where the input already has a texture seam: where there is a choice of nearly equal
+/// paths, the new seam lies where the eye already accepts a discontinuity. See find_texture_seams.
+constexpr double kSeamCost = 0.95;
+
 /// Undirected edges of a manifold surface with vertex adjacency in CSR form.
+/// `seams`: per halfedge of the surface that s.face_parent maps into (the component), 1 on an input
+/// texture seam (find_texture_seams); empty: none. Scaffolding edges are never seams.
 struct EdgeGraph {
   std::vector<uint32_t> edge_halfedge;  // edge -> a halfedge of it (the one with the smaller id)
   std::vector<uint32_t> halfedge_edge;  // halfedge -> edge
-  std::vector<double> length;
+  std::vector<double> length;           // 3D length
+  std::vector<double> cost;             // what a shortest path pays: length, times kSeamCost on a seam
+  std::vector<char> on_seam;            // per edge: an input texture seam
   std::vector<uint32_t> offset, neighbor, via_edge;  // CSR: vertex -> (neighbor, edge)
 
-  explicit EdgeGraph(const Surface& s) {
+  explicit EdgeGraph(const Surface& s, const std::vector<char>& seams = {}) {
     const uint32_t nh = uint32_t(s.opposite.size());
     halfedge_edge.assign(nh, kNone);
+    auto seam_at = [&](uint32_t h) {
+      const uint32_t f = s.face_parent.empty() ? kNone : s.face_parent[h / 3];
+      return f != kNone && seams[3 * f + h % 3];
+    };
     for (uint32_t h = 0; h < nh; ++h) {
       const uint32_t o = s.opposite[h];
       if (o != kNone && o < h) continue;
       const uint32_t e = uint32_t(edge_halfedge.size());
       edge_halfedge.push_back(h);
       length.push_back(s.edge_length(h));
+      on_seam.push_back(!seams.empty() && o != kNone && seam_at(h) && seam_at(o));
+      cost.push_back(on_seam.back() ? kSeamCost * length.back() : length.back());
       halfedge_edge[h] = e;
       if (o != kNone) halfedge_edge[o] = e;
     }
@@ -91,6 +106,7 @@ inline uint32_t farthest(const std::vector<double>& dist) {
 
 /// Double sweep: the vertex farthest from an arbitrary start is one end `a` of an approximate
 /// diameter; the sweep from `a` gives dist/pred, whose farthest vertex is the other end (returned).
+/// Distances are 3D lengths: the ends are far apart on the surface, whatever the seams.
 inline uint32_t double_sweep(const Surface& s, const EdgeGraph& g, uint32_t* a, std::vector<double>& dist,
                              std::vector<uint32_t>& pred) {
   dijkstra(g, s.num_vertices(), {s.triangles[0][0]}, g.length, dist, pred);
@@ -99,7 +115,7 @@ inline uint32_t double_sweep(const Surface& s, const EdgeGraph& g, uint32_t* a, 
   return farthest(dist);
 }
 
-/// Tree-cotree (Eppstein; greedy form of Erickson & Whittlesey 2005): a shortest-path tree T from
+/// Tree-cotree (Eppstein; greedy form of Erickson & Whittlesey 2005): a shortest-path tree T (g.cost) from
 /// `sources` (boundary edges cost nothing, so every hole acts as one point), then a dual spanning tree
 /// over the edges not in T (faces plus one node per boundary loop) that keeps the edges whose loops are
 /// longest. The edges left over close the generator loops: 2g of them on a genus-g surface, each loop
@@ -108,16 +124,17 @@ struct TreeCotree {
   std::vector<double> dist;
   std::vector<uint32_t> pred;      // tree edge towards the root, per vertex
   std::vector<uint32_t> leftover;  // interior edges closing generator loops, shortest loop first
+  /// The cost (g.cost) of the loop closed by edge e.
   double loop_length(const Surface& s, const EdgeGraph& g, uint32_t e) const {
     const uint32_t h = g.edge_halfedge[e];
-    return dist[s.from(h)] + dist[s.to(h)] + g.length[e];
+    return dist[s.from(h)] + dist[s.to(h)] + g.cost[e];
   }
 };
 
 inline TreeCotree tree_cotree(const Surface& s, const EdgeGraph& g, const std::vector<uint32_t>& sources,
                               const std::vector<std::vector<uint32_t>>& loops) {
   TreeCotree tc;
-  std::vector<double> weight = g.length;
+  std::vector<double> weight = g.cost;
   for (uint32_t e = 0; e < g.num_edges(); ++e)
     if (s.opposite[g.edge_halfedge[e]] == kNone) weight[e] = 0;
   dijkstra(g, s.num_vertices(), sources, weight, tc.dist, tc.pred);

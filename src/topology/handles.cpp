@@ -14,11 +14,11 @@ namespace tightex {
 
 namespace {
 
-/// The shortest generator loop through `root`: the leftover edge with the smallest loop length, with
+/// The shortest generator loop through `root`: the leftover edge with the smallest loop cost, with
 /// the two tree paths trimmed where they share a prefix (so the loop is a simple cycle). Returns the
-/// loop's edges and its length; empty when the surface has genus 0.
+/// loop's edges, its 3D length and its cost (g.cost); empty when the surface has genus 0.
 std::vector<uint32_t> shortest_loop_through(const Surface& s, const EdgeGraph& g, uint32_t root,
-                                            const std::vector<std::vector<uint32_t>>& loops, double* length) {
+                                            const std::vector<std::vector<uint32_t>>& loops, double* length, double* cost) {
   const TreeCotree tc = tree_cotree(s, g, {root}, loops);
   if (tc.leftover.empty()) return {};
   const uint32_t e = tc.leftover.front();
@@ -35,24 +35,20 @@ std::vector<uint32_t> shortest_loop_through(const Surface& s, const EdgeGraph& g
   // Trim the common suffix (shared path near the root) down to the branching vertex.
   while (pu.size() > 1 && pv.size() > 1 && pu[pu.size() - 2] == pv[pv.size() - 2]) pu.pop_back(), pv.pop_back();
   std::vector<uint32_t> edges{e};
-  double len = g.length[e];
   for (const auto* path : {&pu, &pv})
-    for (size_t i = 0; i + 1 < path->size(); ++i) {
-      const uint32_t pe = tc.pred[(*path)[i]];
-      edges.push_back(pe);
-      len += g.length[pe];
-    }
-  *length = len;
+    for (size_t i = 0; i + 1 < path->size(); ++i) edges.push_back(tc.pred[(*path)[i]]);
+  *length = *cost = 0;
+  for (uint32_t pe : edges) *length += g.length[pe], *cost += g.cost[pe];
   return edges;
 }
 
 }  // namespace
 
-Surface remove_handles(const Surface& component, std::vector<double>* loop_lengths) {
+Surface remove_handles(const Surface& component, std::vector<double>* loop_lengths, const std::vector<char>& seams) {
   Surface cur = with_identity_parents(component);
   const long genus = topology_of(cur).genus();
   for (long k = 0; k < genus; ++k) {
-    const EdgeGraph g(cur);
+    const EdgeGraph g(cur, seams);
     const auto loops = boundary_loops(cur);
     // Candidate roots: a global tree-cotree from one vertex; the leftover edges sit on the handles, so
     // roots at their ends find each handle's own short loop. The shortest loop over a few candidates wins.
@@ -64,18 +60,18 @@ Surface remove_handles(const Surface& component, std::vector<double>* loop_lengt
         if (std::find(roots.begin(), roots.end(), v) == roots.end()) roots.push_back(v);
       if (roots.size() >= 8) break;
     }
-    // Roots in parallel; the winner is the shortest loop, ties to the earlier root (deterministic).
+    // Roots in parallel; the winner is the cheapest loop, ties to the earlier root (deterministic).
     std::vector<std::vector<uint32_t>> candidate(roots.size());
-    std::vector<double> candidate_len(roots.size(), std::numeric_limits<double>::infinity());
+    std::vector<double> candidate_len(roots.size(), 0.0), candidate_cost(roots.size(), std::numeric_limits<double>::infinity());
     tbb::parallel_for(size_t(0), roots.size(), [&](size_t i) {
-      double len = 0;
-      candidate[i] = shortest_loop_through(cur, g, roots[i], loops, &len);
-      if (!candidate[i].empty()) candidate_len[i] = len;
+      double len = 0, cost = 0;
+      candidate[i] = shortest_loop_through(cur, g, roots[i], loops, &len, &cost);
+      if (!candidate[i].empty()) candidate_len[i] = len, candidate_cost[i] = cost;
     });
     std::vector<uint32_t> best;
-    double best_len = std::numeric_limits<double>::infinity();
+    double best_len = 0, best_cost = std::numeric_limits<double>::infinity();
     for (size_t i = 0; i < roots.size(); ++i)
-      if (candidate_len[i] < best_len) best_len = candidate_len[i], best = std::move(candidate[i]);
+      if (candidate_cost[i] < best_cost) best_cost = candidate_cost[i], best_len = candidate_len[i], best = std::move(candidate[i]);
     if (best.empty()) break;
     // Cut along the loop and cap the new boundary with centroid fans (scaffolding).
     std::vector<char> on_loop(g.num_edges(), 0);

@@ -16,11 +16,20 @@ std::vector<Surface> split_components(const Surface& s);
 /// vertex_parent = kNone and new triangles face_parent = kNone: they are scaffolding, never output.
 Surface fill_holes(const Surface& s, const std::vector<std::vector<uint32_t>>& loops);
 
+/// The input's texture seams along a component's edges: per halfedge (3 * face + corner) of
+/// `component`, 1 where the two input triangles at that edge disagree on the texture coordinate of
+/// either endpoint or on the material, 0 elsewhere and on the boundary (both halfedges of an edge
+/// agree). `component` maps into `surface` (face_parent), `surface` into `input` (face_parent); corners
+/// keep their order along that chain (prepare_surface, split_components). The cut stages prefer these
+/// edges (kSeamCost in graph.hpp): a new seam there is where the eye already accepts a discontinuity.
+std::vector<char> find_texture_seams(const TexturedMesh& input, const Surface& surface, const Surface& component);
+
 /// Topological denoising (§4.1): while the component has genus g > 0, finds a short non-separating
-/// loop (the shortest tree-cotree generator loop over roots placed on the handles) and cuts along it,
-/// which leaves two new boundary loops. Returns a genus-0 surface whose face_parent / vertex_parent
-/// map into `component`; loop_lengths gets each loop's 3D length.
-Surface remove_handles(const Surface& component, std::vector<double>* loop_lengths);
+/// loop (the cheapest tree-cotree generator loop over roots placed on the handles; edges on `seams`
+/// cost kSeamCost of their length) and cuts along it, which leaves two new boundary loops. Returns a
+/// genus-0 surface whose face_parent / vertex_parent map into `component`; loop_lengths gets each
+/// loop's 3D length.
+Surface remove_handles(const Surface& component, std::vector<double>* loop_lengths, const std::vector<char>& seams = {});
 
 /// kFill: holes (and the two sides of each cut handle) are capped with the §4.1 centroid fan while the
 /// caps' total area stays within kFillBudget of the component's area, smallest first; larger ones are
@@ -34,6 +43,8 @@ struct CutStats {
   size_t holes_cut = 0;         // joined into the disk boundary
   size_t cut_edges = 0;         // interior edges cut open
   double cut_length = 0;        // their 3D length
+  double seam_length = 0;       // 3D length of the seam the output gets here (handle loops, holes joined, cut, slits)
+  double seam_on_input_seams = 0;  // the part of it on the input's texture seams
   std::string method;           // "disk", "path", "cut-graph", with "+slit" when deep parts were slit
   size_t slits = 0;             // slits from the boundary to deep vertices
   std::string fallback_reason;  // non-empty: the full method failed here and the plain cut was used
@@ -63,7 +74,10 @@ struct Denoised {
 /// `plain`: the safety net used when the full method throws on a component: no handle search, no caps,
 /// no slits, only the cut graph (the complement of a dual spanning tree, pruned), which makes a disk
 /// of any connected manifold surface.
+/// `seams`: the input's texture seams (find_texture_seams), preferred by the handle loops, the hole
+/// connections and the cut graph (not by the slits, which aim at depth); empty: none.
 Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats,
-                 const std::vector<uint32_t>& slit_to = {}, const Denoised* denoised = nullptr, bool plain = false);
+                 const std::vector<uint32_t>& slit_to = {}, const Denoised* denoised = nullptr, bool plain = false,
+                 const std::vector<char>& seams = {});
 
 }  // namespace tightex
