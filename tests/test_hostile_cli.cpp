@@ -105,6 +105,8 @@ std::vector<Case> catalogue() {
   c.push_back({"missing_material", grid_obj("mtllib m.mtl\nusemtl nope\n"), kMtl, true, "", false});
   c.push_back({"missing_texture", grid_obj(), kMtl, false, "", false});
   c.push_back({"corrupt_texture", grid_obj(), kMtl, false, "\x89PNG\r\n\x1a\n garbage garbage", false});
+  c.push_back({"mtllib_is_a_device", grid_obj("mtllib /dev/zero\nusemtl a\n"), "", false, "", false});
+  c.push_back({"texture_is_a_device", grid_obj(), "newmtl a\nmap_Kd /dev/zero\n", false, "", false});
   c.push_back({"binary_garbage", std::string("\x00\x01\x02\xff\xfe", 5) + "v 1 2", "", false, "", false});
   {
     Case k{"output_under_a_file", grid_obj(), kMtl, true, "", false};

@@ -2,6 +2,7 @@
 // refused one (checking that the message names file and line), plus the Meshroom scan from
 // ../shared/data.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -381,6 +382,21 @@ TEST_F(ObjReaderTest, MalformedMaterialLibrary) {
   const std::string opt_obj =
       write("opt.obj", std::string("mtllib opt.mtl\n") + kSquareVerts + "f 1/1 2/2 3/3\n");
   EXPECT_EQ(error_of(opt_obj), opt + ":2: unknown option '-zoom' in 'map_Kd'");
+}
+
+TEST_F(ObjReaderTest, DevicesAndPipesNamedByTheModelAreRefused) {
+  // A model naming /dev/zero as its library or texture was read until memory ran out, and a FIFO with
+  // no writer blocked forever; only regular files are read on a model's say-so.
+  ASSERT_EQ(::mkfifo((dir_ / "pipe").c_str(), 0600), 0);
+  for (const std::string special : {"/dev/zero", "pipe"}) {
+    const std::string lib = write("lib.obj", "mtllib " + special + "\n" + kSquareVerts + "f 1/1 2/2 3/3\n");
+    EXPECT_EQ(error_of(lib), lib + ":1: material library '" + special + "' is not a regular file (a device, pipe or socket)");
+    const std::string mtl = write("tex.mtl", "newmtl a\nmap_Kd " + special + "\n");
+    const std::string tex = write("tex.obj", std::string("mtllib tex.mtl\nusemtl a\n") + kSquareVerts + "f 1/1 2/2 3/3\n");
+    const std::string message = error_of(tex);
+    EXPECT_EQ(message.rfind(mtl + ":2: texture '" + special + "' of material 'a' could not be loaded: ", 0), 0u) << message;
+    EXPECT_NE(message.find("is not a regular file"), std::string::npos) << message;
+  }
 }
 
 TEST_F(ObjReaderTest, MeshroomScan) {

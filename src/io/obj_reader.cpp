@@ -105,9 +105,18 @@ void reserve_prefaulted(std::vector<T>& v, size_t n) {
   prefault_for_write(v.data(), n * sizeof(T));
 }
 
+// A file that a model names (material library, texture) must be a regular file: a device or FIFO named
+// by a hostile model would otherwise be read until memory runs out (/dev/zero) or block forever (a FIFO
+// with no writer). Only the model given on the command line may be a pipe.
+constexpr const char* kNotRegular = "is not a regular file (a device, pipe or socket)";
+
+bool is_special_file(const fs::file_status& status) {
+  return fs::exists(status) && !fs::is_regular_file(status) && !fs::is_directory(status);
+}
+
 /// Reads a whole file. On failure returns false and a reason that reads after the file name
-/// ("not found", "is a directory, not a file", ...).
-bool read_whole_file(const fs::path& path, std::string& data, std::string& reason) {
+/// ("not found", "is a directory, not a file", ...). `regular_only`: refuse devices, pipes and sockets.
+bool read_whole_file(const fs::path& path, std::string& data, std::string& reason, bool regular_only = false) {
   std::error_code ec;
   const fs::file_status status = fs::status(path, ec);
   if (status.type() == fs::file_type::not_found) {
@@ -120,6 +129,10 @@ bool read_whole_file(const fs::path& path, std::string& data, std::string& reaso
   }
   if (fs::is_directory(status)) {
     reason = "is a directory, not a file";
+    return false;
+  }
+  if (regular_only && is_special_file(status)) {
+    reason = kNotRegular;
     return false;
   }
   std::FILE* file = std::fopen(path.c_str(), "rb");
@@ -628,7 +641,7 @@ void ObjParser::parse_mtllib(std::string_view rest) {
     if (seen) continue;
     std::string data;
     std::string reason;
-    if (!read_whole_file(mtl_path, data, reason))
+    if (!read_whole_file(mtl_path, data, reason, /*regular_only=*/true))
       fail_here("material library '{}' {}", excerpt(name), reason);
     loaded_mtls_.push_back(key);
     load_mtl(mtl_path, data);
@@ -804,6 +817,9 @@ void ObjParser::assemble_materials(TexturedMesh& mesh) {
   std::vector<std::string> errors(mesh.textures.size());
   tbb::parallel_for(size_t(0), mesh.textures.size(), [&](size_t i) {
     try {
+      std::error_code ec;
+      if (is_special_file(fs::status(mesh.textures[i].path, ec)))
+        fail_input("{}: {}", mesh.textures[i].path, kNotRegular);
       mesh.textures[i].image = load_image(mesh.textures[i].path, options_.max_texture_pixels);
     } catch (const InputError& e) {
       errors[i] = e.what();
