@@ -65,8 +65,11 @@ struct EdgeGraph {
 };
 
 /// Dijkstra from a set of sources; `weight(e)` gives each edge's length. pred_edge is kNone at sources.
+/// `limit`: vertices farther than this are left unreached (dist infinite, pred_edge kNone), and the
+/// search stops there, so a small limit costs only the ball it covers.
 inline void dijkstra(const EdgeGraph& g, size_t nv, const std::vector<uint32_t>& sources,
-              const std::vector<double>& weight, std::vector<double>& dist, std::vector<uint32_t>& pred_edge) {
+              const std::vector<double>& weight, std::vector<double>& dist, std::vector<uint32_t>& pred_edge,
+              double limit = std::numeric_limits<double>::infinity()) {
   dist.assign(nv, std::numeric_limits<double>::infinity());
   pred_edge.assign(nv, kNone);
   using Item = std::pair<double, uint32_t>;
@@ -79,6 +82,14 @@ inline void dijkstra(const EdgeGraph& g, size_t nv, const std::vector<uint32_t>&
     auto [d, v] = queue.top();
     queue.pop();
     if (d > dist[v]) continue;
+    if (d > limit) {  // every vertex still queued is farther: leave them all unreached
+      for (; !queue.empty(); queue.pop()) {
+        const uint32_t w = queue.top().second;
+        if (dist[w] > limit) dist[w] = std::numeric_limits<double>::infinity(), pred_edge[w] = kNone;
+      }
+      dist[v] = std::numeric_limits<double>::infinity(), pred_edge[v] = kNone;
+      break;
+    }
     for (uint32_t i = g.offset[v]; i < g.offset[v + 1]; ++i) {
       const uint32_t w = g.neighbor[i], e = g.via_edge[i];
       const double nd = d + weight[e];
@@ -120,6 +131,13 @@ inline uint32_t double_sweep(const Surface& s, const EdgeGraph& g, uint32_t* a, 
 /// over the edges not in T (faces plus one node per boundary loop) that keeps the edges whose loops are
 /// longest. The edges left over close the generator loops: 2g of them on a genus-g surface, each loop
 /// (leftover edge + tree paths to the root) non-separating, the shortest ones first.
+/// `radius`: the tree covers only the vertices within this cost of the sources; edges beyond it join
+/// the dual tree first (in edge order) and close no loop. The loops left over are still all
+/// non-separating (a dual path joining the two sides of such a loop crosses no tree edge, and every
+/// edge of the loop is a tree edge inside the radius, or the leftover edge itself), and the shortest
+/// of them is the shortest non-separating loop through the sources whenever that one costs at most
+/// 2 x radius: every edge the unlimited search would cross before it, this one may cross too. So a
+/// search for a loop cheaper than a known one costs only the ball of half its cost.
 struct TreeCotree {
   std::vector<double> dist;
   std::vector<uint32_t> pred;      // tree edge towards the root, per vertex
@@ -132,12 +150,13 @@ struct TreeCotree {
 };
 
 inline TreeCotree tree_cotree(const Surface& s, const EdgeGraph& g, const std::vector<uint32_t>& sources,
-                              const std::vector<std::vector<uint32_t>>& loops) {
+                              const std::vector<std::vector<uint32_t>>& loops,
+                              double radius = std::numeric_limits<double>::infinity()) {
   TreeCotree tc;
   std::vector<double> weight = g.cost;
   for (uint32_t e = 0; e < g.num_edges(); ++e)
     if (s.opposite[g.edge_halfedge[e]] == kNone) weight[e] = 0;
-  dijkstra(g, s.num_vertices(), sources, weight, tc.dist, tc.pred);
+  dijkstra(g, s.num_vertices(), sources, weight, tc.dist, tc.pred, radius);
   std::vector<char> in_tree(g.num_edges(), 0);
   for (uint32_t v = 0; v < s.num_vertices(); ++v)
     if (tc.pred[v] != kNone) in_tree[tc.pred[v]] = 1;
@@ -145,20 +164,28 @@ inline TreeCotree tree_cotree(const Surface& s, const EdgeGraph& g, const std::v
   std::vector<uint32_t> hole_node(s.opposite.size(), kNone);
   for (size_t i = 0; i < loops.size(); ++i)
     for (uint32_t h : loops[i]) hole_node[h] = nf + uint32_t(i);
-  // Longest loop first; ties by edge id, so the result does not depend on the sort's stability.
-  std::vector<std::pair<double, uint32_t>> order;
-  for (uint32_t e = 0; e < g.num_edges(); ++e)
-    if (!in_tree[e]) order.push_back({-tc.loop_length(s, g, e), e});
-  std::sort(order.begin(), order.end());
   detail::UnionFind dual(nf + loops.size());
-  for (auto [neg_len, e] : order) {
+  auto join = [&](uint32_t e) {  // false: its two sides are joined already
     const uint32_t h = g.edge_halfedge[e], o = s.opposite[h];
-    const uint32_t a = h / 3, b = o == kNone ? hole_node[h] : o / 3;
-    if (dual.find(a) != dual.find(b))
-      dual.unite(a, b);
-    else if (o != kNone)
-      tc.leftover.push_back(e);
+    const uint32_t a = dual.find(h / 3), b = dual.find(o == kNone ? hole_node[h] : o / 3);
+    if (a == b) return false;
+    dual.unite(a, b);
+    return true;
+  };
+  // Longest loop first (edges beyond the radius: infinitely long); ties by edge id, so the result does
+  // not depend on the sort's stability.
+  std::vector<std::pair<double, uint32_t>> order;
+  for (uint32_t e = 0; e < g.num_edges(); ++e) {
+    if (in_tree[e]) continue;
+    const double len = tc.loop_length(s, g, e);
+    if (std::isfinite(len))
+      order.push_back({-len, e});
+    else
+      join(e);
   }
+  std::sort(order.begin(), order.end());
+  for (auto [neg_len, e] : order)
+    if (!join(e) && s.opposite[g.edge_halfedge[e]] != kNone) tc.leftover.push_back(e);
   std::reverse(tc.leftover.begin(), tc.leftover.end());
   return tc;
 }

@@ -26,9 +26,10 @@ std::vector<char> find_texture_seams(const TexturedMesh& input, const Surface& s
 
 /// Topological denoising (§4.1): while the component has genus g > 0, finds a short non-separating
 /// loop (the cheapest tree-cotree generator loop over roots placed on the handles; edges on `seams`
-/// cost kSeamCost of their length) and cuts along it, which leaves two new boundary loops. Returns a
-/// genus-0 surface whose face_parent / vertex_parent map into `component`; loop_lengths gets each
-/// loop's 3D length.
+/// cost kSeamCost of their length), tightens it (roots along the loop and in a band beside it, while
+/// the loop gets cheaper) and cuts along it, which leaves two new boundary loops. Returns a genus-0
+/// surface whose face_parent / vertex_parent map into `component`; loop_lengths gets each loop's 3D
+/// length.
 Surface remove_handles(const Surface& component, std::vector<double>* loop_lengths, const std::vector<char>& seams = {});
 
 /// kFill: holes (and the two sides of each cut handle) are capped with the §4.1 centroid fan while the
