@@ -20,8 +20,13 @@ enum class Layout { kAtlas, kPerComponent };
 /// How texels are spread over the surface (issue 4). kHarmonic: the paper's map exactly (cotangent
 /// harmonic, boundary by arc length). kArea: the same number of texels per unit of 3D area everywhere.
 /// kTexel: the input's own texel density per triangle, so what the scanner captured in detail keeps its
-/// detail. All three are fold-free and fill each component's rectangle.
-enum class MapKind { kHarmonic, kArea, kTexel };
+/// detail. kDetail: texels where the texture has detail — density proportional to the input texture's
+/// colour gradient per unit of 3D length (which minimises the expected reconstruction error for the
+/// budget), capped at the input's own density (no texel beyond what the input holds), at least an
+/// eighth of the mean. All four are fold-free and fill each component's rectangle; all but kHarmonic
+/// then lower a symmetric Dirichlet energy with the boundary sliding along the rectangle's sides
+/// (kArea only as far as its density spread holds).
+enum class MapKind { kHarmonic, kArea, kTexel, kDetail };
 
 struct Options {
   int size = 4096;                 // atlas: the texture's side; per-component: the largest texture's side

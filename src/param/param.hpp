@@ -27,6 +27,16 @@ struct SquareMapOptions {
   /// map, --size 1024: 0 steps 40.98 dB, 2: 41.37, 4: 41.36, 8 (converged): 41.35; each step costs one
   /// factorisation of twice the interior's size.
   int refine_iterations = 4;
+  /// true: the refinement is undone if it widens the density error by more than 0.1 (log2) — a map
+  /// whose promise is its density (area). false: it runs to convergence (up to refine_iterations),
+  /// trading density for shear wherever that lowers the energy.
+  bool refine_keeps_density = true;
+  /// The boundary's vertices (all but the four corners and chord bumps) slide along their side of the
+  /// square: between reweighting steps each boundary edge grows or shrinks with the square root of its
+  /// face's target/area, and the refinement moves them along the side. Measured (surface PSNR at the
+  /// input's budget, area map then 30 refinement steps, fixed / sliding): meshroom_esp32cam 41.50 /
+  /// 41.95, danish_dancinggirl area map density P5 -1.02 / -0.85.
+  bool slide_boundary = true;
   /// Rounds of target correction after that (each: the targets scaled by target/area, 2 more steps).
   /// Off by default: measured on ../shared/data it narrowed no model's density error once the best
   /// reweighting iterate is kept, and cost meshroom_esp32cam 0.2 dB (41.17 vs 41.36 at --size 1024).
@@ -85,8 +95,8 @@ struct SlimStats {
 };
 
 /// Lowers the symmetric Dirichlet energy |J|^2 + |J^-1|^2 of every face, measured against its target
-/// shape (the 3D triangle scaled to area target[f]), weighted by target area; vertices with fixed[v]
-/// stay. uv must be fold-free; it stays fold-free (the line search stops short of any triangle's
+/// shape (the 3D triangle scaled to area target[f]), weighted by target area; fixed[v] bit 0 holds the
+/// vertex's u, bit 1 its v (3: the vertex stays; 1 or 2: it slides along a side). uv must be fold-free; it stays fold-free (the line search stops short of any triangle's
 /// collapse). SLIM (Rabinovich et al. 2017): a reweighted proxy solved with CHOLMOD, pattern analysed once.
 SlimStats refine_map(const Surface& mesh, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,
                      std::vector<Vec2>& uv);
