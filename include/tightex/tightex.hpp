@@ -11,6 +11,7 @@
 #include "core/mesh.hpp"
 #include "io/image_io.hpp"
 #include "layout/layout.hpp"
+#include "param/param.hpp"
 #include "topology/topology.hpp"
 
 namespace tightex {
@@ -39,6 +40,9 @@ struct Options {
   /// Angle/area trade-off of the area and texel maps: 0 = the harmonic map's density (least angle
   /// distortion), 1 = the target density exactly; between, the geometric blend of the two.
   double balance = 1.0;
+  /// Which boundary vertices become the square's corners. Default kEqualArcs: better surface PSNR than
+  /// kTurningAngle on 7 of the 9 models of ../shared/data with the area map (docs/corners.md).
+  CornerRule corners = CornerRule::kEqualArcs;
   /// Least-squares fit of the baked texels to the input under bilinear read-back (BakeOptions::fit).
   bool fit = true;
   /// Compute the METRICS.md figures into report["metrics"]. A caller that writes the result can turn

@@ -64,7 +64,7 @@ int run_measure(int argc, char** argv) {
 int run_main(int argc, char** argv) {
   CLI::App app{"tightex: one compact texture per surface, from a scan's fragmented UV atlas\n"
                "(global parameterization by a harmonic map onto a square; Chen et al., arXiv 2406.04115)"};
-  std::string input, outdir, report_path, preview_path, layout = "atlas", format = "png", holes = "fill", map = "detail";
+  std::string input, outdir, report_path, preview_path, layout = "atlas", format = "png", holes = "fill", map = "detail", corners = "arcs";
   int size = 0;
   double texels = 0, balance = 1.0;
   bool quiet = false, verbose = false, force = false, no_fit = false;
@@ -83,6 +83,9 @@ int run_main(int argc, char** argv) {
   app.add_option("--balance", balance, "area/texel/detail maps: 1 = target density exactly, 0 = the harmonic map's density (least angle "
                                        "distortion); between: a geometric blend")
       ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--corners", corners, "which boundary points become the square's corners: arcs (default): four arcs of equal "
+                                       "length; turning: where the boundary turns most (docs/corners.md)")
+      ->check(CLI::IsMember({"arcs", "turning"}));
   app.add_flag("--no-fit", no_fit, "bake each texel by sampling only, without the least-squares fit to the input");
   app.add_flag("--force", force, "allow --size above 16384");
   app.add_option("--max-memory", max_memory_mib, "refuse inputs whose estimated memory exceeds this many MiB (default: 90% of RAM)")
@@ -146,6 +149,7 @@ int run_main(int argc, char** argv) {
   opt.holes = holes == "fill" ? HoleMode::kFill : HoleMode::kCut;
   opt.map = map == "harmonic" ? MapKind::kHarmonic : map == "area" ? MapKind::kArea : map == "texel" ? MapKind::kTexel : MapKind::kDetail;
   opt.balance = balance;
+  opt.corners = corners == "turning" ? CornerRule::kTurningAngle : CornerRule::kEqualArcs;
   opt.fit = !no_fit;
   opt.measure = false;
   if (show_progress)

@@ -285,43 +285,7 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
   std::vector<double> arc(nb + 1, 0.0);
   for (size_t i = 0; i < nb; ++i) arc[i + 1] = arc[i] + edge_scale[i] * (m.positions[bnd[(i + 1) % nb]] - m.positions[bnd[i]]).norm();
   const double total = arc[nb];
-  // Ears: boundary vertices with one triangle.
-  std::vector<uint32_t> face_count(m.num_vertices(), 0);
-  for (const Tri& f : m.triangles)
-    for (uint32_t v : f) face_count[v]++;
-  std::vector<size_t> ears;
-  for (size_t i = 0; i < nb; ++i)
-    if (face_count[bnd[i]] == 1) ears.push_back(i);
-
-  std::array<size_t, 4> corner{};
-  if (nb == 3) {
-    corner = {0, 1, 2, 2};  // a lone triangle: three corners, the fourth side has no edge
-  } else {
-    const size_t start = ears.empty() ? 0 : ears[0];
-    corner[0] = start;
-    for (int k = 1; k < 4; ++k) {
-      const double target = std::fmod(arc[start] + total * k / 4.0, total);
-      auto dist_to = [&](size_t i) {
-        const double d = std::abs(arc[i] - target);
-        return std::min(d, total - d);
-      };
-      size_t best = 0;
-      for (size_t i = 0; i < nb; ++i)
-        if (dist_to(i) < dist_to(best)) best = i;
-      for (size_t e : ears)
-        if (dist_to(e) < 0.05 * total && dist_to(e) < dist_to(best) + 0.05 * total) {
-          best = e;
-          break;
-        }
-      corner[k] = best;
-    }
-    // Corners must be distinct and in boundary order; fall back to index quarters otherwise.
-    auto rel = [&](size_t i) { return (i + nb - start) % nb; };
-    bool ok = true;
-    for (int k = 1; k < 4; ++k) ok = ok && rel(corner[k]) > rel(corner[k - 1]);
-    if (!ok)
-      for (int k = 1; k < 4; ++k) corner[k] = (start + k * nb / 4) % nb;
-  }
+  const std::array<size_t, 4> corner = choose_corners(disk, arc, options.corners);
   for (int k = 0; k < 4; ++k) st.corners[k] = bnd[corner[k]];
 
   // Alg. 1: each side by arc length between its corners.

@@ -1,5 +1,6 @@
 // The map of a disk onto the unit square (paper §4.2): Alg. 1 boundary, Alg. 2 harmonic map.
 #pragma once
+#include <array>
 #include <string>
 #include <vector>
 
@@ -7,11 +8,18 @@
 
 namespace tightex {
 
+/// Which boundary vertices go to the square's four corners (choose_corners; measured in docs/corners.md).
+enum class CornerRule {
+  kEqualArcs,     // four arcs of (nearly) equal boundary length
+  kTurningAngle,  // where the boundary turns most, each arc at least 10% of the length
+};
+
 struct SquareMapOptions {
   // Size of the texel rectangle the square will be stretched to. Used only to size the boundary bumps
   // (see map_to_square) in texels; the map itself is computed on the unit square.
   int rect_width = 1024, rect_height = 1024;
   double bump_texels = 0.3;  // < 0.5: a bump stays inside the chart's own outermost texels
+  CornerRule corners = CornerRule::kEqualArcs;
 
   // Beyond the paper (issue 4): the texel density. Empty: the paper's harmonic map. Otherwise a target
   // UV area for every disk face (any common scale; > 0), e.g. its 3D area (uniform density) or the
@@ -64,11 +72,19 @@ struct SquareMapStats {
   std::string refine_stopped;
 };
 
+/// The four boundary positions (indices into disk.boundary, in boundary order, distinct unless the
+/// boundary has 3 vertices: {0, 1, 2, 2}) that map_to_square sends to (0,0), (1,0), (1,1), (0,1).
+/// `arc`: cumulative boundary length, arc[i] at boundary vertex i, arc[nb] the total (map_to_square
+/// passes density-scaled lengths when it has a density target).
+/// kEqualArcs: the vertices nearest the quarters of the length, from the first "ear" (a boundary vertex
+/// with a single triangle, which must sit on a corner or its triangle collapses) or vertex 0, snapped to
+/// an ear within 5% of the length. kTurningAngle: the vertices where the boundary turns most (pi minus
+/// the interior angle sum, integrated over +-2.5% of the length with tent weights, so zigzags cancel),
+/// ears first, greedily, skipping any closer than 10% of the length to one already chosen.
+std::array<size_t, 4> choose_corners(const Disk& disk, const std::vector<double>& arc, CornerRule rule);
+
 /// Maps a topological disk onto the unit square, boundary counter-clockwise.
-/// Corners: the four boundary vertices that split the boundary into four arcs of (nearly) equal length,
-/// snapped to an "ear" (a boundary vertex with a single triangle, which must sit on a corner or its
-/// triangle collapses) when one lies within 5% of the boundary length. Boundary: arc length between
-/// corners (Alg. 1). Interior: harmonic with cotangent weights, boundary rows eliminated, one CHOLMOD
+/// Corners: choose_corners with options.corners. Boundary: arc length between corners (Alg. 1). Interior: harmonic with cotangent weights, boundary rows eliminated, one CHOLMOD
 /// factorisation for u and v (Alg. 2).
 /// Fold-free guarantee: if any triangle folds (cotangent weights go negative on obtuse triangles), the
 /// map is recomputed with the negative weights clamped positive, which gives a bijection onto a convex

@@ -295,6 +295,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
     SquareMapOptions mo;
     mo.rect_width = rects[c].w;
     mo.rect_height = rects[c].h;
+    mo.corners = options.corners;
     try {
       std::vector<uint32_t> slit_to;
       std::optional<Denoised> denoised;  // the handles are searched once, whatever the rounds
@@ -331,7 +332,8 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
                   {"materials", input.materials.size()}, {"textures", input.textures.size()}};
   rep["options"] = {{"size", options.size}, {"layout", options.layout == Layout::kAtlas ? "atlas" : "per-component"},
                     {"holes", options.holes == HoleMode::kFill ? "fill" : "cut"}, {"map", map_name(options.map)},
-                    {"balance", options.balance}, {"fit", options.fit}};
+                    {"balance", options.balance}, {"fit", options.fit},
+                    {"corners", options.corners == CornerRule::kTurningAngle ? "turning" : "arcs"}};
   rep["preparation"] = {{"input_vertices", rs.input_vertices},       {"welded_vertices", rs.welded_vertices},
                         {"zero_area_dropped", rs.zero_area_triangles}, {"duplicates_dropped", rs.duplicate_triangles},
                         {"non_manifold_edges_sliced", rs.non_manifold_edges}, {"inconsistent_edges_sliced", rs.inconsistent_edges},
