@@ -9,8 +9,8 @@ bin=./build/tightex
 data=../shared/data
 [ -d "$data" ] || { echo "no $data"; exit 0; }
 out=$(mktemp -d)
-printf "| model | triangles | size | in util | out util | charts | PSNR dB | density P5/P50/P95 | detail loss | seam in->out | flipped | wall s (median of %s) | peak MiB |\n" "$runs"
-echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+printf "| model | triangles | size | in util | out util | charts | PSNR dB | density P5/P50/P95 | angle mean/P95 | detail loss | seam in->out | flipped | wall s (median of %s) | peak MiB |\n" "$runs"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 for dir in "$data"/*/; do
   obj=$(ls "$dir"*.obj | head -1); name=$(basename "$dir")
   times=()
@@ -23,8 +23,8 @@ import json, sys, statistics
 r = json.load(open(sys.argv[1])); m = r["metrics"]
 t = [tuple(map(float, x.split())) for x in sys.argv[2:]]
 wall = statistics.median(x[0] for x in t); mem = max(x[1] for x in t) / 1024
-d = m["density_spread"]
-print(f"| {r['input']['file'].split('/')[-2]} | {r['input']['triangles']} | {r['options']['size']} | {m['input']['utilization']*100:.1f}% | {m['output']['utilization']*100:.2f}% | {m['charts']} | {m['surface_psnr_db']:.1f} | {d['p5']:.1f} / {d['p50']:.1f} / {d['p95']:.1f} | {m['detail_loss_area']*100:.1f}% | {m['seam_length']['input']:.1f} -> {m['seam_length']['output']:.1f} | {m['flipped']} | {wall:.2f} | {mem:.0f} |")
+d = m["density_spread"]; a = m["angle_distortion"]
+print(f"| {r['input']['file'].split('/')[-2]} | {r['input']['triangles']} | {r['options']['size']} | {m['input']['utilization']*100:.1f}% | {m['output']['utilization']*100:.2f}% | {m['charts']} | {m['surface_psnr_db']:.1f} | {d['p5']:.1f} / {d['p50']:.1f} / {d['p95']:.1f} | {a['mean']:.2f} / {a['p95']:.2f} | {m['detail_loss_area']*100:.1f}% | {m['seam_length']['input']:.1f} -> {m['seam_length']['output']:.1f} | {m['flipped']} | {wall:.2f} | {mem:.0f} |")
 PY
 done
 rm -rf "$out"
