@@ -105,7 +105,9 @@ ModelFigures measure_texture_space(const TexturedMesh& mesh) {
     if (tex >= 0) tris[size_t(tex)].push_back(t);
   }
   for (size_t i = 0; i < mesh.textures.size(); ++i) {
-    const auto [W, H] = texture_size(mesh, int(i));
+    // Not a structured binding: clang 14 (the fuzz build) cannot capture one in the lambda below.
+    const std::pair<int, int> size = texture_size(mesh, int(i));
+    const int W = size.first, H = size.second;
     if (W <= 0 || H <= 0) continue;
     std::vector<uint8_t, LargeBufferAllocator<uint8_t>> cov(size_t(W) * size_t(H), 0);
     for (size_t t : tris[i])
