@@ -279,6 +279,8 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
       } catch (const InternalError& last) {
         // The last resort: the component keeps its input texture coordinates and material(s), so none
         // of its triangles is lost (bake_plan). The report and the CLI say so.
+        cut_stats[c] = CutStats{};
+        cut_stats[c].before = topology_of(components[c]);
         cut_stats[c].fallback_reason = e.what();
         kept[c] = fmt::format("{}; then {}", e.what(), last.what());
         disks[c] = Disk{};
