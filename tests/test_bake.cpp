@@ -117,6 +117,30 @@ TEST(Bake, LeastSquaresFitBeatsPointSamplingUnderBilinearReadBack) {
   EXPECT_GT(fitted, plain + 1.0) << "plain " << plain << " dB, fitted " << fitted << " dB";
 }
 
+TEST(Bake, FitDoesNotDependOnTheModelsUnits) {
+  // The fit weighs samples by 3D area per texel. A model in huge units gave weights beyond float's range,
+  // an infinite weight and a NaN texel (found by fuzz_pipeline under UBSan at coordinates of 1e15; the
+  // input is fuzz/corpus/fuzz_pipeline/regress-bake-huge-weights); in tiny units the weights fell to 0
+  // and the fit did nothing. Scaled by a power of two, the areas must give the same texels bit for bit.
+  Image in(96, 96);
+  for (int y = 0; y < 96; ++y)
+    for (int x = 0; x < 96; ++x) in.at(x, y) = {uint8_t((x * 37 + y * 11) % 256), uint8_t((x * 5) % 256), uint8_t(y * 2), 255};
+  const TexturedMesh m = textured(in);
+  const std::vector<Rect> rects = {Rect{0, 0, 0, 128, 128}};
+  auto bake = [&](double area_scale) {
+    auto tris = square(128, 128, 0.5, 0.9);
+    for (BakeTriangle& t : tris) t.area3 *= area_scale;
+    std::vector<Image> out = {Image(128, 128)};
+    BakeStats st;
+    bake_texture(m, tris, rects, out, &st, {});
+    EXPECT_GT(st.tiles_fitted, 0u);
+    return out[0];
+  };
+  const Image ref = bake(1.0);
+  EXPECT_TRUE(bake(std::ldexp(1.0, 150)).pixels == ref.pixels);
+  EXPECT_TRUE(bake(std::ldexp(1.0, -150)).pixels == ref.pixels);
+}
+
 TEST(Bake, FitIsDeterministicAndLeavesMagnifiedTilesAlone) {
   Image in(16, 16);
   for (int y = 0; y < 16; ++y)

@@ -105,9 +105,20 @@ void fit_tile(const Image& base, Image& out, const std::vector<BakeTriangle>& tr
   std::vector<float> weight(4 * n, 0.0f);
   double weight_sum = 0;
   size_t samples = 0;
+  // The weights (3D area per texel) are brought to [1, 2) for the tile's largest by a power of two: a
+  // model in large units (a scan in nanometres, or 1e13 m) has weights beyond float's range, and an
+  // infinite weight made the solve NaN (found by fuzz_pipeline under UBSan). The fit depends only on
+  // ratios of weights, and scaling by a power of two is exact, so every other model bakes bit for bit
+  // as before.
+  double max_weight = 0;
+  for (uint32_t t : tris)
+    if (samplers[t].valid && samplers[t].weight > 0) max_weight = std::max(max_weight, samplers[t].weight);
+  if (!(max_weight > 0)) return;
+  const double weight_scale = std::ldexp(1.0, -std::ilogb(max_weight));
   for (uint32_t t : tris) {
     const TriangleSampler& smp = samplers[t];
     if (!smp.valid || !(smp.weight > 0)) continue;
+    const double smp_weight = smp.weight * weight_scale;
     const BakeTriangle& tri = triangles[t];
     for (int k = 0; k < 4; ++k) {
       const Vec2 off(kOff[k][0], kOff[k][1]);
@@ -117,8 +128,8 @@ void fit_tile(const Image& base, Image& out, const std::vector<BakeTriangle>& tr
                       if (weight[i] > 0) return;
                       const auto c = smp.colour(double(x) + 0.5 + off.x(), double(y) + 0.5 + off.y(), 0.5, max_samples);
                       target[i] = {c[0], c[1], c[2]};
-                      weight[i] = float(smp.weight);
-                      weight_sum += smp.weight;
+                      weight[i] = float(smp_weight);
+                      weight_sum += smp_weight;
                       ++samples;
                     });
     }
