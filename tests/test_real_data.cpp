@@ -62,13 +62,8 @@ TEST_P(RealData, CliOutputIsOneFoldFreeChartPerComponentFillingTheTexture) {
   EXPECT_EQ(side, size_for_texels(std::ceil(m.input.used_texels / 4.0) * 4.0));
   EXPECT_EQ(side % 4, 0);
   EXPECT_GE(double(m.output.texels), m.input.used_texels);
-  // The default (area) map spreads texels evenly: 90% of the surface within a factor 2 of the mean
-  // density on every model but the dancing girl, whose harmonic start is crowded to 2^-14 and ends at
-  // P5 = -1.41 (issue 4's note); the harmonic map spreads -14.2..1.7 there.
-  EXPECT_GE(m.density_spread.p5, -1.5);
-  EXPECT_LE(m.density_spread.p95, 1.0);
-  // Colour fidelity at that budget: measured 41.0 (meshroom) to 56.0 dB (bust).
-  EXPECT_GT(m.surface_psnr, 35.0);
+  // Colour fidelity at that budget (default detail map): measured 42.1 (fuze) to 57.6 dB (bust).
+  EXPECT_GT(m.surface_psnr, 38.0);
   // Colours sit where they were: the real result beats the same result with its texture mirrored by
   // a wide margin.
   TexturedMesh mirrored = result;
@@ -81,6 +76,29 @@ TEST_P(RealData, CliOutputIsOneFoldFreeChartPerComponentFillingTheTexture) {
   fs::remove_all(out);
 }
 
+/// Runs the CLI with `options` and returns its report (the METRICS.md figures it measured).
+nlohmann::json run_cli(const std::string& input, const std::string& options, const std::string& tag) {
+  const fs::path out = fs::temp_directory_path() / ("tightex_" + tag + "_" + fs::path(input).parent_path().filename().string() + "_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  const std::string cmd = std::string(TIGHTEX_CLI) + " '" + input + "' -o '" + out.string() + "' --quiet " + options;
+  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  std::ifstream report_file(out / "report.json");
+  nlohmann::json report = report_file ? nlohmann::json::parse(report_file) : nlohmann::json::object();
+  fs::remove_all(out);
+  return report;
+}
+
+// Issue 4: --map area spreads the texels evenly, 90% of the surface within a factor 2 of the mean
+// density (the spread does not depend on the size; a small one keeps the bake cheap).
+TEST_P(RealData, AreaMapKeepsNinetyPercentWithinAFactorTwoOfTheMeanDensity) {
+  const nlohmann::json r = run_cli(GetParam(), "--map area --size 256 --no-fit", "area");
+  ASSERT_TRUE(r.contains("metrics"));
+  EXPECT_EQ(r["metrics"]["flipped"].get<size_t>(), 0u);
+  EXPECT_EQ(r["metrics"]["lost_triangles"].get<size_t>(), 0u);
+  EXPECT_GE(r["metrics"]["density_spread"]["p5"].get<double>(), -1.0);
+  EXPECT_LE(r["metrics"]["density_spread"]["p95"].get<double>(), 1.0);
+}
+
 INSTANTIATE_TEST_SUITE_P(SharedData, RealData, ::testing::ValuesIn(data_models()),
                          [](const ::testing::TestParamInfo<std::string>& info) {
                            std::string n = fs::path(info.param).parent_path().filename().string();
@@ -89,6 +107,20 @@ INSTANTIATE_TEST_SUITE_P(SharedData, RealData, ::testing::ValuesIn(data_models()
                            return n;
                          });
 GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(RealData);
+
+// Issue 4 on the Meshroom scan at --size 1024: the default map reaches texture-defrag's 41.3 dB (in
+// 40% of its texels) and beats the paper's harmonic map by at least 3 dB (measured 42.4 vs 35.7).
+TEST(RealDataMaps, DefaultMapBeatsHarmonicAndTextureDefragOnMeshroomAt1024) {
+  const fs::path input = fs::path(TIGHTEX_SHARED_DATA) / "meshroom_esp32cam" / "texturedMesh.obj";
+  if (!fs::exists(input)) GTEST_SKIP() << "../shared/data/meshroom_esp32cam not present";
+  const nlohmann::json def = run_cli(input.string(), "--size 1024", "default"), harm = run_cli(input.string(), "--size 1024 --map harmonic", "harmonic");
+  ASSERT_TRUE(def.contains("metrics") && harm.contains("metrics"));
+  const double d = def["metrics"]["surface_psnr_db"].get<double>(), h = harm["metrics"]["surface_psnr_db"].get<double>();
+  EXPECT_GE(d, 41.3);
+  EXPECT_GE(d, h + 3.0);
+  EXPECT_EQ(def["metrics"]["flipped"].get<size_t>(), 0u);
+  EXPECT_EQ(harm["metrics"]["flipped"].get<size_t>(), 0u);
+}
 
 TEST(RealDataPresence, SkipsCleanlyWithoutSharedData) {
   if (data_models().empty()) GTEST_SKIP() << "../shared/data not present";

@@ -64,7 +64,7 @@ int run_measure(int argc, char** argv) {
 int run_main(int argc, char** argv) {
   CLI::App app{"tightex: one compact texture per surface, from a scan's fragmented UV atlas\n"
                "(global parameterization by a harmonic map onto a square; Chen et al., arXiv 2406.04115)"};
-  std::string input, outdir, report_path, preview_path, layout = "atlas", format = "png", holes = "fill", map = "area";
+  std::string input, outdir, report_path, preview_path, layout = "atlas", format = "png", holes = "fill", map = "detail", corners = "arcs";
   int size = 0;
   double texels = 0, balance = 1.0;
   bool quiet = false, verbose = false, force = false, no_fit = false;
@@ -79,10 +79,13 @@ int run_main(int argc, char** argv) {
       ->check(CLI::PositiveNumber)->excludes(size_opt);
   app.add_option("--map", map, "area (default): the same texels per unit of 3D area everywhere; texel: the input's own "
                                "texel density per triangle; harmonic: the paper's map exactly")
-      ->check(CLI::IsMember({"texel", "area", "harmonic"}));
-  app.add_option("--balance", balance, "area/texel maps: 1 = target density exactly, 0 = the harmonic map's density (least angle "
+      ->check(CLI::IsMember({"detail", "texel", "area", "harmonic"}));
+  app.add_option("--balance", balance, "area/texel/detail maps: 1 = target density exactly, 0 = the harmonic map's density (least angle "
                                        "distortion); between: a geometric blend")
       ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--corners", corners, "which boundary points become the square's corners: arcs (default): four arcs of equal "
+                                       "length; turning: where the boundary turns most (docs/corners.md)")
+      ->check(CLI::IsMember({"arcs", "turning"}));
   app.add_flag("--no-fit", no_fit, "bake each texel by sampling only, without the least-squares fit to the input");
   app.add_flag("--force", force, "allow --size above 16384");
   app.add_option("--max-memory", max_memory_mib, "refuse inputs whose estimated memory exceeds this many MiB (default: 90% of RAM)")
@@ -144,8 +147,9 @@ int run_main(int argc, char** argv) {
   opt.size = size;
   opt.layout = layout == "atlas" ? Layout::kAtlas : Layout::kPerComponent;
   opt.holes = holes == "fill" ? HoleMode::kFill : HoleMode::kCut;
-  opt.map = map == "harmonic" ? MapKind::kHarmonic : map == "area" ? MapKind::kArea : MapKind::kTexel;
+  opt.map = map == "harmonic" ? MapKind::kHarmonic : map == "area" ? MapKind::kArea : map == "texel" ? MapKind::kTexel : MapKind::kDetail;
   opt.balance = balance;
+  opt.corners = corners == "turning" ? CornerRule::kTurningAngle : CornerRule::kEqualArcs;
   opt.fit = !no_fit;
   opt.measure = false;
   if (show_progress)
@@ -154,22 +158,33 @@ int run_main(int argc, char** argv) {
   Plan plan;
   double textures_s = 0;
   std::exception_ptr texture_error, plan_error;
-  tbb::parallel_invoke(
-      [&] {
-        try {
-          mesh = read_obj(input);
-          textures_s = seconds_since(t0);
-        } catch (...) {
-          texture_error = std::current_exception();
-        }
-      },
-      [&] {
-        try {
-          plan = plan_charts(geometry, opt);
-        } catch (...) {
-          plan_error = std::current_exception();
-        }
-      });
+  auto read_textures = [&] {
+    try {
+      mesh = read_obj(input);
+      textures_s = seconds_since(t0);
+    } catch (...) {
+      texture_error = std::current_exception();
+    }
+  };
+  if (opt.map == MapKind::kDetail) {
+    // The detail map reads the texture's pixels to place its texels: textures first.
+    read_textures();
+    if (!texture_error) {
+      try {
+        plan = plan_charts(mesh, opt);
+      } catch (...) {
+        plan_error = std::current_exception();
+      }
+    }
+  } else {
+    tbb::parallel_invoke(read_textures, [&] {
+      try {
+        plan = plan_charts(geometry, opt);
+      } catch (...) {
+        plan_error = std::current_exception();
+      }
+    });
+  }
   if (texture_error) std::rethrow_exception(texture_error);  // a bad texture is the user's first problem
   if (plan_error) std::rethrow_exception(plan_error);
   if (layout != "atlas") {

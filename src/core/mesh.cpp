@@ -1,6 +1,7 @@
 #include "core/mesh.hpp"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 
 namespace tightex {
@@ -28,6 +29,37 @@ double input_texel_area(const TexturedMesh& mesh, size_t t) {
   const auto [w, h] = texture_size(mesh, mesh.materials[size_t(m)].texture);
   const double a = std::abs(signed_area(mesh.sampled_uv(t, 0), mesh.sampled_uv(t, 1), mesh.sampled_uv(t, 2)));
   return a * double(w) * double(h);
+}
+
+double input_detail(const TexturedMesh& mesh, size_t t) {
+  const int32_t m = mesh.face_material[t];
+  if (m < 0) return 0.0;
+  const int ti = mesh.materials[size_t(m)].texture;
+  if (ti < 0 || mesh.textures[size_t(ti)].image.empty()) return 0.0;
+  const Image& img = mesh.textures[size_t(ti)].image;
+  const Vec2 a = mesh.sampled_uv(t, 0), b = mesh.sampled_uv(t, 1), c = mesh.sampled_uv(t, 2);
+  const double texels = std::abs(signed_area(a, b, c)) * double(img.width) * double(img.height);
+  const double a3 = triangle_area(mesh.positions[mesh.triangles[t][0]], mesh.positions[mesh.triangles[t][1]], mesh.positions[mesh.triangles[t][2]]);
+  if (!(a3 > 0) || !(texels > 0)) return 0.0;
+  // Points: a barycentric grid of n(n+1)/2 points, n from 1 (tiny) to 5 (16+ texels).
+  const int n = std::clamp(int(std::sqrt(texels)), 1, 5);
+  const double du = 1.0 / img.width, dv = 1.0 / img.height;
+  double sum = 0;
+  int count = 0;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; i + j < n; ++j) {
+      const double l1 = (i + 1.0 / 3.0) / n, l2 = (j + 1.0 / 3.0) / n, l0 = 1.0 - l1 - l2;
+      const Vec2 p = l0 * a + l1 * b + l2 * c;
+      const auto xp = sample_bilinear(img, p.x() + du, p.y()), xm = sample_bilinear(img, p.x() - du, p.y());
+      const auto yp = sample_bilinear(img, p.x(), p.y() + dv), ym = sample_bilinear(img, p.x(), p.y() - dv);
+      for (int ch = 0; ch < 3; ++ch) {
+        const double gx = 0.5 * (xp[size_t(ch)] - xm[size_t(ch)]), gy = 0.5 * (yp[size_t(ch)] - ym[size_t(ch)]);
+        sum += gx * gx + gy * gy;
+      }
+      ++count;
+    }
+  // Levels per texel -> levels per unit length: times the texels per unit length.
+  return std::sqrt(sum / count * texels / a3);
 }
 
 double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c) { return 0.5 * (b - a).cross(c - a).norm(); }

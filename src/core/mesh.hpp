@@ -60,6 +60,15 @@ std::pair<int, int> texture_size(const TexturedMesh& mesh, int i);
 /// texture or when the texture's size is unknown.
 double input_texel_area(const TexturedMesh& mesh, size_t t);
 
+/// The texture detail of input triangle t: the root mean square colour gradient of its texture over
+/// the triangle, in 8-bit levels (RGB, summed over channels) per unit of 3D length, from central
+/// differences one input texel apart at up to 16 points spread over the triangle. 0 where the triangle
+/// has no loaded texture or no area. Under the usual model of reconstruction error (a region sampled
+/// with texel spacing h loses about |gradient|^2 h^2 per unit area), the texel density that minimises
+/// the error over the surface for a fixed budget is proportional to this (Sander et al. 2002,
+/// signal-specialized parametrization).
+double input_detail(const TexturedMesh& mesh, size_t t);
+
 /// 3D area of a triangle.
 double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c);
 /// Signed area of a 2D triangle (positive = counter-clockwise).

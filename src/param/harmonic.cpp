@@ -112,10 +112,55 @@ double weighted_quantile(std::vector<std::pair<double, double>>& value_weight, d
   return value_weight.empty() ? 0.0 : value_weight.back().first;
 }
 
+/// The boundary loop as placed on the square: which side each boundary vertex starts, the face of each
+/// boundary edge (bnd[i], bnd[i+1]), and the vertices that may not move (corners, bumps).
+struct SquareBoundary {
+  const std::vector<uint32_t>* bnd = nullptr;
+  std::array<size_t, 4> corner{};
+  std::vector<int> side_of;
+  std::vector<uint32_t> edge_face;
+  std::vector<char> pinned;
+};
+
+/// Slides the boundary vertices along their sides: each boundary edge's length is multiplied by the
+/// square root of target/area of its face, then each side is rescaled to its full length. The order
+/// along a side never changes, so the boundary stays convex and the next Tutte solve cannot fold.
+/// Sides holding a pinned (bumped) vertex stay as they are.
+void slide_boundary(const SquareBoundary& b, const std::vector<double>& log_ratio, std::vector<Vec2>& uv) {
+  static const Vec2 kCorner[4] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  const auto& bnd = *b.bnd;
+  const size_t nb = bnd.size();
+  if (nb < 5) return;
+  for (int k = 0; k < 4; ++k) {
+    const size_t a = b.corner[k], len = (b.corner[(k + 1) % 4] + nb - a) % nb;
+    if (len < 2) continue;
+    bool movable = true;
+    for (size_t j = 1; j < len; ++j) movable = movable && !b.pinned[(a + j) % nb];
+    if (!movable) continue;
+    std::vector<double> l(len);
+    double total = 0;
+    for (size_t j = 0; j < len; ++j) {
+      const size_t i = (a + j) % nb;
+      const double cur = (uv[bnd[(i + 1) % nb]] - uv[bnd[i]]).norm();
+      const uint32_t f = b.edge_face[i];
+      const double lr = f == kNone ? 0.0 : std::clamp(log_ratio[f], -4.0, 4.0);
+      l[j] = std::max(cur, 1e-12) * std::exp(-0.5 * lr);
+      total += l[j];
+    }
+    double acc = 0;
+    for (size_t j = 1; j < len; ++j) {
+      acc += l[j - 1];
+      const double t = acc / total;
+      uv[bnd[(a + j) % nb]] = (1 - t) * kCorner[k] + t * kCorner[(k + 1) % 4];
+    }
+  }
+}
+
 /// The density iterations of map_to_square (see param.hpp). `uv` holds a fold-free map with the
 /// boundary already placed; `w` positive weights (one per edge, on its smaller halfedge).
 void equalize_density(const Surface& m, const SquareMapOptions& options, const std::vector<char>& on_boundary,
-                      std::vector<double> w, Solver& solver, bool& analyzed, std::vector<Vec2>& uv, SquareMapStats& st) {
+                      const SquareBoundary* sides, std::vector<double> w, Solver& solver, bool& analyzed, std::vector<Vec2>& uv,
+                      SquareMapStats& st) {
   const size_t nf = m.num_faces();
   const double balance = std::clamp(options.balance, 0.0, 1.0);
   std::vector<double> log_target(nf), area(nf);
@@ -170,6 +215,7 @@ void equalize_density(const Surface& m, const SquareMapOptions& options, const s
       w[h] *= std::exp(0.5 * std::clamp(lr, -20.0, 20.0));
     }
     trial = uv;
+    if (sides) slide_boundary(*sides, log_ratio, trial);
     if (!solve_interior(m, w, on_boundary, trial, solver, analyzed)) {
       st.stopped = "solver";
       break;
@@ -220,6 +266,7 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
   if (density && options.face_target.size() != m.num_faces())
     fail_internal("map_to_square: {} face targets for {} faces", options.face_target.size(), m.num_faces());
   std::vector<double> edge_scale(nb, 1.0);
+  std::vector<uint32_t> edge_face(nb, kNone);  // the face of boundary edge (bnd[i], bnd[i+1])
   if (density) {
     std::vector<uint32_t> boundary_face_from(m.num_vertices(), kNone), boundary_face_to(m.num_vertices(), kNone);
     for (uint32_t h = 0; h < m.opposite.size(); ++h)
@@ -229,6 +276,7 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
       if (f == kNone || !(m.triangles[f][0] == bnd[(i + 1) % nb] || m.triangles[f][1] == bnd[(i + 1) % nb] || m.triangles[f][2] == bnd[(i + 1) % nb]))
         f = boundary_face_to[bnd[i]];
       if (f == kNone) continue;
+      edge_face[i] = f;
       const double a3 = triangle_area(m.positions[m.triangles[f][0]], m.positions[m.triangles[f][1]], m.positions[m.triangles[f][2]]);
       const double d = a3 > 0 ? options.face_target[f] / a3 : 0.0;
       if (d > 0 && std::isfinite(d)) edge_scale[i] = std::pow(d, 0.5 * std::clamp(options.balance, 0.0, 1.0));
@@ -237,43 +285,7 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
   std::vector<double> arc(nb + 1, 0.0);
   for (size_t i = 0; i < nb; ++i) arc[i + 1] = arc[i] + edge_scale[i] * (m.positions[bnd[(i + 1) % nb]] - m.positions[bnd[i]]).norm();
   const double total = arc[nb];
-  // Ears: boundary vertices with one triangle.
-  std::vector<uint32_t> face_count(m.num_vertices(), 0);
-  for (const Tri& f : m.triangles)
-    for (uint32_t v : f) face_count[v]++;
-  std::vector<size_t> ears;
-  for (size_t i = 0; i < nb; ++i)
-    if (face_count[bnd[i]] == 1) ears.push_back(i);
-
-  std::array<size_t, 4> corner{};
-  if (nb == 3) {
-    corner = {0, 1, 2, 2};  // a lone triangle: three corners, the fourth side has no edge
-  } else {
-    const size_t start = ears.empty() ? 0 : ears[0];
-    corner[0] = start;
-    for (int k = 1; k < 4; ++k) {
-      const double target = std::fmod(arc[start] + total * k / 4.0, total);
-      auto dist_to = [&](size_t i) {
-        const double d = std::abs(arc[i] - target);
-        return std::min(d, total - d);
-      };
-      size_t best = 0;
-      for (size_t i = 0; i < nb; ++i)
-        if (dist_to(i) < dist_to(best)) best = i;
-      for (size_t e : ears)
-        if (dist_to(e) < 0.05 * total && dist_to(e) < dist_to(best) + 0.05 * total) {
-          best = e;
-          break;
-        }
-      corner[k] = best;
-    }
-    // Corners must be distinct and in boundary order; fall back to index quarters otherwise.
-    auto rel = [&](size_t i) { return (i + nb - start) % nb; };
-    bool ok = true;
-    for (int k = 1; k < 4; ++k) ok = ok && rel(corner[k]) > rel(corner[k - 1]);
-    if (!ok)
-      for (int k = 1; k < 4; ++k) corner[k] = (start + k * nb / 4) % nb;
-  }
+  const std::array<size_t, 4> corner = choose_corners(disk, arc, options.corners);
   for (int k = 0; k < 4; ++k) st.corners[k] = bnd[corner[k]];
 
   // Alg. 1: each side by arc length between its corners.
@@ -281,6 +293,9 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
   std::vector<char> on_boundary(m.num_vertices(), 0);
   std::vector<int> side_of(nb, 0);
   std::vector<double> side_t(nb, 0.0);
+  std::vector<char> pinned(nb, 0);  // corners and bumped vertices: fixed in both coordinates
+  for (int k = 0; k < 4; ++k) pinned[corner[k]] = 1;
+  if (nb == 3) std::fill(pinned.begin(), pinned.end(), 1);
   for (int k = 0; k < 4; ++k) {
     const size_t a = corner[k], b = corner[(k + 1) % 4];
     const size_t len = (b + nb - a) % nb;
@@ -335,6 +350,7 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
           const size_t i = (corner[k] + p) % nb;
           const double s = (side_t[i] - ta) / std::max(tb - ta, 1e-300);
           uv[bnd[i]] = kCorner[k] + side_t[i] * along + h * std::sin(std::numbers::pi * std::clamp(s, 0.0, 1.0)) * outward;
+          pinned[i] = 1;
           st.bumped_vertices++;
         }
       };
@@ -375,11 +391,15 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
   }
   if (density && st.flipped == 0 && st.crowded_vertex == kNone) {
     if (positive_w.empty()) positive_w = edge_weights(m, Weights::kClamped, nullptr);
-    equalize_density(m, options, on_boundary, positive_w, solver, analyzed, uv, st);
+    SquareBoundary sb{&bnd, corner, side_of, edge_face, pinned};
+    equalize_density(m, options, on_boundary, options.slide_boundary ? &sb : nullptr, positive_w, solver, analyzed, uv, st);
     if (options.refine_iterations > 0) {
       const std::vector<Vec2> reweighted = uv;
       const double reweighted_p5 = st.spread_p5, reweighted_p95 = st.spread_p95;
-      const SlimStats ss = refine_map(m, on_boundary, st.blended_target, options.refine_iterations, uv);
+      // Fixed coordinates (bit 0: u, bit 1: v): both for corners and bumps; a side's vertex slides along it.
+      std::vector<char> fixed(m.num_vertices(), 0);
+      for (size_t i = 0; i < nb; ++i) fixed[bnd[i]] = pinned[i] || !options.slide_boundary ? 3 : (side_of[i] % 2 == 0 ? 2 : 1);
+      const SlimStats ss = refine_map(m, fixed, st.blended_target, options.refine_iterations, uv);
       st.refine_iterations = ss.iterations;
       st.refine_energy_before = ss.energy_before;
       st.refine_energy = ss.energy;
@@ -403,7 +423,7 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
       // unless it widens the density error by more than kRefineSlack.
       constexpr double kRefineSlack = 0.1;
       const double before = std::max(-reweighted_p5, reweighted_p95);
-      if (std::max(-st.spread_p5, st.spread_p95) > before + kRefineSlack) {
+      if (options.refine_keeps_density && std::max(-st.spread_p5, st.spread_p95) > before + kRefineSlack) {
         uv = reweighted;
         st.refine_stopped = "reverted";
         spread();
@@ -417,7 +437,7 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
         for (size_t f = 0; f < nf; ++f) corrected[f] *= std::exp2(-std::clamp(log_ratio[f], -4.0, 4.0));
         const std::vector<Vec2> previous = uv;
         const double previous_p5 = st.spread_p5, previous_p95 = st.spread_p95;
-        const SlimStats cs = refine_map(m, on_boundary, corrected, 2, uv);
+        const SlimStats cs = refine_map(m, fixed, corrected, 2, uv);
         st.refine_iterations += cs.iterations;
         ++st.correction_rounds;
         spread();

@@ -1,5 +1,6 @@
 // The map of a disk onto the unit square (paper §4.2): Alg. 1 boundary, Alg. 2 harmonic map.
 #pragma once
+#include <array>
 #include <string>
 #include <vector>
 
@@ -7,11 +8,18 @@
 
 namespace tightex {
 
+/// Which boundary vertices go to the square's four corners (choose_corners; measured in docs/corners.md).
+enum class CornerRule {
+  kEqualArcs,     // four arcs of (nearly) equal boundary length
+  kTurningAngle,  // where the boundary turns most, each arc at least 10% of the length
+};
+
 struct SquareMapOptions {
   // Size of the texel rectangle the square will be stretched to. Used only to size the boundary bumps
   // (see map_to_square) in texels; the map itself is computed on the unit square.
   int rect_width = 1024, rect_height = 1024;
   double bump_texels = 0.3;  // < 0.5: a bump stays inside the chart's own outermost texels
+  CornerRule corners = CornerRule::kEqualArcs;
 
   // Beyond the paper (issue 4): the texel density. Empty: the paper's harmonic map. Otherwise a target
   // UV area for every disk face (any common scale; > 0), e.g. its 3D area (uniform density) or the
@@ -27,6 +35,16 @@ struct SquareMapOptions {
   /// map, --size 1024: 0 steps 40.98 dB, 2: 41.37, 4: 41.36, 8 (converged): 41.35; each step costs one
   /// factorisation of twice the interior's size.
   int refine_iterations = 4;
+  /// true: the refinement is undone if it widens the density error by more than 0.1 (log2) — a map
+  /// whose promise is its density (area). false: it runs to convergence (up to refine_iterations),
+  /// trading density for shear wherever that lowers the energy.
+  bool refine_keeps_density = true;
+  /// The boundary's vertices (all but the four corners and chord bumps) slide along their side of the
+  /// square: between reweighting steps each boundary edge grows or shrinks with the square root of its
+  /// face's target/area, and the refinement moves them along the side. Measured (surface PSNR at the
+  /// input's budget, area map then 30 refinement steps, fixed / sliding): meshroom_esp32cam 41.50 /
+  /// 41.95, danish_dancinggirl area map density P5 -1.02 / -0.85.
+  bool slide_boundary = true;
   /// Rounds of target correction after that (each: the targets scaled by target/area, 2 more steps).
   /// Off by default: measured on ../shared/data it narrowed no model's density error once the best
   /// reweighting iterate is kept, and cost meshroom_esp32cam 0.2 dB (41.17 vs 41.36 at --size 1024).
@@ -54,11 +72,19 @@ struct SquareMapStats {
   std::string refine_stopped;
 };
 
+/// The four boundary positions (indices into disk.boundary, in boundary order, distinct unless the
+/// boundary has 3 vertices: {0, 1, 2, 2}) that map_to_square sends to (0,0), (1,0), (1,1), (0,1).
+/// `arc`: cumulative boundary length, arc[i] at boundary vertex i, arc[nb] the total (map_to_square
+/// passes density-scaled lengths when it has a density target).
+/// kEqualArcs: the vertices nearest the quarters of the length, from the first "ear" (a boundary vertex
+/// with a single triangle, which must sit on a corner or its triangle collapses) or vertex 0, snapped to
+/// an ear within 5% of the length. kTurningAngle: the vertices where the boundary turns most (pi minus
+/// the interior angle sum, integrated over +-2.5% of the length with tent weights, so zigzags cancel),
+/// ears first, greedily, skipping any closer than 10% of the length to one already chosen.
+std::array<size_t, 4> choose_corners(const Disk& disk, const std::vector<double>& arc, CornerRule rule);
+
 /// Maps a topological disk onto the unit square, boundary counter-clockwise.
-/// Corners: the four boundary vertices that split the boundary into four arcs of (nearly) equal length,
-/// snapped to an "ear" (a boundary vertex with a single triangle, which must sit on a corner or its
-/// triangle collapses) when one lies within 5% of the boundary length. Boundary: arc length between
-/// corners (Alg. 1). Interior: harmonic with cotangent weights, boundary rows eliminated, one CHOLMOD
+/// Corners: choose_corners with options.corners. Boundary: arc length between corners (Alg. 1). Interior: harmonic with cotangent weights, boundary rows eliminated, one CHOLMOD
 /// factorisation for u and v (Alg. 2).
 /// Fold-free guarantee: if any triangle folds (cotangent weights go negative on obtuse triangles), the
 /// map is recomputed with the negative weights clamped positive, which gives a bijection onto a convex
@@ -85,8 +111,8 @@ struct SlimStats {
 };
 
 /// Lowers the symmetric Dirichlet energy |J|^2 + |J^-1|^2 of every face, measured against its target
-/// shape (the 3D triangle scaled to area target[f]), weighted by target area; vertices with fixed[v]
-/// stay. uv must be fold-free; it stays fold-free (the line search stops short of any triangle's
+/// shape (the 3D triangle scaled to area target[f]), weighted by target area; fixed[v] bit 0 holds the
+/// vertex's u, bit 1 its v (3: the vertex stays; 1 or 2: it slides along a side). uv must be fold-free; it stays fold-free (the line search stops short of any triangle's
 /// collapse). SLIM (Rabinovich et al. 2017): a reweighted proxy solved with CHOLMOD, pattern analysed once.
 SlimStats refine_map(const Surface& mesh, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,
                      std::vector<Vec2>& uv);

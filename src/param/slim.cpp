@@ -105,30 +105,32 @@ SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std
   SlimStats st;
   const size_t nv = m.num_vertices();
   const auto fr = target_frames(m, target);
-  std::vector<int> index(nv, -1);
+  // One unknown per free coordinate: fixed[v] bit 0 holds u, bit 1 holds v (a vertex sliding along a
+  // side of the square keeps one of them).
+  std::vector<int> index(2 * nv, -1);
   int n = 0;
   for (size_t v = 0; v < nv; ++v)
-    if (!fixed[v]) index[v] = n++;
+    for (int a = 0; a < 2; ++a)
+      if (!(fixed[v] & (1 << a))) index[2 * v + size_t(a)] = n++;
   st.energy_before = st.energy = energy(m, fr, uv);
   if (n == 0 || !std::isfinite(st.energy)) return st;
   Eigen::CholmodSimplicialLLT<SpMat, Eigen::Lower> solver;
   bool analyzed = false;
   // The matrix's pattern is the same every step: build it once, and where each face's 2x2 blocks land
   // in its value array, so a step only overwrites values.
-  SpMat A(2 * n, 2 * n);
+  SpMat A(n, n);
   std::vector<int> slot(m.num_faces() * 36, -1);  // face, (i, j) corner pair, (a, b) coordinate pair
   {
     // Every lower-triangle entry (row >= col) a face contributes, with its slot number.
     auto for_each_entry = [&](auto&& f) {
       for (size_t face = 0; face < m.num_faces(); ++face)
         for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j) {
-            const int ii = index[m.triangles[face][i]], jj = index[m.triangles[face][j]];
-            if (ii < 0 || jj < 0) continue;
+          for (int j = 0; j < 3; ++j)
             for (int a = 0; a < 2; ++a)
-              for (int b = 0; b < 2; ++b)
-                if (2 * ii + a >= 2 * jj + b) f(face * 36 + size_t((i * 3 + j) * 4 + a * 2 + b), 2 * ii + a, 2 * jj + b);
-          }
+              for (int b = 0; b < 2; ++b) {
+                const int row = index[2 * m.triangles[face][i] + size_t(a)], col = index[2 * m.triangles[face][j] + size_t(b)];
+                if (row >= 0 && col >= 0 && row >= col) f(face * 36 + size_t((i * 3 + j) * 4 + a * 2 + b), row, col);
+              }
     };
     std::vector<Eigen::Triplet<double>> trips;
     trips.reserve(m.num_faces() * 24);
@@ -145,7 +147,7 @@ SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std
   for (int it = 0; it < iterations; ++it) {
     std::fill(A.valuePtr(), A.valuePtr() + A.nonZeros(), 0.0);
     double* values = A.valuePtr();
-    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(2 * n);
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
     for (size_t f = 0; f < m.num_faces(); ++f) {
       const TargetFrame& F = fr[f];
       if (F.area <= 0) continue;
@@ -163,24 +165,19 @@ SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std
       const Mat2 M = U * w2.asDiagonal() * U.transpose();
       const Mat2 MR = M * R;
       for (int i = 0; i < 3; ++i) {
-        const int ii = index[t[i]];
-        if (ii < 0) continue;
         const Vec2 b = F.area * MR * F.g[i];
-        rhs(2 * ii) += b.x();
-        rhs(2 * ii + 1) += b.y();
-        for (int j = 0; j < 3; ++j) {
-          const Mat2 H = F.area * F.g[i].dot(F.g[j]) * M;
-          const int jj = index[t[j]];
-          if (jj < 0) {
-            const Vec2 r = H * uv[t[j]];
-            rhs(2 * ii) -= r.x();
-            rhs(2 * ii + 1) -= r.y();
-            continue;
+        for (int a = 0; a < 2; ++a) {
+          const int row = index[2 * t[i] + size_t(a)];
+          if (row < 0) continue;
+          rhs(row) += b(a);
+          for (int j = 0; j < 3; ++j) {
+            const Mat2 H = F.area * F.g[i].dot(F.g[j]) * M;
+            const int* sl = &slot[f * 36 + size_t((i * 3 + j) * 4)];
+            for (int b2 = 0; b2 < 2; ++b2) {
+              if (index[2 * t[j] + size_t(b2)] < 0) rhs(row) -= H(a, b2) * uv[t[j]](b2);  // a fixed coordinate
+              else if (sl[a * 2 + b2] >= 0) values[sl[a * 2 + b2]] += H(a, b2);
+            }
           }
-          const int* sl = &slot[f * 36 + size_t((i * 3 + j) * 4)];
-          for (int a = 0; a < 2; ++a)
-            for (int b2 = 0; b2 < 2; ++b2)
-              if (sl[a * 2 + b2] >= 0) values[sl[a * 2 + b2]] += H(a, b2);
         }
       }
     }
@@ -198,7 +195,11 @@ SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std
       st.stopped = "solver";
       break;
     }
-    for (size_t v = 0; v < nv; ++v) d[v] = index[v] < 0 ? Vec2(0, 0) : Vec2(Vec2(x(2 * index[v]), x(2 * index[v] + 1)) - uv[v]);
+    for (size_t v = 0; v < nv; ++v)
+      for (int a = 0; a < 2; ++a) {
+        const int k = index[2 * v + size_t(a)];
+        d[v](a) = k < 0 ? 0.0 : x(k) - uv[v](a);
+      }
     double t = std::min(1.0, 0.9 * max_step(m, uv, d));
     double e_new = INFINITY;
     for (int tries = 0; tries < 40; ++tries, t *= 0.5) {
