@@ -62,8 +62,13 @@ struct TriangleSampler {
   /// never averages in the input's empty space beyond the triangle.
   std::array<float, 4> colour(double x, double y, double box, int max_samples) const {
     if (!src) return {float(flat.r), float(flat.g), float(flat.b), float(flat.a)};
-    const int nx = std::clamp(int(std::ceil(footprint_x * box - 1e-9)), 1, max_samples);
-    const int ny = std::clamp(int(std::ceil(footprint_y * box - 1e-9)), 1, max_samples);
+    // Clamped before the conversion to int: a material's -s can make the footprint 1e300 (found by
+    // fuzz_pipeline under UBSan), and a NaN footprint takes one sample.
+    auto samples_along = [&](double footprint) {
+      const double n = std::ceil(footprint * box - 1e-9);
+      return n >= max_samples ? max_samples : n >= 1 ? int(n) : 1;
+    };
+    const int nx = samples_along(footprint_x), ny = samples_along(footprint_y);
     std::array<float, 4> sum{0, 0, 0, 0};
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i) {
