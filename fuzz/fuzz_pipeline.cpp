@@ -1,6 +1,7 @@
 // libFuzzer harness for the whole method (tightex::optimize, then measure) on tiny meshes made from the
-// bytes (format in targets.hpp). InputError is allowed. An InternalError, or a lost or flipped triangle,
-// is recorded as a finding and the run goes on (TIGHTEX_FUZZ_STRICT=1: abort instead); a crash, a
+// bytes (format in targets.hpp). InputError is allowed. An InternalError, a lost or flipped triangle, or
+// a component kept with its input UVs (the full method and the plain fallback both failed) is recorded
+// as a finding and the run goes on (TIGHTEX_FUZZ_STRICT=1: abort instead); a crash, a
 // sanitizer report, a broken output invariant or any other exception stops the run.
 #include <string>
 
@@ -17,6 +18,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       const tightex_fuzz::PipelineOutcome r = tightex_fuzz::run_pipeline(data, size);
       if (r.lost > 0) tightex_fuzz::finding("lost", std::to_string(r.lost) + " lost triangles", data, size);
       if (r.flipped > 0) tightex_fuzz::finding("flipped", std::to_string(r.flipped) + " flipped triangles", data, size);
+      // Not a broken promise (the component is output as it came), but the method failed on it twice.
+      if (r.kept > 0) tightex_fuzz::finding("kept", r.kept_reason, data, size);
     } catch (const tightex::InternalError& e) {
       tightex_fuzz::finding("internal", e.what(), data, size);
     }

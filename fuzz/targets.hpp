@@ -154,6 +154,10 @@ inline Outcome run_image(const uint8_t* data, size_t size) {
 struct PipelineOutcome {
   Outcome outcome = Outcome::kAccepted;
   size_t lost = 0, flipped = 0;
+  /// Components the method could not map, kept with their input UVs (Plan::kept); their triangles may
+  /// be flipped or outside [0,1] as the input's were, so `flipped` is not counted when kept > 0.
+  size_t kept = 0;
+  std::string kept_reason;
 };
 
 inline TexturedMesh mesh_from_bytes(const uint8_t* data, size_t size, Options& options) {
@@ -216,14 +220,25 @@ inline PipelineOutcome run_pipeline(const uint8_t* data, size_t size) {
   try {
     const Result r = optimize(mesh, options);
     const TexturedMesh& o = r.output;
+    for (const auto& c : r.report["components"])
+      if (c["kept_original_uvs"].get<bool>()) {
+        if (out.kept++ == 0) out.kept_reason = c["kept_reason"].get<std::string>();
+      }
     require(o.corner_uv.size() == 3 * o.triangles.size(), "output corner_uv is not 3 per triangle");
-    for (const Vec2& uv : o.corner_uv)
-      require(uv.allFinite() && uv.minCoeff() >= 0 && uv.maxCoeff() <= 1, "output texture coordinate outside [0,1]");
+    require(o.face_material.size() == o.triangles.size(), "output face_material is not 1 per triangle");
+    for (size_t t = 0; t < o.triangles.size(); ++t) {
+      require(o.face_material[t] >= 0 && size_t(o.face_material[t]) < o.materials.size(), "output material out of range");
+      if (o.materials[size_t(o.face_material[t])].name.rfind("kept_", 0) == 0) continue;  // input UVs, kept
+      for (int k = 0; k < 3; ++k) {
+        const Vec2& uv = o.corner_uv[3 * t + size_t(k)];
+        require(uv.allFinite() && uv.minCoeff() >= 0 && uv.maxCoeff() <= 1, "output texture coordinate outside [0,1]");
+      }
+    }
     for (const Texture& t : o.textures) require(!t.image.empty(), "output texture empty");
     const Metrics m = measure(mesh, o, 2000);
     (void)to_json(m);
     out.lost = m.lost_triangles;
-    out.flipped = m.flipped;
+    out.flipped = out.kept > 0 ? 0 : m.flipped;
   } catch (const InputError&) {
     out.outcome = Outcome::kRefused;
   }

@@ -6,6 +6,8 @@
 #include <random>
 
 #include "bake/bake.hpp"
+#include "core/raster.hpp"
+#include "report/metrics.hpp"
 
 namespace tightex {
 namespace {
@@ -115,6 +117,58 @@ TEST(Bake, LeastSquaresFitBeatsPointSamplingUnderBilinearReadBack) {
   };
   const double plain = psnr(false), fitted = psnr(true);
   EXPECT_GT(fitted, plain + 1.0) << "plain " << plain << " dB, fitted " << fitted << " dB";
+}
+
+TEST(Bake, FitDoesNotDependOnTheModelsUnits) {
+  // The fit weighs samples by 3D area per texel. A model in huge units gave weights beyond float's range,
+  // an infinite weight and a NaN texel (found by fuzz_pipeline under UBSan at coordinates of 1e15; the
+  // input is fuzz/corpus/fuzz_pipeline/regress-bake-huge-weights); in tiny units the weights fell to 0
+  // and the fit did nothing. Scaled by a power of two, the areas must give the same texels bit for bit.
+  Image in(96, 96);
+  for (int y = 0; y < 96; ++y)
+    for (int x = 0; x < 96; ++x) in.at(x, y) = {uint8_t((x * 37 + y * 11) % 256), uint8_t((x * 5) % 256), uint8_t(y * 2), 255};
+  const TexturedMesh m = textured(in);
+  const std::vector<Rect> rects = {Rect{0, 0, 0, 128, 128}};
+  auto bake = [&](double area_scale) {
+    auto tris = square(128, 128, 0.5, 0.9);
+    for (BakeTriangle& t : tris) t.area3 *= area_scale;
+    std::vector<Image> out = {Image(128, 128)};
+    BakeStats st;
+    bake_texture(m, tris, rects, out, &st, {});
+    EXPECT_GT(st.tiles_fitted, 0u);
+    return out[0];
+  };
+  const Image ref = bake(1.0);
+  EXPECT_TRUE(bake(std::ldexp(1.0, 150)).pixels == ref.pixels);
+  EXPECT_TRUE(bake(std::ldexp(1.0, -150)).pixels == ref.pixels);
+}
+
+TEST(Bake, AbsurdCoordinatesAreSkippedOrCappedNotOverflowed) {
+  // A material's -s/-o can put texture coordinates at 1e300; converted to texel indices they overflowed
+  // (undefined behaviour, found by fuzz_pipeline under UBSan; inputs fuzz/corpus/fuzz_pipeline/
+  // regress-bake-footprint-overflow and regress-metrics-offset-overflow). Under UBSan this test fails
+  // without the clamps; here it checks what is visited.
+  size_t visited = 0;
+  scan_triangle(Vec2(1e300, 1e300), Vec2(2e300, 1e300), Vec2(1e300, 2e300), 0, 64, 0, 64, EdgeRule::kInclusive,
+                [&](long, long, double, double, double) { ++visited; });
+  scan_triangle(Vec2(-1e300, 10), Vec2(1e300, 10), Vec2(0, 20), 0, 64, 0, 64, EdgeRule::kInclusive,
+                [&](long, long, double, double, double) { ++visited; });
+  EXPECT_EQ(visited, 64u * 10u);  // the second: rows 10..19, every column
+  // A source footprint of 1e300 texels takes the sample cap.
+  Image in(8, 8, Rgba8{90, 90, 90, 255});
+  const TexturedMesh m = textured(in);
+  auto tris = square(16, 16, 0.0, 1e300);
+  std::vector<Image> out = {Image(16, 16)};
+  bake_texture(m, tris, {Rect{0, 0, 0, 16, 16}}, out, nullptr, {});
+  EXPECT_EQ(out[0].at(8, 8).r, 90);
+  // Texture space of a model whose material shifts it by 1e300: nothing addressable is used.
+  TexturedMesh shifted = m;
+  shifted.positions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  shifted.triangles = {Tri{0, 1, 2}};
+  shifted.corner_uv = {Vec2(0.1, 0.1), Vec2(0.9, 0.1), Vec2(0.1, 0.9)};
+  shifted.face_material = {0};
+  shifted.materials[0].uv_offset = {1e300, -1e300};
+  EXPECT_EQ(measure_texture_space(shifted).used_texels, 0.0);
 }
 
 TEST(Bake, FitIsDeterministicAndLeavesMagnifiedTilesAlone) {

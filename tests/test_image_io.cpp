@@ -567,6 +567,69 @@ TEST_F(ImageIoTest, PnmHeaderNumberTooLongIsRefused) {
                      "999999999x1 pixels, more than the limit");
 }
 
+// A PSD of `channels` 8-bit planes, raw, `w` x `h`, each plane given in full.
+Bytes raw_psd(int w, int h, const std::vector<Bytes>& planes) {
+  Bytes b = {'8', 'B', 'P', 'S', 0, 1, 0, 0, 0, 0, 0, 0, 0, uint8_t(planes.size())};
+  for (uint32_t v : {uint32_t(h), uint32_t(w)})
+    for (int s = 24; s >= 0; s -= 8) b.push_back(uint8_t(v >> s));
+  b.insert(b.end(), {0, 8, 0, 3});          // 8 bits, RGB mode
+  b.insert(b.end(), 12, 0);                 // no colour mode data, image resources or layers
+  b.insert(b.end(), {0, 0});                // raw
+  for (const Bytes& p : planes) b.insert(b.end(), p.begin(), p.end());
+  return b;
+}
+
+TEST_F(ImageIoTest, PsdWithColourBelowTheWhiteMatteDecodesClamped) {
+  // stb_image 2.27 removes Photoshop's white matte from partly transparent PSD pixels with a float to
+  // byte cast that is undefined behaviour when the colour lies below the matte (found by fuzz_image
+  // under UBSan; the input is fuzz/corpus/fuzz_image/regress-psd-matte-below-zero.psd). tightex decodes
+  // PSD itself, the same way, with that value clamped to 0.
+  const Bytes psd = raw_psd(3, 1, {{10, 200, 40}, {0, 255, 90}, {255, 100, 0}, {128, 128, 255}});
+  const Image img = decode_image(psd.data(), psd.size(), "matte.psd");
+  ASSERT_EQ(img.width, 3);
+  ASSERT_EQ(img.height, 1);
+  // Pixel 0 (alpha 128): 10 and 0 lie below the matte -> 0; 255 -> 255 * 1.99 - 253.0 = 255.
+  EXPECT_EQ(img.at(0, 0).r, 0);
+  EXPECT_EQ(img.at(0, 0).g, 0);
+  EXPECT_EQ(img.at(0, 0).b, 255);
+  EXPECT_EQ(img.at(0, 0).a, 128);
+  // Pixel 1 (alpha 128): 200 -> 145.4 -> 145, as stb computes it; 255 -> 255; 100 -> 0.
+  EXPECT_EQ(img.at(1, 0).r, 145);
+  EXPECT_EQ(img.at(1, 0).g, 255);
+  EXPECT_EQ(img.at(1, 0).b, 0);
+  // Pixel 2 (opaque): as stored.
+  EXPECT_EQ(img.at(2, 0).r, 40);
+  EXPECT_EQ(img.at(2, 0).g, 90);
+  EXPECT_EQ(img.at(2, 0).b, 0);
+  EXPECT_EQ(img.at(2, 0).a, 255);
+  write_bytes(path("matte.psd"), psd);
+  EXPECT_EQ(image_dimensions(path("matte.psd")), (std::pair<int, int>{3, 1}));
+  // The fuzzer's input: 1x3 pixels, 8 channels, nothing but the matte to remove.
+  const Bytes found = read_bytes(std::string(TIGHTEX_FUZZ_CORPUS) + "/fuzz_image/regress-psd-matte-below-zero.psd");
+  const Image f = decode_image(found.data(), found.size(), "found.psd");
+  EXPECT_EQ(f.width * f.height, 3);
+}
+
+TEST_F(ImageIoTest, PsdMissingChannelsAndBadHeadersAreRefusedOrFilled) {
+  // One plane: red only, green and blue 0, opaque (as stb reads it).
+  const Bytes one = raw_psd(2, 1, {{7, 9}});
+  const Image img = decode_image(one.data(), one.size(), "one.psd");
+  EXPECT_EQ(img.at(1, 0).r, 9);
+  EXPECT_EQ(img.at(1, 0).g, 0);
+  EXPECT_EQ(img.at(1, 0).a, 255);
+  Bytes bad_mode = one;
+  bad_mode[25] = 1;  // greyscale
+  expect_input_error([&] { decode_image(bad_mode.data(), bad_mode.size(), "grey.psd"); }, "grey.psd: PSD image not in RGB");
+  Bytes bad_rle = one;
+  bad_rle[39] = 1;  // RLE: row counts, then a run longer than the plane
+  bad_rle.resize(40);
+  bad_rle.insert(bad_rle.end(), {0, 0, 0xFD, 1});
+  expect_input_error([&] { decode_image(bad_rle.data(), bad_rle.size(), "rle.psd"); }, "rle.psd: corrupt PSD image (bad RLE data)");
+  Bytes huge = one;
+  huge[14] = 0x7F;  // height 2^30 + ...
+  expect_input_error([&] { decode_image(huge.data(), huge.size(), "huge.psd", size_t(1) << 20); }, "more than the limit");
+}
+
 TEST_F(ImageIoTest, ZeroSizePngIsRefused) {
   // spng's encoder refuses to write a zero width, so the header is written by hand.
   const Bytes png = png_header_only(0, 1);

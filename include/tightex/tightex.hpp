@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "core/mesh.hpp"
 #include "io/image_io.hpp"
@@ -50,6 +51,10 @@ struct Options {
   bool measure = true;
   /// Called with a stage name and the fraction [0,1] done; may be called from the calling thread only.
   std::function<void(std::string_view stage, double fraction)> progress;
+  /// Test only (tests/test_kept_component.cpp): components, by index in plan order, whose cut+map is made
+  /// to throw InternalError both in the full method and in the plain fallback, so the last resort (see
+  /// Plan::kept) can be exercised on any mesh. Leave empty.
+  std::vector<size_t> test_fail_components;
 };
 
 struct Result {
@@ -67,6 +72,11 @@ struct Plan {
   std::vector<Rect> rects;               // per component
   std::vector<std::pair<int, int>> image_size;
   int num_images = 1;
+  /// Per component: empty when it was mapped; otherwise why it could not be (the full method and the
+  /// plain fallback both threw, or the fallback's map folds). Such a component is the last resort's:
+  /// its disk and uv are empty, and bake_plan outputs its triangles with their input texture
+  /// coordinates and a copy of their input material(s) and texture(s), so no triangle is ever dropped.
+  std::vector<std::string> kept;
   nlohmann::json report;                 // what was done so far
 };
 Plan plan_charts(const TexturedMesh& input, const Options& options);

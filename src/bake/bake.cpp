@@ -62,8 +62,13 @@ struct TriangleSampler {
   /// never averages in the input's empty space beyond the triangle.
   std::array<float, 4> colour(double x, double y, double box, int max_samples) const {
     if (!src) return {float(flat.r), float(flat.g), float(flat.b), float(flat.a)};
-    const int nx = std::clamp(int(std::ceil(footprint_x * box - 1e-9)), 1, max_samples);
-    const int ny = std::clamp(int(std::ceil(footprint_y * box - 1e-9)), 1, max_samples);
+    // Clamped before the conversion to int: a material's -s can make the footprint 1e300 (found by
+    // fuzz_pipeline under UBSan), and a NaN footprint takes one sample.
+    auto samples_along = [&](double footprint) {
+      const double n = std::ceil(footprint * box - 1e-9);
+      return n >= max_samples ? max_samples : n >= 1 ? int(n) : 1;
+    };
+    const int nx = samples_along(footprint_x), ny = samples_along(footprint_y);
     std::array<float, 4> sum{0, 0, 0, 0};
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i) {
@@ -105,9 +110,20 @@ void fit_tile(const Image& base, Image& out, const std::vector<BakeTriangle>& tr
   std::vector<float> weight(4 * n, 0.0f);
   double weight_sum = 0;
   size_t samples = 0;
+  // The weights (3D area per texel) are brought to [1, 2) for the tile's largest by a power of two: a
+  // model in large units (a scan in nanometres, or 1e13 m) has weights beyond float's range, and an
+  // infinite weight made the solve NaN (found by fuzz_pipeline under UBSan). The fit depends only on
+  // ratios of weights, and scaling by a power of two is exact, so every other model bakes bit for bit
+  // as before.
+  double max_weight = 0;
+  for (uint32_t t : tris)
+    if (samplers[t].valid && samplers[t].weight > 0) max_weight = std::max(max_weight, samplers[t].weight);
+  if (!(max_weight > 0)) return;
+  const double weight_scale = std::ldexp(1.0, -std::ilogb(max_weight));
   for (uint32_t t : tris) {
     const TriangleSampler& smp = samplers[t];
     if (!smp.valid || !(smp.weight > 0)) continue;
+    const double smp_weight = smp.weight * weight_scale;
     const BakeTriangle& tri = triangles[t];
     for (int k = 0; k < 4; ++k) {
       const Vec2 off(kOff[k][0], kOff[k][1]);
@@ -117,8 +133,8 @@ void fit_tile(const Image& base, Image& out, const std::vector<BakeTriangle>& tr
                       if (weight[i] > 0) return;
                       const auto c = smp.colour(double(x) + 0.5 + off.x(), double(y) + 0.5 + off.y(), 0.5, max_samples);
                       target[i] = {c[0], c[1], c[2]};
-                      weight[i] = float(smp.weight);
-                      weight_sum += smp.weight;
+                      weight[i] = float(smp_weight);
+                      weight_sum += smp_weight;
                       ++samples;
                     });
     }

@@ -194,6 +194,20 @@ int run_main(int argc, char** argv) {
   }
   Result result = bake_plan(plan, mesh, opt);
   if (show_progress) fmt::print(stderr, "\r\033[K");
+  // Components the method could not map are kept as they were (Plan::kept): one line says so.
+  size_t kept_components = 0, kept_triangles = 0;
+  const std::string* kept_reason = nullptr;
+  for (size_t c = 0; c < plan.kept.size(); ++c)
+    if (!plan.kept[c].empty()) {
+      ++kept_components;
+      kept_triangles += plan.components[c].num_faces();
+      if (kept_reason == nullptr) kept_reason = &plan.kept[c];
+    }
+  if (kept_components > 0 && !quiet)
+    fmt::print(stderr,
+               "tightex: warning: {} component(s), {} triangles, could not be re-parameterized and keep their original "
+               "texture coordinates and texture(s) ({}); see \"kept_original_uvs\" in the report\n",
+               kept_components, kept_triangles, *kept_reason);
 
   // Writing (PNG compression) and measuring are independent: run them side by side.
   const auto tw = std::chrono::steady_clock::now();

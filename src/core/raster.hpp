@@ -47,8 +47,12 @@ void scan_triangle(const Vec2& p0, const Vec2& p1, const Vec2& p2, long x_lo, lo
   }
   const double ymin = std::min({p0.y(), p1.y(), p2.y()}), ymax = std::max({p0.y(), p1.y(), p2.y()});
   const double xmin = std::min({p0.x(), p1.x(), p2.x()}), xmax = std::max({p0.x(), p1.x(), p2.x()});
-  const long ya = std::max(y_lo, long(std::ceil(std::max(ymin, double(y_lo) - 1) - 0.5)));
-  const long yb = std::min(y_hi - 1, long(std::floor(std::min(ymax, double(y_hi) + 1) - 0.5)));
+  // Coordinates are clamped to one texel beyond the range before any conversion to long: a huge or NaN
+  // coordinate (a material's -s/-o of 1e300) would overflow it (found by fuzzing). The same rows and
+  // columns are visited as without the clamp.
+  auto near = [](double v, long lo, long hi) { return std::fmin(std::fmax(v, double(lo) - 1), double(hi) + 1); };
+  const long ya = std::max(y_lo, long(std::ceil(near(ymin, y_lo, y_hi) - 0.5)));
+  const long yb = std::min(y_hi - 1, long(std::floor(near(ymax, y_lo, y_hi) - 0.5)));
   const double inv = 1.0 / (sign * area2);
   for (long y = ya; y <= yb; ++y) {
     const double py = double(y) + 0.5;
@@ -61,8 +65,8 @@ void scan_triangle(const Vec2& p0, const Vec2& p1, const Vec2& p2, long x_lo, lo
     }
     if (hi < lo - 1) continue;
     // One texel of slack on each side: the exact test below decides.
-    const long xa = std::max(x_lo, long(std::ceil(lo - 0.5)) - 1);
-    const long xb = std::min(x_hi - 1, long(std::floor(hi - 0.5)) + 1);
+    const long xa = std::max(x_lo, long(std::ceil(near(lo, x_lo, x_hi) - 0.5)) - 1);
+    const long xb = std::min(x_hi - 1, long(std::floor(near(hi, x_lo, x_hi) - 0.5)) + 1);
     for (long x = xa; x <= xb; ++x) {
       const double px = double(x) + 0.5;
       double w[3];

@@ -33,7 +33,7 @@
 // compiles stb cannot clash with it. PNG and JPEG are compiled out because they never reach stb. So is
 // Radiance HDR: stb 2.27 loops forever on an RLE count of 0 (found by fuzzing), and a float HDR image
 // is no 8-bit texture anyway; and Softimage PIC, which no texture pipeline produces. What remains:
-// BMP, TGA, PSD (composite), GIF (first frame), PNM.
+// BMP, TGA, GIF (first frame), PNM, and PSD's header (its pixels are decoded here: see decode_psd).
 #define STB_IMAGE_STATIC
 #define STB_IMAGE_IMPLEMENTATION
 #define STBI_NO_STDIO
@@ -590,6 +590,89 @@ bool pnm_header_number_too_long(const unsigned char* data, size_t size) {
   return false;
 }
 
+// ---------------------------------------------------------------------------------------------------
+// PSD: the merged composite of an RGB file, 8 or 16 bits, raw or RLE; what stb_image reads, read the way
+// it reads it. Decoded here rather than by stb 2.27, whose loader removes Photoshop's white matte from
+// every pixel of partial alpha with `(unsigned char)(c / a + 255 (1 - 1 / a))`: a colour below the matte
+// (any file not written by Photoshop) casts a negative float to a byte, which is undefined behaviour
+// (found by fuzz_image under UBSan; fuzz/corpus/fuzz_image/regress-psd-matte-below-zero.psd). Here that
+// value is clamped to 0; every pixel stb decodes without undefined behaviour decodes the same.
+
+bool is_psd(const unsigned char* data, size_t size) {
+  static constexpr unsigned char kMagic[] = {'8', 'B', 'P', 'S'};
+  return size >= 4 && std::memcmp(data, kMagic, 4) == 0;
+}
+
+/// Big-endian reads that, like stb's, give 0 past the end; a skip past the end stops at the end.
+struct PsdReader {
+  const unsigned char* data;
+  size_t size, at = 0;
+  unsigned get8() { return at < size ? data[at++] : 0u; }
+  unsigned get16() { return (get8() << 8) | get8(); }
+  uint32_t get32() { return (uint32_t(get16()) << 16) | get16(); }
+  void skip(uint64_t n) { at = n >= size - std::min(at, size) ? size : at + size_t(n); }
+};
+
+Image decode_psd(const unsigned char* data, size_t size, const std::string& name, size_t max_pixels) {
+  PsdReader r{data, size};
+  r.skip(4);  // "8BPS"
+  if (r.get16() != 1) fail_input("{}: unsupported PSD version", name);
+  r.skip(6);
+  const unsigned channels = r.get16();
+  if (channels > 16) fail_input("{}: PSD image with {} channels (at most 16 are supported)", name, channels);
+  const uint32_t height = r.get32(), width = r.get32();
+  check_dimensions(name, "PSD", width, height, max_pixels);
+  const unsigned depth = r.get16();
+  if (depth != 8 && depth != 16) fail_input("{}: PSD image of {} bits per channel (8 or 16 are supported)", name, depth);
+  if (r.get16() != 3) fail_input("{}: PSD image not in RGB colour mode", name);
+  r.skip(r.get32());  // colour mode data
+  r.skip(r.get32());  // image resources
+  r.skip(r.get32());  // layers and masks: only the merged composite is read
+  const unsigned compression = r.get16();
+  if (compression > 1) fail_input("{}: PSD image with unknown compression {}", name, compression);
+  Image image{int(width), int(height)};
+  const size_t n = image.pixels.size();
+  auto channel_byte = [&](Rgba8& p, unsigned c) -> uint8_t& { return c == 0 ? p.r : c == 1 ? p.g : c == 2 ? p.b : p.a; };
+  if (compression == 1) {
+    r.skip(uint64_t(height) * channels * 2);  // per-row byte counts: not needed
+  }
+  for (unsigned c = 0; c < 4; ++c) {
+    if (c >= channels) {  // missing channels: colour 0, alpha opaque
+      for (Rgba8& p : image.pixels) channel_byte(p, c) = c == 3 ? 255 : 0;
+      continue;
+    }
+    if (compression == 0) {
+      for (Rgba8& p : image.pixels) channel_byte(p, c) = uint8_t(depth == 16 ? r.get16() >> 8 : r.get8());
+      continue;
+    }
+    // PackBits: n < 128 copies n+1 bytes, n > 128 repeats the next byte 257-n times, 128 does nothing.
+    // (As in stb, 16-bit RLE data is unpacked as bytes.)
+    for (size_t i = 0; i < n;) {
+      const unsigned len = r.get8();
+      if (len == 128) continue;
+      const size_t count = len < 128 ? len + 1 : 257 - len;
+      if (count > n - i) fail_input("{}: corrupt PSD image (bad RLE data)", name);
+      if (len < 128) {
+        for (size_t k = 0; k < count; ++k) channel_byte(image.pixels[i++], c) = uint8_t(r.get8());
+      } else {
+        const uint8_t v = uint8_t(r.get8());
+        for (size_t k = 0; k < count; ++k) channel_byte(image.pixels[i++], c) = v;
+      }
+    }
+  }
+  if (channels >= 4) {  // remove the white matte, in stb's float arithmetic
+    for (Rgba8& p : image.pixels) {
+      if (p.a == 0 || p.a == 255) continue;
+      const float a = float(p.a) / 255.0f, ra = 1.0f / a, inv_a = 255.0f * (1 - ra);
+      for (uint8_t* v : {&p.r, &p.g, &p.b}) {
+        const float x = float(*v) * ra + inv_a;
+        *v = x <= 0.0f ? 0 : uint8_t(x);
+      }
+    }
+  }
+  return image;
+}
+
 Image decode_with_stb(const unsigned char* data, size_t size, const std::string& name, size_t max_pixels) {
   if (size > size_t(INT_MAX)) fail_input("{}: unrecognised image format", name);
   if (pnm_header_number_too_long(data, size)) fail_input("{}: corrupt PNM header (a number of more than 9 digits)", name);
@@ -641,6 +724,7 @@ Image decode_image(const unsigned char* data, size_t size, const std::string& na
   // Detected by content, not by extension: textures named .png that hold JPEG data are common.
   if (is_png(data, size)) return decode_png(data, size, name, max_pixels);
   if (is_jpeg(data, size)) return decode_jpeg(data, size, name, max_pixels);
+  if (is_psd(data, size)) return decode_psd(data, size, name, max_pixels);
   return decode_with_stb(data, size, name, max_pixels);
 }
 

@@ -72,7 +72,14 @@ void write_obj(const TexturedMesh& mesh, const std::string& outdir, const std::s
     for (const Material& m : mesh.materials) {
       mtl += fmt::format("\nnewmtl {}\nKa 1 1 1\nKd {} {} {}\nKs 0 0 0\nd 1\nillum 1\n", m.name, format_double(m.kd[0]),
                          format_double(m.kd[1]), format_double(m.kd[2]));
-      if (m.texture >= 0) mtl += fmt::format("map_Kd {}\n", tex_name[size_t(m.texture)]);
+      if (m.texture < 0) continue;
+      // -s/-o only where the material has them (a copied input material, see bake_plan's kept components).
+      std::string options;
+      if (m.uv_scale != std::array<double, 2>{1.0, 1.0})
+        options += fmt::format("-s {} {} 1 ", format_double(m.uv_scale[0]), format_double(m.uv_scale[1]));
+      if (m.uv_offset != std::array<double, 2>{0.0, 0.0})
+        options += fmt::format("-o {} {} 0 ", format_double(m.uv_offset[0]), format_double(m.uv_offset[1]));
+      mtl += fmt::format("map_Kd {}{}\n", options, tex_name[size_t(m.texture)]);
     }
     write_file(temp_for(name + ".mtl"), mtl);
 

@@ -4,10 +4,12 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <numeric>
 #include <optional>
+#include <set>
 
 #include "bake/bake.hpp"
 #include "core/error.hpp"
@@ -44,6 +46,34 @@ class StageClock {
 }  // namespace
 
 namespace {
+
+/// The file name of a path without folder and extension ("a/b.c.png" -> "b.c").
+std::string file_stem(std::string s) {
+  const size_t slash = s.find_last_of('/');
+  if (slash != std::string::npos) s = s.substr(slash + 1);
+  const size_t dot = s.find_last_of('.');
+  return dot == std::string::npos || dot == 0 ? s : s.substr(0, dot);
+}
+
+std::string lower(std::string s) {
+  for (char& ch : s) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+  return s;
+}
+
+/// A name that is safe as a file stem and an MTL token: letters, digits, '-', '_' and '.' (not first).
+std::string file_name_safe(const std::string& s) {
+  std::string r;
+  for (char ch : s) r += std::isalnum(static_cast<unsigned char>(ch)) || ch == '-' || ch == '_' || (ch == '.' && !r.empty()) ? ch : '_';
+  return r.empty() ? std::string("texture") : r;
+}
+
+/// `base`, or base_2, base_3, ... : the first not in `taken` (without case), which it joins.
+std::string unique_name(std::set<std::string>& taken, const std::string& base) {
+  std::string name = base;
+  for (int i = 2; taken.count(lower(name)) != 0; ++i) name = fmt::format("{}_{}", base, i);
+  taken.insert(lower(name));
+  return name;
+}
 
 const char* map_name(MapKind m) {
   return m == MapKind::kHarmonic ? "harmonic" : m == MapKind::kArea ? "area" : m == MapKind::kTexel ? "texel" : "detail";
@@ -291,12 +321,19 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   std::vector<std::vector<Vec2>>& uv = plan.uv;
   uv.resize(nc);
   std::vector<SquareMapStats> map_stats(nc);
+  std::vector<std::string>& kept = plan.kept;
+  kept.assign(nc, std::string());
+  auto forced_failure = [&](size_t c, const char* what) {
+    if (std::find(options.test_fail_components.begin(), options.test_fail_components.end(), c) != options.test_fail_components.end())
+      fail_internal("{} failure forced by Options::test_fail_components", what);
+  };
   tbb::parallel_for(size_t(0), nc, [&](size_t c) {
     SquareMapOptions mo;
     mo.rect_width = rects[c].w;
     mo.rect_height = rects[c].h;
     mo.corners = options.corners;
     try {
+      forced_failure(c, "full method");
       std::vector<uint32_t> slit_to;
       std::optional<Denoised> denoised;  // the handles are searched once, whatever the rounds
       const std::vector<char> seams = find_texture_seams(input, surface, components[c]);  // cuts prefer them
@@ -314,14 +351,30 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
         if (target == kNone) break;  // crowded at scaffolding: nothing to slit to
         slit_to.push_back(target);
       }
+      // The map promises no fold; one that folds anyway is a failure of the full method.
+      if (map_stats[c].flipped > 0) fail_internal("the map folds {} triangles", map_stats[c].flipped);
     } catch (const InternalError& e) {
       // A component the full method cannot handle still gets one chart: the plain cut graph and the
       // fold-free map. The report says so; the run goes on.
       cut_stats[c] = CutStats{};
-      disks[c] = cut_to_disk(components[c], options.holes, &cut_stats[c], {}, nullptr, true);
-      cut_stats[c].fallback_reason = e.what();
-      set_face_targets(disks[c], density[c], options, mo);
-      uv[c] = map_to_square(disks[c], mo, &map_stats[c]);
+      try {
+        forced_failure(c, "plain fallback");
+        disks[c] = cut_to_disk(components[c], options.holes, &cut_stats[c], {}, nullptr, true);
+        cut_stats[c].fallback_reason = e.what();
+        set_face_targets(disks[c], density[c], options, mo);
+        map_stats[c] = SquareMapStats{};
+        uv[c] = map_to_square(disks[c], mo, &map_stats[c]);
+        if (map_stats[c].flipped > 0) fail_internal("the plain fallback's map folds {} triangles", map_stats[c].flipped);
+      } catch (const InternalError& last) {
+        // The last resort: the component keeps its input texture coordinates and material(s), so none
+        // of its triangles is lost (bake_plan). The report and the CLI say so.
+        cut_stats[c] = CutStats{};
+        cut_stats[c].before = topology_of(components[c]);
+        cut_stats[c].fallback_reason = e.what();
+        kept[c] = fmt::format("{}; then {}", e.what(), last.what());
+        disks[c] = Disk{};
+        uv[c].clear();
+      }
     }
   });
   clock.done("cut+map");
@@ -353,6 +406,8 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
                      {"cut", cs.method},
                      {"slits", cs.slits},
                      {"fallback", cs.fallback_reason},
+                     {"kept_original_uvs", !kept[c].empty()},
+                     {"kept_reason", kept[c]},
                      {"handle_loops", cs.handle_loops},
                      {"cut_edges", cs.cut_edges},
                      {"cut_length", cs.cut_length},
@@ -374,6 +429,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
                      {"rect", {{"image", rects[c].image}, {"x", rects[c].x}, {"y", rects[c].y}, {"w", rects[c].w}, {"h", rects[c].h}}}});
   }
   rep["preparation"]["holes_filled"] = holes_filled;
+  rep["preparation"]["components_kept_original_uvs"] = size_t(std::count_if(kept.begin(), kept.end(), [](const std::string& k) { return !k.empty(); }));
   rep["components"] = comps;
   rep["timings"] = timings;
   return plan;
@@ -397,23 +453,42 @@ Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& opt
   const int num_images = plan.num_images;
   const size_t nc = components.size();
   // 5. Output model: the input's positions and triangles (same corners, same winding), new UVs.
+  //    Components the plan could not map (Plan::kept) keep their input UVs and materials (below).
+  const std::vector<std::string> no_kept;
+  const std::vector<std::string>& kept = plan.kept.empty() ? no_kept : plan.kept;
+  auto is_kept = [&](size_t c) { return c < kept.size() && !kept[c].empty(); };
+  // The new images that some mapped component uses, renumbered densely (all of them unless a
+  // component was kept: then a per-component image of its own would stay empty and is not written).
+  std::vector<int> image_index(size_t(num_images), -1);
+  for (size_t c = 0; c < nc; ++c)
+    if (!is_kept(c)) image_index[size_t(rects[c].image)] = 0;
+  int new_images = 0;
+  for (int& i : image_index)
+    if (i == 0) i = new_images++;
+  std::vector<Rect> mapped_rects;
+  for (size_t c = 0; c < nc; ++c)
+    if (!is_kept(c)) {
+      mapped_rects.push_back(rects[c]);
+      mapped_rects.back().image = image_index[size_t(rects[c].image)];
+    }
   TexturedMesh& out = result.output;
   out.source = input.source;
   out.positions = input.positions;
   const bool normals = !input.corner_normal.empty();
   std::vector<BakeTriangle> bake_tris;
   bake_tris.reserve(input.num_triangles());
-  std::vector<std::vector<uint32_t>> by_component(nc);
   for (size_t c = 0; c < nc; ++c) {
+    if (is_kept(c)) continue;
     const Rect& r = rects[c];
     const auto [W, H] = image_size[size_t(r.image)];
+    const int image = image_index[size_t(r.image)];
     const Disk& d = disks[c];
     for (uint32_t f = 0; f < d.mesh.num_faces(); ++f) {
       const uint32_t cf = d.mesh.face_parent[f];
       if (cf == kNone) continue;  // scaffolding
       const uint32_t t = surface.face_parent[components[c].face_parent[cf]];
       BakeTriangle bt;
-      bt.image = uint32_t(r.image);
+      bt.image = uint32_t(image);
       bt.material = input.face_material[t];
       bt.area3 = triangle_area(input.positions[input.triangles[t][0]], input.positions[input.triangles[t][1]], input.positions[input.triangles[t][2]]);
       out.triangles.push_back(input.triangles[t]);
@@ -425,36 +500,75 @@ Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& opt
         out.corner_uv.push_back(Vec2(px.x() / W, 1.0 - px.y() / H));
         if (normals) out.corner_normal.push_back(input.corner_normal[3 * t + size_t(k)]);
       }
-      out.face_material.push_back(int32_t(r.image));
+      out.face_material.push_back(int32_t(image));
       bake_tris.push_back(bt);
     }
   }
-  const std::string stem = [&] {
-    std::string s = input.source;
-    const size_t slash = s.find_last_of('/');
-    if (slash != std::string::npos) s = s.substr(slash + 1);
-    const size_t dot = s.find_last_of('.');
-    return dot == std::string::npos || dot == 0 ? s : s.substr(0, dot);
-  }();
-  for (int i = 0; i < num_images; ++i) {
+  const std::string stem = file_stem(input.source);
+  std::set<std::string> names;  // file stems and material names taken, compared without case
+  for (int i = 0; i < new_images; ++i) {
     Texture tex;
-    tex.path = num_images == 1 ? stem + "_tightex" : fmt::format("{}_tightex_{}", stem, i);
-    tex.image = Image(image_size[size_t(i)].first, image_size[size_t(i)].second, Rgba8{0, 0, 0, 255});
+    tex.path = new_images == 1 ? stem + "_tightex" : fmt::format("{}_tightex_{}", stem, i);
+    int src = 0;
+    while (image_index[size_t(src)] != i) ++src;
+    tex.image = Image(image_size[size_t(src)].first, image_size[size_t(src)].second, Rgba8{0, 0, 0, 255});
+    names.insert(lower(tex.path));
     out.textures.push_back(std::move(tex));
     Material m;
-    m.name = num_images == 1 ? "tightex" : fmt::format("tightex_{}", i);
+    m.name = new_images == 1 ? "tightex" : fmt::format("tightex_{}", i);
     m.texture = i;
+    names.insert(lower(m.name));
     out.materials.push_back(m);
+  }
+  // The kept components' triangles, after the mapped ones: input corners and texture coordinates as
+  // they were, each input material they use copied once (first use first, so the order is fixed), its
+  // texture copied under the input file's own stem, both renamed only where a name is taken.
+  std::vector<int32_t> kept_material(input.materials.size() + 1, -1);  // input material + 1 -> output
+  std::vector<int> kept_texture(input.textures.size(), -1);
+  for (size_t c = 0; c < nc; ++c) {
+    if (!is_kept(c)) continue;
+    const Surface& comp = components[c];
+    for (uint32_t cf = 0; cf < comp.num_faces(); ++cf) {
+      const uint32_t t = surface.face_parent[comp.face_parent[cf]];
+      const int32_t in_mat = input.face_material[t];
+      int32_t& om = kept_material[size_t(in_mat + 1)];
+      if (om < 0) {
+        Material m;  // no input material: white, as measure() and a renderer take it
+        if (in_mat >= 0) m = input.materials[size_t(in_mat)];
+        m.texture = -1;
+        m.name = unique_name(names, "kept_" + file_name_safe(in_mat >= 0 ? input.materials[size_t(in_mat)].name : "none"));
+        if (in_mat >= 0 && input.materials[size_t(in_mat)].texture >= 0) {
+          const int in_tex = input.materials[size_t(in_mat)].texture;
+          int& ot = kept_texture[size_t(in_tex)];
+          if (ot < 0 && !input.textures[size_t(in_tex)].image.empty()) {
+            Texture tex;
+            tex.path = unique_name(names, file_name_safe(file_stem(input.textures[size_t(in_tex)].path)));
+            tex.image = input.textures[size_t(in_tex)].image;
+            ot = int(out.textures.size());
+            out.textures.push_back(std::move(tex));
+          }
+          m.texture = ot;
+        }
+        om = int32_t(out.materials.size());
+        out.materials.push_back(std::move(m));
+      }
+      out.triangles.push_back(input.triangles[t]);
+      for (int k = 0; k < 3; ++k) {
+        out.corner_uv.push_back(input.corner_uv[3 * t + size_t(k)]);
+        if (normals) out.corner_normal.push_back(input.corner_normal[3 * t + size_t(k)]);
+      }
+      out.face_material.push_back(om);
+    }
   }
 
   // 6. Bake the new texture (§4.3).
   progress("bake", 0);
   std::vector<Image> images;
-  for (Texture& t : out.textures) images.push_back(std::move(t.image));
+  for (int i = 0; i < new_images; ++i) images.push_back(std::move(out.textures[size_t(i)].image));
   BakeStats bs;
   BakeOptions bo;
   bo.fit = options.fit;
-  bake_texture(input, bake_tris, rects, images, &bs, bo);
+  bake_texture(input, bake_tris, mapped_rects, images, &bs, bo);
   for (size_t i = 0; i < images.size(); ++i) out.textures[i].image = std::move(images[i]);
   clock.done("bake");
 

@@ -64,6 +64,8 @@ void raster(const Vec2& a, const Vec2& b, const Vec2& c, int W, int H, F&& f) {
   const double x0 = std::min({p[0].x(), p[1].x(), p[2].x()}), x1 = std::max({p[0].x(), p[1].x(), p[2].x()});
   const double y0 = std::min({p[0].y(), p[1].y(), p[2].y()}), y1 = std::max({p[0].y(), p[1].y(), p[2].y()});
   if (!(x1 - x0 <= 4.0 * W && y1 - y0 <= 4.0 * H)) return;  // absurd or non-finite span: a broken input triangle
+  // So far out (a material's -o of 1e300) that its texel indices overflow: no texel a renderer can address.
+  if (!(std::abs(x0) < 1e15 && std::abs(x1) < 1e15 && std::abs(y0) < 1e15 && std::abs(y1) < 1e15)) return;
   scan_triangle(p[0], p[1], p[2], long(std::floor(x0)) - 1, long(std::ceil(x1)) + 1, long(std::floor(y0)) - 1,
                 long(std::ceil(y1)) + 1, EdgeRule::kInclusive, [&](long x, long y, double, double, double) { f(x, y); });
 }
@@ -105,7 +107,9 @@ ModelFigures measure_texture_space(const TexturedMesh& mesh) {
     if (tex >= 0) tris[size_t(tex)].push_back(t);
   }
   for (size_t i = 0; i < mesh.textures.size(); ++i) {
-    const auto [W, H] = texture_size(mesh, int(i));
+    // Not a structured binding: clang 14 (the fuzz build) cannot capture one in the lambda below.
+    const std::pair<int, int> size = texture_size(mesh, int(i));
+    const int W = size.first, H = size.second;
     if (W <= 0 || H <= 0) continue;
     std::vector<uint8_t, LargeBufferAllocator<uint8_t>> cov(size_t(W) * size_t(H), 0);
     for (size_t t : tris[i])
