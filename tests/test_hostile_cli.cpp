@@ -165,3 +165,37 @@ INSTANTIATE_TEST_SUITE_P(Catalogue, HostileCli, ::testing::ValuesIn(catalogue())
                          [](const ::testing::TestParamInfo<Case>& info) { return info.param.name; });
 
 }  // namespace
+
+namespace {
+
+// The outputs are named after the input: -o naming the input's own folder would replace the input
+// model. Refused with one line and exit 1, the input byte for byte as it was.
+TEST(HostileCliOutput, OutputIntoTheInputsOwnFolderIsRefusedAndTheInputUntouched) {
+  const fs::path dir = fs::temp_directory_path() / ("tightex_samedir_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string obj = grid_obj();
+  std::ofstream(dir / "in.obj", std::ios::binary) << obj;
+  std::ofstream(dir / "m.mtl", std::ios::binary) << kMtl;
+  Image img(16, 16, Rgba8{10, 20, 30, 255});
+  save_image((dir / "t.png").string(), img, ImageFormat::kPng);
+  for (const std::string& out : {dir.string(), dir.string() + "/.", dir.string() + "/../" + dir.filename().string()}) {
+    SCOPED_TRACE(out);
+    const std::string cmd = std::string(TIGHTEX_CLI) + " '" + (dir / "in.obj").string() + "' -o '" + out + "' --size 64 --quiet 2> '" +
+                            (dir / "stderr.txt").string() + "'";
+    const int status = std::system(cmd.c_str());
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 1);
+    std::ifstream err_file(dir / "stderr.txt");
+    const std::string err((std::istreambuf_iterator<char>(err_file)), {});
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+    EXPECT_NE(err.find("in.obj"), std::string::npos) << err;
+    std::ifstream in(dir / "in.obj", std::ios::binary);
+    EXPECT_EQ(std::string((std::istreambuf_iterator<char>(in)), {}), obj);
+    EXPECT_FALSE(fs::exists(dir / "report.json"));
+    EXPECT_FALSE(fs::exists(dir / "in_tightex.png"));
+  }
+  fs::remove_all(dir);
+}
+
+}  // namespace

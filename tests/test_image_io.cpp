@@ -693,3 +693,17 @@ TEST_F(ImageIoTest, LoadsRealTexture) {
 
 }  // namespace
 }  // namespace tightex
+
+// A NaN or infinite texture coordinate reads no texel (converting NaN to an index is undefined
+// behaviour; UBSan flags it): transparent black, and finite wrapped coordinates still sample.
+TEST(SampleBilinear, NonFiniteCoordinatesReadNothing) {
+  tightex::Image img(4, 4, tightex::Rgba8{200, 100, 50, 255});
+  for (double bad : {std::nan(""), double(INFINITY), -double(INFINITY)}) {
+    const auto a = tightex::sample_bilinear(img, bad, 0.5), b = tightex::sample_bilinear(img, 0.5, bad);
+    for (int c = 0; c < 4; ++c) {
+      EXPECT_EQ(a[size_t(c)], 0.0f);
+      EXPECT_EQ(b[size_t(c)], 0.0f);
+    }
+  }
+  EXPECT_FLOAT_EQ(tightex::sample_bilinear(img, 7.3, -2.1)[0], 200.0f);
+}

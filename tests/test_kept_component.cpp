@@ -132,18 +132,18 @@ TEST(KeptComponent, KeepsInputUvsMaterialAndTextureAndLosesNothing) {
   ASSERT_EQ(out.materials.size(), 2u);
   EXPECT_EQ(out.materials[1].name, "kept_skin_2");
   ASSERT_EQ(out.textures.size(), 2u);
-  EXPECT_EQ(out.textures[1].path, "skin");
+  EXPECT_EQ(out.textures[1].path, "kept_skin");
 
   // On disk: the MTL names the copied texture with its -s/-o, the texture loads, and the model reads
   // back with the kept part exactly as the input had it.
   TempDir dir("tightex_kept");
   write_obj(out, dir.path.string(), "model", ImageFormat::kPng);
-  for (const char* f : {"model.obj", "model.mtl", "multi_component_tightex.png", "skin.png"}) EXPECT_TRUE(fs::is_regular_file(dir.path / f)) << f;
+  for (const char* f : {"model.obj", "model.mtl", "multi_component_tightex.png", "kept_skin.png"}) EXPECT_TRUE(fs::is_regular_file(dir.path / f)) << f;
   const std::string mtl = slurp(dir.path / "model.mtl");
   EXPECT_NE(mtl.find("newmtl kept_skin_2\n"), std::string::npos) << mtl;
   EXPECT_NE(mtl.find("Kd 0.5 0.25 1\n"), std::string::npos) << mtl;
-  EXPECT_NE(mtl.find("map_Kd -s 2 1 1 -o 0.25 0 0 skin.png\n"), std::string::npos) << mtl;
-  EXPECT_TRUE(same_pixels(load_image((dir.path / "skin.png").string()), in.textures[1].image));
+  EXPECT_NE(mtl.find("map_Kd -s 2 1 1 -o 0.25 0 0 kept_skin.png\n"), std::string::npos) << mtl;
+  EXPECT_TRUE(same_pixels(load_image((dir.path / "kept_skin.png").string()), in.textures[1].image));
   const TexturedMesh back = read_obj((dir.path / "model.obj").string());
   expect_kept_as_input(in, back, kept_tris);
   const Metrics mb = measure(in, back, 20000);
@@ -165,7 +165,7 @@ TEST(KeptComponent, PerComponentLayoutWritesNoEmptyImage) {
   // nc - 1 new images and the input's texture, copied once.
   ASSERT_EQ(out.textures.size(), nc);
   for (size_t i = 0; i + 1 < nc; ++i) EXPECT_EQ(out.textures[i].path, fmt::format("multi_component_tightex_{}", i));
-  EXPECT_EQ(out.textures.back().path, "multi_component");  // the catalogue's texture is "multi_component.png"
+  EXPECT_EQ(out.textures.back().path, "kept_multi_component");  // the catalogue's texture is "multi_component.png"
   for (const Texture& t : out.textures) EXPECT_FALSE(t.image.empty());
   EXPECT_EQ(measure(in, out, 20000).lost_triangles, 0u);
   expect_kept_as_input(in, out, triangles_of(plan, 0));
@@ -189,7 +189,7 @@ TEST(KeptComponent, AllKeptAndNoMaterial) {
   expect_kept_as_input(in, out, triangles_of(plan, 0));
   TempDir dir("tightex_kept_all");
   write_obj(out, dir.path.string(), "sphere", ImageFormat::kJpeg);
-  EXPECT_TRUE(fs::is_regular_file(dir.path / "sphere.jpg"));
+  EXPECT_TRUE(fs::is_regular_file(dir.path / "kept_sphere.jpg"));
   EXPECT_FALSE(fs::exists(dir.path / "sphere_tightex.jpg"));
   const TexturedMesh back = read_obj((dir.path / "sphere.obj").string());
   EXPECT_EQ(back.num_triangles(), in.num_triangles());

@@ -106,6 +106,14 @@ int run_main(int argc, char** argv) {
   }
   const auto t0 = std::chrono::steady_clock::now();
   if (fs::is_directory(input)) fail_input("{}: is a directory, not a model file", input);
+  {
+    // The outputs are named after the input: written into the input's own folder they would replace it.
+    std::error_code ec;
+    const fs::path in_dir = fs::absolute(fs::path(input)).parent_path();
+    if (fs::exists(outdir, ec) && fs::exists(in_dir, ec) && fs::equivalent(outdir, in_dir, ec))
+      fail_input("{}: the output folder {} is the input's own folder; {}.obj would replace the input (choose another -o)", input, outdir,
+                 fs::path(input).stem().string());
+  }
   // Geometry first (milliseconds); the texture pixels are decoded while the geometric stages run,
   // since only the bake needs them. The OBJ is parsed twice: cheap, and every texture error keeps its
   // MTL file and line.

@@ -15,6 +15,7 @@ inline int wrap(int i, int n) {
 std::array<float, 4> sample_bilinear(const Image& image, double u, double v) {
   const double x = u * image.width - 0.5;
   const double y = (1.0 - v) * image.height - 0.5;
+  if (!std::isfinite(x) || !std::isfinite(y) || image.empty()) return {0, 0, 0, 0};  // no texel to read (int(NaN) is undefined)
   const double fx = std::floor(x), fy = std::floor(y);
   const float tx = float(x - fx), ty = float(y - fy);
   // floor of huge values is clamped before the int conversion, so absurd UVs cannot overflow.

@@ -542,7 +542,8 @@ Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& opt
           int& ot = kept_texture[size_t(in_tex)];
           if (ot < 0 && !input.textures[size_t(in_tex)].image.empty()) {
             Texture tex;
-            tex.path = unique_name(names, file_name_safe(file_stem(input.textures[size_t(in_tex)].path)));
+            // "kept_" keeps the copy from ever taking an input texture's own file name.
+            tex.path = unique_name(names, "kept_" + file_name_safe(file_stem(input.textures[size_t(in_tex)].path)));
             tex.image = input.textures[size_t(in_tex)].image;
             ot = int(out.textures.size());
             out.textures.push_back(std::move(tex));
