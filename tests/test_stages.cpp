@@ -1043,5 +1043,18 @@ TEST(DetailMap, GivesTheTexelsToTheDetailedHalf) {
   EXPECT_GT(detail_psnr, area_psnr + 1.0) << "detail " << detail_psnr << " dB, area " << area_psnr << " dB";
 }
 
+// input_detail: positive on a textured triangle with contrast, 0 on a flat colour, and finite (0) where
+// absurd material transforms make the texel count overflow (int(inf) would be undefined behaviour).
+TEST(DetailMap, InputDetailIsFiniteForAnyUnits) {
+  TexturedMesh m = cat::make_textured("detail_units", {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}, {Tri{0, 1, 2}}, cat::checker_image(64, 64, 2));
+  EXPECT_GT(input_detail(m, 0), 0.0);
+  m.materials[0].uv_scale = {1e300, 1e300};
+  const double huge = input_detail(m, 0);
+  EXPECT_TRUE(std::isfinite(huge));
+  m.materials[0].uv_scale = {1, 1};
+  m.textures[0].image = Image(64, 64, Rgba8{50, 60, 70, 255});
+  EXPECT_EQ(input_detail(m, 0), 0.0);
+}
+
 }  // namespace
 }  // namespace tightex

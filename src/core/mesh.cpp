@@ -40,9 +40,9 @@ double input_detail(const TexturedMesh& mesh, size_t t) {
   const Vec2 a = mesh.sampled_uv(t, 0), b = mesh.sampled_uv(t, 1), c = mesh.sampled_uv(t, 2);
   const double texels = std::abs(signed_area(a, b, c)) * double(img.width) * double(img.height);
   const double a3 = triangle_area(mesh.positions[mesh.triangles[t][0]], mesh.positions[mesh.triangles[t][1]], mesh.positions[mesh.triangles[t][2]]);
-  if (!(a3 > 0) || !(texels > 0)) return 0.0;
-  // Points: a barycentric grid of n(n+1)/2 points, n from 1 (tiny) to 5 (16+ texels).
-  const int n = std::clamp(int(std::sqrt(texels)), 1, 5);
+  if (!(a3 > 0) || !(texels > 0) || !std::isfinite(texels) || !std::isfinite(a3)) return 0.0;
+  // Points: a barycentric grid of n(n+1)/2 points, n from 1 (tiny) to 5 (25+ texels).
+  const int n = texels >= 25 ? 5 : std::max(1, int(std::sqrt(texels)));
   const double du = 1.0 / img.width, dv = 1.0 / img.height;
   double sum = 0;
   int count = 0;
@@ -59,7 +59,8 @@ double input_detail(const TexturedMesh& mesh, size_t t) {
       ++count;
     }
   // Levels per texel -> levels per unit length: times the texels per unit length.
-  return std::sqrt(sum / count * texels / a3);
+  const double detail = std::sqrt(sum / count * texels / a3);
+  return std::isfinite(detail) ? detail : 0.0;
 }
 
 double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c) { return 0.5 * (b - a).cross(c - a).norm(); }

@@ -159,6 +159,7 @@ void allocate_detail(const std::vector<Surface>& components, std::vector<Compone
     for (size_t f = 0; f < d.area3.size(); ++f) area += d.area3[f], max_detail = std::max(max_detail, d.detail[f]);
   if (!(area > 0) || !(max_detail > 0) || !(budget > 0)) return;  // no detail anywhere: the area map
   const double mean = budget / area, floor = kDetailFloor * mean;
+  if (!std::isfinite(mean) || !std::isfinite(mean / max_detail) || !(mean / max_detail > 0)) return;  // absurd units: the area map
   auto density_at = [&](const ComponentDensity& d, size_t f, double c) {
     const double cap = d.input_density[f] > 0 ? kDetailCap * d.input_density[f] : mean;
     return std::max(floor, std::min(c * d.detail[f], std::max(cap, floor)));
