@@ -98,6 +98,16 @@ constexpr double kDensityRange = 16.0;
 /// Symmetric Dirichlet steps of the texel and detail maps (they stop earlier once a step gains < 0.1%).
 constexpr int kRefineToConvergence = 30;
 
+/// The weighted median of (value, weight) pairs (non-empty; sorts them).
+double weighted_median(std::vector<std::pair<double, double>>& vw) {
+  std::sort(vw.begin(), vw.end());
+  double total = 0, acc = 0;
+  for (const auto& [v, w] : vw) total += w;
+  for (const auto& [v, w] : vw)
+    if ((acc += w) >= 0.5 * total) return v;
+  return vw.back().first;
+}
+
 ComponentDensity component_density(const TexturedMesh& input, const Surface& surface, const Surface& comp, MapKind map) {
   ComponentDensity d;
   const size_t nf = comp.num_faces();
@@ -115,15 +125,7 @@ ComponentDensity component_density(const TexturedMesh& input, const Surface& sur
       d.textured = false;
       d.face.assign(nf, 1.0);
     } else {
-      std::sort(vw.begin(), vw.end());
-      double total = 0, acc = 0;
-      for (const auto& [v, w] : vw) total += w;
-      d.median = vw.back().first;
-      for (const auto& [v, w] : vw)
-        if ((acc += w) >= 0.5 * total) {
-          d.median = v;
-          break;
-        }
+      d.median = weighted_median(vw);
       for (double& x : d.face) x = std::isfinite(x) ? std::clamp(x, d.median / kDensityRange, d.median * kDensityRange) : d.median;
     }
   }
@@ -199,14 +201,7 @@ void allocate_detail(const std::vector<Surface>& components, std::vector<Compone
     for (size_t f = 0; f < nf; ++f) d.texels += (d.face[f] = std::exp(lg[f])) * d.area3[f];
     std::vector<std::pair<double, double>> vw;
     for (size_t f = 0; f < nf; ++f) vw.push_back({d.face[f], d.area3[f]});
-    std::sort(vw.begin(), vw.end());
-    const double half = 0.5 * std::accumulate(d.area3.begin(), d.area3.end(), 0.0);
-    double acc = 0;
-    for (const auto& [v, w] : vw)
-      if ((acc += w) >= half) {
-        d.median = v;
-        break;
-      }
+    if (!vw.empty()) d.median = weighted_median(vw);
   }
 }
 
