@@ -104,10 +104,14 @@ void fit_tile(const Image& base, Image& out, const std::vector<BakeTriangle>& tr
   const int rx1 = std::min(out.width, bx1 + kHalo), ry1 = std::min(out.height, by1 + kHalo);
   const int rw = rx1 - rx0, rh = ry1 - ry0;
   const size_t n = size_t(rw) * size_t(rh);
-  static constexpr double kOff[4][2] = {{-0.25, -0.25}, {0.25, -0.25}, {-0.25, 0.25}, {0.25, 0.25}};
+  // Sample classes: a K x K grid of points inside each texel (offsets from its centre).
+  const int K = std::clamp(options.fit_samples, 1, 8), classes = K * K;
+  std::vector<std::array<double, 2>> offsets(static_cast<size_t>(classes));
+  for (int j = 0; j < K; ++j)
+    for (int i = 0; i < K; ++i) offsets[size_t(j * K + i)] = {(i + 0.5) / K - 0.5, (j + 0.5) / K - 0.5};
   // Samples: per class k and texel, the target colour and weight (0: none).
-  std::vector<std::array<float, 3>> target(4 * n);
-  std::vector<float> weight(4 * n, 0.0f);
+  std::vector<std::array<float, 3>> target(size_t(classes) * n);
+  std::vector<float> weight(size_t(classes) * n, 0.0f);
   double weight_sum = 0;
   size_t samples = 0;
   // The weights (3D area per texel) are brought to [1, 2) for the tile's largest by a power of two: a
@@ -125,13 +129,13 @@ void fit_tile(const Image& base, Image& out, const std::vector<BakeTriangle>& tr
     if (!smp.valid || !(smp.weight > 0)) continue;
     const double smp_weight = smp.weight * weight_scale;
     const BakeTriangle& tri = triangles[t];
-    for (int k = 0; k < 4; ++k) {
-      const Vec2 off(kOff[k][0], kOff[k][1]);
+    for (int k = 0; k < classes; ++k) {
+      const Vec2 off(offsets[size_t(k)][0], offsets[size_t(k)][1]);
       scan_triangle(tri.target_px[0] - off, tri.target_px[1] - off, tri.target_px[2] - off, rx0 + 1, rx1 - 1, ry0 + 1, ry1 - 1,
                     EdgeRule::kInclusive, [&](long x, long y, double, double, double) {
                       const size_t i = size_t(k) * n + size_t(y - ry0) * size_t(rw) + size_t(x - rx0);
                       if (weight[i] > 0) return;
-                      const auto c = smp.colour(double(x) + 0.5 + off.x(), double(y) + 0.5 + off.y(), 0.5, max_samples);
+                      const auto c = smp.colour(double(x) + 0.5 + off.x(), double(y) + 0.5 + off.y(), 1.0 / K, max_samples);
                       target[i] = {c[0], c[1], c[2]};
                       weight[i] = float(smp_weight);
                       weight_sum += smp_weight;
@@ -143,8 +147,9 @@ void fit_tile(const Image& base, Image& out, const std::vector<BakeTriangle>& tr
   const float lambda = float(options.fit_lambda * weight_sum / double(samples));
   // Bilinear taps of a sample of class k at local texel i: (offset index, weight).
   auto taps = [&](int k, size_t i, auto&& f) {
-    const int dx0 = kOff[k][0] < 0 ? -1 : 0, dy0 = kOff[k][1] < 0 ? -1 : 0;
-    const float wx1 = kOff[k][0] < 0 ? 0.75f : 0.25f, wy1 = kOff[k][1] < 0 ? 0.75f : 0.25f;  // weight of the +1 tap
+    const double ox = offsets[size_t(k)][0], oy = offsets[size_t(k)][1];
+    const int dx0 = ox < 0 ? -1 : 0, dy0 = oy < 0 ? -1 : 0;
+    const float wx1 = float(ox < 0 ? 1 + ox : ox), wy1 = float(oy < 0 ? 1 + oy : oy);  // weight of the +1 tap
     const long base_i = long(i) + dy0 * rw + dx0;
     f(size_t(base_i), (1 - wx1) * (1 - wy1));
     f(size_t(base_i + 1), wx1 * (1 - wy1));
@@ -154,7 +159,7 @@ void fit_tile(const Image& base, Image& out, const std::vector<BakeTriangle>& tr
   // A = B^T W B + lambda I as a 9-point stencil per texel: every sample's 4 taps lie in a 2x2 block.
   std::vector<std::array<float, 9>> stencil(n);
   for (size_t i = 0; i < n; ++i) stencil[i] = {0, 0, 0, 0, lambda, 0, 0, 0, 0};
-  for (int k = 0; k < 4; ++k)
+  for (int k = 0; k < classes; ++k)
     for (size_t i = 0; i < n; ++i) {
       const float w = weight[size_t(k) * n + i];
       if (w == 0) continue;
@@ -197,7 +202,7 @@ void fit_tile(const Image& base, Image& out, const std::vector<BakeTriangle>& tr
       x[i] = {float(c.r), float(c.g), float(c.b)};
       rhs[i] = {lambda * x[i][0], lambda * x[i][1], lambda * x[i][2]};
     }
-  for (int k = 0; k < 4; ++k)
+  for (int k = 0; k < classes; ++k)
     for (size_t i = 0; i < n; ++i) {
       const float w = weight[size_t(k) * n + i];
       if (w == 0) continue;

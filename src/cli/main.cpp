@@ -77,8 +77,9 @@ int run_main(int argc, char** argv) {
   app.add_option("--texels", texels, "texel budget: the texture is the smallest square (side a multiple of 4) holding this many texels. "
                                      "Default: the input's used texels, so the output keeps the input's information")
       ->check(CLI::PositiveNumber)->excludes(size_opt);
-  app.add_option("--map", map, "area (default): the same texels per unit of 3D area everywhere; texel: the input's own "
-                               "texel density per triangle; harmonic: the paper's map exactly")
+  app.add_option("--map", map, "detail (default): texels where the input texture has detail (colour gradient per 3D length), "
+                               "capped at 4x the input's own density; area: the same texels per unit of 3D area everywhere; "
+                               "texel: the input's own texel density per triangle; harmonic: the paper's map exactly (docs/maps.md)")
       ->check(CLI::IsMember({"detail", "texel", "area", "harmonic"}));
   app.add_option("--balance", balance, "area/texel/detail maps: 1 = target density exactly, 0 = the harmonic map's density (least angle "
                                        "distortion); between: a geometric blend")
