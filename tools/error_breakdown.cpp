@@ -25,13 +25,6 @@ using namespace tightex;
 
 namespace {
 
-const Image* image_of(const TexturedMesh& m, size_t t) {
-  const int32_t mat = m.face_material[t];
-  if (mat < 0) return nullptr;
-  const int tex = m.materials[size_t(mat)].texture;
-  if (tex < 0 || m.textures[size_t(tex)].image.empty()) return nullptr;
-  return &m.textures[size_t(tex)].image;
-}
 
 std::array<double, 3> colour(const TexturedMesh& m, size_t t, const Vec2& uv) {
   const Image* img = image_of(m, t);

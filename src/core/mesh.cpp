@@ -63,6 +63,14 @@ double input_detail(const TexturedMesh& mesh, size_t t) {
   return std::isfinite(detail) ? detail : 0.0;
 }
 
+const Image* image_of(const TexturedMesh& m, size_t t) {
+  const int32_t mat = m.face_material[t];
+  if (mat < 0) return nullptr;
+  const int tex = m.materials[size_t(mat)].texture;
+  if (tex < 0 || m.textures[size_t(tex)].image.empty()) return nullptr;
+  return &m.textures[size_t(tex)].image;
+}
+
 double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c) { return 0.5 * (b - a).cross(c - a).norm(); }
 
 double signed_area(const Vec2& a, const Vec2& b, const Vec2& c) {

@@ -69,6 +69,9 @@ double input_texel_area(const TexturedMesh& mesh, size_t t);
 /// signal-specialized parametrization).
 double input_detail(const TexturedMesh& mesh, size_t t);
 
+/// The loaded texture image triangle t samples; nullptr without a material, texture or pixels.
+const Image* image_of(const TexturedMesh& m, size_t t);
+
 /// 3D area of a triangle.
 double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c);
 /// Signed area of a 2D triangle (positive = counter-clockwise).

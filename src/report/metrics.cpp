@@ -44,13 +44,6 @@ std::vector<uint32_t> weld_positions(const TexturedMesh& m) {
   return id;
 }
 
-const Image* image_of(const TexturedMesh& m, size_t t) {
-  const int32_t mat = m.face_material[t];
-  if (mat < 0) return nullptr;
-  const int tex = m.materials[size_t(mat)].texture;
-  if (tex < 0 || m.textures[size_t(tex)].image.empty()) return nullptr;
-  return &m.textures[size_t(tex)].image;
-}
 int texture_of(const TexturedMesh& m, size_t t) {
   const int32_t mat = m.face_material[t];
   return mat < 0 ? -1 : m.materials[size_t(mat)].texture;
