@@ -68,6 +68,18 @@ struct TriangleSampler {
       const double n = std::ceil(footprint * box - 1e-9);
       return n >= max_samples ? max_samples : n >= 1 ? int(n) : 1;
     };
+    // Common case (a footprint of at most one input pixel along both axes): one sample, the same as the
+    // general loop below with nx = ny = 1, without its ceil() calls (the fit takes K^2 samples a texel).
+    if (footprint_x * box - 1e-9 <= 1 && footprint_y * box - 1e-9 <= 1) {
+      double w[3], total = 0;
+      for (int k = 0; k < 3; ++k) total += w[k] = std::max(0.0, bary_0[k] + bary_x[k] * x + bary_y[k] * y);
+      Vec2 uv = uv0 + x * du_dx + y * du_dy;
+      if (w[0] == 0 || w[1] == 0 || w[2] == 0) {
+        uv = Vec2::Zero();
+        for (int k = 0; k < 3; ++k) uv += (w[k] / total) * corner_uv[k];
+      }
+      return sample_bilinear(*src, uv.x(), uv.y());
+    }
     const int nx = samples_along(footprint_x), ny = samples_along(footprint_y);
     std::array<float, 4> sum{0, 0, 0, 0};
     for (int j = 0; j < ny; ++j)
@@ -157,42 +169,69 @@ void fit_tile(const Image& base, Image& out, const std::vector<BakeTriangle>& tr
     f(size_t(base_i + rw + 1), wx1 * wy1);
   };
   // A = B^T W B + lambda I as a 9-point stencil per texel: every sample's 4 taps lie in a 2x2 block.
+  // A class's taps (offsets, weights) are the same for all its samples, and so is the stencil slot of
+  // tap b seen from tap a: tabulated once per class.
   std::vector<std::array<float, 9>> stencil(n);
   for (size_t i = 0; i < n; ++i) stencil[i] = {0, 0, 0, 0, lambda, 0, 0, 0, 0};
-  for (int k = 0; k < classes; ++k)
+  for (int k = 0; k < classes; ++k) {
+    long tap_offset[4];
+    float tap_weight[4];
+    int m = 0;
+    taps(k, 0, [&](size_t j, float wt) { tap_offset[m] = long(j), tap_weight[m] = wt, ++m; });  // offsets from texel 0 (wrap as size_t)
+    constexpr int kPosX[4] = {0, 1, 0, 1}, kPosY[4] = {0, 0, 1, 1};
+    int slot[4][4];
+    for (int a = 0; a < 4; ++a)
+      for (int b2 = 0; b2 < 4; ++b2) slot[a][b2] = (kPosY[b2] - kPosY[a] + 1) * 3 + (kPosX[b2] - kPosX[a] + 1);
+    const float* wk = weight.data() + size_t(k) * n;
     for (size_t i = 0; i < n; ++i) {
-      const float w = weight[size_t(k) * n + i];
+      const float w = wk[i];
       if (w == 0) continue;
-      size_t tj[4];
-      float tw[4];
-      int m = 0;
-      taps(k, i, [&](size_t j, float wt) { tj[m] = j, tw[m] = wt, ++m; });
-      for (int a = 0; a < 4; ++a)
-        for (int b2 = 0; b2 < 4; ++b2) {
-          const long d = long(tj[b2]) - long(tj[a]);  // 0, +-1, +-rw, +-(rw+-1)
-          const int dy = d > 1 ? 1 : d < -1 ? -1 : 0, dx = int(d - long(dy) * rw);
-          stencil[tj[a]][size_t((dy + 1) * 3 + dx + 1)] += w * tw[a] * tw[b2];
-        }
+      for (int a = 0; a < 4; ++a) {
+        auto& st = stencil[size_t(long(i) + tap_offset[a])];
+        const float wa = w * tap_weight[a];
+        for (int b2 = 0; b2 < 4; ++b2) st[size_t(slot[a][b2])] += wa * tap_weight[b2];
+      }
     }
+  }
   using Vec = std::vector<std::array<float, 3>>;
+  // result = A v. Interior texels take all 9 neighbours without checks; the region's border rows and
+  // columns check their bounds (their stencil has zeros there, as no sample's taps leave the region).
   auto apply = [&](const Vec& v, Vec& result) {
-    for (int y = 0; y < rh; ++y)
-      for (int xx = 0; xx < rw; ++xx) {
+    auto general = [&](int y, int xx) {
+      const size_t i = size_t(y) * size_t(rw) + size_t(xx);
+      const auto& st = stencil[i];
+      float s0 = 0, s1 = 0, s2 = 0;
+      for (int dy = -1; dy <= 1; ++dy) {
+        if (y + dy < 0 || y + dy >= rh) continue;
+        for (int dx = -1; dx <= 1; ++dx) {
+          if (xx + dx < 0 || xx + dx >= rw) continue;
+          const float c = st[size_t((dy + 1) * 3 + dx + 1)];
+          const auto& vj = v[size_t(long(i) + dy * rw + dx)];
+          s0 += c * vj[0], s1 += c * vj[1], s2 += c * vj[2];
+        }
+      }
+      result[i] = {s0, s1, s2};
+    };
+    for (int y = 0; y < rh; ++y) {
+      if (y == 0 || y == rh - 1 || rw < 3) {
+        for (int xx = 0; xx < rw; ++xx) general(y, xx);
+        continue;
+      }
+      general(y, 0);
+      for (int xx = 1; xx < rw - 1; ++xx) {
         const size_t i = size_t(y) * size_t(rw) + size_t(xx);
         const auto& st = stencil[i];
         float s0 = 0, s1 = 0, s2 = 0;
-        for (int dy = -1; dy <= 1; ++dy) {
-          if (y + dy < 0 || y + dy >= rh) continue;
+        for (int dy = -1; dy <= 1; ++dy)
           for (int dx = -1; dx <= 1; ++dx) {
-            if (xx + dx < 0 || xx + dx >= rw) continue;
             const float c = st[size_t((dy + 1) * 3 + dx + 1)];
-            if (c == 0) continue;
             const auto& vj = v[size_t(long(i) + dy * rw + dx)];
             s0 += c * vj[0], s1 += c * vj[1], s2 += c * vj[2];
           }
-        }
         result[i] = {s0, s1, s2};
       }
+      general(y, rw - 1);
+    }
   };
   Vec x(n), rhs(n), r(n), p(n), ap(n);
   for (int y = ry0; y < ry1; ++y)
