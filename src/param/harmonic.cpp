@@ -1,4 +1,4 @@
-#include <Eigen/CholmodSupport>
+#include "param/sparse_cholesky.hpp"
 #include <Eigen/Sparse>
 #include <algorithm>
 #include <cmath>
@@ -52,7 +52,7 @@ std::vector<double> edge_weights(const Surface& m, Weights kind, size_t* negativ
 }
 
 /// Solves the Dirichlet problem with the boundary fixed at `uv` of boundary vertices.
-using Solver = Eigen::CholmodSimplicialLLT<SpMat, Eigen::Lower>;
+using Solver = SparseCholesky;
 
 /// The fallbacks change the weights, never the sparsity pattern: the symbolic analysis is done once.
 bool solve_interior(const Surface& m, const std::vector<double>& w, const std::vector<char>& on_boundary,
@@ -87,6 +87,7 @@ bool solve_interior(const Surface& m, const std::vector<double>& w, const std::v
   SpMat A(n, n);
   A.setFromTriplets(trips.begin(), trips.end());
   if (!analyzed) {
+    choose_factorisation(solver, A.rows());
     solver.analyzePattern(A);
     analyzed = true;
   }

@@ -2,7 +2,7 @@
 // against its target shape (the 3D triangle scaled to its target UV area), with the boundary held.
 // Scalable Locally Injective Maps (Rabinovich, Lipman, Sorkine-Hornung 2017): each step solves a
 // reweighted Laplacian-like proxy, then a line search that never lets a triangle reach zero area.
-#include <Eigen/CholmodSupport>
+#include "param/sparse_cholesky.hpp"
 #include <Eigen/Sparse>
 #include <algorithm>
 #include <cmath>
@@ -114,7 +114,7 @@ SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std
       if (!(fixed[v] & (1 << a))) index[2 * v + size_t(a)] = n++;
   st.energy_before = st.energy = energy(m, fr, uv);
   if (n == 0 || !std::isfinite(st.energy)) return st;
-  Eigen::CholmodSimplicialLLT<SpMat, Eigen::Lower> solver;
+  SparseCholesky solver;
   bool analyzed = false;
   // The matrix's pattern is the same every step: build it once, and where each face's 2x2 blocks land
   // in its value array, so a step only overwrites values.
@@ -182,6 +182,7 @@ SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std
       }
     }
     if (!analyzed) {
+      choose_factorisation(solver, A.rows());
       solver.analyzePattern(A);
       analyzed = true;
     }
