@@ -2,7 +2,7 @@
 # Installs everything tightex needs to build and test on Debian 12 (run as root, or with sudo available).
 set -euo pipefail
 pkgs=(build-essential cmake ninja-build pkg-config
-      libeigen3-dev libsuitesparse-dev libopenblas0-serial libtbb-dev
+      libeigen3-dev libsuitesparse-dev libopenblas0-pthread libtbb-dev
       libtinyobjloader-dev libtinygltf-dev nlohmann-json3-dev
       libspng-dev libjpeg62-turbo-dev libwebp-dev libstb-dev zlib1g-dev
       libcli11-dev libfmt-dev libgtest-dev libgmock-dev libbenchmark-dev)

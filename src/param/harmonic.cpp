@@ -87,7 +87,6 @@ bool solve_interior(const Surface& m, const std::vector<double>& w, const std::v
   SpMat A(n, n);
   A.setFromTriplets(trips.begin(), trips.end());
   if (!analyzed) {
-    choose_factorisation(solver, A.rows());
     solver.analyzePattern(A);
     analyzed = true;
   }
@@ -369,7 +368,7 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
 
   // Alg. 2 with the fold-free fallbacks.
   const std::vector<Vec2> boundary_uv = uv;
-  Solver solver;
+  Solver solver(options.supernodal_from);
   bool analyzed = false;
   std::vector<double> positive_w;  // the positive weights of the first fold-free positive weighting
   for (Weights kind : {Weights::kCotangent, Weights::kClamped, Weights::kUniform}) {
@@ -400,7 +399,7 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
       // Fixed coordinates (bit 0: u, bit 1: v): both for corners and bumps; a side's vertex slides along it.
       std::vector<char> fixed(m.num_vertices(), 0);
       for (size_t i = 0; i < nb; ++i) fixed[bnd[i]] = pinned[i] || !options.slide_boundary ? 3 : (side_of[i] % 2 == 0 ? 2 : 1);
-      const SlimStats ss = refine_map(m, fixed, st.blended_target, options.refine_iterations, uv);
+      const SlimStats ss = refine_map(m, fixed, st.blended_target, options.refine_iterations, uv, options.supernodal_from);
       st.refine_iterations = ss.iterations;
       st.refine_energy_before = ss.energy_before;
       st.refine_energy = ss.energy;
@@ -438,7 +437,7 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
         for (size_t f = 0; f < nf; ++f) corrected[f] *= std::exp2(-std::clamp(log_ratio[f], -4.0, 4.0));
         const std::vector<Vec2> previous = uv;
         const double previous_p5 = st.spread_p5, previous_p95 = st.spread_p95;
-        const SlimStats cs = refine_map(m, fixed, corrected, 2, uv);
+        const SlimStats cs = refine_map(m, fixed, corrected, 2, uv, options.supernodal_from);
         st.refine_iterations += cs.iterations;
         ++st.correction_rounds;
         spread();

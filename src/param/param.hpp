@@ -14,6 +14,15 @@ enum class CornerRule {
   kTurningAngle,  // where the boundary turns most, each arc at least 10% of the length
 };
 
+/// From this many unknowns on, a map's linear systems are factorised supernodally (dense BLAS kernels
+/// on column blocks); below it, simplicially. Measured (BENCHMARKS.md, "Large models"), cut+map
+/// seconds, default map, simplicial -> supernodal with Debian's OpenBLAS (pthread): a vase of 44k
+/// triangles 14.5 -> 5.8, of 225k 48.8 -> 14.9, of 896k 571 -> 77. With the reference BLAS the
+/// supernodal one still wins at 225k (41.8 s). At meshroom's sizes (harmonic systems of 26k unknowns)
+/// the simplicial one is as fast, and the maps there stay exactly as they were (its crowding rounds
+/// are sensitive to rounding: 42.22 -> 41.71 dB otherwise).
+constexpr long kSupernodalFrom = 40000;
+
 struct SquareMapOptions {
   // Size of the texel rectangle the square will be stretched to. Used only to size the boundary bumps
   // (see map_to_square) in texels; the map itself is computed on the unit square.
@@ -49,6 +58,9 @@ struct SquareMapOptions {
   /// Off by default: measured on ../shared/data it narrowed no model's density error once the best
   /// reweighting iterate is kept, and cost meshroom_esp32cam 0.2 dB (41.17 vs 41.36 at --size 1024).
   int correction_rounds = 0;
+  /// Linear systems of this many unknowns or more are factorised supernodally, smaller ones
+  /// simplicially (see kSupernodalFrom). Tests set it low to run the supernodal path on small meshes.
+  long supernodal_from = kSupernodalFrom;
 };
 
 struct SquareMapStats {
@@ -115,7 +127,7 @@ struct SlimStats {
 /// vertex's u, bit 1 its v (3: the vertex stays; 1 or 2: it slides along a side). uv must be fold-free; it stays fold-free (the line search stops short of any triangle's
 /// collapse). SLIM (Rabinovich et al. 2017): a reweighted proxy solved with CHOLMOD, pattern analysed once.
 SlimStats refine_map(const Surface& mesh, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,
-                     std::vector<Vec2>& uv);
+                     std::vector<Vec2>& uv, long supernodal_from = kSupernodalFrom);
 
 /// Number of triangles whose UV signed area is not strictly positive.
 size_t count_folds(const Surface& mesh, const std::vector<Vec2>& uv);

@@ -101,7 +101,7 @@ double max_step(const Surface& m, const std::vector<Vec2>& uv, const std::vector
 }  // namespace
 
 SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,
-                     std::vector<Vec2>& uv) {
+                     std::vector<Vec2>& uv, long supernodal_from) {
   SlimStats st;
   const size_t nv = m.num_vertices();
   const auto fr = target_frames(m, target);
@@ -114,7 +114,7 @@ SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std
       if (!(fixed[v] & (1 << a))) index[2 * v + size_t(a)] = n++;
   st.energy_before = st.energy = energy(m, fr, uv);
   if (n == 0 || !std::isfinite(st.energy)) return st;
-  SparseCholesky solver;
+  SparseCholesky solver(supernodal_from);
   bool analyzed = false;
   // The matrix's pattern is the same every step: build it once, and where each face's 2x2 blocks land
   // in its value array, so a step only overwrites values.
@@ -182,8 +182,7 @@ SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std
       }
     }
     if (!analyzed) {
-      choose_factorisation(solver, A.rows());
-      solver.analyzePattern(A);
+        solver.analyzePattern(A);
       analyzed = true;
     }
     solver.factorize(A);

@@ -2,22 +2,49 @@
 #pragma once
 #include <Eigen/CholmodSupport>
 #include <Eigen/Sparse>
+#include <mutex>
+
+#include "param/param.hpp"
 
 namespace tightex {
 
-using SparseCholesky = Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower>;
+/// Serialises the supernodal factorisations and solves of all threads. The components are mapped in
+/// parallel, and a BLAS built without locking (Debian's serial OpenBLAS) returns garbage when two
+/// threads call it at once: two 100k-triangle components gave "matrix not positive definite" and a
+/// folded map. One BLAS call at a time is correct with any BLAS, and costs little: a threaded BLAS
+/// uses every core within the call.
+std::mutex& blas_mutex();
 
-/// From this many unknowns on, the supernodal factorisation (dense BLAS kernels on column blocks);
-/// below it, the simplicial one. Measured (BENCHMARKS.md, "Large models"), cut+map seconds, default
-/// map, simplicial -> supernodal with Debian's serial OpenBLAS: vase of 225k triangles 48.8 -> 24.2,
-/// of 896k triangles 571 -> 122; 44k triangles 14.5 -> 9.0. With the reference BLAS the supernodal
-/// one still wins at 225k (41.8 s). At meshroom's sizes (harmonic systems of 26k unknowns) the
-/// simplicial one is as fast, and the maps there stay exactly as they were.
-constexpr Eigen::Index kSupernodalFrom = 40000;
+/// Eigen's CHOLMOD wrapper, simplicial or supernodal by the system's size (chosen at analyzePattern;
+/// kSupernodalFrom).
+class SparseCholesky {
+ public:
+  using Matrix = Eigen::SparseMatrix<double>;
 
-/// Call before analyzePattern: the factorisation kind for a system of `unknowns` rows.
-inline void choose_factorisation(SparseCholesky& solver, Eigen::Index unknowns) {
-  solver.setMode(unknowns >= kSupernodalFrom ? Eigen::CholmodSupernodalLLt : Eigen::CholmodSimplicialLLt);
-}
+  explicit SparseCholesky(long supernodal_from = kSupernodalFrom) : supernodal_from_(supernodal_from) {}
+  void analyzePattern(const Matrix& a) {
+    supernodal_ = a.rows() >= supernodal_from_;
+    solver_.setMode(supernodal_ ? Eigen::CholmodSupernodalLLt : Eigen::CholmodSimplicialLLt);
+    solver_.analyzePattern(a);
+  }
+  void factorize(const Matrix& a) {
+    std::unique_lock<std::mutex> lock(blas_mutex(), std::defer_lock);
+    if (supernodal_) lock.lock();
+    solver_.factorize(a);
+  }
+  template <class Rhs>
+  Eigen::Matrix<double, Eigen::Dynamic, Rhs::ColsAtCompileTime> solve(const Eigen::MatrixBase<Rhs>& b) const {
+    std::unique_lock<std::mutex> lock(blas_mutex(), std::defer_lock);
+    if (supernodal_) lock.lock();
+    return solver_.solve(b);
+  }
+  Eigen::ComputationInfo info() const { return solver_.info(); }
+  bool supernodal() const { return supernodal_; }
+
+ private:
+  Eigen::CholmodDecomposition<Matrix, Eigen::Lower> solver_;
+  long supernodal_from_;
+  bool supernodal_ = false;
+};
 
 }  // namespace tightex
