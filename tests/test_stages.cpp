@@ -9,6 +9,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <map>
 #include <numeric>
@@ -1050,6 +1052,41 @@ TEST(Checkers, CatchBrokenOutput) {
 // colour on its right. The detail map must give the checkered half clearly more texels per unit area
 // than the flat half, stay fold-free, and reproduce the texture better than the area map at the same
 // (tight) budget; the area map keeps both halves near the same density.
+// Progress: stages in pipeline order, fractions within [0, 1] and never decreasing within a stage,
+// calls never overlapping (the components are mapped in parallel and report from their threads).
+TEST(Pipeline, ProgressIsOrderedAndSerialised) {
+  Options opt;
+  opt.size = 128;
+  std::vector<std::pair<std::string, double>> calls;
+  std::atomic<int> inside{0};
+  bool overlapped = false;
+  opt.progress = [&](std::string_view stage, double f) {
+    if (inside.fetch_add(1) != 0) overlapped = true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));  // widen the window for an overlap
+    calls.push_back({std::string(stage), f});
+    inside.fetch_sub(1);
+  };
+  const Result r = optimize(cat::multi_component(), opt);
+  EXPECT_FALSE(overlapped);
+  ASSERT_FALSE(calls.empty());
+  const std::vector<std::string> order = {"repair", "components", "cut+map", "bake", "measure", "done"};
+  size_t at = 0;
+  double last = 0;
+  for (const auto& [stage, f] : calls) {
+    SCOPED_TRACE(stage + " " + std::to_string(f));
+    const size_t i = size_t(std::find(order.begin(), order.end(), stage) - order.begin());
+    ASSERT_LT(i, order.size()) << "unknown stage";
+    ASSERT_GE(i, at) << "stages out of order";
+    if (i > at) at = i, last = 0;
+    EXPECT_GE(f, last);
+    EXPECT_LE(f, 1.0);
+    last = f;
+  }
+  EXPECT_EQ(calls.back().first, "done");
+  EXPECT_EQ(calls.back().second, 1.0);
+  EXPECT_TRUE(std::any_of(calls.begin(), calls.end(), [](const auto& c) { return c.first == "cut+map"; }));
+}
+
 TEST(DetailMap, GivesTheTexelsToTheDetailedHalf) {
   auto g = cat::param_grid(33, 17, false, false, [](int i, int j) { return Vec3(i / 16.0, j / 16.0, 0.0); });
   Image img(256, 128);

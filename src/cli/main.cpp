@@ -162,7 +162,10 @@ int run_main(int argc, char** argv) {
   opt.fit = !no_fit;
   opt.measure = false;
   if (show_progress)
-    opt.progress = [](std::string_view stage, double) { fmt::print(stderr, "\r\033[Ktightex: {}...", stage); };
+    opt.progress = [](std::string_view stage, double f) {
+      if (f > 0 && f < 1) fmt::print(stderr, "\r\033[Ktightex: {} {:.0f}%...", stage, 100 * f);
+      else fmt::print(stderr, "\r\033[Ktightex: {}...", stage);
+    };
   TexturedMesh mesh;
   Plan plan;
   double textures_s = 0;

@@ -226,6 +226,7 @@ void equalize_density(const Surface& m, const SquareMapOptions& options, const s
     }
     uv.swap(trial);
     ++st.iterations;
+    if (options.progress) options.progress(0.4 * std::min(1.0, st.iterations / 20.0));
     total = areas(uv);
     measure_ratio(total, &p5, &p95);
     st.spread_p5 = p5;
@@ -399,7 +400,9 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
       // Fixed coordinates (bit 0: u, bit 1: v): both for corners and bumps; a side's vertex slides along it.
       std::vector<char> fixed(m.num_vertices(), 0);
       for (size_t i = 0; i < nb; ++i) fixed[bnd[i]] = pinned[i] || !options.slide_boundary ? 3 : (side_of[i] % 2 == 0 ? 2 : 1);
-      const SlimStats ss = refine_map(m, fixed, st.blended_target, options.refine_iterations, uv, options.supernodal_from);
+      const SlimStats ss = refine_map(m, fixed, st.blended_target, options.refine_iterations, uv, options.supernodal_from, [&](int step) {
+        if (options.progress) options.progress(0.4 + 0.6 * std::min(1.0, step / 15.0));
+      });
       st.refine_iterations = ss.iterations;
       st.refine_energy_before = ss.energy_before;
       st.refine_energy = ss.energy;

@@ -1,6 +1,7 @@
 // The map of a disk onto the unit square (paper §4.2): Alg. 1 boundary, Alg. 2 harmonic map.
 #pragma once
 #include <array>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -18,9 +19,10 @@ enum class CornerRule {
 /// on column blocks); below it, simplicially. Measured (BENCHMARKS.md, "Large models"), cut+map
 /// seconds, default map, simplicial -> supernodal with Debian's OpenBLAS (pthread): a vase of 44k
 /// triangles 14.5 -> 5.8, of 225k 48.8 -> 14.9, of 896k 571 -> 77. With the reference BLAS the
-/// supernodal one still wins at 225k (41.8 s). At meshroom's sizes (harmonic systems of 26k unknowns)
-/// the simplicial one is as fast, and the maps there stay exactly as they were (its crowding rounds
-/// are sensitive to rounding: 42.22 -> 41.71 dB otherwise).
+/// supernodal one still wins at 225k (41.8 s). Below 40k the simplicial one is as fast, and it keeps
+/// meshroom's harmonic systems (26k unknowns) as they were: its crowding rounds are sensitive to
+/// rounding (42.22 -> 41.71 dB with those supernodal). Its 53k-unknown symmetric Dirichlet systems are
+/// supernodal: 42.2233 dB either way; every model in ../shared/data keeps its PSNR.
 constexpr long kSupernodalFrom = 40000;
 
 struct SquareMapOptions {
@@ -61,6 +63,10 @@ struct SquareMapOptions {
   /// Linear systems of this many unknowns or more are factorised supernodally, smaller ones
   /// simplicially (see kSupernodalFrom). Tests set it low to run the supernodal path on small meshes.
   long supernodal_from = kSupernodalFrom;
+  /// Optional: called from the mapping thread with an estimate of the fraction of this map done (the
+  /// density reweighting up to 0.4, the symmetric Dirichlet steps from there; each step counts as if
+  /// the reweighting took 20 and the steps 15, so the estimate may jump to 1 at the end).
+  std::function<void(double)> progress;
 };
 
 struct SquareMapStats {
@@ -127,7 +133,8 @@ struct SlimStats {
 /// vertex's u, bit 1 its v (3: the vertex stays; 1 or 2: it slides along a side). uv must be fold-free; it stays fold-free (the line search stops short of any triangle's
 /// collapse). SLIM (Rabinovich et al. 2017): a reweighted proxy solved with CHOLMOD, pattern analysed once.
 SlimStats refine_map(const Surface& mesh, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,
-                     std::vector<Vec2>& uv, long supernodal_from = kSupernodalFrom);
+                     std::vector<Vec2>& uv, long supernodal_from = kSupernodalFrom,
+                     const std::function<void(int step)>& on_step = {});
 
 /// Number of triangles whose UV signed area is not strictly positive.
 size_t count_folds(const Surface& mesh, const std::vector<Vec2>& uv);

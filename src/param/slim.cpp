@@ -101,7 +101,7 @@ double max_step(const Surface& m, const std::vector<Vec2>& uv, const std::vector
 }  // namespace
 
 SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,
-                     std::vector<Vec2>& uv, long supernodal_from) {
+                     std::vector<Vec2>& uv, long supernodal_from, const std::function<void(int step)>& on_step) {
   SlimStats st;
   const size_t nv = m.num_vertices();
   const auto fr = target_frames(m, target);
@@ -215,6 +215,7 @@ SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std
     const double gain = (st.energy - e_new) / st.energy;
     st.energy = e_new;
     ++st.iterations;
+    if (on_step) on_step(st.iterations);
     if (gain < 1e-3) {
       st.stopped = "converged";
       break;

@@ -4,9 +4,11 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cctype>
 #include <chrono>
 #include <cmath>
+#include <mutex>
 #include <numeric>
 #include <optional>
 #include <set>
@@ -315,6 +317,24 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   //    region and cut again, up to kCrowdingRounds times.
   constexpr int kCrowdingRounds = 3;
   progress("cut+map", 0);
+  // Progress of the maps, weighted by triangles: each component adds what its map reports (an
+  // estimate, SquareMapOptions::progress) and the rest when it is done. The caller hears of it from
+  // whichever thread is mapping, one at a time, at most every 0.2 s.
+  double all_faces = 0;
+  for (const Surface& comp : components) all_faces += double(comp.num_faces());
+  std::atomic<double> faces_done{0};
+  std::mutex progress_mutex;
+  auto last_report = std::chrono::steady_clock::now();
+  auto advance = [&](double faces) {
+    const double done = faces_done.fetch_add(faces) + faces;
+    if (!options.progress || !(all_faces > 0)) return;
+    std::unique_lock<std::mutex> lock(progress_mutex, std::try_to_lock);
+    if (!lock.owns_lock()) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_report < std::chrono::milliseconds(200)) return;
+    last_report = now;
+    options.progress("cut+map", std::clamp(done / all_faces, 0.0, 1.0));
+  };
   std::vector<std::vector<Vec2>>& uv = plan.uv;
   uv.resize(nc);
   std::vector<SquareMapStats> map_stats(nc);
@@ -329,6 +349,13 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
     mo.rect_width = rects[c].w;
     mo.rect_height = rects[c].h;
     mo.corners = options.corners;
+    const double faces = double(components[c].num_faces());
+    double reported = 0;  // fraction of this component already added to faces_done
+    mo.progress = [&](double f) {
+      if (f <= reported) return;
+      advance((f - reported) * faces);
+      reported = f;
+    };
     try {
       forced_failure(c, "full method");
       std::vector<uint32_t> slit_to;
@@ -373,6 +400,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
         uv[c].clear();
       }
     }
+    advance((1 - reported) * faces);
   });
   clock.done("cut+map");
 
