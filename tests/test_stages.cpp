@@ -22,6 +22,7 @@
 #include "layout/layout.hpp"
 #include "mesh_catalogue.hpp"
 #include "param/param.hpp"
+#include "param/sparse_cholesky.hpp"
 #include "repair/repair.hpp"
 #include "report/metrics.hpp"
 #include "tightex/tightex.hpp"
@@ -686,6 +687,37 @@ TEST_P(Catalogue, AreaMapEvensTheDensity) {
     // sides; it is not held to the improvement.
     const size_t interior = disk.mesh.num_vertices() - disk.boundary.size();
     if (harmonic_spread > 1.5 && 2 * interior >= disk.mesh.num_vertices()) EXPECT_LT(spread, harmonic_spread - 0.5) << "the area map must improve on a crowded harmonic map" << " (" << st.iterations << " iterations, " << st.stopped << ", before " << st.spread_before_p5 << "/" << st.spread_before_p95 << ", faces " << disk.mesh.num_faces() << ")";
+  }
+}
+
+// The residual check every map solve passes (SparseCholesky::solves): a sound factorisation's solution
+// passes, simplicial or supernodal, on a badly scaled system; one off by 1% (a broken factorisation
+// gives worse) does not, nor does zero.
+TEST(SparseCholesky, ResidualCheckAcceptsTheSolutionAndRejectsAWrongOne) {
+  const int n = 3000;
+  std::vector<Eigen::Triplet<double>> trips;
+  auto scale = [](int i) { return std::pow(10.0, (i % 7) - 3); };  // entries from 1e-3 to 1e3
+  for (int i = 0; i < n; ++i) {
+    trips.emplace_back(i, i, 2.5 * scale(i));  // diagonally dominant: positive definite
+    if (i > 0) trips.emplace_back(i, i - 1, -std::min(scale(i), scale(i - 1)));
+  }
+  SparseCholesky::Matrix a(n, n);
+  a.setFromTriplets(trips.begin(), trips.end());
+  Eigen::VectorXd b(n);
+  for (int i = 0; i < n; ++i) b(i) = std::sin(0.01 * i) + 0.5;
+  for (long from : {1L << 40, 0L}) {
+    SCOPED_TRACE(from == 0 ? "supernodal" : "simplicial");
+    SparseCholesky solver(from);
+    solver.analyzePattern(a);
+    solver.factorize(a);
+    ASSERT_EQ(solver.info(), Eigen::Success);
+    EXPECT_EQ(solver.supernodal(), from == 0);
+    const Eigen::VectorXd x = solver.solve(b);
+    EXPECT_TRUE(SparseCholesky::solves(a, x, b));
+    Eigen::VectorXd wrong = x;
+    for (int i = 0; i < n; ++i) wrong(i) *= 1 + 0.01 * std::sin(1.7 * i);  // off by up to 1%
+    EXPECT_FALSE(SparseCholesky::solves(a, wrong, b));
+    EXPECT_FALSE(SparseCholesky::solves(a, Eigen::VectorXd::Zero(n), b));
   }
 }
 

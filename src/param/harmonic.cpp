@@ -93,7 +93,7 @@ bool solve_interior(const Surface& m, const std::vector<double>& w, const std::v
   solver.factorize(A);
   if (solver.info() != Eigen::Success) return false;
   Eigen::MatrixX2d x = solver.solve(rhs);
-  if (solver.info() != Eigen::Success || !x.allFinite()) return false;
+  if (solver.info() != Eigen::Success || !x.allFinite() || !SparseCholesky::solves(A, x, rhs)) return false;
   for (size_t v = 0; v < nv; ++v)
     if (unknown[v] >= 0) uv[v] = x.row(unknown[v]).transpose();
   return true;
@@ -390,6 +390,9 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
     st.weights = kind == Weights::kCotangent ? "cotangent" : kind == Weights::kClamped ? "clamped-cotangent" : "uniform";
     if (st.flipped == 0) break;
   }
+  // No weighting solved (a factorisation failed, or its solution did not solve the system): the
+  // interior still sits where the boundary left it. A failure, never a map.
+  if (st.weights.empty()) fail_internal("the sparse solve of the harmonic map failed for every weighting ({} vertices)", m.num_vertices());
   if (density && st.flipped == 0 && st.crowded_vertex == kNone) {
     if (positive_w.empty()) positive_w = edge_weights(m, Weights::kClamped, nullptr);
     SquareBoundary sb{&bnd, corner, side_of, edge_face, pinned};

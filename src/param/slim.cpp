@@ -191,7 +191,7 @@ SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std
       break;
     }
     const Eigen::VectorXd x = solver.solve(rhs);
-    if (solver.info() != Eigen::Success || !x.allFinite()) {
+    if (solver.info() != Eigen::Success || !x.allFinite() || !SparseCholesky::solves(A, x, rhs)) {
       st.stopped = "solver";
       break;
     }
