@@ -90,10 +90,9 @@ bool solve_interior(const Surface& m, const std::vector<double>& w, const std::v
     solver.analyzePattern(A);
     analyzed = true;
   }
-  solver.factorize(A);
-  if (solver.info() != Eigen::Success) return false;
-  Eigen::MatrixX2d x = solver.solve(rhs);
-  if (solver.info() != Eigen::Success || !x.allFinite() || !SparseCholesky::solves(A, x, rhs)) return false;
+  if (!solver.factorize(A)) return false;
+  Eigen::MatrixX2d x;
+  if (!solver.solve(A, rhs, x)) return false;
   for (size_t v = 0; v < nv; ++v)
     if (unknown[v] >= 0) uv[v] = x.row(unknown[v]).transpose();
   return true;

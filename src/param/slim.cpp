@@ -182,16 +182,11 @@ SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std
       }
     }
     if (!analyzed) {
-        solver.analyzePattern(A);
+      solver.analyzePattern(A);
       analyzed = true;
     }
-    solver.factorize(A);
-    if (solver.info() != Eigen::Success) {
-      st.stopped = "solver";
-      break;
-    }
-    const Eigen::VectorXd x = solver.solve(rhs);
-    if (solver.info() != Eigen::Success || !x.allFinite() || !SparseCholesky::solves(A, x, rhs)) {
+    Eigen::VectorXd x;
+    if (!solver.factorize(A) || !solver.solve(A, rhs, x)) {
       st.stopped = "solver";
       break;
     }

@@ -28,18 +28,24 @@ class SparseCholesky {
     solver_.setMode(supernodal_ ? Eigen::CholmodSupernodalLLt : Eigen::CholmodSimplicialLLt);
     solver_.analyzePattern(a);
   }
-  void factorize(const Matrix& a) {
+  /// False if CHOLMOD failed (a not positive definite, numerically).
+  bool factorize(const Matrix& a) {
     std::unique_lock<std::mutex> lock(blas_mutex(), std::defer_lock);
     if (supernodal_) lock.lock();
     solver_.factorize(a);
+    return solver_.info() == Eigen::Success;
   }
-  template <class Rhs>
-  Eigen::Matrix<double, Eigen::Dynamic, Rhs::ColsAtCompileTime> solve(const Eigen::MatrixBase<Rhs>& b) const {
-    std::unique_lock<std::mutex> lock(blas_mutex(), std::defer_lock);
-    if (supernodal_) lock.lock();
-    return solver_.solve(b);
+  /// x = a^-1 b with the factorisation of `a` (factorize(a) first). False, and x unspecified, if CHOLMOD
+  /// failed, x is not finite, or x does not solve the system (solves()).
+  template <class B, class X>
+  bool solve(const Matrix& a, const Eigen::MatrixBase<B>& b, X& x) const {
+    {
+      std::unique_lock<std::mutex> lock(blas_mutex(), std::defer_lock);
+      if (supernodal_) lock.lock();
+      x = solver_.solve(b);
+    }
+    return solver_.info() == Eigen::Success && x.allFinite() && solves(a, x, b);
   }
-  Eigen::ComputationInfo info() const { return solver_.info(); }
 
   /// Whether x solves a x = b (a: lower triangle stored) as a backward-stable factorisation would: the
   /// normwise backward error |a x - b| / (|a| |x| + |b|) (infinity norms) at most 1e-8, far above the
