@@ -840,11 +840,11 @@ TEST_P(Catalogue, OptimizeCutHolesPerComponent) {
   check_pipeline(mesh(), want(), options, want().fills_rectangles);
 }
 
-// Every map through the whole pipeline: one fold-free chart per component (area is the default and
+// Every map through the whole pipeline: one fold-free chart per component (detail is the default and
 // runs in OptimizeAtlas).
-TEST_P(Catalogue, OptimizeHarmonicAndTexelMaps) {
-  for (MapKind kind : {MapKind::kHarmonic, MapKind::kTexel}) {
-    SCOPED_TRACE(kind == MapKind::kHarmonic ? "harmonic" : "texel");
+TEST_P(Catalogue, OptimizeHarmonicTexelAndAreaMaps) {
+  for (MapKind kind : {MapKind::kHarmonic, MapKind::kTexel, MapKind::kArea}) {
+    SCOPED_TRACE(kind == MapKind::kHarmonic ? "harmonic" : kind == MapKind::kTexel ? "texel" : "area");
     Options options;
     options.size = 128;
     options.map = kind;

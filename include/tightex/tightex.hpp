@@ -24,8 +24,8 @@ enum class Layout { kAtlas, kPerComponent };
 /// kTexel: the input's own texel density per triangle, so what the scanner captured in detail keeps its
 /// detail. kDetail: texels where the texture has detail — density proportional to the input texture's
 /// colour gradient per unit of 3D length (which minimises the expected reconstruction error for the
-/// budget), capped at the input's own density (no texel beyond what the input holds), at least an
-/// eighth of the mean. All four are fold-free and fill each component's rectangle; all but kHarmonic
+/// budget), capped at 4x the input's own density (beyond it a texel adds little the input holds), at
+/// least an eighth of the mean. All four are fold-free and fill each component's rectangle; all but kHarmonic
 /// then lower a symmetric Dirichlet energy with the boundary sliding along the rectangle's sides
 /// (kArea only as far as its density spread holds).
 enum class MapKind { kHarmonic, kArea, kTexel, kDetail };
@@ -34,12 +34,11 @@ struct Options {
   int size = 4096;                 // atlas: the texture's side; per-component: the largest texture's side
   Layout layout = Layout::kAtlas;
   HoleMode holes = HoleMode::kFill;
-  /// Default kArea, chosen by measurement on ../shared/data (BENCHMARKS.md): at equal budgets it beats
-  /// kTexel or ties on every model (these scans' atlas density follows the packing of their charts more
-  /// than the detail captured) and costs less.
-  MapKind map = MapKind::kArea;
-  /// Angle/area trade-off of the area and texel maps: 0 = the harmonic map's density (least angle
-  /// distortion), 1 = the target density exactly; between, the geometric blend of the two.
+  /// Default kDetail, as the CLI's: the highest surface PSNR of the four maps on every model of
+  /// ../shared/data at the input's budget (BENCHMARKS.md, "Surface PSNR per map").
+  MapKind map = MapKind::kDetail;
+  /// Angle/area trade-off of the area, texel and detail maps: 0 = the harmonic map's density (least
+  /// angle distortion), 1 = the target density exactly; between, the geometric blend of the two.
   double balance = 1.0;
   /// Which boundary vertices become the square's corners. Default kEqualArcs: better surface PSNR than
   /// kTurningAngle on 7 of the 9 models of ../shared/data with the area map (docs/corners.md).
