@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <random>
 
 #include "bake/bake.hpp"
@@ -93,9 +94,11 @@ double readback_psnr(const Image& in, const Image& out, const std::vector<BakeTr
   return 10 * std::log10(255.0 * 255.0 / (se / double(n)));
 }
 
-TEST(Bake, LeastSquaresFitBeatsPointSamplingUnderBilinearReadBack) {
+TEST(Bake, LeastSquaresFitBeatsPointSamplingAndTheFineFitBeatsTheFit) {
   // Detail near the output's resolution (periods of 3 to 7 texels), resampled at a rotation: a
-  // point-sampled bake blurs twice (bake, then read-back); the fit undoes much of that.
+  // point-sampled bake blurs twice (bake, then read-back); the fit undoes much of that. The fine fit's
+  // 4x4 points per texel constrain the bilinear reconstruction between the 2x2 points too, so the
+  // read-back (at other points than the fit's) is closer still.
   Image in(192, 192);
   for (int y = 0; y < 192; ++y)
     for (int x = 0; x < 192; ++x) {
@@ -106,17 +109,45 @@ TEST(Bake, LeastSquaresFitBeatsPointSamplingUnderBilinearReadBack) {
   const TexturedMesh m = textured(in);
   const auto tris = square(128, 128, 0.5, 0.6);  // about 1:1 texels, rotated by 29 degrees
   const std::vector<Rect> rects = {Rect{0, 0, 0, 128, 128}};
-  auto psnr = [&](bool fit) {
+  auto psnr = [&](bool fit, bool fine) {
     std::vector<Image> out = {Image(128, 128)};
     BakeOptions o;
     o.fit = fit;
+    if (fine) o.fit_samples = kFineFitSamples, o.fit_lambda = kFineFitLambda;
     BakeStats st;
     bake_texture(m, tris, rects, out, &st, o);
     if (fit) EXPECT_GT(st.tiles_fitted, 0u);
     return readback_psnr(in, out[0], tris);
   };
-  const double plain = psnr(false), fitted = psnr(true);
+  const double plain = psnr(false, false), fitted = psnr(true, false), fine = psnr(true, true);
   EXPECT_GT(fitted, plain + 1.0) << "plain " << plain << " dB, fitted " << fitted << " dB";
+  EXPECT_GT(fine, fitted + 0.1) << "fit " << fitted << " dB, fine fit " << fine << " dB";
+}
+
+TEST(Bake, FineFitKeepsTheDefaultFitWhereTheInputIsMinifiedBeyondItsLimit) {
+  // 16 input pixels per output texel (a 512-pixel input onto 32 texels): beyond the limit of 12, the
+  // fine fit's 4x4 points lost up to 1 dB on real models, so such tiles get the default fit, bit for bit.
+  // Under the limit (a 1:1 copy) the fine fit does change the texels.
+  Image in(512, 512);
+  for (int y = 0; y < 512; ++y)
+    for (int x = 0; x < 512; ++x) {
+      const uint8_t g = uint8_t(127.5 + 100 * std::sin(x * 0.37 + y * 0.11));
+      in.at(x, y) = {g, g, uint8_t(255 - g), 255};
+    }
+  const TexturedMesh m = textured(in);
+  auto bake = [&](int side, double scale, bool fine) {
+    std::vector<Image> out = {Image(side, side)};
+    BakeOptions o;
+    if (fine) o.fit_samples = kFineFitSamples, o.fit_lambda = kFineFitLambda;
+    BakeStats st;
+    bake_texture(m, square(side, side, 0.3, scale), {Rect{0, 0, 0, side, side}}, out, &st, o);
+    EXPECT_GT(st.tiles_fitted, 0u);
+    return out[0];
+  };
+  const Image normal = bake(32, 1.0, false), fine = bake(32, 1.0, true);
+  EXPECT_EQ(0, std::memcmp(normal.pixels.data(), fine.pixels.data(), normal.pixels.size() * sizeof(normal.pixels[0])));
+  const Image normal_1to1 = bake(64, 0.125, false), fine_1to1 = bake(64, 0.125, true);
+  EXPECT_NE(0, std::memcmp(normal_1to1.pixels.data(), fine_1to1.pixels.data(), normal_1to1.pixels.size() * sizeof(normal_1to1.pixels[0])));
 }
 
 TEST(Bake, FitDoesNotDependOnTheModelsUnits) {

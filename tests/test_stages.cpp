@@ -1080,12 +1080,26 @@ TEST(Checkers, CatchBrokenOutput) {
   }
 }
 
-// Issue 4, --map detail: a flat sheet whose texture is a fine checker on its left half and one flat
-// colour on its right. The detail map must give the checkered half clearly more texels per unit area
-// than the flat half, stay fold-free, and reproduce the texture better than the area map at the same
-// (tight) budget; the area map keeps both halves near the same density.
 // Progress: stages in pipeline order, fractions within [0, 1] and never decreasing within a stage,
 // calls never overlapping (the components are mapped in parallel and report from their threads).
+// Options::fine_fit changes only the texels (same texture coordinates), reports itself, and reproduces
+// the input at least as well as the default fit.
+TEST(Pipeline, FineFitChangesOnlyTheTexelsAndDoesNotLoseFidelity) {
+  Options opt;
+  opt.size = 128;
+  const TexturedMesh in = cat::multi_component();
+  const Result normal = optimize(in, opt);
+  opt.fine_fit = true;
+  const Result fine = optimize(in, opt);
+  EXPECT_EQ(fine.report["options"]["fine_fit"], true);
+  EXPECT_EQ(normal.report["options"]["fine_fit"], false);
+  ASSERT_EQ(fine.output.corner_uv.size(), normal.output.corner_uv.size());
+  for (size_t i = 0; i < fine.output.corner_uv.size(); ++i) ASSERT_EQ(fine.output.corner_uv[i], normal.output.corner_uv[i]) << i;
+  const double p_normal = normal.report["metrics"]["surface_psnr_db"], p_fine = fine.report["metrics"]["surface_psnr_db"];
+  EXPECT_GE(p_fine, p_normal) << "fit " << p_normal << " dB, fine fit " << p_fine << " dB";
+  EXPECT_NE(fine.output.textures[0].image.pixels, normal.output.textures[0].image.pixels);
+}
+
 TEST(Pipeline, ProgressIsOrderedAndSerialised) {
   Options opt;
   opt.size = 128;
@@ -1119,6 +1133,10 @@ TEST(Pipeline, ProgressIsOrderedAndSerialised) {
   EXPECT_TRUE(std::any_of(calls.begin(), calls.end(), [](const auto& c) { return c.first == "cut+map"; }));
 }
 
+// Issue 4, --map detail: a flat sheet whose texture is a fine checker on its left half and one flat
+// colour on its right. The detail map must give the checkered half clearly more texels per unit area
+// than the flat half, stay fold-free, and reproduce the texture better than the area map at the same
+// (tight) budget; the area map keeps both halves near the same density.
 TEST(DetailMap, GivesTheTexelsToTheDetailedHalf) {
   auto g = cat::param_grid(33, 17, false, false, [](int i, int j) { return Vec3(i / 16.0, j / 16.0, 0.0); });
   Image img(256, 128);

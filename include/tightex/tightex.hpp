@@ -45,6 +45,11 @@ struct Options {
   CornerRule corners = CornerRule::kEqualArcs;
   /// Least-squares fit of the baked texels to the input under bilinear read-back (BakeOptions::fit).
   bool fit = true;
+  /// The fit on a 4 x 4 grid of points per texel (pull 0.3) instead of 2 x 2 (pull 1), except on tiles
+  /// minified beyond 12 input pixels per texel: +0.1..0.3 dB surface PSNR on every model of
+  /// ../shared/data with the detail map (harmonic: 0..+0.3), at about twice the bake time; the texture
+  /// coordinates do not change (BENCHMARKS.md, "Fine fit"). Ignored without `fit`.
+  bool fine_fit = false;
   /// Compute the METRICS.md figures into report["metrics"]. A caller that writes the result can turn
   /// this off and run measure() beside the write (the CLI does).
   bool measure = true;

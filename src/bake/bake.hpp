@@ -33,15 +33,27 @@ struct BakeOptions {
   int fit_iterations = 12;
   /// K: the fit's sample points are a K x K grid in each texel. Measured (surface PSNR at the input's
   /// budget, detail map, fuze / tomato / meshroom): K=2 lambda 1: 42.06 / 47.66 / 42.22; K=3 lambda 0.3:
-  /// 42.15 / 47.80 / 42.11; K=4 lambda 0.3: 42.28 / 47.93 / 42.44 at 4x the fit's sampling cost; kept at 2
-  /// until its time is measured (the fit is near the best a bilinear texture on another grid can do).
+  /// 42.15 / 47.80 / 42.11; K=4 lambda 0.3: 42.28 / 47.93 / 42.44 at about twice the bake time: the
+  /// default stays 2, K=4 is the opt-in fine fit (kFineFitSamples).
   int fit_samples = 2;
+  /// With fit_samples > 2: a tile where some triangle's footprint exceeds this many input pixels per
+  /// texel (along either axis) is fitted with K=2 and lambda 1 instead. Measured with the fine fit
+  /// (surface PSNR at the input's budget, --map harmonic, cracker / potted meat; detail map, meshroom):
+  /// no limit 37.85 / 40.20; 42.44 (the harmonic map's most squeezed regions lose 1 dB against the 2 x 2
+  /// fit's 38.86 / 40.93); limit 3: 38.92 / 41.00; 42.22; 6: 38.99 / 41.02; 42.25; 12: 39.15 / 41.03;
+  /// 42.30; 24: 39.15 / 40.91; 42.29.
+  double fit_fine_max_footprint = 12.0;
   /// Pull of each texel towards its footprint-filtered bake, relative to the mean sample weight. Chosen
   /// by measurement (meshroom_esp32cam, area map, --size 1024, surface PSNR): 0.01: 41.10 dB, 0.1: 41.21,
   /// 0.3: 41.31, 1: 41.35, 3: 41.12, 10: 40.64; without the fit 40.01. A weaker pull over-fits the four
   /// sample points of each texel; a stronger one gives the fit away.
   double fit_lambda = 1.0;
 };
+
+/// The fine fit (Options::fine_fit, CLI --fine-fit): BakeOptions::fit_samples and fit_lambda (measured
+/// there and in BENCHMARKS.md, "Fine fit"); fit_fine_max_footprint applies.
+constexpr int kFineFitSamples = 4;
+constexpr double kFineFitLambda = 0.3;
 
 struct BakeStats {
   size_t texels_filled = 0;   // texel centres inside some triangle

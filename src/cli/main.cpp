@@ -67,7 +67,7 @@ int run_main(int argc, char** argv) {
   std::string input, outdir, report_path, preview_path, layout = "atlas", format = "png", holes = "fill", map = "detail", corners = "arcs";
   int size = 0;
   double texels = 0, balance = 1.0;
-  bool quiet = false, verbose = false, force = false, no_fit = false;
+  bool quiet = false, verbose = false, force = false, no_fit = false, fine_fit = false;
   double max_memory_mib = 0;
   app.add_option("input", input, "textured model (OBJ + MTL + textures)")->required();
   app.add_option("-o,--output", outdir, "output directory")->required();
@@ -87,7 +87,9 @@ int run_main(int argc, char** argv) {
   app.add_option("--corners", corners, "which boundary points become the square's corners: arcs (default): four arcs of equal "
                                        "length; turning: where the boundary turns most (docs/corners.md)")
       ->check(CLI::IsMember({"arcs", "turning"}));
-  app.add_flag("--no-fit", no_fit, "bake each texel by sampling only, without the least-squares fit to the input");
+  auto* no_fit_opt = app.add_flag("--no-fit", no_fit, "bake each texel by sampling only, without the least-squares fit to the input");
+  app.add_flag("--fine-fit", fine_fit, "fit on 4x4 points per texel instead of 2x2: +0.1-0.3 dB surface PSNR, about twice the bake time")
+      ->excludes(no_fit_opt);
   app.add_flag("--force", force, "allow --size above 16384");
   app.add_option("--max-memory", max_memory_mib, "refuse inputs whose estimated memory exceeds this many MiB (default: 90% of RAM)")
       ->check(CLI::PositiveNumber);
@@ -160,6 +162,7 @@ int run_main(int argc, char** argv) {
   opt.balance = balance;
   opt.corners = corners == "turning" ? CornerRule::kTurningAngle : CornerRule::kEqualArcs;
   opt.fit = !no_fit;
+  opt.fine_fit = fine_fit;
   opt.measure = false;
   if (show_progress)
     opt.progress = [](std::string_view stage, double f) {

@@ -410,7 +410,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
                   {"materials", input.materials.size()}, {"textures", input.textures.size()}};
   rep["options"] = {{"size", options.size}, {"layout", options.layout == Layout::kAtlas ? "atlas" : "per-component"},
                     {"holes", options.holes == HoleMode::kFill ? "fill" : "cut"}, {"map", map_name(options.map)},
-                    {"balance", options.balance}, {"fit", options.fit},
+                    {"balance", options.balance}, {"fit", options.fit}, {"fine_fit", options.fit && options.fine_fit},
                     {"corners", options.corners == CornerRule::kTurningAngle ? "turning" : "arcs"}};
   rep["preparation"] = {{"input_vertices", rs.input_vertices},       {"welded_vertices", rs.welded_vertices},
                         {"zero_area_dropped", rs.zero_area_triangles}, {"duplicates_dropped", rs.duplicate_triangles},
@@ -594,6 +594,7 @@ Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& opt
   BakeStats bs;
   BakeOptions bo;
   bo.fit = options.fit;
+  if (options.fine_fit) bo.fit_samples = kFineFitSamples, bo.fit_lambda = kFineFitLambda;
   bake_texture(input, bake_tris, mapped_rects, images, &bs, bo);
   for (size_t i = 0; i < images.size(); ++i) out.textures[i].image = std::move(images[i]);
   clock.done("bake");
