@@ -1082,6 +1082,28 @@ TEST(Checkers, CatchBrokenOutput) {
 
 // Progress: stages in pipeline order, fractions within [0, 1] and never decreasing within a stage,
 // calls never overlapping (the components are mapped in parallel and report from their threads).
+// Options::size 0 (the default): as the CLI, the texture holds the input's used texels (METRICS.md),
+// rounded up to a side that is a multiple of 4 - not a fixed 4096².
+TEST(Pipeline, DefaultSizeKeepsTheInputsUsedTexels) {
+  // A sheet whose UVs cover most of a 256 x 128 texture (26680 used texels: a 164² output).
+  auto g = cat::param_grid(33, 17, false, false, [](int i, int j) { return Vec3(i / 16.0, j / 16.0, 0.0); });
+  Image img(256, 128);
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) img.at(x, y) = Rgba8{uint8_t(x), uint8_t(2 * y), 90, 255};
+  const TexturedMesh in = cat::make_textured("sheet", g.positions, g.triangles, std::move(img));
+  const double used = input_used_texels(in);
+  ASSERT_GT(used, 20000);
+  const Result r = optimize(in, Options{});
+  const int side = r.report["options"]["size"];
+  EXPECT_EQ(side, default_size(in));
+  EXPECT_EQ(side % 4, 0);
+  EXPECT_GE(double(side) * side, used);
+  EXPECT_LT(double(side - 4) * (side - 4), used);
+  ASSERT_EQ(r.output.textures.size(), 1u);
+  EXPECT_EQ(r.output.textures[0].image.width, side);
+  EXPECT_EQ(default_size(in, 64), 64) << "capped at max_side";
+}
+
 // Options::fine_fit changes only the texels (same texture coordinates), reports itself, and reproduces
 // the input at least as well as the default fit.
 TEST(Pipeline, FineFitChangesOnlyTheTexelsAndDoesNotLoseFidelity) {

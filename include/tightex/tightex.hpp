@@ -9,8 +9,11 @@
 #include <string_view>
 #include <vector>
 
+#include "core/error.hpp"
 #include "core/mesh.hpp"
 #include "io/image_io.hpp"
+#include "io/obj_reader.hpp"
+#include "io/obj_writer.hpp"
 #include "layout/layout.hpp"
 #include "param/param.hpp"
 #include "topology/topology.hpp"
@@ -31,7 +34,9 @@ enum class Layout { kAtlas, kPerComponent };
 enum class MapKind { kHarmonic, kArea, kTexel, kDetail };
 
 struct Options {
-  int size = 4096;                 // atlas: the texture's side; per-component: the largest texture's side
+  /// Atlas: the texture's side; per-component: the largest texture's side. 0 (default): default_size(input),
+  /// as the CLI: as many texels as the input uses, so the output keeps the input's information.
+  int size = 0;
   Layout layout = Layout::kAtlas;
   HoleMode holes = HoleMode::kFill;
   /// Default kDetail, as the CLI's: the highest surface PSNR of the four maps on every model of
@@ -98,6 +103,12 @@ int size_for_texels(double texels);
 /// Texels the input model actually uses (texel centres covered by some triangle, over all its
 /// textures; METRICS.md "used texels"). Needs only the textures' sizes, not their pixels.
 double input_used_texels(const TexturedMesh& input);
+
+/// The default texture side (Options::size 0, the CLI without --size or --texels): size_for_texels of the
+/// input's used texels rounded up to a multiple of 4 (1024² if no texture has a known size), at most
+/// max_side (by default kDefaultSizeMax, 1 GiB of RGBA; the CLI goes beyond only with --force).
+constexpr int kDefaultSizeMax = 16384;
+int default_size(const TexturedMesh& input, int max_side = kDefaultSizeMax);
 
 /// Runs the whole method: repair, components, holes, cut, harmonic map, layout, bake, metrics.
 /// Requires a mesh as returned by read_obj (validated). Throws InputError for input it cannot handle

@@ -126,12 +126,9 @@ int run_main(int argc, char** argv) {
   TexturedMesh geometry = read_obj(input, geometry_only, &read_stats);
   const double read_s = seconds_since(t0);
   for (Texture& t : geometry.textures) std::tie(t.width, t.height) = image_dimensions(t.path);
-  double budget_texels = texels;
   if (size == 0) {
-    if (budget_texels == 0) budget_texels = std::ceil(input_used_texels(geometry) / 4.0) * 4.0;
-    if (budget_texels == 0) budget_texels = 1024.0 * 1024.0;  // no texture of known size: a 1K map
-    size = size_for_texels(budget_texels);
-    if (size > 16384 && !force) size = 16384;
+    const int max_side = force ? 65536 : kDefaultSizeMax;
+    size = texels > 0 ? std::min(size_for_texels(texels), max_side) : default_size(geometry, max_side);
   }
   if (size > 16384 && !force)
     fail_input("--size {} is above 16384 ({:.1f} GiB of RGBA texture); add --force to allow it", size,

@@ -253,7 +253,8 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   auto progress = [&](std::string_view stage, double f) {
     if (options.progress) options.progress(stage, f);
   };
-  if (options.size < 8 || options.size > 65536) fail_input("--size {} is out of range (8..65536)", options.size);
+  const int size = options.size == 0 ? default_size(input) : options.size;
+  if (size < 8 || size > 65536) fail_input("--size {} is out of range (8..65536)", size);
   Plan plan;
   nlohmann::json timings = nlohmann::json::array();
   StageClock clock(timings);
@@ -283,7 +284,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   std::vector<double> shares = areas;
   if (options.map != MapKind::kHarmonic) {
     tbb::parallel_for(size_t(0), nc, [&](size_t c) { density[c] = component_density(input, surface, components[c], options.map); });
-    if (options.map == MapKind::kDetail) allocate_detail(components, density, double(options.size) * double(options.size));
+    if (options.map == MapKind::kDetail) allocate_detail(components, density, double(size) * double(size));
     for (size_t c = 0; c < nc; ++c) shares[c] = density[c].texels;
     // Components without any texture share by area at the overall mean density.
     double sum_texels = 0, sum_area = 0;
@@ -304,10 +305,10 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   num_images = 1;
   std::vector<std::pair<int, int>>& image_size = plan.image_size;
   if (options.layout == Layout::kAtlas) {
-    rects = layout_atlas(shares, options.size, options.size);
-    image_size.push_back({options.size, options.size});
+    rects = layout_atlas(shares, size, size);
+    image_size.push_back({size, size});
   } else {
-    rects = layout_per_component(shares, options.size);
+    rects = layout_per_component(shares, size);
     num_images = int(nc);
     for (const Rect& r : rects) image_size.push_back({r.w, r.h});
   }
@@ -408,7 +409,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   nlohmann::json& rep = plan.report;
   rep["input"] = {{"file", input.source}, {"vertices", input.num_vertices()}, {"triangles", input.num_triangles()},
                   {"materials", input.materials.size()}, {"textures", input.textures.size()}};
-  rep["options"] = {{"size", options.size}, {"layout", options.layout == Layout::kAtlas ? "atlas" : "per-component"},
+  rep["options"] = {{"size", size}, {"layout", options.layout == Layout::kAtlas ? "atlas" : "per-component"},
                     {"holes", options.holes == HoleMode::kFill ? "fill" : "cut"}, {"map", map_name(options.map)},
                     {"balance", options.balance}, {"fit", options.fit}, {"fine_fit", options.fit && options.fine_fit},
                     {"corners", options.corners == CornerRule::kTurningAngle ? "turning" : "arcs"}};
@@ -620,6 +621,12 @@ int size_for_texels(double texels) {
 }
 
 double input_used_texels(const TexturedMesh& input) { return measure_texture_space(input).used_texels; }
+
+int default_size(const TexturedMesh& input, int max_side) {
+  double texels = std::ceil(input_used_texels(input) / 4.0) * 4.0;
+  if (!(texels > 0)) texels = 1024.0 * 1024.0;  // no texture of known size: a 1K map
+  return std::min(size_for_texels(texels), max_side);
+}
 
 Result optimize(const TexturedMesh& input, const Options& options) { return bake_plan(plan_charts(input, options), input, options); }
 
