@@ -360,6 +360,43 @@ TEST_F(ObjReaderTest, TexturesAreLoaded) {
   EXPECT_EQ(mesh.materials[1].texture, 0);
 }
 
+// Files named as another machine saw them: a Windows exporter's absolute path in quotes, a name whose
+// case differs from the file's (case-insensitive file systems), an MTL library in other case. Each is
+// found under the model's folder, and the report lists how (ObjReadStats::paths_found).
+TEST_F(ObjReaderTest, FilesNamedByAnotherMachineAreFound) {
+  fs::create_directories(dir_ / "Textures");
+  save_image((dir_ / "Textures/Tex_0.PNG").string(), Image(4, 2, Rgba8{10, 20, 30, 255}), ImageFormat::kPng);
+  save_image((dir_ / "tex_1.png").string(), Image(3, 3, Rgba8{1, 2, 3, 255}), ImageFormat::kPng);
+  write("Scan.MTL",
+        "newmtl a\nmap_Kd \"C:\\Users\\me\\scan\\textures\\tex_0.png\"\n"
+        "newmtl b\nmap_Kd TEX_1.PNG\n");
+  const std::string path = write("scan.obj", std::string("mtllib scan.mtl\n") + kSquareVerts +
+                                                 "usemtl a\nf 1/1 2/2 3/3\nusemtl b\nf 1/1 3/3 4/4\n");
+  ObjReadStats stats;
+  const TexturedMesh mesh = read_obj(path, {}, &stats);
+  ASSERT_EQ(mesh.textures.size(), 2u);
+  EXPECT_EQ(mesh.textures[0].image.width, 4);
+  EXPECT_EQ(fs::path(mesh.textures[0].path), dir_ / "Textures/Tex_0.PNG");
+  EXPECT_EQ(mesh.textures[1].image.width, 3);
+  ASSERT_EQ(stats.paths_found.size(), 3u);
+  EXPECT_EQ(stats.paths_found[0], "scan.mtl -> " + (dir_ / "Scan.MTL").string());
+  EXPECT_EQ(stats.paths_found[1], "\"C:/Users/me/scan/textures/tex_0.png\" -> " + (dir_ / "Textures/Tex_0.PNG").string());
+}
+
+// Two files whose names differ only in case: the exact name wins; a third spelling matches neither
+// (ambiguous) and is reported missing, as is a path none of whose tails exists.
+TEST_F(ObjReaderTest, AmbiguousOrAbsentNamesAreNotGuessed) {
+  save_image((dir_ / "t.png").string(), Image(2, 2), ImageFormat::kPng);
+  save_image((dir_ / "T.png").string(), Image(5, 5), ImageFormat::kPng);
+  write("m.mtl", "newmtl a\nmap_Kd T.png\nnewmtl b\nmap_Kd t.PNG\nnewmtl c\nmap_Kd C:/elsewhere/none.png\n");
+  auto model = [&](const char* material) {
+    return write(std::string(material) + ".obj", std::string("mtllib m.mtl\n") + kSquareVerts + "usemtl " + material + "\nf 1/1 2/2 3/3\n");
+  };
+  EXPECT_EQ(read_obj(model("a")).textures.at(0).image.width, 5);
+  EXPECT_NE(error_of(model("b")).find("texture 't.PNG' of material 'b' could not be loaded"), std::string::npos);
+  EXPECT_NE(error_of(model("c")).find("texture 'C:/elsewhere/none.png' of material 'c' could not be loaded"), std::string::npos);
+}
+
 TEST_F(ObjReaderTest, MissingTextureNamesTheMaterialLibraryLine) {
   const std::string mtl = write("gone.mtl", "newmtl a\nKd 1 1 1\nmap_Kd gone.png\n");
   const std::string path =

@@ -247,6 +247,7 @@ int run_main(int argc, char** argv) {
   rep["wall_seconds"] = seconds_since(t0);
   rep["peak_rss_mib"] = double(u.ru_maxrss) / 1024.0;
   rep["input"]["polygons_triangulated"] = read_stats.polygons_triangulated;
+  rep["input"]["paths_found"] = read_stats.paths_found;  // MTL/texture names found without case or by a tail
   rep["output"] = {{"directory", outdir}, {"obj", name + ".obj"}};
   if (!preview_path.empty()) {
     const fs::path p(preview_path);

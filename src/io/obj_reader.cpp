@@ -18,6 +18,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <optional>
 #include <string_view>
 #include <unordered_map>
 #include <utility>
@@ -77,6 +78,55 @@ std::string with_forward_slashes(std::string_view s) {
   for (char& c : out)
     if (c == '\\') c = '/';
   return out;
+}
+
+/// The file an MTL names, as the exporter meant it: `written` (forward slashes) under `folder`, else
+/// the same path matched without case (exported on Windows or macOS, where TEXTURE.JPG and texture.jpg
+/// are one file), else the longest tail of it that exists under `folder` that way (an absolute path of
+/// the machine that wrote it, "C:/Users/me/scan/textures/tex_0.jpg", or "../textures/tex_0.jpg" after
+/// the files were moved). One pair of surrounding double quotes is dropped. nullopt if none exists.
+std::optional<fs::path> find_named_file(const fs::path& folder, std::string written) {
+  if (written.size() >= 2 && written.front() == '"' && written.back() == '"') written = written.substr(1, written.size() - 2);
+  if (written.empty()) return std::nullopt;
+  std::error_code ec;
+  const fs::path exact = folder / written;
+  if (fs::exists(exact, ec)) return exact;
+  // Each component matched without case, one directory listing per component (directories of scans
+  // hold few files; a folder that cannot be listed ends the search).
+  auto without_case = [&](const std::vector<std::string>& parts) -> std::optional<fs::path> {
+    fs::path at = folder;
+    for (const std::string& part : parts) {
+      if (part == "." ) continue;
+      if (part == "..") {
+        at /= part;
+        continue;
+      }
+      if (fs::exists(at / part, ec)) {
+        at /= part;
+        continue;
+      }
+      std::optional<fs::path> match;
+      for (fs::directory_iterator it(at, ec), end; !ec && it != end; it.increment(ec))
+        if (equals_ignoring_case(it->path().filename().string(), part)) {
+          if (match) return std::nullopt;  // two names differ only in case: ambiguous
+          match = it->path();
+        }
+      if (!match) return std::nullopt;
+      at = *match;
+    }
+    return at;
+  };
+  std::vector<std::string> parts;
+  for (const auto& part : fs::path(written).relative_path()) parts.push_back(part.string());
+  // A Windows drive ("C:") is a component of its own on this platform: never part of a tail.
+  const bool absolute = fs::path(written).has_root_directory() || (written.size() >= 2 && written[1] == ':');
+  for (size_t first = 0; first < parts.size(); ++first) {
+    if (first == 0 && absolute) continue;
+    if (parts[first] == ".." || parts[first] == ".") continue;
+    const std::vector<std::string> tail(parts.begin() + long(first), parts.end());
+    if (auto found = without_case(tail); found && fs::is_regular_file(*found, ec)) return found;
+  }
+  return std::nullopt;
 }
 
 // A page fault costs about 10 us on the virtual machines tightex is tested on (Firecracker: zero-filling
@@ -389,6 +439,7 @@ class ObjParser {
   std::vector<MaterialDef> defs_;
   std::unordered_map<std::string, size_t> def_by_name_;  // first definition of a name wins
   std::vector<std::string> loaded_mtls_;                 // each library is read once
+  std::vector<std::string> paths_found_;                 // ObjReadStats::paths_found
   bool saw_mtllib_ = false;
 };
 
@@ -446,6 +497,7 @@ TexturedMesh ObjParser::read(ObjReadStats* stats) {
   if (stats != nullptr) {
     stats->polygons_triangulated = polygons_triangulated_;
     stats->lines = lines.number();
+    stats->paths_found = paths_found_;
   }
   return mesh;
 }
@@ -621,20 +673,22 @@ void ObjParser::parse_mtllib(std::string_view rest) {
   const std::string whole = with_forward_slashes(rest);
   // mtllib may list several files separated by blanks, but a single file name may also contain
   // spaces: the whole rest of the line names a file if such a file exists, otherwise each word does.
-  std::vector<std::string> names;
-  std::error_code ec;
-  if (fs::exists(folder / whole, ec)) {
-    names.push_back(whole);
+  std::vector<std::pair<std::string, fs::path>> names;  // as written, as found
+  if (auto found = find_named_file(folder, whole)) {
+    names.push_back({whole, *found});
   } else {
     Tokens words(whole);
-    for (std::string_view w = words.next(); !w.empty(); w = words.next()) names.emplace_back(w);
     size_t missing = 0;
-    for (const std::string& n : names) missing += fs::exists(folder / n, ec) ? 0 : 1;
+    for (std::string_view w = words.next(); !w.empty(); w = words.next()) {
+      const auto f = find_named_file(folder, std::string(w));
+      missing += f ? 0 : 1;
+      names.push_back({std::string(w), f ? *f : folder / w});
+    }
     // No word exists either: most likely one file name with spaces, so name it whole.
     if (missing == names.size()) fail_here("material library '{}' not found", excerpt(whole));
   }
-  for (const std::string& name : names) {
-    const fs::path mtl_path = folder / name;
+  for (const auto& [name, mtl_path] : names) {
+    if (mtl_path != folder / name) paths_found_.push_back(fmt::format("{} -> {}", name, mtl_path.lexically_normal().string()));
     const std::string key = mtl_path.lexically_normal().string();
     bool seen = false;
     for (const std::string& l : loaded_mtls_) seen = seen || l == key;
@@ -757,7 +811,9 @@ void ObjParser::load_mtl(const fs::path& mtl_path, const std::string& data) {
       current->material.uv_scale = {scale[0], scale[1]};
       current->material.uv_offset = {offset[0], offset[1]};
       current->texture_written = file;
-      current->texture_resolved = (folder / file).lexically_normal().string();
+      const std::optional<fs::path> found = find_named_file(folder, file);
+      current->texture_resolved = (found ? *found : folder / file).lexically_normal().string();
+      if (found && *found != folder / file) paths_found_.push_back(fmt::format("{} -> {}", file, current->texture_resolved));
       current->texture_line = mtl_line;
     }
     // Every other statement (Ka, Ks, Ns, d, illum, bump maps, PBR extensions) does not affect the

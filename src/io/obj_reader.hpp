@@ -5,6 +5,7 @@
 // tinyobjloader's loader does not give for bad indices or numbers.
 #pragma once
 #include <string>
+#include <vector>
 
 #include "core/mesh.hpp"
 
@@ -19,6 +20,9 @@ struct ObjReadOptions {
 struct ObjReadStats {
   size_t polygons_triangulated = 0;  // faces with more than 3 corners, fan-triangulated
   size_t lines = 0;
+  /// Files the MTL names that were found only by ignoring case or by a tail of the path as written
+  /// ("WRITTEN -> USED"), e.g. a Windows exporter's absolute path.
+  std::vector<std::string> paths_found;
 };
 
 /// Reads an OBJ file and its MTL libraries and textures.
