@@ -117,14 +117,14 @@ void fit_tile(const Image& base, Image& out, const std::vector<BakeTriangle>& tr
   const int rw = rx1 - rx0, rh = ry1 - ry0;
   const size_t n = size_t(rw) * size_t(rh);
   // Sample classes: a K x K grid of points inside each texel (offsets from its centre).
-  // A tile holding a triangle that minifies the input beyond fit_fine_max_footprint keeps the 2 x 2 fit
-  // (see BakeOptions::fit_fine_max_footprint).
+  // A tile holding a triangle that minifies the input beyond fit_fine_max_footprint keeps the default
+  // 2 x 2 fit (see BakeOptions::fit_fine_max_footprint).
   double tile_footprint = 0;
   for (uint32_t t : tris)
     if (samplers[t].valid) tile_footprint = std::max({tile_footprint, samplers[t].footprint_x, samplers[t].footprint_y});
   const bool coarse = options.fit_samples > 2 && !(tile_footprint <= options.fit_fine_max_footprint);
-  const int K = coarse ? 2 : std::clamp(options.fit_samples, 1, 8), classes = K * K;
-  const double fit_lambda = coarse ? 1.0 : options.fit_lambda;
+  const int K = coarse ? BakeOptions{}.fit_samples : std::clamp(options.fit_samples, 1, 8), classes = K * K;
+  const double fit_lambda = coarse ? BakeOptions{}.fit_lambda : options.fit_lambda;
   std::vector<std::array<double, 2>> offsets(static_cast<size_t>(classes));
   for (int j = 0; j < K; ++j)
     for (int i = 0; i < K; ++i) offsets[size_t(j * K + i)] = {(i + 0.5) / K - 0.5, (j + 0.5) / K - 0.5};
