@@ -2,6 +2,7 @@
 // fit for bilinear read-back. Both are checked against what they exist to fix.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -148,6 +149,34 @@ TEST(Bake, FineFitKeepsTheDefaultFitWhereTheInputIsMinifiedBeyondItsLimit) {
   EXPECT_EQ(0, std::memcmp(normal.pixels.data(), fine.pixels.data(), normal.pixels.size() * sizeof(normal.pixels[0])));
   const Image normal_1to1 = bake(64, 0.125, false), fine_1to1 = bake(64, 0.125, true);
   EXPECT_NE(0, std::memcmp(normal_1to1.pixels.data(), fine_1to1.pixels.data(), normal_1to1.pixels.size() * sizeof(normal_1to1.pixels[0])));
+}
+
+// Progress: at least one call, fractions in (0, 1] that never go backwards, never two calls at once
+// (the tiles are baked in parallel and report from their threads).
+TEST(Bake, ProgressIsOrderedAndSerialised) {
+  Image in(256, 256);
+  for (int y = 0; y < 256; ++y)
+    for (int x = 0; x < 256; ++x) in.at(x, y) = {uint8_t(x), uint8_t(y), uint8_t(x ^ y), 255};
+  const TexturedMesh m = textured(in);
+  std::vector<Image> out = {Image(512, 512)};
+  BakeOptions o;
+  o.progress_interval_s = 0;
+  std::vector<double> calls;
+  std::atomic<int> inside{0};
+  bool overlapped = false;
+  o.progress = [&](double f) {
+    if (inside.fetch_add(1) != 0) overlapped = true;
+    calls.push_back(f);
+    inside.fetch_sub(1);
+  };
+  bake_texture(m, square(512, 512, 0.3, 0.9), {Rect{0, 0, 0, 512, 512}}, out, nullptr, o);
+  EXPECT_FALSE(overlapped);
+  ASSERT_FALSE(calls.empty());
+  for (size_t i = 0; i < calls.size(); ++i) {
+    EXPECT_GT(calls[i], 0.0);
+    EXPECT_LE(calls[i], 1.0);
+    if (i > 0) EXPECT_GE(calls[i], calls[i - 1]) << i;
+  }
 }
 
 TEST(Bake, FitDoesNotDependOnTheModelsUnits) {

@@ -58,9 +58,10 @@ struct Options {
   /// Compute the METRICS.md figures into report["metrics"]. A caller that writes the result can turn
   /// this off and run measure() beside the write (the CLI does).
   bool measure = true;
-  /// Called with a stage name and the fraction [0,1] done (an estimate within "cut+map", at most every
-  /// 0.2 s there). Calls never overlap, but within "cut+map" they may come from any thread working for
-  /// the call (the components are mapped in parallel).
+  /// Called with a stage name and the fraction [0,1] done (an estimate within "cut+map" and "bake", at
+  /// most every 0.2 s there). Calls never overlap and never go backwards within a stage, but within
+  /// "cut+map" and "bake" they may come from any thread working for the call (components are mapped,
+  /// tiles baked in parallel).
   std::function<void(std::string_view stage, double fraction)> progress;
   /// Test only (tests/test_kept_component.cpp): components, by index in plan order, whose cut+map is made
   /// to throw InternalError both in the full method and in the plain fallback, so the last resort (see

@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
+#include <mutex>
 #include <cmath>
 
 namespace tightex {
@@ -318,6 +320,25 @@ void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& tr
   });
   const int max_samples = std::max(1, options.max_footprint_samples);
   std::atomic<size_t> filled{0}, dilated{0}, filtered{0}, tiles_fitted{0}, tiles_total{0};
+  // Progress by tiles: each is rasterised (1 unit) and, with the fit, fitted (3 units).
+  constexpr double kFitUnits = 3.0;
+  double all_units = 0;
+  for (const Image& out : images)
+    all_units += double((out.width + kTile - 1) / kTile) * double((out.height + kTile - 1) / kTile) * (options.fit ? 1 + kFitUnits : 1);
+  std::atomic<double> units_done{0};
+  std::mutex progress_mutex;
+  auto last_report = std::chrono::steady_clock::now() - std::chrono::hours(1);  // the first call reports
+  auto advance = [&](double units) {
+    units_done.fetch_add(units);
+    if (!options.progress || !(all_units > 0)) return;
+    std::unique_lock<std::mutex> lock(progress_mutex, std::try_to_lock);
+    if (!lock.owns_lock()) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_report < std::chrono::duration<double>(options.progress_interval_s)) return;
+    last_report = now;
+    // Read under the lock: reports in order never go backwards.
+    options.progress(std::clamp(units_done.load() / all_units, 0.0, 1.0));
+  };
   for (uint32_t img = 0; img < images.size(); ++img) {
     Image& out = images[img];
     const int tiles_x = (out.width + kTile - 1) / kTile, tiles_y = (out.height + kTile - 1) / kTile;
@@ -363,6 +384,7 @@ void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& tr
       }
       filled += local;
       filtered += local_filtered;
+      advance(double(range.size()));
     });
 
     // Dilation inside each rectangle, layer by layer (deterministic: a layer reads only earlier layers).
@@ -426,6 +448,10 @@ void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& tr
         std::sort(tris.begin(), tris.end());
         tris.erase(std::unique(tris.begin(), tris.end()), tris.end());
         if (!bins[b].empty()) ++tiles_total;
+        struct Counted {  // however this tile's body returns
+          const decltype(advance)& f;
+          ~Counted() { f(kFitUnits); }
+        } counted{advance};
         bool worth = false;
         for (uint32_t t : bins[b]) worth = worth || (samplers[t].src && samplers[t].valid && std::max(samplers[t].footprint_x, samplers[t].footprint_y) > 0.5);
         if (!worth) return;

@@ -2,6 +2,7 @@
 // space and each texel takes the colour of the original texture through the original UVs.
 #pragma once
 #include <array>
+#include <functional>
 #include <vector>
 
 #include "core/mesh.hpp"
@@ -43,6 +44,10 @@ struct BakeOptions {
   /// fit's 38.86 / 40.93); limit 3: 38.92 / 41.00; 42.22; 6: 38.99 / 41.02; 42.25; 12: 39.15 / 41.03;
   /// 42.30; 24: 39.15 / 40.91; 42.29.
   double fit_fine_max_footprint = 12.0;
+  /// Optional: called with the fraction of the bake done (tiles rasterised, then fitted; a fitted tile
+  /// counts as three), from the baking threads, never two calls at once, at most every 0.2 s.
+  std::function<void(double)> progress;
+  double progress_interval_s = 0.2;  // the least time between two progress calls
   /// Pull of each texel towards its footprint-filtered bake, relative to the mean sample weight. Chosen
   /// by measurement (meshroom_esp32cam, area map, --size 1024, surface PSNR): 0.01: 41.10 dB, 0.1: 41.21,
   /// 0.3: 41.31, 1: 41.35, 3: 41.12, 10: 40.64; without the fit 40.01. A weaker pull over-fits the four

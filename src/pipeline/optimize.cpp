@@ -327,14 +327,16 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   std::mutex progress_mutex;
   auto last_report = std::chrono::steady_clock::now();
   auto advance = [&](double faces) {
-    const double done = faces_done.fetch_add(faces) + faces;
+    faces_done.fetch_add(faces);
     if (!options.progress || !(all_faces > 0)) return;
     std::unique_lock<std::mutex> lock(progress_mutex, std::try_to_lock);
     if (!lock.owns_lock()) return;
     const auto now = std::chrono::steady_clock::now();
     if (now - last_report < std::chrono::milliseconds(200)) return;
     last_report = now;
-    options.progress("cut+map", std::clamp(done / all_faces, 0.0, 1.0));
+    // Read under the lock: reports in order never go backwards (a value read before it could be older
+    // than one another thread has reported meanwhile).
+    options.progress("cut+map", std::clamp(faces_done.load() / all_faces, 0.0, 1.0));
   };
   std::vector<std::vector<Vec2>>& uv = plan.uv;
   uv.resize(nc);
@@ -596,6 +598,7 @@ Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& opt
   BakeOptions bo;
   bo.fit = options.fit;
   if (options.fine_fit) bo.fit_samples = kFineFitSamples, bo.fit_lambda = kFineFitLambda;
+  if (options.progress) bo.progress = [&](double f) { options.progress("bake", f); };
   bake_texture(input, bake_tris, mapped_rects, images, &bs, bo);
   for (size_t i = 0; i < images.size(); ++i) out.textures[i].image = std::move(images[i]);
   clock.done("bake");
