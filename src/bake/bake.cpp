@@ -1,5 +1,6 @@
 #include "bake/bake.hpp"
 
+#include "core/progress.hpp"
 #include "core/raster.hpp"
 
 #include <tbb/blocked_range.h>
@@ -7,8 +8,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
-#include <mutex>
 #include <cmath>
 
 namespace tightex {
@@ -325,20 +324,8 @@ void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& tr
   double all_units = 0;
   for (const Image& out : images)
     all_units += double((out.width + kTile - 1) / kTile) * double((out.height + kTile - 1) / kTile) * (options.fit ? 1 + kFitUnits : 1);
-  std::atomic<double> units_done{0};
-  std::mutex progress_mutex;
-  auto last_report = std::chrono::steady_clock::now() - std::chrono::hours(1);  // the first call reports
-  auto advance = [&](double units) {
-    units_done.fetch_add(units);
-    if (!options.progress || !(all_units > 0)) return;
-    std::unique_lock<std::mutex> lock(progress_mutex, std::try_to_lock);
-    if (!lock.owns_lock()) return;
-    const auto now = std::chrono::steady_clock::now();
-    if (now - last_report < std::chrono::duration<double>(options.progress_interval_s)) return;
-    last_report = now;
-    // Read under the lock: reports in order never go backwards.
-    options.progress(std::clamp(units_done.load() / all_units, 0.0, 1.0));
-  };
+  ProgressCounter bake_progress(options.progress, all_units, options.progress_interval_s);
+  auto advance = [&](double units) { bake_progress.advance(units); };
   for (uint32_t img = 0; img < images.size(); ++img) {
     Image& out = images[img];
     const int tiles_x = (out.width + kTile - 1) / kTile, tiles_y = (out.height + kTile - 1) / kTile;

@@ -15,6 +15,7 @@
 
 #include "bake/bake.hpp"
 #include "core/error.hpp"
+#include "core/progress.hpp"
 #include "layout/layout.hpp"
 #include "param/param.hpp"
 #include "repair/repair.hpp"
@@ -323,21 +324,9 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   // whichever thread is mapping, one at a time, at most every 0.2 s.
   double all_faces = 0;
   for (const Surface& comp : components) all_faces += double(comp.num_faces());
-  std::atomic<double> faces_done{0};
-  std::mutex progress_mutex;
-  auto last_report = std::chrono::steady_clock::now();
-  auto advance = [&](double faces) {
-    faces_done.fetch_add(faces);
-    if (!options.progress || !(all_faces > 0)) return;
-    std::unique_lock<std::mutex> lock(progress_mutex, std::try_to_lock);
-    if (!lock.owns_lock()) return;
-    const auto now = std::chrono::steady_clock::now();
-    if (now - last_report < std::chrono::milliseconds(200)) return;
-    last_report = now;
-    // Read under the lock: reports in order never go backwards (a value read before it could be older
-    // than one another thread has reported meanwhile).
-    options.progress("cut+map", std::clamp(faces_done.load() / all_faces, 0.0, 1.0));
-  };
+  ProgressCounter map_progress(options.progress ? std::function<void(double)>([&](double f) { options.progress("cut+map", f); }) : nullptr,
+                               all_faces);
+  auto advance = [&](double faces) { map_progress.advance(faces); };
   std::vector<std::vector<Vec2>>& uv = plan.uv;
   uv.resize(nc);
   std::vector<SquareMapStats> map_stats(nc);
