@@ -120,10 +120,13 @@ void fit_tile(const Image& base, Image& out, const std::vector<BakeTriangle>& tr
   // Sample classes: a K x K grid of points inside each texel (offsets from its centre).
   // A tile holding a triangle that minifies the input beyond fit_fine_max_footprint keeps the default
   // 2 x 2 fit (see BakeOptions::fit_fine_max_footprint).
-  double tile_footprint = 0;
-  for (uint32_t t : tris)
-    if (samplers[t].valid) tile_footprint = std::max({tile_footprint, samplers[t].footprint_x, samplers[t].footprint_y});
-  const bool coarse = options.fit_samples > 2 && !(tile_footprint <= options.fit_fine_max_footprint);
+  bool coarse = false;
+  if (options.fit_samples > 2)
+    for (uint32_t t : tris)
+      if (samplers[t].valid && std::max(samplers[t].footprint_x, samplers[t].footprint_y) > options.fit_fine_max_footprint) {
+        coarse = true;
+        break;
+      }
   const int K = coarse ? BakeOptions{}.fit_samples : std::clamp(options.fit_samples, 1, 8), classes = K * K;
   const double fit_lambda = coarse ? BakeOptions{}.fit_lambda : options.fit_lambda;
   std::vector<std::array<double, 2>> offsets(static_cast<size_t>(classes));
@@ -324,8 +327,7 @@ void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& tr
   double all_units = 0;
   for (const Image& out : images)
     all_units += double((out.width + kTile - 1) / kTile) * double((out.height + kTile - 1) / kTile) * (options.fit ? 1 + kFitUnits : 1);
-  ProgressCounter bake_progress(options.progress, all_units, options.progress_interval_s);
-  auto advance = [&](double units) { bake_progress.advance(units); };
+  ProgressCounter progress(options.progress, all_units, options.progress_interval_s);
   for (uint32_t img = 0; img < images.size(); ++img) {
     Image& out = images[img];
     const int tiles_x = (out.width + kTile - 1) / kTile, tiles_y = (out.height + kTile - 1) / kTile;
@@ -371,7 +373,7 @@ void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& tr
       }
       filled += local;
       filtered += local_filtered;
-      advance(double(range.size()));
+      progress.advance(double(range.size()));
     });
 
     // Dilation inside each rectangle, layer by layer (deterministic: a layer reads only earlier layers).
@@ -423,27 +425,26 @@ void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& tr
     if (options.fit) {
       const Image base = out;
       tbb::parallel_for(size_t(0), bins.size(), [&](size_t b) {
-        const int tx = int(b % size_t(tiles_x)), ty = int(b / size_t(tiles_x));
-        std::vector<uint32_t> tris;
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx) {
-            const int nx = tx + dx, ny = ty + dy;
-            if (nx < 0 || ny < 0 || nx >= tiles_x || ny >= tiles_y) continue;
-            const auto& bin = bins[size_t(ny) * size_t(tiles_x) + size_t(nx)];
-            tris.insert(tris.end(), bin.begin(), bin.end());
-          }
-        std::sort(tris.begin(), tris.end());
-        tris.erase(std::unique(tris.begin(), tris.end()), tris.end());
         if (!bins[b].empty()) ++tiles_total;
-        struct Counted {  // however this tile's body returns
-          const decltype(advance)& f;
-          ~Counted() { f(kFitUnits); }
-        } counted{advance};
         bool worth = false;
         for (uint32_t t : bins[b]) worth = worth || (samplers[t].src && samplers[t].valid && std::max(samplers[t].footprint_x, samplers[t].footprint_y) > 0.5);
-        if (!worth) return;
-        fit_tile(base, out, triangles, samplers, tris, tx * kTile, ty * kTile, options, max_samples);
-        ++tiles_fitted;
+        if (worth) {
+          // The tile's triangles and its neighbours' (the fit's halo reaches into them).
+          const int tx = int(b % size_t(tiles_x)), ty = int(b / size_t(tiles_x));
+          std::vector<uint32_t> tris;
+          for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+              const int nx = tx + dx, ny = ty + dy;
+              if (nx < 0 || ny < 0 || nx >= tiles_x || ny >= tiles_y) continue;
+              const auto& bin = bins[size_t(ny) * size_t(tiles_x) + size_t(nx)];
+              tris.insert(tris.end(), bin.begin(), bin.end());
+            }
+          std::sort(tris.begin(), tris.end());
+          tris.erase(std::unique(tris.begin(), tris.end()), tris.end());
+          fit_tile(base, out, triangles, samplers, tris, tx * kTile, ty * kTile, options, max_samples);
+          ++tiles_fitted;
+        }
+        progress.advance(kFitUnits);
       });
     }
   }

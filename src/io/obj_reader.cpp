@@ -96,7 +96,7 @@ std::optional<fs::path> find_named_file(const fs::path& folder, std::string writ
   auto without_case = [&](const std::vector<std::string>& parts) -> std::optional<fs::path> {
     fs::path at = folder;
     for (const std::string& part : parts) {
-      if (part == "." ) continue;
+      if (part == ".") continue;
       if (part == "..") {
         at /= part;
         continue;
@@ -440,6 +440,12 @@ class ObjParser {
   std::unordered_map<std::string, size_t> def_by_name_;  // first definition of a name wins
   std::vector<std::string> loaded_mtls_;                 // each library is read once
   std::vector<std::string> paths_found_;                 // ObjReadStats::paths_found
+  /// find_named_file, noting in paths_found_ a file found under another name than written.
+  std::optional<fs::path> locate(const fs::path& folder, const std::string& written) {
+    std::optional<fs::path> found = find_named_file(folder, written);
+    if (found && *found != folder / written) paths_found_.push_back(fmt::format("{} -> {}", written, found->lexically_normal().string()));
+    return found;
+  }
   bool saw_mtllib_ = false;
 };
 
@@ -674,13 +680,13 @@ void ObjParser::parse_mtllib(std::string_view rest) {
   // mtllib may list several files separated by blanks, but a single file name may also contain
   // spaces: the whole rest of the line names a file if such a file exists, otherwise each word does.
   std::vector<std::pair<std::string, fs::path>> names;  // as written, as found
-  if (auto found = find_named_file(folder, whole)) {
+  if (auto found = locate(folder, whole)) {
     names.push_back({whole, *found});
   } else {
     Tokens words(whole);
     size_t missing = 0;
     for (std::string_view w = words.next(); !w.empty(); w = words.next()) {
-      const auto f = find_named_file(folder, std::string(w));
+      const auto f = locate(folder, std::string(w));
       missing += f ? 0 : 1;
       names.push_back({std::string(w), f ? *f : folder / w});
     }
@@ -688,7 +694,6 @@ void ObjParser::parse_mtllib(std::string_view rest) {
     if (missing == names.size()) fail_here("material library '{}' not found", excerpt(whole));
   }
   for (const auto& [name, mtl_path] : names) {
-    if (mtl_path != folder / name) paths_found_.push_back(fmt::format("{} -> {}", name, mtl_path.lexically_normal().string()));
     const std::string key = mtl_path.lexically_normal().string();
     bool seen = false;
     for (const std::string& l : loaded_mtls_) seen = seen || l == key;
@@ -811,9 +816,8 @@ void ObjParser::load_mtl(const fs::path& mtl_path, const std::string& data) {
       current->material.uv_scale = {scale[0], scale[1]};
       current->material.uv_offset = {offset[0], offset[1]};
       current->texture_written = file;
-      const std::optional<fs::path> found = find_named_file(folder, file);
+      const std::optional<fs::path> found = locate(folder, file);
       current->texture_resolved = (found ? *found : folder / file).lexically_normal().string();
-      if (found && *found != folder / file) paths_found_.push_back(fmt::format("{} -> {}", file, current->texture_resolved));
       current->texture_line = mtl_line;
     }
     // Every other statement (Ka, Ks, Ns, d, illum, bump maps, PBR extensions) does not affect the

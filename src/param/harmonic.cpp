@@ -51,12 +51,10 @@ std::vector<double> edge_weights(const Surface& m, Weights kind, size_t* negativ
   return w;
 }
 
-/// Solves the Dirichlet problem with the boundary fixed at `uv` of boundary vertices.
-using Solver = SparseCholesky;
-
-/// The fallbacks change the weights, never the sparsity pattern: the symbolic analysis is done once.
+/// Solves the Dirichlet problem with the boundary fixed at `uv` of boundary vertices. The fallbacks
+/// change the weights, never the sparsity pattern: the symbolic analysis is done once.
 bool solve_interior(const Surface& m, const std::vector<double>& w, const std::vector<char>& on_boundary,
-                    std::vector<Vec2>& uv, Solver& solver, bool& analyzed) {
+                    std::vector<Vec2>& uv, SparseCholesky& solver, bool& analyzed) {
   const size_t nv = m.num_vertices();
   std::vector<int> unknown(nv, -1);
   int n = 0;
@@ -158,7 +156,7 @@ void slide_boundary(const SquareBoundary& b, const std::vector<double>& log_rati
 /// The density iterations of map_to_square (see param.hpp). `uv` holds a fold-free map with the
 /// boundary already placed; `w` positive weights (one per edge, on its smaller halfedge).
 void equalize_density(const Surface& m, const SquareMapOptions& options, const std::vector<char>& on_boundary,
-                      const SquareBoundary* sides, std::vector<double> w, Solver& solver, bool& analyzed, std::vector<Vec2>& uv,
+                      const SquareBoundary* sides, std::vector<double> w, SparseCholesky& solver, bool& analyzed, std::vector<Vec2>& uv,
                       SquareMapStats& st) {
   const size_t nf = m.num_faces();
   const double balance = std::clamp(options.balance, 0.0, 1.0);
@@ -368,7 +366,7 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
 
   // Alg. 2 with the fold-free fallbacks.
   const std::vector<Vec2> boundary_uv = uv;
-  Solver solver(options.supernodal_from);
+  SparseCholesky solver(options.supernodal_from);
   bool analyzed = false;
   std::vector<double> positive_w;  // the positive weights of the first fold-free positive weighting
   for (Weights kind : {Weights::kCotangent, Weights::kClamped, Weights::kUniform}) {

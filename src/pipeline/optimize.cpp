@@ -4,11 +4,9 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cctype>
 #include <chrono>
 #include <cmath>
-#include <mutex>
 #include <numeric>
 #include <optional>
 #include <set>
@@ -326,7 +324,6 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   for (const Surface& comp : components) all_faces += double(comp.num_faces());
   ProgressCounter map_progress(options.progress ? std::function<void(double)>([&](double f) { options.progress("cut+map", f); }) : nullptr,
                                all_faces);
-  auto advance = [&](double faces) { map_progress.advance(faces); };
   std::vector<std::vector<Vec2>>& uv = plan.uv;
   uv.resize(nc);
   std::vector<SquareMapStats> map_stats(nc);
@@ -345,7 +342,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
     double reported = 0;  // fraction of this component already added to faces_done
     mo.progress = [&](double f) {
       if (f <= reported) return;
-      advance((f - reported) * faces);
+      map_progress.advance((f - reported) * faces);
       reported = f;
     };
     try {
@@ -392,7 +389,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
         uv[c].clear();
       }
     }
-    advance((1 - reported) * faces);
+    map_progress.advance((1 - reported) * faces);
   });
   clock.done("cut+map");
 
