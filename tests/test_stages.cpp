@@ -1093,14 +1093,26 @@ TEST(Pipeline, DefaultSizeKeepsTheInputsUsedTexels) {
   const TexturedMesh in = cat::make_textured("sheet", g.positions, g.triangles, std::move(img));
   const double used = input_used_texels(in);
   ASSERT_GT(used, 20000);
-  const Result r = optimize(in, Options{});
-  const int side = r.report["options"]["size"];
-  EXPECT_EQ(side, default_size(in));
-  EXPECT_EQ(side % 4, 0);
-  EXPECT_GE(double(side) * side, used);
-  EXPECT_LT(double(side - 4) * (side - 4), used);
-  ASSERT_EQ(r.output.textures.size(), 1u);
-  EXPECT_EQ(r.output.textures[0].image.width, side);
+  for (double aspect : {1.0, 0.0, 2.0}) {  // the square, the auto shape, a 2:1 texture
+    SCOPED_TRACE(aspect);
+    Options opt;
+    opt.aspect = aspect;
+    const Result r = optimize(in, opt);
+    const int side = r.report["options"]["size"];
+    EXPECT_EQ(side, default_size(in));
+    EXPECT_EQ(side % 4, 0);
+    EXPECT_GE(double(side) * side, used);
+    EXPECT_LT(double(side - 4) * (side - 4), used);
+    ASSERT_EQ(r.output.textures.size(), 1u);
+    const Image& img = r.output.textures[0].image;
+    EXPECT_EQ(img.width % 4, 0);
+    EXPECT_EQ(img.height % 4, 0);
+    EXPECT_GE(double(img.width) * img.height, used) << "never fewer texels than the input uses";
+    EXPECT_LT(double(img.width) * (img.height - 4), double(side) * side) << "and no more than the square's rounding";
+    if (aspect == 1.0) EXPECT_EQ(img.width, side);
+    if (aspect == 2.0) EXPECT_NEAR(double(img.width) / img.height, 2.0, 0.1);
+    EXPECT_EQ(r.report["aspect"]["chosen"].get<double>() == 1.0, img.width == img.height);
+  }
   EXPECT_EQ(default_size(in, 64), 64) << "capped at max_side";
 }
 

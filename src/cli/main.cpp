@@ -67,6 +67,7 @@ int run_main(int argc, char** argv) {
   std::string input, outdir, report_path, preview_path, layout = "atlas", format = "png", holes = "fill", map = "detail", corners = "arcs";
   int size = 0;
   double texels = 0, balance = 1.0;
+  std::string aspect_arg;
   bool quiet = false, verbose = false, force = false, no_fit = false, fine_fit = false;
   double max_memory_mib = 0;
   app.add_option("input", input, "textured model (OBJ + MTL + textures)")->required();
@@ -74,13 +75,29 @@ int run_main(int argc, char** argv) {
   auto* size_opt = app.add_option("--size", size, "texture side in texels (per-component: of the largest component); above 16384 needs --force. "
                                    "Default: the side that holds as many texels as the input uses (see --texels)")
       ->check(CLI::Range(8, 65536));
-  app.add_option("--texels", texels, "texel budget: the texture is the smallest square (side a multiple of 4) holding this many texels. "
+  app.add_option("--texels", texels, "texel budget: the texture holds this many texels: the smallest square (side a multiple of 4), or as many "
+                                     "in the shape --aspect gives or chooses. "
                                      "Default: the input's used texels, so the output keeps the input's information")
       ->check(CLI::PositiveNumber)->excludes(size_opt);
   app.add_option("--map", map, "detail (default): texels where the input texture has detail (colour gradient per 3D length), "
                                "capped at 4x the input's own density; area: the same texels per unit of 3D area everywhere; "
                                "texel: the input's own texel density per triangle; harmonic: the paper's map exactly (docs/maps.md)")
       ->check(CLI::IsMember({"detail", "texel", "area", "harmonic"}));
+  app.add_option("--aspect", aspect_arg,
+                 "width/height of the texture, which holds as many texels as a square would: auto (default, area/texel/detail "
+                 "maps): the component holding most of the texture is mapped at 1:2, 1:1 and 2:1 and the shape whose "
+                 "texels keep the most of the input is chosen (the square unless another is clearly better); a number "
+                 "(e.g. 2) fixes it. With --size the default is 1, a square of that side")
+      ->check([](const std::string& v) {
+        if (v == "auto") return std::string();
+        try {
+          size_t used = 0;
+          const double a = std::stod(v, &used);
+          if (used == v.size() && a >= 0.0625 && a <= 16) return std::string();
+        } catch (...) {
+        }
+        return std::string("must be auto or a number in [1/16, 16]");
+      });
   app.add_option("--balance", balance, "area/texel/detail maps: 1 = target density exactly, 0 = the harmonic map's density (least angle "
                                        "distortion); between: a geometric blend")
       ->check(CLI::Range(0.0, 1.0));
@@ -157,6 +174,8 @@ int run_main(int argc, char** argv) {
   opt.holes = holes == "fill" ? HoleMode::kFill : HoleMode::kCut;
   opt.map = map == "harmonic" ? MapKind::kHarmonic : map == "area" ? MapKind::kArea : map == "texel" ? MapKind::kTexel : MapKind::kDetail;
   opt.balance = balance;
+  // --size promises a side: a square, unless a shape is asked for.
+  opt.aspect = aspect_arg.empty() ? (size_opt->count() > 0 ? 1.0 : 0.0) : aspect_arg == "auto" ? 0.0 : std::stod(aspect_arg);
   opt.corners = corners == "turning" ? CornerRule::kTurningAngle : CornerRule::kEqualArcs;
   opt.fit = !no_fit;
   opt.fine_fit = fine_fit;
@@ -178,8 +197,9 @@ int run_main(int argc, char** argv) {
       texture_error = std::current_exception();
     }
   };
-  if (opt.map == MapKind::kDetail) {
-    // The detail map reads the texture's pixels to place its texels: textures first.
+  if (opt.map == MapKind::kDetail || (opt.aspect == 0 && opt.map != MapKind::kHarmonic && opt.layout == Layout::kAtlas)) {
+    // The detail map reads the texture's pixels to place its texels, the auto aspect to compare its
+    // shapes: textures first.
     read_textures();
     if (!texture_error) {
       try {

@@ -100,13 +100,14 @@ std::vector<Rect> layout_atlas(const std::vector<double>& areas, int width, int 
   return out;
 }
 
-std::vector<Rect> layout_per_component(const std::vector<double>& areas, int size, int min_side) {
+std::vector<Rect> layout_per_component(const std::vector<double>& areas, int size, int min_side, double aspect) {
   std::vector<Rect> out(areas.size());
   const double max_area = areas.empty() ? 1.0 : *std::max_element(areas.begin(), areas.end());
+  const double sx = std::sqrt(aspect > 0 ? aspect : 1.0);
   for (size_t i = 0; i < areas.size(); ++i) {
     const double share = max_area > 0 ? std::sqrt(std::max(areas[i], 0.0) / max_area) : 1.0;
-    const int side = std::max(min_side, int(std::lround(size * share)));
-    out[i] = Rect{int(i), 0, 0, side, side};
+    const int w = std::max(min_side, int(std::lround(size * share * sx))), h = std::max(min_side, int(std::lround(size * share / sx)));
+    out[i] = Rect{int(i), 0, 0, w, h};
   }
   return out;
 }

@@ -10,15 +10,19 @@ namespace tightex {
 
 namespace {
 
-/// The four corners at the quarters of the boundary length, starting at the first ear (or vertex 0);
-/// an ear within 5% of a quarter point is taken instead of the nearest vertex.
-std::array<size_t, 4> equal_arc_corners(size_t nb, const std::vector<double>& arc, const std::vector<size_t>& ears) {
+/// The four corners where the boundary length is shared out as the rectangle's perimeter is (the
+/// quarters on a square), starting at the first ear (or vertex 0); an ear within 5% of such a point is
+/// taken instead of the nearest vertex.
+std::array<size_t, 4> equal_arc_corners(size_t nb, const std::vector<double>& arc, const std::vector<size_t>& ears, double aspect) {
   const double total = arc[nb];
   std::array<size_t, 4> corner{};
   const size_t start = ears.empty() ? 0 : ears[0];
   corner[0] = start;
+  // Sides in boundary order: bottom (width), right (height), top (width), left (height).
+  const double bottom = aspect / (2 * (aspect + 1)), right = 1 / (2 * (aspect + 1));
+  const double share_before[4] = {0, bottom, bottom + right, 2 * bottom + right};
   for (int k = 1; k < 4; ++k) {
-    const double target = std::fmod(arc[start] + total * k / 4.0, total);
+    const double target = std::fmod(arc[start] + total * share_before[k], total);
     auto dist_to = [&](size_t i) {
       const double d = std::abs(arc[i] - target);
       return std::min(d, total - d);
@@ -116,11 +120,12 @@ std::array<size_t, 4> turning_corners(const Disk& disk, const std::vector<double
 
 }  // namespace
 
-std::array<size_t, 4> choose_corners(const Disk& disk, const std::vector<double>& arc, CornerRule rule) {
+std::array<size_t, 4> choose_corners(const Disk& disk, const std::vector<double>& arc, CornerRule rule, double aspect) {
   const Surface& m = disk.mesh;
   const auto& bnd = disk.boundary;
   const size_t nb = bnd.size();
   if (nb < 3 || arc.size() != nb + 1) fail_internal("choose_corners: boundary of {} vertices, {} arc lengths", nb, arc.size());
+  if (!(aspect > 0) || !std::isfinite(aspect)) fail_internal("choose_corners: aspect {}", aspect);
   if (nb == 3) return {0, 1, 2, 2};  // a lone triangle: three corners, the fourth side has no edge
   // Ears: boundary vertices with one triangle.
   std::vector<uint32_t> face_count(m.num_vertices(), 0);
@@ -129,7 +134,7 @@ std::array<size_t, 4> choose_corners(const Disk& disk, const std::vector<double>
   std::vector<size_t> ears;
   for (size_t i = 0; i < nb; ++i)
     if (face_count[bnd[i]] == 1) ears.push_back(i);
-  return rule == CornerRule::kTurningAngle ? turning_corners(disk, arc, ears) : equal_arc_corners(nb, arc, ears);
+  return rule == CornerRule::kTurningAngle ? turning_corners(disk, arc, ears) : equal_arc_corners(nb, arc, ears, aspect);
 }
 
 }  // namespace tightex

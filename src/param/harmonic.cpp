@@ -283,7 +283,9 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
   std::vector<double> arc(nb + 1, 0.0);
   for (size_t i = 0; i < nb; ++i) arc[i + 1] = arc[i] + edge_scale[i] * (m.positions[bnd[(i + 1) % nb]] - m.positions[bnd[i]]).norm();
   const double total = arc[nb];
-  const std::array<size_t, 4> corner = choose_corners(disk, arc, options.corners);
+  // The rectangle's width/height (texel spacing is the same both ways): 1 for the paper's map.
+  const double aspect = density ? double(std::max(1, options.rect_width)) / double(std::max(1, options.rect_height)) : 1.0;
+  const std::array<size_t, 4> corner = choose_corners(disk, arc, options.corners, aspect);
   for (int k = 0; k < 4; ++k) st.corners[k] = bnd[corner[k]];
 
   // Alg. 1: each side by arc length between its corners.
@@ -400,7 +402,23 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
       // Fixed coordinates (bit 0: u, bit 1: v): both for corners and bumps; a side's vertex slides along it.
       std::vector<char> fixed(m.num_vertices(), 0);
       for (size_t i = 0; i < nb; ++i) fixed[bnd[i]] = pinned[i] || !options.slide_boundary ? 3 : (side_of[i] % 2 == 0 ? 2 : 1);
-      const SlimStats ss = refine_map(m, fixed, st.blended_target, options.refine_iterations, uv, options.supernodal_from, [&](int step) {
+      // Refined in the rectangle's proportions (area 1: the targets are normalised to the unit square),
+      // so the targets' shapes are met in texels.
+      auto refine_in_rect = [&](const std::vector<double>& target, int iterations, const std::function<void(int)>& on_step) {
+        if (aspect == 1.0) return refine_map(m, fixed, target, iterations, uv, options.supernodal_from, on_step);
+        const double sx = std::sqrt(aspect);
+        const std::vector<Vec2> before = uv;
+        for (Vec2& p : uv) p = Vec2(p.x() * sx, p.y() / sx);
+        const SlimStats r = refine_map(m, fixed, target, iterations, uv, options.supernodal_from, on_step);
+        for (Vec2& p : uv) p = Vec2(p.x() / sx, p.y() * sx);
+        // Held coordinates come back exactly (x * sx / sx may miss 1 by an ulp: a side's texel centres
+        // would fall outside the chart).
+        for (size_t v = 0; v < uv.size(); ++v)
+          for (int a = 0; a < 2; ++a)
+            if (fixed[v] & (1 << a)) uv[v](a) = before[v](a);
+        return r;
+      };
+      const SlimStats ss = refine_in_rect(st.blended_target, options.refine_iterations, [&](int step) {
         if (options.progress) options.progress(0.4 + 0.6 * std::min(1.0, step / 15.0));
       });
       st.refine_iterations = ss.iterations;
@@ -440,7 +458,7 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
         for (size_t f = 0; f < nf; ++f) corrected[f] *= std::exp2(-std::clamp(log_ratio[f], -4.0, 4.0));
         const std::vector<Vec2> previous = uv;
         const double previous_p5 = st.spread_p5, previous_p95 = st.spread_p95;
-        const SlimStats cs = refine_map(m, fixed, corrected, 2, uv, options.supernodal_from);
+        const SlimStats cs = refine_in_rect(corrected, 2, {});
         st.refine_iterations += cs.iterations;
         ++st.correction_rounds;
         spread();

@@ -16,6 +16,7 @@
 #include "core/progress.hpp"
 #include "layout/layout.hpp"
 #include "param/param.hpp"
+#include "pipeline/aspect.hpp"
 #include "repair/repair.hpp"
 #include "report/metrics.hpp"
 #include "tightex/tightex.hpp"
@@ -225,6 +226,34 @@ void set_face_targets(const Disk& disk, const ComponentDensity& density, const O
   }
 }
 
+/// One component cut and mapped (plan_charts' step 4), for the rectangle `rect`.
+struct Mapped {
+  Rect rect;
+  Disk disk;
+  std::vector<Vec2> uv;
+  CutStats cut;
+  SquareMapStats map;
+  std::string kept;  // non-empty: neither the full method nor the fallback mapped it (Plan::kept)
+};
+
+/// The auto aspect's probes, width/height of the texture (the square first: it stays unless another is
+/// clearly better). Measured (session 7, detail map at the input's budget, shapes 1/4 .. 3): only
+/// ycb_005_tomato_soup_can gains among ../shared/data (0.5: 47.66 -> 49.00 dB); generated vases gain
+/// up to 1.2 dB at 2. A can's side unrolls to about 2:1.
+constexpr double kAspectProbes[] = {1.0, 0.5, 2.0};
+/// Another shape replaces the square only if its estimated error is this fraction of the square's or
+/// less (0.2 dB): the estimate is a simulation, and a square texture is the simpler one to use.
+constexpr double kAspectMinGain = 0.95;
+/// Surface points of the estimate (resampling_mse): the same points for every probe. Scans' errors are
+/// heavy-tailed (meshroom_esp32cam: 0.1% of the surface holds 6% of the squared error): 32768 points
+/// put its 2:1 map 1 dB above the square, 1M points 0.15 dB (the finished runs: 0.5 dB below).
+constexpr size_t kAspectSamples = size_t(1) << 20;
+/// Beyond this many faces the dominant component is not probed (each probe is a whole map: the 225k
+/// vase's takes 15 s): the square, unless Options::aspect asks for a shape.
+constexpr size_t kAspectProbeMaxFaces = 250000;
+/// Components of fewer faces are probed in parallel; bigger ones one probe at a time (memory).
+constexpr size_t kAspectParallelBelow = 100000;
+
 /// The library's entry check (read_obj guarantees all of this; a mesh built in code may not).
 void validate(const TexturedMesh& m) {
   const std::string& f = m.source.empty() ? std::string("mesh") : m.source;
@@ -270,9 +299,6 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   progress("components", 0);
   const std::vector<Surface>& components = plan.components = split_components(surface);
   const size_t nc = components.size();
-  std::vector<Disk>& disks = plan.disks;
-  disks.resize(nc);
-  std::vector<CutStats> cut_stats(nc);
   std::vector<double> areas(nc, 0.0);
   for (size_t c = 0; c < nc; ++c)
     for (const Tri& f : components[c].triangles)
@@ -298,19 +324,22 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
       }
   }
 
-  // 3. Layout: a rectangle of texels per component.
+  // 3. Layout: a rectangle of texels per component, in a texture of (about) size x size texels whose
+  //    width/height is Options::aspect, or, on auto, the one of kAspectProbes whose map keeps the most of
+  //    the texture (below, once the component that dominates the texture has been mapped at each).
   std::vector<Rect>& rects = plan.rects;
   int& num_images = plan.num_images;
   num_images = 1;
   std::vector<std::pair<int, int>>& image_size = plan.image_size;
-  if (options.layout == Layout::kAtlas) {
-    rects = layout_atlas(shares, size, size);
-    image_size.push_back({size, size});
-  } else {
-    rects = layout_per_component(shares, size);
-    num_images = int(nc);
-    for (const Rect& r : rects) image_size.push_back({r.w, r.h});
-  }
+  // W x H for a shape: W a multiple of 4 near size x sqrt(aspect), H the least multiple of 4 with
+  // W x H >= size^2 (never fewer texels than the square).
+  auto atlas_size = [&](double aspect) {
+    if (aspect == 1.0) return std::pair{size, size};
+    const int W = std::max(8, int(std::lround(size * std::sqrt(aspect) / 4)) * 4);
+    const long need = (long(size) * long(size) + W - 1) / W;
+    return std::pair{W, std::max(8, int((need + 3) / 4 * 4))};
+  };
+  double aspect = options.aspect > 0 ? options.aspect : 1.0;
 
   // 4. Cut each component to a disk and map it onto the unit square (§4.2). Where even positive
   //    weights fold (a region crowded below floating-point precision), the disk is slit to that
@@ -322,29 +351,40 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   // whichever thread is mapping, one at a time, at most every 0.2 s.
   double all_faces = 0;
   for (const Surface& comp : components) all_faces += double(comp.num_faces());
+  // The auto aspect maps the dominant component once per probe (its share of the texels at least half).
+  size_t dominant = kNone;
+  if (options.aspect == 0 && options.map != MapKind::kHarmonic && options.layout == Layout::kAtlas && nc > 0) {
+    const size_t c = size_t(std::max_element(shares.begin(), shares.end()) - shares.begin());
+    const double sum = std::accumulate(shares.begin(), shares.end(), 0.0);
+    bool pixels = false;
+    for (const Texture& t : input.textures) pixels = pixels || !t.image.empty();
+    if (pixels && density[c].textured && shares[c] >= 0.5 * sum && components[c].num_faces() <= kAspectProbeMaxFaces) dominant = c;
+  }
+  if (dominant != kNone) all_faces += double(components[dominant].num_faces()) * double(std::size(kAspectProbes) - 1);
   ProgressCounter map_progress(options.progress ? std::function<void(double)>([&](double f) { options.progress("cut+map", f); }) : nullptr,
                                all_faces);
-  std::vector<std::vector<Vec2>>& uv = plan.uv;
-  uv.resize(nc);
-  std::vector<SquareMapStats> map_stats(nc);
-  std::vector<std::string>& kept = plan.kept;
-  kept.assign(nc, std::string());
   auto forced_failure = [&](size_t c, const char* what) {
     if (std::find(options.test_fail_components.begin(), options.test_fail_components.end(), c) != options.test_fail_components.end())
       fail_internal("{} failure forced by Options::test_fail_components", what);
   };
-  tbb::parallel_for(size_t(0), nc, [&](size_t c) {
+  // Component c cut and mapped for a texel rectangle of rect's shape.
+  auto map_component = [&](size_t c, const Rect& rect, Mapped& out) {
+    out.rect = rect;
     SquareMapOptions mo;
-    mo.rect_width = rects[c].w;
-    mo.rect_height = rects[c].h;
+    mo.rect_width = rect.w;
+    mo.rect_height = rect.h;
     mo.corners = options.corners;
     const double faces = double(components[c].num_faces());
-    double reported = 0;  // fraction of this component already added to faces_done
+    double reported = 0;  // fraction of this map already added to the progress
     mo.progress = [&](double f) {
       if (f <= reported) return;
       map_progress.advance((f - reported) * faces);
       reported = f;
     };
+    Disk& disk = out.disk;
+    std::vector<Vec2>& uv = out.uv;
+    CutStats& cut_stats = out.cut;
+    SquareMapStats& map_stats = out.map;
     try {
       forced_failure(c, "full method");
       std::vector<uint32_t> slit_to;
@@ -355,41 +395,103 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
         denoised->surface = remove_handles(components[c], &denoised->handle_loops, seams);
       }
       for (int round = 0;; ++round) {
-        disks[c] = cut_to_disk(components[c], options.holes, &cut_stats[c], slit_to, denoised ? &*denoised : nullptr, false, seams);
-        set_face_targets(disks[c], density[c], options, mo);
-        uv[c] = map_to_square(disks[c], mo, &map_stats[c]);
-        const uint32_t crowded = map_stats[c].crowded_vertex;
+        disk = cut_to_disk(components[c], options.holes, &cut_stats, slit_to, denoised ? &*denoised : nullptr, false, seams);
+        set_face_targets(disk, density[c], options, mo);
+        uv = map_to_square(disk, mo, &map_stats);
+        const uint32_t crowded = map_stats.crowded_vertex;
         if (crowded == kNone || round == kCrowdingRounds) break;
-        const uint32_t target = disks[c].mesh.vertex_parent[crowded];
+        const uint32_t target = disk.mesh.vertex_parent[crowded];
         if (target == kNone) break;  // crowded at scaffolding: nothing to slit to
         slit_to.push_back(target);
       }
       // The map promises no fold; one that folds anyway is a failure of the full method.
-      if (map_stats[c].flipped > 0) fail_internal("the map folds {} triangles", map_stats[c].flipped);
+      if (map_stats.flipped > 0) fail_internal("the map folds {} triangles", map_stats.flipped);
     } catch (const InternalError& e) {
       // A component the full method cannot handle still gets one chart: the plain cut graph and the
       // fold-free map. The report says so; the run goes on.
-      cut_stats[c] = CutStats{};
+      cut_stats = CutStats{};
       try {
         forced_failure(c, "plain fallback");
-        disks[c] = cut_to_disk(components[c], options.holes, &cut_stats[c], {}, nullptr, true);
-        cut_stats[c].fallback_reason = e.what();
-        set_face_targets(disks[c], density[c], options, mo);
-        map_stats[c] = SquareMapStats{};
-        uv[c] = map_to_square(disks[c], mo, &map_stats[c]);
-        if (map_stats[c].flipped > 0) fail_internal("the plain fallback's map folds {} triangles", map_stats[c].flipped);
+        disk = cut_to_disk(components[c], options.holes, &cut_stats, {}, nullptr, true);
+        cut_stats.fallback_reason = e.what();
+        set_face_targets(disk, density[c], options, mo);
+        map_stats = SquareMapStats{};
+        uv = map_to_square(disk, mo, &map_stats);
+        if (map_stats.flipped > 0) fail_internal("the plain fallback's map folds {} triangles", map_stats.flipped);
       } catch (const InternalError& last) {
         // The last resort: the component keeps its input texture coordinates and material(s), so none
         // of its triangles is lost (bake_plan). The report and the CLI say so.
-        cut_stats[c] = CutStats{};
-        cut_stats[c].before = topology_of(components[c]);
-        cut_stats[c].fallback_reason = e.what();
-        kept[c] = fmt::format("{}; then {}", e.what(), last.what());
-        disks[c] = Disk{};
-        uv[c].clear();
+        cut_stats = CutStats{};
+        cut_stats.before = topology_of(components[c]);
+        cut_stats.fallback_reason = e.what();
+        out.kept = fmt::format("{}; then {}", e.what(), last.what());
+        disk = Disk{};
+        uv.clear();
       }
     }
     map_progress.advance((1 - reported) * faces);
+  };
+
+  // The auto aspect: the dominant component mapped into its rectangle of each probe's texture, each
+  // map's texels simulated (resampling_mse), the best kept (the square unless another is clearly better).
+  std::vector<Mapped> probe(std::size(kAspectProbes));
+  nlohmann::json probes_report = nlohmann::json::array();
+  size_t chosen = kNone;
+  if (dominant != kNone) {
+    std::vector<double> mse(probe.size(), -1);
+    std::vector<Rect> probe_rect(probe.size());
+    auto run_probe = [&](size_t i) {
+      const auto [W, H] = atlas_size(kAspectProbes[i]);
+      if (std::max(W, H) > std::max(size, kDefaultSizeMax)) return;  // not beyond the size limit for a shape
+      probe_rect[i] = layout_atlas(shares, W, H)[dominant];
+      map_component(dominant, probe_rect[i], probe[i]);
+      if (!probe[i].kept.empty()) return;
+      const Disk& d = probe[i].disk;
+      std::vector<uint32_t> input_tri(d.mesh.num_faces(), kNone);
+      for (size_t f = 0; f < d.mesh.num_faces(); ++f)
+        if (const uint32_t cf = d.mesh.face_parent[f]; cf != kNone) input_tri[f] = surface.face_parent[components[dominant].face_parent[cf]];
+      mse[i] = resampling_mse(input, d.mesh, input_tri, probe[i].uv, probe_rect[i].w, probe_rect[i].h, kAspectSamples);
+    };
+    // Small components are probed side by side; big ones one after the other (each map's memory).
+    if (components[dominant].num_faces() < kAspectParallelBelow) tbb::parallel_for(size_t(0), probe.size(), run_probe);
+    else for (size_t i = 0; i < probe.size(); ++i) run_probe(i);
+    chosen = 0;  // kAspectProbes[0] is the square
+    for (size_t i = 1; i < probe.size(); ++i)
+      if (mse[i] >= 0 && (mse[chosen] < 0 || mse[i] < mse[chosen] * (chosen == 0 ? kAspectMinGain : 1.0))) chosen = i;
+    aspect = kAspectProbes[chosen];
+    for (size_t i = 0; i < probe.size(); ++i) {
+      const auto [W, H] = atlas_size(kAspectProbes[i]);
+      probes_report.push_back({{"aspect", kAspectProbes[i]}, {"width", W}, {"height", H},
+                               {"estimated_psnr_db", mse[i] > 0 ? 10 * std::log10(255.0 * 255.0 / mse[i]) : mse[i] == 0 ? 99.0 : -1.0}});
+    }
+  }
+  if (options.layout == Layout::kAtlas) {
+    const auto [W, H] = atlas_size(aspect);
+    rects = layout_atlas(shares, W, H);
+    image_size.push_back({W, H});
+  } else {
+    rects = layout_per_component(shares, size, 4, aspect);
+    num_images = int(nc);
+    for (const Rect& r : rects) image_size.push_back({r.w, r.h});
+  }
+
+  std::vector<Disk>& disks = plan.disks;
+  disks.resize(nc);
+  std::vector<CutStats> cut_stats(nc);
+  std::vector<std::vector<Vec2>>& uv = plan.uv;
+  uv.resize(nc);
+  std::vector<SquareMapStats> map_stats(nc);
+  std::vector<std::string>& kept = plan.kept;
+  kept.assign(nc, std::string());
+  tbb::parallel_for(size_t(0), nc, [&](size_t c) {
+    Mapped m;
+    if (c == dominant && rects[c].w == probe[chosen].rect.w && rects[c].h == probe[chosen].rect.h) m = std::move(probe[chosen]);
+    else map_component(c, rects[c], m);
+    disks[c] = std::move(m.disk);
+    uv[c] = std::move(m.uv);
+    cut_stats[c] = std::move(m.cut);
+    map_stats[c] = std::move(m.map);
+    kept[c] = std::move(m.kept);
   });
   clock.done("cut+map");
 
@@ -400,7 +502,13 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   rep["options"] = {{"size", size}, {"layout", options.layout == Layout::kAtlas ? "atlas" : "per-component"},
                     {"holes", options.holes == HoleMode::kFill ? "fill" : "cut"}, {"map", map_name(options.map)},
                     {"balance", options.balance}, {"fit", options.fit}, {"fine_fit", options.fit && options.fine_fit},
-                    {"corners", options.corners == CornerRule::kTurningAngle ? "turning" : "arcs"}};
+                    {"corners", options.corners == CornerRule::kTurningAngle ? "turning" : "arcs"},
+                    {"aspect", options.aspect > 0 ? nlohmann::json(options.aspect) : nlohmann::json("auto")}};
+  // The texture's shape: what was asked, what it is, and (auto) what each probe was estimated to give.
+  rep["aspect"] = {{"requested", options.aspect > 0 ? nlohmann::json(options.aspect) : nlohmann::json("auto")},
+                   {"chosen", aspect},
+                   {"probed_component", dominant == kNone ? nlohmann::json(nullptr) : nlohmann::json(dominant)},
+                   {"probes", probes_report}};
   rep["preparation"] = {{"input_vertices", rs.input_vertices},       {"welded_vertices", rs.welded_vertices},
                         {"zero_area_dropped", rs.zero_area_triangles}, {"duplicates_dropped", rs.duplicate_triangles},
                         {"non_manifold_edges_sliced", rs.non_manifold_edges}, {"inconsistent_edges_sliced", rs.inconsistent_edges},
@@ -508,7 +616,7 @@ Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& opt
       out.triangles.push_back(input.triangles[t]);
       for (int k = 0; k < 3; ++k) {
         const Vec2& s = uv[c][d.mesh.triangles[f][k]];
-        const Vec2 px(r.x + 0.5 + s.x() * (r.w - 1), r.y + 0.5 + (1.0 - s.y()) * (r.h - 1));
+        const Vec2 px = rect_pixel(r, s);
         bt.target_px[k] = px;
         bt.source_uv[k] = input.sampled_uv(t, k);
         out.corner_uv.push_back(Vec2(px.x() / W, 1.0 - px.y() / H));
