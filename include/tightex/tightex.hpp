@@ -42,7 +42,7 @@ struct Options {
   /// component that holds most of the texture is mapped into a square, a 1:2 and a 2:1 texture, each
   /// map's texels simulated at 32768 surface points, and the square kept unless another shape's error
   /// is at least 5% lower (report "aspect"; costs two more maps of that component, which is not probed
-  /// beyond 250k triangles). Otherwise 1, the paper's square. The CLI's --size asks for a square (1)
+  /// beyond 100k triangles). Otherwise 1, the paper's square. The CLI's --size asks for a square (1)
   /// unless --aspect is given. Measured: a soup can (ycb_005_tomato_soup_can) 47.66 -> 48.97 dB surface
   /// PSNR at the same budget in a 1:2 texture; the other scans of ../shared/data keep the square but
   /// meshroom_esp32cam (2:1, 42.25 -> 42.11, within its sampling noise).

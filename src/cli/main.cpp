@@ -282,9 +282,15 @@ int run_main(int argc, char** argv) {
 
   if (!quiet) {
     const auto& m = rep["metrics"];
-    fmt::print("tightex: {} -> {}/{}.obj  ({} components, {:.1f}% -> {:.1f}% texels used, {} charts, "
+    // The new texture's size (the first of several: per-component layout).
+    std::string texture;
+    if (!result.output.textures.empty()) {
+      const Image& img = result.output.textures[0].image;
+      texture = fmt::format("{}x{}{} texture, ", img.width, img.height, result.output.textures.size() > 1 ? " +" : "");
+    }
+    fmt::print("tightex: {} -> {}/{}.obj  ({}{} components, {:.1f}% -> {:.1f}% texels used, {} charts, "
                "PSNR {:.1f} dB, {} lost, {} flipped, {:.2f} s)\n",
-               input, outdir, name, rep["preparation"]["components"].get<size_t>(),
+               input, outdir, name, texture, rep["preparation"]["components"].get<size_t>(),
                100 * m["input"]["utilization"].get<double>(), 100 * m["output"]["utilization"].get<double>(),
                m["charts"].get<size_t>(), m["surface_psnr_db"].get<double>(), m["lost_triangles"].get<size_t>(),
                m["flipped"].get<size_t>(), rep["wall_seconds"].get<double>());
