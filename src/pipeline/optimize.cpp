@@ -367,8 +367,23 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
     if (std::find(options.test_fail_components.begin(), options.test_fail_components.end(), c) != options.test_fail_components.end())
       fail_internal("{} failure forced by Options::test_fail_components", what);
   };
-  // Component c cut and mapped for a texel rectangle of rect's shape.
-  auto map_component = [&](size_t c, const Rect& rect, Mapped& out) {
+  // What the cut needs of component c whatever its rectangle: the input's texture seams (cuts prefer
+  // them) and, if it has handles, the handle search (once, whatever the rounds or the shapes probed).
+  struct CutInputs {
+    std::vector<char> seams;
+    std::optional<Denoised> denoised;
+  };
+  auto cut_inputs = [&](size_t c) {
+    CutInputs ci;
+    ci.seams = find_texture_seams(input, surface, components[c]);
+    if (topology_of(components[c]).genus() > 0) {
+      ci.denoised.emplace();
+      ci.denoised->surface = remove_handles(components[c], &ci.denoised->handle_loops, ci.seams);
+    }
+    return ci;
+  };
+  // Component c cut and mapped for a texel rectangle of rect's shape; `pre`: cut_inputs(c) if known.
+  auto map_component = [&](size_t c, const Rect& rect, Mapped& out, const CutInputs* pre) {
     out.rect = rect;
     SquareMapOptions mo;
     mo.rect_width = rect.w;
@@ -388,14 +403,10 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
     try {
       forced_failure(c, "full method");
       std::vector<uint32_t> slit_to;
-      std::optional<Denoised> denoised;  // the handles are searched once, whatever the rounds
-      const std::vector<char> seams = find_texture_seams(input, surface, components[c]);  // cuts prefer them
-      if (topology_of(components[c]).genus() > 0) {
-        denoised.emplace();
-        denoised->surface = remove_handles(components[c], &denoised->handle_loops, seams);
-      }
+      const CutInputs own = pre ? CutInputs{} : cut_inputs(c);
+      const CutInputs& ci = pre ? *pre : own;
       for (int round = 0;; ++round) {
-        disk = cut_to_disk(components[c], options.holes, &cut_stats, slit_to, denoised ? &*denoised : nullptr, false, seams);
+        disk = cut_to_disk(components[c], options.holes, &cut_stats, slit_to, ci.denoised ? &*ci.denoised : nullptr, false, ci.seams);
         set_face_targets(disk, density[c], options, mo);
         uv = map_to_square(disk, mo, &map_stats);
         const uint32_t crowded = map_stats.crowded_vertex;
@@ -438,13 +449,20 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   nlohmann::json probes_report = nlohmann::json::array();
   size_t chosen = kNone;
   if (dominant != kNone) {
+    // The probes share the dominant component's seams and handle search (if that throws, each probe
+    // meets it again and falls back as any component would).
+    std::optional<CutInputs> shared;
+    try {
+      shared = cut_inputs(dominant);
+    } catch (const InternalError&) {
+    }
     std::vector<double> mse(probe.size(), -1);
     std::vector<Rect> probe_rect(probe.size());
     auto run_probe = [&](size_t i) {
       const auto [W, H] = atlas_size(kAspectProbes[i]);
       if (std::max(W, H) > std::max(size, kDefaultSizeMax)) return;  // not beyond the size limit for a shape
       probe_rect[i] = layout_atlas(shares, W, H)[dominant];
-      map_component(dominant, probe_rect[i], probe[i]);
+      map_component(dominant, probe_rect[i], probe[i], shared ? &*shared : nullptr);
       if (!probe[i].kept.empty()) return;
       const Disk& d = probe[i].disk;
       std::vector<uint32_t> input_tri(d.mesh.num_faces(), kNone);
@@ -484,7 +502,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   tbb::parallel_for(size_t(0), nc, [&](size_t c) {
     Mapped m;
     if (c == dominant && rects[c].w == probe[chosen].rect.w && rects[c].h == probe[chosen].rect.h) m = std::move(probe[chosen]);
-    else map_component(c, rects[c], m);
+    else map_component(c, rects[c], m, nullptr);
     disks[c] = std::move(m.disk);
     uv[c] = std::move(m.uv);
     cut_stats[c] = std::move(m.cut);
