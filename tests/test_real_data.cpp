@@ -39,7 +39,15 @@ TEST_P(RealData, CliOutputIsOneFoldFreeChartPerComponentFillingTheTexture) {
   const std::string input = GetParam();
   const fs::path out = fs::temp_directory_path() / ("tightex_real_" + fs::path(input).parent_path().filename().string() + "_" + std::to_string(::getpid()));
   fs::remove_all(out);
-  const std::string cmd = std::string(TIGHTEX_CLI) + " '" + input + "' -o '" + out.string() + "' --quiet";
+  // The default run. Under AddressSanitizer (CI's second pass, several times slower) only the soup can
+  // probes the texture's shape; the others keep the square (--aspect 1), which the first pass has
+  // already run as part of the default: that keeps CI within its time.
+#ifdef __SANITIZE_ADDRESS__
+  const bool probe_shape = input.find("tomato_soup_can") != std::string::npos;
+#else
+  const bool probe_shape = true;
+#endif
+  const std::string cmd = std::string(TIGHTEX_CLI) + " '" + input + "' -o '" + out.string() + "' --quiet" + (probe_shape ? "" : " --aspect 1");
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
 
   const TexturedMesh in = read_obj(input);
@@ -89,6 +97,7 @@ TEST_P(RealData, CliOutputIsOneFoldFreeChartPerComponentFillingTheTexture) {
       if (p["aspect"].get<double>() == chosen) EXPECT_TRUE(chosen == 1.0 ? best - square < 0.23 : p["estimated_psnr_db"].get<double>() == best);
   }
   if (input.find("tomato_soup_can") != std::string::npos) EXPECT_EQ(chosen, 0.5);
+  if (!probe_shape) EXPECT_TRUE(shape["probes"].empty());
   // The report states the same figures as the independent measurement.
   EXPECT_EQ(report["metrics"]["lost_triangles"].get<size_t>(), m.lost_triangles);
   EXPECT_NEAR(report["metrics"]["output"]["utilization"].get<double>(), m.output.utilization, 1e-9);
