@@ -137,6 +137,23 @@ TEST(Aspect, AutoShapeFollowsTheSurfaceAndKeepsMoreOfTheTexture) {
   EXPECT_EQ(optimize(longsheet, h).report["aspect"]["chosen"].get<double>(), 1.0);
 }
 
+// At tiny sizes a long shape rounds to the square (sides are multiples of 4, at least 8): such a probe
+// is skipped, so the reported shape is always the texture's.
+TEST(Aspect, TheReportedShapeIsTheTexturesAtAnySize) {
+  const TexturedMesh longsheet = noisy_sheet(49, 17, 0.9 / 48);
+  for (int size : {8, 12, 16, 24}) {
+    SCOPED_TRACE(size);
+    Options opt;
+    opt.size = size;
+    const Result r = optimize(longsheet, opt);
+    const Image& img = r.output.textures.at(0).image;
+    const double chosen = r.report["aspect"]["chosen"];
+    EXPECT_EQ(chosen == 1.0, img.width == img.height);
+    for (const auto& p : r.report["aspect"]["probes"])
+      if (p["estimated_psnr_db"].get<double>() != -1.0 && p["aspect"].get<double>() != 1.0) EXPECT_NE(p["width"], p["height"]);
+  }
+}
+
 // Every texel centre of a chart's rectangle is inside the chart as METRICS.md measures it from the
 // stored texture coordinates, for sizes that are not powers of two and for long textures (the corner
 // texel centres sit on the chart's edge up to kChartInset; exactly on it, u * W could miss by an ulp).

@@ -461,6 +461,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
     auto run_probe = [&](size_t i) {
       const auto [W, H] = atlas_size(kAspectProbes[i]);
       if (std::max(W, H) > std::max(size, kDefaultSizeMax)) return;  // not beyond the size limit for a shape
+      if (kAspectProbes[i] != 1.0 && W == H) return;  // too small a texture to take another shape
       probe_rect[i] = layout_atlas(shares, W, H)[dominant];
       map_component(dominant, probe_rect[i], probe[i], shared ? &*shared : nullptr);
       if (!probe[i].kept.empty()) return;
