@@ -248,6 +248,9 @@ constexpr double kAspectMinGain = 0.95;
 /// heavy-tailed (meshroom_esp32cam: 0.1% of the surface holds 6% of the squared error): 32768 points
 /// put its 2:1 map 1 dB above the square, 1M points 0.15 dB (the finished runs: 0.5 dB below).
 constexpr size_t kAspectSamples = size_t(1) << 20;
+/// Small textures take fewer: 4 per texel, at least this many (a 64^2 texture: 65536 instead of 1M;
+/// fuzz_pipeline's tiny meshes ran 172 times in 240 s with 1M).
+constexpr size_t kAspectMinSamples = 65536;
 /// Beyond this many faces the dominant component is not probed: the square, unless Options::aspect asks
 /// for a shape. Each probe is a whole map, and they cost more than the square's: a generated 225k-
 /// triangle vase took cut+map 17.5 s square, 95.5 s probed (the square won). Below it the three probes
@@ -469,7 +472,8 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
       std::vector<uint32_t> input_tri(d.mesh.num_faces(), kNone);
       for (size_t f = 0; f < d.mesh.num_faces(); ++f)
         if (const uint32_t cf = d.mesh.face_parent[f]; cf != kNone) input_tri[f] = surface.face_parent[components[dominant].face_parent[cf]];
-      mse[i] = resampling_mse(input, d.mesh, input_tri, probe[i].uv, probe_rect[i].w, probe_rect[i].h, kAspectSamples);
+      const size_t texels = size_t(probe_rect[i].w) * size_t(probe_rect[i].h);
+      mse[i] = resampling_mse(input, d.mesh, input_tri, probe[i].uv, probe_rect[i].w, probe_rect[i].h, std::clamp(4 * texels, kAspectMinSamples, kAspectSamples));
     };
     tbb::parallel_for(size_t(0), probe.size(), run_probe);
     chosen = 0;  // kAspectProbes[0] is the square
