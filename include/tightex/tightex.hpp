@@ -40,9 +40,9 @@ struct Options {
   /// Width/height of the texture, which then holds about size x size texels (sides multiples of 4).
   /// 0 (default): chosen per model for the area, texel and detail maps in the atlas layout: the
   /// component that holds most of the texture is mapped into a square, a 1:2 and a 2:1 texture, each
-  /// map's texels simulated at 32768 surface points, and the square kept unless another shape's error
-  /// is at least 5% lower (report "aspect"; costs two more maps of that component, which is not probed
-  /// beyond 100k triangles). Otherwise 1, the paper's square. The CLI's --size asks for a square (1)
+  /// map baked without the fit and compared with the input at up to 1M surface points, and the square
+  /// kept unless another shape's error is at least 5% lower (report "aspect"; costs two more maps of
+  /// that component, which is not probed beyond 100k triangles). Otherwise 1, the paper's square. The CLI's --size asks for a square (1)
   /// unless --aspect is given. Measured: a soup can (ycb_005_tomato_soup_can) 47.66 -> 48.97 dB surface
   /// PSNR at the same budget in a 1:2 texture; the other scans of ../shared/data keep the square but
   /// meshroom_esp32cam (2:1, 42.25 -> 42.11, within its sampling noise).

@@ -446,8 +446,9 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
     map_progress.advance((1 - reported) * faces);
   };
 
-  // The auto aspect: the dominant component mapped into its rectangle of each probe's texture, each
-  // map's texels simulated (resampling_mse), the best kept (the square unless another is clearly better).
+  // The auto aspect: the dominant component mapped into its rectangle of each probe's texture, each map
+  // baked and compared with the input (resampling_mse), the best kept (the square unless another is
+  // clearly better).
   std::vector<Mapped> probe(std::size(kAspectProbes));
   nlohmann::json probes_report = nlohmann::json::array();
   size_t chosen = kNone;
