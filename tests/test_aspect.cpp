@@ -154,6 +154,17 @@ TEST(Aspect, TheReportedShapeIsTheTexturesAtAnySize) {
   }
 }
 
+// A shape out of range (a library caller's; the CLI checks its own) is refused with InputError, not
+// turned into an absurd texture.
+TEST(Aspect, AnAspectOutOfRangeIsRefused) {
+  const TexturedMesh sheet = noisy_sheet(5, 5, 0.9 / 4);
+  for (double a : {-1.0, 1e-3, 17.0, 1e300, std::nan("")}) {
+    Options opt;
+    opt.aspect = a;
+    EXPECT_THROW(optimize(sheet, opt), InputError) << a;
+  }
+}
+
 // Every texel centre of a chart's rectangle is inside the chart as METRICS.md measures it from the
 // stored texture coordinates, for sizes that are not powers of two and for long textures (the corner
 // texel centres sit on the chart's edge up to kChartInset; exactly on it, u * W could miss by an ulp).

@@ -286,6 +286,8 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   };
   const int size = options.size == 0 ? default_size(input) : options.size;
   if (size < 8 || size > 65536) fail_input("--size {} is out of range (8..65536)", size);
+  if (options.aspect != 0 && !(options.aspect >= 1.0 / 16 && options.aspect <= 16))
+    fail_input("aspect {} is out of range (0 for auto, or 1/16..16)", options.aspect);
   Plan plan;
   nlohmann::json timings = nlohmann::json::array();
   StageClock clock(timings);
