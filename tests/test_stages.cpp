@@ -882,7 +882,9 @@ void check_atlas(const std::vector<double>& areas, const std::vector<Rect>& rect
     const double ideal = areas[i] / total * double(width) * height;
     if (ideal < 16.0 * min_side * min_side) continue;
     const double got = double(rects[i].w) * rects[i].h;
-    EXPECT_LE(got, 1.5 * ideal) << "rect " << i << " of area share " << areas[i] / total;
+    // Near its share; up to 4x where its share alone would have made it a strip (the layout's error
+    // model trades a little of the others' texels for its shape; Layout.ASmallComponentBesideABig...).
+    EXPECT_LE(got, 4.0 * ideal) << "rect " << i << " of area share " << areas[i] / total;
     EXPECT_GE(got, ideal / 1.5) << "rect " << i << " of area share " << areas[i] / total;
   }
 }
@@ -915,6 +917,44 @@ TEST(Layout, AtlasTilesTheTexture) {
       ASSERT_NO_THROW(rects = layout_atlas(sets[i], w, h, 4));
       check_atlas(sets[i], rects, w, h, 4);
     }
+  }
+}
+
+// Without a strip in sight the rectangles are exactly proportional.
+TEST(Layout, AtlasIsProportionalWhenNoComponentIsSqueezed) {
+  const auto four = layout_atlas({1, 1, 1, 1}, 256, 256, 4);
+  for (const Rect& r : four) {
+    EXPECT_EQ(r.w, 128);
+    EXPECT_EQ(r.h, 128);
+  }
+  const auto three = layout_atlas({2, 1, 1}, 256, 256, 4);
+  EXPECT_EQ(three[0].w * three[0].h, 128 * 256);
+  EXPECT_EQ(three[1].w * three[1].h, 128 * 128);
+  EXPECT_EQ(three[2].w * three[2].h, 128 * 128);
+}
+
+// A scan's main surface beside a fragment of 1% of its area (generated vases: 216 triangles beside
+// 2600): in proportion the fragment gets a 1024 x 10 strip, a round patch flattened 100:1, whose texels
+// resolve nothing across it (vase seed 3, 40 segments: 36.0 dB; with this layout 38.7). The layout's
+// error model (a^2 / texels, times (e + 1/e) / 2 for an elongation e beyond 2:1) puts the optimum near
+// 38 rows: it must give the fragment 2.5x to 6x its share and leave the main surface at least 94%.
+TEST(Layout, ASmallComponentBesideABigOneIsNotAStrip) {
+  const std::vector<double> areas = {0.99, 0.01};
+  const auto rects = layout_atlas(areas, 1024, 1024, 4);
+  check_atlas(areas, rects, 1024, 1024, 4);
+  const double ideal = 0.01 * 1024 * 1024, got = double(rects[1].w) * rects[1].h;
+  EXPECT_GE(got, 2.5 * ideal);
+  EXPECT_LE(got, 6.0 * ideal);
+  EXPECT_GE(double(rects[0].w) * rects[0].h, 0.94 * 1024 * 1024);
+  // exact_shares (the area map's same texels per unit area) keeps the proportion, strip or not.
+  const auto exact = layout_atlas(areas, 1024, 1024, 4, true);
+  check_atlas(areas, exact, 1024, 1024, 4);
+  EXPECT_NEAR(double(exact[1].w) * exact[1].h, ideal, 1024.0);
+  // The same in a 2:1 texture, both ways round (the auto shape's probes).
+  for (auto [w, h] : {std::pair{1448, 724}, std::pair{724, 1448}}) {
+    const auto r2 = layout_atlas(areas, w, h, 4);
+    check_atlas(areas, r2, w, h, 4);
+    EXPECT_GE(double(r2[1].w) * r2[1].h, 2.0 * 0.01 * w * h) << w << "x" << h;
   }
 }
 

@@ -10,10 +10,47 @@ namespace tightex {
 
 namespace {
 
+/// A rectangle up to this elongated costs a chart nothing in the layout's error model (Bisector::cost):
+/// most components are not round either.
+constexpr double kFreeAspect = 2.0;
+/// The layout moves a cut away from the proportional split only for a modelled gain above this.
+constexpr double kMinLayoutGain = 1e-3;
+
 struct Bisector {
   const std::vector<double>& weight;
   int min_side;
+  bool exact_shares;
   std::vector<Rect>& out;
+
+  /// The modelled colour error of a group of items in a w x h rectangle. A chart of weight (share) a
+  /// holding t texels loses about a^2 / t (its texel spacing squared, over its area: docs/maps.md), and
+  /// the proportional split minimises the sum. A chart squeezed into a strip keeps its texel count but
+  /// not its resolution across the strip: sampled e:1 instead of 1:1 at the same count, it loses
+  /// (e + 1/e) / 2 times more, e the elongation beyond kFreeAspect of the rectangle the group's largest
+  /// item would get (its long side cut in proportion).
+  double cost(double wsum, double wmax, long w, long h) const {
+    if (w <= 0 || h <= 0 || !(wsum > 0)) return 0.0;
+    const double r = double(std::max(w, h)) / double(std::min(w, h));
+    const double e = std::max(1.0, std::max(1.0, r * wmax / wsum) / kFreeAspect);
+    return wsum * wsum / (double(w) * double(h)) * 0.5 * (e + 1.0 / e);
+  }
+
+  /// The cut in [lo, hi] along `extent` (the other side `across`) with the least cost of the two groups
+  /// (weights wa, wb; their largest items' wmax_a, wmax_b: items are sorted, largest first), if that
+  /// beats the proportional cut `first` by kMinLayoutGain; else `first`. A coarse scan (at most 513
+  /// cuts), then the texels around its best.
+  int least_cost_cut(int first, int lo, int hi, int extent, int across, double wa, double wmax_a, double wb, double wmax_b) const {
+    auto split_cost = [&](int x) { return cost(wa, wmax_a, x, across) + cost(wb, wmax_b, extent - x, across); };
+    const double proportional = split_cost(first);
+    const int stride = std::max(1, (hi - lo) / 512);
+    int best = first;
+    double best_cost = proportional;
+    for (int x = lo; x <= hi; x += stride)
+      if (const double c = split_cost(x); c < best_cost) best_cost = c, best = x;
+    for (int x = std::max(lo, best - stride); x <= std::min(hi, best + stride); ++x)
+      if (const double c = split_cost(x); c < best_cost) best_cost = c, best = x;
+    return best_cost < proportional * (1 - kMinLayoutGain) ? best : first;
+  }
 
   // Smallest extent along a cut direction that a group of n items can take when the other side is
   // `across` texels: enough area for n min_side squares, and at least min_side.
@@ -58,7 +95,10 @@ struct Bisector {
         const int extent = cut_x ? r.w : r.h, across = cut_x ? r.h : r.w;
         const int lo = min_extent(a.size(), across), hi = extent - min_extent(b.size(), across);
         if (lo > hi) continue;
-        const int first = std::clamp(int(std::lround(extent * share)), lo, hi);
+        int first = std::clamp(int(std::lround(extent * share)), lo, hi);
+        // The proportional cut, unless it squeezes a group into a strip (one big component and a small
+        // one: the small one's strip spans the texture): then the cut that the error model prefers.
+        if (!exact_shares) first = least_cost_cut(first, lo, hi, extent, across, wa, weight[a.front()], total - wa, weight[b.front()]);
         Rect ra = r, rb = r;
         if (cut_x) {
           ra.w = first;
@@ -81,7 +121,7 @@ struct Bisector {
 
 }  // namespace
 
-std::vector<Rect> layout_atlas(const std::vector<double>& areas, int width, int height, int min_side) {
+std::vector<Rect> layout_atlas(const std::vector<double>& areas, int width, int height, int min_side, bool exact_shares) {
   std::vector<Rect> out(areas.size());
   if (areas.empty()) return out;
   if (long(areas.size()) > long(width / min_side) * long(height / min_side))
@@ -96,7 +136,7 @@ std::vector<Rect> layout_atlas(const std::vector<double>& areas, int width, int 
   std::vector<uint32_t> items(areas.size());
   std::iota(items.begin(), items.end(), 0u);
   std::stable_sort(items.begin(), items.end(), [&](uint32_t a, uint32_t b) { return weight[a] > weight[b]; });
-  Bisector{weight, min_side, out}.place(items, Rect{0, 0, 0, width, height});
+  Bisector{weight, min_side, exact_shares, out}.place(items, Rect{0, 0, 0, width, height});
   return out;
 }
 

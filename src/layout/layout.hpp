@@ -27,10 +27,15 @@ inline Vec2 rect_pixel(const Rect& r, const Vec2& s) {
 /// is proportional to its surface area and the rectangles tile the texture exactly, without a gap.
 /// Method: recursive bisection (a slice-and-dice treemap): the components, largest first, are split
 /// into two groups of nearly equal area and the rectangle is cut across its longer side in that
-/// proportion, which keeps aspect ratios near 1. Every rectangle is at least min_side texels on each
+/// proportion, which keeps aspect ratios near 1; where that proportion would squeeze a group into a
+/// strip (a main surface beside a fragment of 1% of its area: a 100:1 strip), the cut moves to where a
+/// model of the colour error (texel spacing squared, times the loss of a stretched sampling) is least,
+/// giving the strip more than its share (`exact_shares` keeps the proportion: the area map's promise of
+/// the same texels per unit area everywhere). Every rectangle is at least min_side texels on each
 /// side (a component too small for that still gets min_side x min_side: its share is rounded up).
 /// Throws InputError when the texture cannot hold that many components.
-std::vector<Rect> layout_atlas(const std::vector<double>& areas, int width, int height, int min_side = 4);
+std::vector<Rect> layout_atlas(const std::vector<double>& areas, int width, int height, int min_side = 4,
+                               bool exact_shares = false);
 
 /// The paper's layout: one image per component, the largest component size x size texels (aspect 1:
 /// the paper's square; otherwise as many texels with width/height `aspect`) and the others scaled by the

@@ -345,6 +345,9 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
     return std::pair{W, std::max(8, int((need + 3) / 4 * 4))};
   };
   double aspect = options.aspect > 0 ? options.aspect : 1.0;
+  // The area map promises the same texels per unit area on every component; the others may give a
+  // fragment that would be squeezed into a strip more than its share (layout_atlas).
+  const bool exact_shares = options.map == MapKind::kArea;
 
   // 4. Cut each component to a disk and map it onto the unit square (§4.2). Where even positive
   //    weights fold (a region crowded below floating-point precision), the disk is slit to that
@@ -468,7 +471,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
       const auto [W, H] = atlas_size(kAspectProbes[i]);
       if (std::max(W, H) > std::max(size, kDefaultSizeMax)) return;  // not beyond the size limit for a shape
       if (kAspectProbes[i] != 1.0 && W == H) return;  // too small a texture to take another shape
-      probe_rect[i] = layout_atlas(shares, W, H)[dominant];
+      probe_rect[i] = layout_atlas(shares, W, H, 4, exact_shares)[dominant];
       map_component(dominant, probe_rect[i], probe[i], shared ? &*shared : nullptr);
       if (!probe[i].kept.empty()) return;
       const Disk& d = probe[i].disk;
@@ -491,7 +494,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   }
   if (options.layout == Layout::kAtlas) {
     const auto [W, H] = atlas_size(aspect);
-    rects = layout_atlas(shares, W, H);
+    rects = layout_atlas(shares, W, H, 4, exact_shares);
     image_size.push_back({W, H});
   } else {
     rects = layout_per_component(shares, size, 4, aspect);
