@@ -4,6 +4,7 @@
 // keep the painted colour: surface PSNR above a floor set a few dB below what was measured.
 #include <gtest/gtest.h>
 
+#include <numeric>
 #include <string>
 
 #include "genus_surfaces.hpp"
@@ -94,6 +95,37 @@ TEST_P(Genus, OneChartEveryHandleFound) {
   std::printf("%s g=%d tris=%zu psnr=%.2f loops=%.4f seam=%.3f -> %.3f\n", c.family.c_str(), c.genus, m.num_triangles(), psnr,
               loops, mt["seam_length"]["input"].get<double>(), mt["seam_length"]["output"].get<double>());
   EXPECT_GT(psnr, c.min_psnr);
+}
+
+// Caps (scaffolding) never hold the chart together: with a 5% cap budget, the plate of genus 3 gets
+// three of its six handle sides capped, and the cut graph then left 4 of its 608 faces linked to the
+// rest only through a cap (an output of two charts). cut_to_disk must see it and open the holes.
+TEST(Genus, CapsNeverHoldTheChartTogether) {
+  for (int genus : {2, 3, 13}) {
+    SCOPED_TRACE("plate of genus " + std::to_string(genus));
+    const auto comps = split_components(prepare_surface(cat::perforated_plate(genus), nullptr));
+    ASSERT_EQ(comps.size(), 1u);
+    for (double budget : {kFillBudget, 0.02, 0.05, 0.2}) {
+      CutStats st;
+      const Disk disk = cut_to_disk(comps[0], HoleMode::kFill, &st, {}, nullptr, false, {}, budget);
+      const Surface& d = disk.mesh;
+      std::vector<uint32_t> root(d.num_faces());
+      std::iota(root.begin(), root.end(), 0u);
+      auto find = [&](uint32_t x) {
+        while (root[x] != x) x = root[x] = root[root[x]];
+        return x;
+      };
+      size_t real = 0;
+      for (uint32_t h = 0; h < d.opposite.size(); ++h) {
+        const uint32_t o = d.opposite[h];
+        if (o != kNone && d.face_parent[h / 3] != kNone && d.face_parent[o / 3] != kNone) root[find(h / 3)] = find(o / 3);
+      }
+      size_t groups = 0;
+      for (uint32_t f = 0; f < d.num_faces(); ++f) real += d.face_parent[f] != kNone, groups += d.face_parent[f] != kNone && find(f) == f;
+      EXPECT_EQ(real, comps[0].num_faces()) << "budget " << budget;
+      EXPECT_EQ(groups, 1u) << "budget " << budget << ", cut " << st.method << ", " << st.holes_filled << " capped";
+    }
+  }
 }
 
 }  // namespace

@@ -11,7 +11,7 @@ namespace tightex {
 
 
 Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, const std::vector<uint32_t>& slit_to,
-                 const Denoised* denoised, bool plain, const std::vector<char>& seams) {
+                 const Denoised* denoised, bool plain, const std::vector<char>& seams, double fill_budget) {
   CutStats st;
   st.before = topology_of(component);
   // Handles first: a genus-0 surface (with its holes) comes back, the handle loops capped.
@@ -50,7 +50,7 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, cons
     std::vector<std::vector<uint32_t>> fill;
     double used = 0;
     for (size_t i : order) {
-      if (i == keep || used + cap_area[i] > kFillBudget * component_area) continue;
+      if (i == keep || used + cap_area[i] > fill_budget * component_area) continue;
       used += cap_area[i];
       fill.push_back(loops[i]);
     }
@@ -239,6 +239,30 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, cons
     fail_internal("cut_to_disk: result has {} boundary loops and Euler characteristic {} (expected a disk)",
                   disk_loops.size(), dt.euler());
   for (uint32_t h : disk_loops[0]) disk.boundary.push_back(disk.mesh.from(h));
+  // One chart per component: the real faces must hang together without the caps. A cap can be the only
+  // link between a few faces and the rest (a handle's capped side on one hand, the cut graph on the
+  // other: the generated plate of genus 3 with a 5% budget, 4 of its 608 faces); the output would then
+  // hold them as a chart of their own. Then cut again without caps (every face real: one chart).
+  if (holes == HoleMode::kFill && st.holes_filled > 0) {
+    const size_t nfd = disk.mesh.num_faces();
+    std::vector<uint32_t> root(nfd);
+    std::iota(root.begin(), root.end(), 0u);
+    auto find = [&](uint32_t x) {
+      while (root[x] != x) x = root[x] = root[root[x]];
+      return x;
+    };
+    for (uint32_t h = 0; h < disk.mesh.opposite.size(); ++h) {
+      const uint32_t o = disk.mesh.opposite[h];
+      if (o != kNone && disk.mesh.face_parent[h / 3] != kNone && disk.mesh.face_parent[o / 3] != kNone) root[find(h / 3)] = find(o / 3);
+    }
+    size_t groups = 0;
+    for (uint32_t f = 0; f < nfd; ++f) groups += disk.mesh.face_parent[f] != kNone && find(f) == f;
+    if (groups > 1) {
+      Disk open = cut_to_disk(component, HoleMode::kCut, stats, slit_to, denoised, plain, seams, fill_budget);
+      if (stats) stats->method += " (caps would split the chart: holes opened)";
+      return open;
+    }
+  }
   // The seam this component gets in the output (METRICS.md): its edges whose two triangles end up apart
   // (handle loops, hole connections, the cut graph, slits), each counted once from both sides, and the
   // part of it that lies on the input's texture seams.

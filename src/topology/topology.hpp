@@ -77,8 +77,12 @@ struct Denoised {
 /// of any connected manifold surface.
 /// `seams`: the input's texture seams (find_texture_seams), preferred by the handle loops, the hole
 /// connections and the cut graph (not by the slits, which aim at depth); empty: none.
+/// `fill_budget`: kFill's cap budget (fraction of the component's area).
+/// The real faces (not scaffolding) of the result always hang together through uncut edges, so the
+/// component becomes one chart: where the caps would be the only link between some of them, the holes
+/// are opened instead (CutStats::method says so).
 Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats,
                  const std::vector<uint32_t>& slit_to = {}, const Denoised* denoised = nullptr, bool plain = false,
-                 const std::vector<char>& seams = {});
+                 const std::vector<char>& seams = {}, double fill_budget = kFillBudget);
 
 }  // namespace tightex
