@@ -400,8 +400,16 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
       const std::vector<Vec2> reweighted = uv;
       const double reweighted_p5 = st.spread_p5, reweighted_p95 = st.spread_p95;
       // Fixed coordinates (bit 0: u, bit 1: v): both for corners and bumps; a side's vertex slides along it.
+      // A bump's vertices are pinned off the side; its two neighbours on the side are held too. A free
+      // vertex beside a bump could slide past it without any triangle collapsing (the bump is off the
+      // line) and turn the boundary back on itself; two neighbours on the side cannot pass each other
+      // without their boundary triangle collapsing, which the line search prevents (found with 2% hole
+      // caps on the catalogue's holey slab; meshroom_esp32cam at --size 1024 had 4 such pairs).
+      std::vector<char> held = pinned;
+      for (size_t i = 0; i < nb; ++i)
+        if (pinned[i] && i != corner[0] && i != corner[1] && i != corner[2] && i != corner[3]) held[(i + 1) % nb] = held[(i + nb - 1) % nb] = 1;
       std::vector<char> fixed(m.num_vertices(), 0);
-      for (size_t i = 0; i < nb; ++i) fixed[bnd[i]] = pinned[i] || !options.slide_boundary ? 3 : (side_of[i] % 2 == 0 ? 2 : 1);
+      for (size_t i = 0; i < nb; ++i) fixed[bnd[i]] = held[i] || !options.slide_boundary ? 3 : (side_of[i] % 2 == 0 ? 2 : 1);
       // Refined in the rectangle's proportions (area 1: the targets are normalised to the unit square),
       // so the targets' shapes are met in texels.
       auto refine_in_rect = [&](const std::vector<double>& target, int iterations, const std::function<void(int)>& on_step) {
