@@ -4,7 +4,6 @@
 // keep the painted colour: surface PSNR above a floor set a few dB below what was measured.
 #include <gtest/gtest.h>
 
-#include <numeric>
 #include <string>
 
 #include "genus_surfaces.hpp"
@@ -109,19 +108,11 @@ TEST(Genus, CapsNeverHoldTheChartTogether) {
       CutStats st;
       const Disk disk = cut_to_disk(comps[0], HoleMode::kFill, &st, {}, nullptr, false, {}, budget);
       const Surface& d = disk.mesh;
-      std::vector<uint32_t> root(d.num_faces());
-      std::iota(root.begin(), root.end(), 0u);
-      auto find = [&](uint32_t x) {
-        while (root[x] != x) x = root[x] = root[root[x]];
-        return x;
-      };
-      size_t real = 0;
-      for (uint32_t h = 0; h < d.opposite.size(); ++h) {
-        const uint32_t o = d.opposite[h];
-        if (o != kNone && d.face_parent[h / 3] != kNone && d.face_parent[o / 3] != kNone) root[find(h / 3)] = find(o / 3);
-      }
-      size_t groups = 0;
-      for (uint32_t f = 0; f < d.num_faces(); ++f) real += d.face_parent[f] != kNone, groups += d.face_parent[f] != kNone && find(f) == f;
+      detail::UnionFind uf(d.num_faces());
+      for (uint32_t h = 0; h < d.opposite.size(); ++h)
+        if (const uint32_t o = d.opposite[h]; o != kNone && d.face_parent[h / 3] != kNone && d.face_parent[o / 3] != kNone) uf.unite(h / 3, o / 3);
+      size_t real = 0, groups = 0;
+      for (uint32_t f = 0; f < d.num_faces(); ++f) real += d.face_parent[f] != kNone, groups += d.face_parent[f] != kNone && uf.find(f) == f;
       EXPECT_EQ(real, comps[0].num_faces()) << "budget " << budget;
       EXPECT_EQ(groups, 1u) << "budget " << budget << ", cut " << st.method << ", " << st.holes_filled << " capped";
     }

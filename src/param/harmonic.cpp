@@ -407,7 +407,7 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
       // caps on the catalogue's holey slab; meshroom_esp32cam at --size 1024 had 4 such pairs).
       std::vector<char> held = pinned;
       for (size_t i = 0; i < nb; ++i)
-        if (pinned[i] && i != corner[0] && i != corner[1] && i != corner[2] && i != corner[3]) held[(i + 1) % nb] = held[(i + nb - 1) % nb] = 1;
+        if (pinned[i] && std::find(corner.begin(), corner.end(), i) == corner.end()) held[(i + 1) % nb] = held[(i + nb - 1) % nb] = 1;
       std::vector<char> fixed(m.num_vertices(), 0);
       for (size_t i = 0; i < nb; ++i) fixed[bnd[i]] = held[i] || !options.slide_boundary ? 3 : (side_of[i] % 2 == 0 ? 2 : 1);
       // Refined in the rectangle's proportions (area 1: the targets are normalised to the unit square),

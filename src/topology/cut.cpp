@@ -244,19 +244,12 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, cons
   // other: the generated plate of genus 3 with a 5% budget, 4 of its 608 faces); the output would then
   // hold them as a chart of their own. Then cut again without caps (every face real: one chart).
   if (holes == HoleMode::kFill && st.holes_filled > 0) {
-    const size_t nfd = disk.mesh.num_faces();
-    std::vector<uint32_t> root(nfd);
-    std::iota(root.begin(), root.end(), 0u);
-    auto find = [&](uint32_t x) {
-      while (root[x] != x) x = root[x] = root[root[x]];
-      return x;
-    };
-    for (uint32_t h = 0; h < disk.mesh.opposite.size(); ++h) {
-      const uint32_t o = disk.mesh.opposite[h];
-      if (o != kNone && disk.mesh.face_parent[h / 3] != kNone && disk.mesh.face_parent[o / 3] != kNone) root[find(h / 3)] = find(o / 3);
-    }
+    const Surface& d = disk.mesh;
+    detail::UnionFind uf(d.num_faces());
+    for (uint32_t h = 0; h < d.opposite.size(); ++h)
+      if (const uint32_t o = d.opposite[h]; o != kNone && d.face_parent[h / 3] != kNone && d.face_parent[o / 3] != kNone) uf.unite(h / 3, o / 3);
     size_t groups = 0;
-    for (uint32_t f = 0; f < nfd; ++f) groups += disk.mesh.face_parent[f] != kNone && find(f) == f;
+    for (uint32_t f = 0; f < d.num_faces(); ++f) groups += d.face_parent[f] != kNone && uf.find(f) == f;
     if (groups > 1) {
       Disk open = cut_to_disk(component, HoleMode::kCut, stats, slit_to, denoised, plain, seams, fill_budget);
       if (stats) stats->method += " (caps would split the chart: holes opened)";
