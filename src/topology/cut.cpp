@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <array>
 #include <numbers>
 #include <numeric>
 #include <queue>
@@ -9,6 +10,23 @@
 
 namespace tightex {
 
+
+namespace {
+
+/// Whether the real faces (face_parent != kNone; caps are scaffolding) fall apart into more than one
+/// group through the interior edges that are not cut.
+bool real_faces_apart(const Surface& s, const std::vector<char>& cut_edge, const EdgeGraph& g) {
+  detail::UnionFind uf(s.num_faces());
+  for (uint32_t h = 0; h < s.opposite.size(); ++h)
+    if (const uint32_t o = s.opposite[h]; o != kNone && !cut_edge[g.halfedge_edge[h]] && s.face_parent[h / 3] != kNone &&
+                                          s.face_parent[o / 3] != kNone)
+      uf.unite(h / 3, o / 3);
+  size_t groups = 0;
+  for (uint32_t f = 0; f < s.num_faces(); ++f) groups += s.face_parent[f] != kNone && uf.find(f) == f;
+  return groups > 1;
+}
+
+}  // namespace
 
 Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, const std::vector<uint32_t>& slit_to,
                  const Denoised* denoised, bool plain, const std::vector<char>& seams, double fill_budget) {
@@ -158,31 +176,73 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, cons
       }
       return queue.size() == nf;
     };
+    // Real-first dual tree, used when the plain one leaves the real faces joined only through caps:
+    // Prim's order over edge classes (0: unmarked between real faces, 1: marked between real faces,
+    // 2: unmarked beside a cap, 3: marked beside a cap), from a real face. Every real face is then
+    // reached through real faces before any cap is entered; a marked path crossed there is cut
+    // through the cap instead.
+    auto real_first_tree = [&](std::vector<char>& crossed) {
+      crossed.assign(g.num_edges(), 0);
+      std::vector<char> seen(nf, 0);
+      uint32_t start = 0;
+      while (start + 1 < nf && s.face_parent[start] == kNone) ++start;
+      std::array<std::vector<uint32_t>, 4> bucket;  // halfedges leaving the tree
+      auto visit = [&](uint32_t t) {
+        seen[t] = 1;
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t h = 3 * t + k, o = s.opposite[h];
+          if (o == kNone || seen[o / 3]) continue;
+          const bool real = s.face_parent[t] != kNone && s.face_parent[o / 3] != kNone;
+          bucket[size_t((real ? 0 : 2) + (marked[g.halfedge_edge[h]] ? 1 : 0))].push_back(h);
+        }
+      };
+      visit(start);
+      for (;;) {
+        size_t b = 0;
+        while (b < 4 && bucket[b].empty()) ++b;
+        if (b == 4) break;
+        const uint32_t h = bucket[b].back();
+        bucket[b].pop_back();
+        const uint32_t o = s.opposite[h];
+        if (seen[o / 3]) continue;
+        crossed[g.halfedge_edge[h]] = 1;
+        visit(o / 3);
+      }
+    };
+    // The cut graph: the complement of the tree, pruned of dangling branches.
+    auto cut_from = [&](const std::vector<char>& crossed) {
+      for (uint32_t e = 0; e < g.num_edges(); ++e) cut_edge[e] = !crossed[e] && !is_boundary_edge[e];
+      std::vector<uint32_t> degree(nv, 0);
+      for (uint32_t e = 0; e < g.num_edges(); ++e)
+        if (cut_edge[e] || is_boundary_edge[e]) degree[s.from(g.edge_halfedge[e])]++, degree[s.to(g.edge_halfedge[e])]++;
+      std::vector<uint32_t> stack;
+      for (uint32_t v = 0; v < nv; ++v)
+        if (degree[v] == 1) stack.push_back(v);
+      while (!stack.empty()) {
+        const uint32_t v = stack.back();
+        stack.pop_back();
+        if (degree[v] != 1) continue;
+        for (uint32_t i = g.offset[v]; i < g.offset[v + 1]; ++i) {
+          const uint32_t e = g.via_edge[i];
+          if (!cut_edge[e]) continue;
+          cut_edge[e] = 0;
+          degree[v]--;
+          const uint32_t w = g.neighbor[i];
+          if (--degree[w] == 1) stack.push_back(w);
+          break;
+        }
+      }
+    };
     std::vector<char> crossed;
     if (!dual_tree(marked, crossed)) {
       std::vector<char> none(g.num_edges(), 0);
       dual_tree(none, crossed);
     }
-    for (uint32_t e = 0; e < g.num_edges(); ++e) cut_edge[e] = !crossed[e] && !is_boundary_edge[e];
-    std::vector<uint32_t> degree(nv, 0);
-    for (uint32_t e = 0; e < g.num_edges(); ++e)
-      if (cut_edge[e] || is_boundary_edge[e]) degree[s.from(g.edge_halfedge[e])]++, degree[s.to(g.edge_halfedge[e])]++;
-    std::vector<uint32_t> stack;
-    for (uint32_t v = 0; v < nv; ++v)
-      if (degree[v] == 1) stack.push_back(v);
-    while (!stack.empty()) {
-      const uint32_t v = stack.back();
-      stack.pop_back();
-      if (degree[v] != 1) continue;
-      for (uint32_t i = g.offset[v]; i < g.offset[v + 1]; ++i) {
-        const uint32_t e = g.via_edge[i];
-        if (!cut_edge[e]) continue;
-        cut_edge[e] = 0;
-        degree[v]--;
-        const uint32_t w = g.neighbor[i];
-        if (--degree[w] == 1) stack.push_back(w);
-        break;
-      }
+    cut_from(crossed);
+    if (st.holes_filled > 0 && real_faces_apart(s, cut_edge, g)) {
+      real_first_tree(crossed);
+      cut_from(crossed);
+      st.method += " (real-first)";
     }
   }
 

@@ -20,9 +20,11 @@ Surface fill_holes(const Surface& s, const std::vector<std::vector<uint32_t>>& l
 /// `component`, 1 where the two input triangles at that edge disagree on the texture coordinate of
 /// either endpoint or on the material, 0 elsewhere and on the boundary (both halfedges of an edge
 /// agree). `component` maps into `surface` (face_parent), `surface` into `input` (face_parent); corners
-/// keep their order along that chain (prepare_surface, split_components). The cut stages prefer these
+/// keep their order along that chain except where prepare_surface reversed a triangle (`reversed`, per
+/// input triangle; empty: none). The cut stages prefer these
 /// edges (kSeamCost in graph.hpp): a new seam there is where the eye already accepts a discontinuity.
-std::vector<char> find_texture_seams(const TexturedMesh& input, const Surface& surface, const Surface& component);
+std::vector<char> find_texture_seams(const TexturedMesh& input, const Surface& surface, const Surface& component,
+                                     const std::vector<char>& reversed = {});
 
 /// Topological denoising (§4.1): while the component has genus g > 0, finds a short non-separating
 /// loop (the cheapest tree-cotree generator loop over roots placed on the handles; edges on `seams`
@@ -79,8 +81,10 @@ struct Denoised {
 /// connections and the cut graph (not by the slits, which aim at depth); empty: none.
 /// `fill_budget`: kFill's cap budget (fraction of the component's area).
 /// The real faces (not scaffolding) of the result always hang together through uncut edges, so the
-/// component becomes one chart: where the caps would be the only link between some of them, the holes
-/// are opened instead (CutStats::method says so).
+/// component becomes one chart: where the cut graph would leave the caps as the only link between some
+/// of them, it is rebuilt from a dual tree that joins the real faces before it enters any cap (the
+/// cut then runs through the caps; CutStats::method says "real-first"); should that still fail, the
+/// holes are opened instead ("holes opened").
 Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats,
                  const std::vector<uint32_t>& slit_to = {}, const Denoised* denoised = nullptr, bool plain = false,
                  const std::vector<char>& seams = {}, double fill_budget = kFillBudget);
