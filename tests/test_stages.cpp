@@ -316,8 +316,11 @@ TEST_P(Catalogue, PrepareSurface) {
   const TexturedMesh m = mesh();
   const Expected& e = want();
   RepairStats st;
-  const Surface s = prepare_surface(m, &st);
+  std::vector<char> rev;
+  const Surface s = prepare_surface(m, &st, &rev);
   ASSERT_TRUE(is_manifold(s));
+  EXPECT_EQ(st.reoriented_triangles, 0u) << "the catalogue's meshes are wound consistently (a Mobius strip as far as it can be)";
+  ASSERT_EQ(rev.size(), m.num_triangles());
   ASSERT_EQ(s.face_parent.size(), s.num_faces());
   ASSERT_EQ(s.vertex_parent.size(), s.num_vertices());
 
@@ -344,7 +347,8 @@ TEST_P(Catalogue, PrepareSurface) {
   EXPECT_EQ(st.input_vertices, m.num_vertices());
 
   // No triangle with area lost: of each group of equal triangles exactly one is kept, once, with the
-  // input's corners in the input's order; nothing without area is kept.
+  // input's corners in the input's order (corners 1 and 2 swapped where `rev` says so); nothing without
+  // area is kept.
   std::vector<size_t> kept(m.num_triangles(), 0);
   for (uint32_t t = 0; t < s.num_faces(); ++t) {
     const uint32_t p = s.face_parent[t];
@@ -352,7 +356,7 @@ TEST_P(Catalogue, PrepareSurface) {
     kept[p]++;
     for (int k = 0; k < 3; ++k) {
       const uint32_t v = s.triangles[t][k];
-      EXPECT_TRUE(same_bits(s.positions[v], m.positions[m.triangles[p][k]])) << "face " << t << " corner " << k;
+      EXPECT_TRUE(same_bits(s.positions[v], m.positions[m.triangles[p][size_t(input_corner(rev[p], k))]])) << "face " << t << " corner " << k;
     }
   }
   std::map<uint32_t, size_t> group_kept;
@@ -1177,6 +1181,41 @@ TEST(Pipeline, FineFitChangesOnlyTheTexelsAndDoesNotLoseFidelity) {
   const double p_normal = normal.report["metrics"]["surface_psnr_db"], p_fine = fine.report["metrics"]["surface_psnr_db"];
   EXPECT_GE(p_fine, p_normal) << "fit " << p_normal << " dB, fine fit " << p_fine << " dB";
   EXPECT_NE(fine.output.textures[0].image.pixels, normal.output.textures[0].image.pixels);
+}
+
+// Scans and merged exports hold triangles wound the other way. Repair orients each patch the way most
+// of its area is wound, so the model stays one chart, as if it had come clean: before, every such edge
+// was sliced (a sphere with every 5th triangle reversed fell into about 200 charts, and on a real scan
+// the flipped count was the reversed triangles').
+TEST(Pipeline, TrianglesWoundTheOtherWayAreReoriented) {
+  const TexturedMesh clean = cat::sphere();
+  TexturedMesh messy = clean;
+  size_t reversed = 0;
+  for (size_t t = 0; t < messy.num_triangles(); t += 5, ++reversed) {
+    std::swap(messy.triangles[t][1], messy.triangles[t][2]);
+    std::swap(messy.corner_uv[3 * t + 1], messy.corner_uv[3 * t + 2]);
+  }
+  RepairStats st;
+  std::vector<char> rev;
+  const Surface s = prepare_surface(messy, &st, &rev);
+  EXPECT_EQ(st.reoriented_triangles, reversed);
+  EXPECT_EQ(st.inconsistent_edges, 0u);
+  EXPECT_EQ(std::count(rev.begin(), rev.end(), 1), long(reversed));
+  EXPECT_EQ(split_components(s).size(), 1u);
+  Options opt;
+  opt.size = 128;
+  const Result a = optimize(clean, opt), b = optimize(messy, opt);
+  EXPECT_EQ(b.report["preparation"]["reoriented_triangles"], reversed);
+  EXPECT_EQ(b.report["metrics"]["charts"], 1);
+  EXPECT_EQ(b.report["metrics"]["flipped"], 0);
+  EXPECT_EQ(b.report["metrics"]["lost_triangles"], 0);
+  EXPECT_NEAR(b.report["metrics"]["surface_psnr_db"].get<double>(), a.report["metrics"]["surface_psnr_db"].get<double>(), 0.5);
+  // Written the way the rest is wound: every output triangle faces out of the sphere.
+  for (size_t t = 0; t < b.output.num_triangles(); ++t) {
+    const Tri& f = b.output.triangles[t];
+    const Vec3 &p0 = b.output.positions[f[0]], &p1 = b.output.positions[f[1]], &p2 = b.output.positions[f[2]];
+    ASSERT_GT((p1 - p0).cross(p2 - p0).dot(p0 + p1 + p2), 0.0) << "output triangle " << t;
+  }
 }
 
 TEST(Pipeline, ProgressIsOrderedAndSerialised) {

@@ -1,6 +1,7 @@
 #include "pipeline/aspect.hpp"
 
 #include "bake/bake.hpp"
+#include "repair/repair.hpp"
 
 #include <algorithm>
 #include <array>
@@ -11,8 +12,8 @@
 
 namespace tightex {
 
-double resampling_mse(const TexturedMesh& input, const Surface& disk, const std::vector<uint32_t>& input_triangle,
-                      const std::vector<Vec2>& uv, int w, int h, size_t samples) {
+double resampling_mse(const TexturedMesh& input, const std::vector<char>& reversed, const Surface& disk,
+                      const std::vector<uint32_t>& input_triangle, const std::vector<Vec2>& uv, int w, int h, size_t samples) {
   const size_t nf = disk.num_faces();
   if (w < 2 || h < 2 || samples == 0 || uv.size() != disk.num_vertices() || input_triangle.size() != nf) return -1;
   // The faces that have pixels to read, baked as bake_plan places them (the unit square's corners on
@@ -30,7 +31,7 @@ double resampling_mse(const TexturedMesh& input, const Surface& disk, const std:
     for (int k = 0; k < 3; ++k) {
       const Vec2& s = uv[disk.triangles[f][size_t(k)]];
       bt.target_px[size_t(k)] = rect_pixel(Rect{0, 0, 0, w, h}, s);
-      bt.source_uv[size_t(k)] = input.sampled_uv(t, k);
+      bt.source_uv[size_t(k)] = input.sampled_uv(t, input_corner(!reversed.empty() && reversed[t], k));
     }
     tris.push_back(bt);
   }

@@ -295,7 +295,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   // 1. Repair (§4.1): weld, drop degenerate and duplicate triangles, slice non-manifold elements.
   progress("repair", 0);
   RepairStats rs;
-  const Surface& surface = plan.surface = prepare_surface(input, &rs);
+  const Surface& surface = plan.surface = prepare_surface(input, &rs, &plan.reversed);
   if (surface.num_faces() == 0)
     fail_input("{}: no triangle with non-zero area ({} zero-area, {} duplicate)", input.source, rs.zero_area_triangles, rs.duplicate_triangles);
   clock.done("repair");
@@ -383,7 +383,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   };
   auto cut_inputs = [&](size_t c) {
     CutInputs ci;
-    ci.seams = find_texture_seams(input, surface, components[c]);
+    ci.seams = find_texture_seams(input, surface, components[c], plan.reversed);
     if (topology_of(components[c]).genus() > 0) {
       ci.denoised.emplace();
       ci.denoised->surface = remove_handles(components[c], &ci.denoised->handle_loops, ci.seams);
@@ -479,7 +479,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
       for (size_t f = 0; f < d.mesh.num_faces(); ++f)
         if (const uint32_t cf = d.mesh.face_parent[f]; cf != kNone) input_tri[f] = surface.face_parent[components[dominant].face_parent[cf]];
       const size_t texels = size_t(probe_rect[i].w) * size_t(probe_rect[i].h);
-      mse[i] = resampling_mse(input, d.mesh, input_tri, probe[i].uv, probe_rect[i].w, probe_rect[i].h, std::clamp(4 * texels, kAspectMinSamples, kAspectSamples));
+      mse[i] = resampling_mse(input, plan.reversed, d.mesh, input_tri, probe[i].uv, probe_rect[i].w, probe_rect[i].h, std::clamp(4 * texels, kAspectMinSamples, kAspectSamples));
     };
     tbb::parallel_for(size_t(0), probe.size(), run_probe);
     chosen = 0;  // kAspectProbes[0] is the square
@@ -538,7 +538,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
                    {"probes", probes_report}};
   rep["preparation"] = {{"input_vertices", rs.input_vertices},       {"welded_vertices", rs.welded_vertices},
                         {"zero_area_dropped", rs.zero_area_triangles}, {"duplicates_dropped", rs.duplicate_triangles},
-                        {"non_manifold_edges_sliced", rs.non_manifold_edges}, {"inconsistent_edges_sliced", rs.inconsistent_edges},
+                        {"non_manifold_edges_sliced", rs.non_manifold_edges}, {"inconsistent_edges_sliced", rs.inconsistent_edges}, {"reoriented_triangles", rs.reoriented_triangles},
                         {"vertices_sliced", rs.sliced_vertices}, {"slits_closed", rs.slits_closed},      {"components", nc}};
   nlohmann::json comps = nlohmann::json::array();
   size_t holes_filled = 0;
@@ -591,6 +591,7 @@ Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& opt
   Result result;
   result.report = plan.report;
   nlohmann::json& rep = result.report;
+  const std::vector<char>& reversed = plan.reversed;
   nlohmann::json& timings = rep["timings"];
   StageClock clock(timings);
   const Surface& surface = plan.surface;
@@ -640,14 +641,17 @@ Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& opt
       bt.image = uint32_t(image);
       bt.material = input.face_material[t];
       bt.area3 = triangle_area(input.positions[input.triangles[t][0]], input.positions[input.triangles[t][1]], input.positions[input.triangles[t][2]]);
-      out.triangles.push_back(input.triangles[t]);
+      const bool rev = !reversed.empty() && reversed[t];  // written as the repaired surface winds it
+      const Tri& it = input.triangles[t];
+      out.triangles.push_back(rev ? Tri{it[0], it[2], it[1]} : it);
       for (int k = 0; k < 3; ++k) {
+        const int ik = input_corner(rev, k);
         const Vec2& s = uv[c][d.mesh.triangles[f][k]];
         const Vec2 px = rect_pixel(r, s);
         bt.target_px[k] = px;
-        bt.source_uv[k] = input.sampled_uv(t, k);
+        bt.source_uv[k] = input.sampled_uv(t, ik);
         out.corner_uv.push_back(Vec2(px.x() / W, 1.0 - px.y() / H));
-        if (normals) out.corner_normal.push_back(input.corner_normal[3 * t + size_t(k)]);
+        if (normals) out.corner_normal.push_back(input.corner_normal[3 * t + size_t(ik)]);
       }
       out.face_material.push_back(int32_t(image));
       bake_tris.push_back(bt);
@@ -702,10 +706,13 @@ Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& opt
         om = int32_t(out.materials.size());
         out.materials.push_back(std::move(m));
       }
-      out.triangles.push_back(input.triangles[t]);
+      const bool rev = !reversed.empty() && reversed[t];
+      const Tri& it = input.triangles[t];
+      out.triangles.push_back(rev ? Tri{it[0], it[2], it[1]} : it);
       for (int k = 0; k < 3; ++k) {
-        out.corner_uv.push_back(input.corner_uv[3 * t + size_t(k)]);
-        if (normals) out.corner_normal.push_back(input.corner_normal[3 * t + size_t(k)]);
+        const size_t ik = size_t(input_corner(rev, k));
+        out.corner_uv.push_back(input.corner_uv[3 * t + ik]);
+        if (normals) out.corner_normal.push_back(input.corner_normal[3 * t + ik]);
       }
       out.face_material.push_back(om);
     }

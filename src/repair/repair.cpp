@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <numeric>
 #include <unordered_map>
 
 namespace tightex {
@@ -29,7 +30,7 @@ uint64_t bits(double d) {
 
 }  // namespace
 
-Surface prepare_surface(const TexturedMesh& mesh, RepairStats* stats) {
+Surface prepare_surface(const TexturedMesh& mesh, RepairStats* stats, std::vector<char>* reversed) {
   RepairStats st;
   st.input_vertices = mesh.num_vertices();
 
@@ -83,12 +84,74 @@ Surface prepare_surface(const TexturedMesh& mesh, RepairStats* stats) {
     }
   }
 
-  // 3. Pair halfedges: an edge joins its two triangles only when exactly two use it, in opposite
+  // 3. Orient consistently: scans and merged exports often hold triangles wound the other way. Over
+  //    the edges that exactly two triangles share, each connected patch gets one orientation, the one
+  //    most of its area already has (a clean mesh is untouched). The edges whose triangles agree are
+  //    taken first (union-find with parity), then the others: where a patch cannot agree (a Mobius
+  //    strip) the input's own consistent parts stay as they were, and what still disagrees is sliced
+  //    below.
+  if (reversed) reversed->assign(mesh.num_triangles(), 0);
+  auto keyed = halfedges_by_edge(s0);
+  {
+    const uint32_t nf = uint32_t(s0.num_faces());
+    std::vector<uint32_t> parent(nf);
+    std::vector<uint8_t> parity(nf, 0);  // orientation relative to the parent: 1 = opposite
+    std::iota(parent.begin(), parent.end(), 0u);
+    auto find = [&](uint32_t f) {  // root, and f's orientation relative to it; halves the path
+      uint8_t p = 0;
+      while (parent[f] != f) {
+        const uint32_t g = parent[f];
+        if (parent[g] != g) {
+          parity[f] ^= parity[g];
+          parent[f] = parent[g];
+        }
+        p ^= parity[f];
+        f = parent[f];
+      }
+      return std::pair<uint32_t, uint8_t>{f, p};
+    };
+    std::vector<std::pair<uint32_t, uint32_t>> agree, disagree;
+    for (size_t i = 0; i < keyed.size();) {
+      size_t j = i + 1;
+      while (j < keyed.size() && keyed[j].first == keyed[i].first) ++j;
+      const uint32_t h = keyed[i].second, o = keyed[i + 1 < j ? i + 1 : i].second;
+      if (j - i == 2 && h / 3 != o / 3) (s0.from(h) == s0.to(o) ? agree : disagree).push_back({h / 3, o / 3});
+      i = j;
+    }
+    auto join = [&](uint32_t a, uint32_t b, uint8_t opposite) {
+      const auto [ra, pa] = find(a);
+      const auto [rb, pb] = find(b);
+      if (ra == rb) return;  // already related (a conflict stays: sliced below)
+      parent[rb] = ra;
+      parity[rb] = uint8_t(pa ^ pb ^ opposite);
+    };
+    for (auto [a, b] : agree) join(a, b, 0);
+    for (auto [a, b] : disagree) join(a, b, 1);
+    std::vector<double> area_total(nf, 0.0), area_opposite(nf, 0.0);
+    std::vector<uint8_t> rel(nf);
+    std::vector<uint32_t> root(nf);
+    for (uint32_t f = 0; f < nf; ++f) {
+      const auto [r, p] = find(f);
+      root[f] = r, rel[f] = p;
+      const double a = triangle_area(s0.positions[s0.triangles[f][0]], s0.positions[s0.triangles[f][1]], s0.positions[s0.triangles[f][2]]);
+      area_total[r] += a;
+      if (p) area_opposite[r] += a;
+    }
+    for (uint32_t f = 0; f < nf; ++f) {
+      const uint8_t majority = area_opposite[root[f]] > 0.5 * area_total[root[f]] ? 1 : 0;  // stays as it is
+      if (rel[f] == majority) continue;
+      std::swap(s0.triangles[f][1], s0.triangles[f][2]);
+      ++st.reoriented_triangles;
+      if (reversed) (*reversed)[s0.face_parent[f]] = 1;
+    }
+  }
+
+  // 4. Pair halfedges: an edge joins its two triangles only when exactly two use it, in opposite
   //    directions. Everything else is sliced (each triangle keeps its own copy of the edge).
   const size_t nh = 3 * s0.num_faces();
   s0.opposite.assign(nh, kNone);
   {
-    const auto keyed = halfedges_by_edge(s0);
+    if (st.reoriented_triangles) keyed = halfedges_by_edge(s0);  // halfedge ids moved with the corners
     for (size_t i = 0; i < nh;) {
       size_t j = i + 1;
       while (j < nh && keyed[j].first == keyed[i].first) ++j;
@@ -107,7 +170,7 @@ Surface prepare_surface(const TexturedMesh& mesh, RepairStats* stats) {
     }
   }
 
-  // 4. Slice vertices: one copy per fan of corners that stays connected through paired edges. This
+  // 5. Slice vertices: one copy per fan of corners that stays connected through paired edges. This
   //    separates bowtie vertices and the ends of sliced edges alike.
   uint32_t groups = 0;
   const auto corner_vertex = group_corners(s0, [](uint32_t) { return true; }, &groups);
@@ -121,7 +184,7 @@ Surface prepare_surface(const TexturedMesh& mesh, RepairStats* stats) {
   for (uint32_t c : copies) st.sliced_vertices += c > 1;
   for (uint32_t t = 0; t < s.num_faces(); ++t) s.face_parent[t] = s0.face_parent[t];
 
-  // 5. Close slits. Slicing an edge shared by several sheets can leave a sheet whose fan around each
+  // 6. Close slits. Slicing an edge shared by several sheets can leave a sheet whose fan around each
   //    end vertex is whole but open along that edge: two boundary halfedges a->b and b->a with the same
   //    vertex copies. They are the two ends of one fan chain, so pairing them restores a manifold disk.
   {

@@ -1,6 +1,7 @@
 // Data preparation, first half (paper §4.1): make the input a clean manifold surface.
 #pragma once
 #include <cstddef>
+#include <vector>
 
 #include "core/surface.hpp"
 
@@ -11,16 +12,23 @@ struct RepairStats {
   size_t welded_vertices = 0;       // vertices after welding equal positions
   size_t zero_area_triangles = 0;   // dropped: repeated vertex or exactly zero 3D area
   size_t duplicate_triangles = 0;   // dropped: same three vertices in the same cyclic order as an earlier one
+  size_t reoriented_triangles = 0;  // wound against the rest of their patch: corners 1 and 2 swapped
   size_t non_manifold_edges = 0;    // edges used by more than two triangles, sliced apart
   size_t inconsistent_edges = 0;    // edges whose two triangles disagree on orientation, sliced apart
   size_t sliced_vertices = 0;       // welded vertices that became more than one vertex
   size_t slits_closed = 0;          // sliced edges glued back within one sheet (see prepare_surface)
 };
 
-/// Welds vertices with bit-equal positions, drops zero-area and duplicated triangles, and slices every
-/// non-manifold edge and vertex (and every edge whose two triangles are oriented inconsistently, so a
-/// Mobius strip becomes an orientable strip). No triangle with area is ever dropped.
+/// Welds vertices with bit-equal positions, drops zero-area and duplicated triangles, orients each
+/// connected patch consistently (the orientation most of its area has), and slices every non-manifold
+/// edge and vertex (and every edge whose two triangles still disagree on orientation, so a Mobius strip
+/// becomes an orientable strip). No triangle with area is ever dropped.
 /// Returns a manifold surface; face_parent maps to input triangles, vertex_parent to input vertices.
-Surface prepare_surface(const TexturedMesh& mesh, RepairStats* stats);
+/// `reversed` (optional) gets, per input triangle, whether its surface face has corners 1 and 2
+/// swapped: surface corner k is input corner input_corner(reversed[t], k).
+Surface prepare_surface(const TexturedMesh& mesh, RepairStats* stats, std::vector<char>* reversed = nullptr);
+
+/// The input corner of a surface face's corner k (see prepare_surface's `reversed`).
+inline int input_corner(bool reversed, int k) { return reversed ? (3 - k) % 3 : k; }
 
 }  // namespace tightex
