@@ -774,6 +774,47 @@ TEST(MapToSquare, SupernodalMatchesSimplicialWhenComponentsRunConcurrently) {
 
 // A bump is sized in texels of the rectangle: a narrow rectangle gets a larger bump along its short
 // side; the map must stay valid for any rectangle shape.
+// A map is written as texture coordinates in its rectangle: a triangle whose area is within what that
+// rounding can move is as good as folded (the paper's map crowded meshroom_esp32cam, with six patches
+// of its surface missing, to triangles of 1e-14 texels, and 3 came out folded). A small but clean
+// triangle is not.
+TEST(MapToSquare, CollapsedTrianglesAreThoseRoundingCanFold) {
+  Surface s;
+  s.positions.assign(9, Vec3::Zero());
+  s.triangles = {{0, 1, 2}, {3, 4, 5}, {6, 7, 8}};
+  SquareMapOptions o;
+  o.rect_width = o.rect_height = 1024;
+  const double y = 0.000527425151;
+  std::vector<Vec2> uv = {{0.1, 0.1}, {0.1 + 1e-6, 0.1}, {0.1, 0.1 + 1e-6},             // 5e-7 texels: clean
+                          {0.3, 0.3}, {0.6, 0.3}, {0.3, 0.6},                             // large: clean
+                          {0.37331, y}, {0.37466, y}, {0.37354, y + 1e-17}};              // 1e-14 texels
+  uint32_t worst = kNone;
+  EXPECT_EQ(count_collapsed(s, uv, o, &worst), 1u);
+  EXPECT_EQ(worst, 6u);
+  EXPECT_EQ(count_folds(s, uv), 0u) << "positive in double precision: only the rounding test sees it";
+  o.texel_extent = 1e12;  // the same triangles 1e12 texels out: the small one is not safe there
+  EXPECT_EQ(count_collapsed(s, uv, o), 2u);
+  std::swap(uv[1], uv[2]);  // folded counts too
+  o.texel_extent = 0;
+  EXPECT_EQ(count_collapsed(s, uv, o), 2u);
+}
+
+// The pipeline never writes a collapsed triangle with the paper's map either: it slits to the crowded
+// region, and where that does not help, the component gets the area map (and the report says so). The
+// holey slab cut open with the turning-angle corners crowds 35 triangles below 2e-12 texels.
+TEST(Pipeline, HarmonicMapNeverWritesACollapsedTriangle) {
+  Options opt;
+  opt.size = 256;
+  opt.map = MapKind::kHarmonic;
+  opt.holes = HoleMode::kCut;
+  opt.corners = CornerRule::kTurningAngle;
+  const Result r = optimize(cat::holey_slab(), opt);
+  EXPECT_EQ(r.report["metrics"]["flipped"], 0);
+  EXPECT_EQ(r.report["metrics"]["degenerate"], 0);
+  const auto& c = r.report["components"][0];
+  EXPECT_TRUE(c["slits"].get<int>() > 0 || c["fallback"].get<std::string>().find("area map") != std::string::npos) << c.dump();
+}
+
 TEST(MapToSquare, NonSquareRectangles) {
   for (const char* name : {"bowtie", "obtuse_strip", "sphere_with_holes"}) {
     const auto comps = split_components(prepare_surface(expected(name).make(), nullptr));

@@ -249,6 +249,26 @@ size_t count_folds(const Surface& mesh, const std::vector<Vec2>& uv) {
   return folds;
 }
 
+size_t count_collapsed(const Surface& mesh, const std::vector<Vec2>& uv, const SquareMapOptions& options, uint32_t* worst_vertex) {
+  const double sx = double(std::max(1, options.rect_width - 1)), sy = double(std::max(1, options.rect_height - 1));
+  const double extent = std::max({options.texel_extent, double(options.rect_width), double(options.rect_height)});
+  const double rounding = std::ldexp(extent, -52);  // texels
+  size_t collapsed = 0;
+  double worst = 1;
+  for (const Tri& f : mesh.triangles) {
+    const Vec2 a(uv[f[0]].x() * sx, uv[f[0]].y() * sy), b(uv[f[1]].x() * sx, uv[f[1]].y() * sy), c(uv[f[2]].x() * sx, uv[f[2]].y() * sy);
+    const double margin = signed_area(a, b, c) / (rounding * ((b - a).norm() + (c - b).norm() + (a - c).norm()));
+    if (!(margin >= 1)) {
+      collapsed++;
+      if (!(margin >= worst)) {
+        worst = margin;
+        if (worst_vertex) *worst_vertex = f[0];
+      }
+    }
+  }
+  return collapsed;
+}
+
 std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& options, SquareMapStats* stats) {
   SquareMapStats st;
   const Surface& m = disk.mesh;
@@ -392,6 +412,16 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
   // No weighting solved (a factorisation failed, or its solution did not solve the system): the
   // interior still sits where the boundary left it. A failure, never a map.
   if (st.weights.empty()) fail_internal("the sparse solve of the harmonic map failed for every weighting ({} vertices)", m.num_vertices());
+  // The paper's map (no density targets) can crowd a region so far that its triangles keep a positive
+  // area only below what the output's texture coordinates hold: placed in the rectangle and written in
+  // double precision, they come out folded (meshroom_esp32cam with six 1% patches of its surface
+  // missing: 3 triangles of 1e-14 texels). A triangle whose area in texels is within the reach of that
+  // rounding (2^-52 of the texel extent, per unit of its perimeter) counts as a fold, and its region as
+  // crowded (the caller slits to it). The density maps never get near: they spread this map out.
+  if (!density && st.flipped == 0) {
+    st.flipped = count_collapsed(m, uv, options, &st.crowded_vertex);
+    if (st.flipped) st.folds_per_attempt.push_back(st.flipped);
+  }
   if (density && st.flipped == 0 && st.crowded_vertex == kNone) {
     if (positive_w.empty()) positive_w = edge_weights(m, Weights::kClamped, nullptr);
     SquareBoundary sb{&bnd, corner, side_of, edge_face, pinned};

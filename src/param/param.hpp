@@ -37,6 +37,9 @@ struct SquareMapOptions {
   // budget in a 2024 x 4048 texture): quarters and unit-square refinement 47.94 dB, corners by shape
   // 48.29, both 49.00.
   double bump_texels = 0.3;  // < 0.5: a bump stays inside the chart's own outermost texels
+  // The largest texel coordinate the rectangle reaches in its texture (0: the rectangle's own size):
+  // what the written texture coordinates' rounding is relative to (see map_to_square's collapse test).
+  double texel_extent = 0;
   CornerRule corners = CornerRule::kEqualArcs;
 
   // Beyond the paper (issue 4): the texel density. Empty: the paper's harmonic map. Otherwise a target
@@ -147,5 +150,12 @@ SlimStats refine_map(const Surface& mesh, const std::vector<char>& fixed, const 
 
 /// Number of triangles whose UV signed area is not strictly positive.
 size_t count_folds(const Surface& mesh, const std::vector<Vec2>& uv);
+
+/// Triangles of a unit-square map that would not survive being written: placed in options' rectangle,
+/// their area in texels is below what rounding the texture coordinates (2^-52 of the texel extent)
+/// can move per unit of their perimeter, so a reader may find them folded or empty. Folded ones count
+/// too. `worst_vertex` (optional) gets a vertex of the worst one; untouched when none.
+size_t count_collapsed(const Surface& mesh, const std::vector<Vec2>& uv, const SquareMapOptions& options,
+                       uint32_t* worst_vertex = nullptr);
 
 }  // namespace tightex
