@@ -32,6 +32,7 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, cons
                  const Denoised* denoised, bool plain, const std::vector<char>& seams, double fill_budget) {
   CutStats st;
   st.before = topology_of(component);
+  st.fill_budget = holes == HoleMode::kFill && !plain ? fill_budget : 0.0;
   // Handles first: a genus-0 surface (with its holes) comes back, the handle loops capped.
   Surface base;
   if (plain) {
@@ -73,6 +74,7 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, cons
       fill.push_back(loops[i]);
     }
     st.holes_filled = fill.size();
+    st.filled_area = component_area > 0 ? used / component_area : 0.0;
     s = fill_holes(base, fill);
     for (uint32_t& p : s.vertex_parent)
       if (p != kNone) p = base.vertex_parent[p];

@@ -35,8 +35,10 @@ std::vector<char> find_texture_seams(const TexturedMesh& input, const Surface& s
 Surface remove_handles(const Surface& component, std::vector<double>* loop_lengths, const std::vector<char>& seams = {});
 
 /// kFill: holes (and the two sides of each cut handle) are capped with the §4.1 centroid fan while the
-/// caps' total area stays within kFillBudget of the component's area, smallest first; larger ones are
-/// opened into the disk boundary, since a large cap would waste its texels. kCut: none is capped.
+/// caps' total area stays within the fill budget (cut_to_disk's fill_budget; kFillBudget unless the
+/// caller gives another: the pipeline starts at 2% and comes down to it where the caps take more than
+/// 0.8% of the square) of the component's area, smallest first; larger ones are opened into the disk
+/// boundary, since a large cap would waste its texels. kCut: none is capped.
 enum class HoleMode { kFill, kCut };
 constexpr double kFillBudget = 0.005;
 
@@ -44,6 +46,8 @@ struct CutStats {
   Topology before;              // of the component as given (holes not yet filled)
   size_t holes_filled = 0;
   size_t holes_cut = 0;         // joined into the disk boundary
+  double fill_budget = 0;       // the cap budget it was cut with (fraction of the component's area)
+  double filled_area = 0;       // the caps' area (fraction of the component's area)
   size_t cut_edges = 0;         // interior edges cut open
   double cut_length = 0;        // their 3D length
   double seam_length = 0;       // 3D length of the seam the output gets here (handle loops, holes joined, cut, slits)
