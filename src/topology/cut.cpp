@@ -286,6 +286,15 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, cons
     if (st.slits) st.method += "+slit";
     if (plain) st.method += " (plain fallback)";
   }
+  // One chart per component: the real faces must hang together without the caps. A cap can be the only
+  // link between a few faces and the rest (a handle's capped side on one hand, the cut graph on the
+  // other: the generated plate of genus 3 with a 5% budget, 4 of its 608 faces); the output would then
+  // hold them as a chart of their own. Then cut again without caps (every face real: one chart).
+  if (holes == HoleMode::kFill && st.holes_filled > 0 && real_faces_apart(s, cut_edge, g)) {
+    Disk open = cut_to_disk(component, HoleMode::kCut, stats, slit_to, denoised, plain, seams, fill_budget);
+    if (stats) stats->method += " (caps would split the chart: holes opened)";
+    return open;
+  }
   for (uint32_t e = 0; e < g.num_edges(); ++e)
     if (cut_edge[e]) st.cut_edges++, st.cut_length += g.length[e];
   uint32_t groups = 0;
@@ -301,23 +310,6 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, cons
     fail_internal("cut_to_disk: result has {} boundary loops and Euler characteristic {} (expected a disk)",
                   disk_loops.size(), dt.euler());
   for (uint32_t h : disk_loops[0]) disk.boundary.push_back(disk.mesh.from(h));
-  // One chart per component: the real faces must hang together without the caps. A cap can be the only
-  // link between a few faces and the rest (a handle's capped side on one hand, the cut graph on the
-  // other: the generated plate of genus 3 with a 5% budget, 4 of its 608 faces); the output would then
-  // hold them as a chart of their own. Then cut again without caps (every face real: one chart).
-  if (holes == HoleMode::kFill && st.holes_filled > 0) {
-    const Surface& d = disk.mesh;
-    detail::UnionFind uf(d.num_faces());
-    for (uint32_t h = 0; h < d.opposite.size(); ++h)
-      if (const uint32_t o = d.opposite[h]; o != kNone && d.face_parent[h / 3] != kNone && d.face_parent[o / 3] != kNone) uf.unite(h / 3, o / 3);
-    size_t groups = 0;
-    for (uint32_t f = 0; f < d.num_faces(); ++f) groups += d.face_parent[f] != kNone && uf.find(f) == f;
-    if (groups > 1) {
-      Disk open = cut_to_disk(component, HoleMode::kCut, stats, slit_to, denoised, plain, seams, fill_budget);
-      if (stats) stats->method += " (caps would split the chart: holes opened)";
-      return open;
-    }
-  }
   // The seam this component gets in the output (METRICS.md): its edges whose two triangles end up apart
   // (handle loops, hole connections, the cut graph, slits), each counted once from both sides, and the
   // part of it that lies on the input's texture seams.
