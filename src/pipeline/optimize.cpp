@@ -149,15 +149,27 @@ ComponentDensity component_density(const TexturedMesh& input, const Surface& sur
 /// The detail map's densities (texels per 3D area, in output texels): c x detail, capped at kDetailCap
 /// times the input's own density (beyond it a texel adds little the input holds) and at least
 /// kDetailFloor of the mean, c chosen by bisection so the surface takes `budget` texels; then smoothed
-/// over each face's neighbours (in log space, kDetailSmoothing rounds) since a map's density cannot
-/// follow every single triangle. A surface whose texture has no detail at all gets the area map.
+/// over each face's neighbours (in log space) since a map's density cannot follow every single
+/// triangle, and a face of few texels gives a noisy detail figure (15 points). A surface whose texture
+/// has no detail at all gets the area map.
 /// Chosen by measurement (surface PSNR at the input's budget, mustard / tomato / meshroom_esp32cam;
 /// meshroom also at --size 1024): cap 1: 50.90 / 47.21 / 39.34 (1024: 40.26); cap 4: 52.96 / 47.66 /
 /// 42.22 (42.38); no cap: 52.87 / 47.65 / 42.27 (41.81). Floor 1/16: 53.10 / 47.70 / 42.01; 1/4:
 /// 53.01 / 47.68 / 41.55. Smoothing 1 round: 53.42 / 47.89 / 41.65; 6: 52.67 / 47.48 / 42.04.
 /// Density proportional to detail^1.3: 52.86 / 47.59 / 41.48; ^0.8: 53.01 / 47.73 / 42.05.
 constexpr double kDetailCap = 4.0, kDetailFloor = 0.125;
-constexpr int kDetailSmoothing = 3;
+/// Smoothing rounds: kDetailSmoothingTexels / (the budget's texels per face), rounded, at most
+/// kDetailMaxSmoothing: faces of a few texels are smoothed over their rings, faces of hundreds of texels
+/// keep their own density. Measured (session 10, surface PSNR at the input's budget, rounds 0 / 1 / 2 /
+/// 3 / 5 / 8; texels per face in brackets): mustard [694] 53.73 / 53.47 / 53.19 / 52.95 / 52.76 / 52.52,
+/// cracker [565] 47.19 / 46.49 / 46.34 / 46.32 / 46.14 / 45.94, tomato [500] 49.27 / 49.16 / 49.05 /
+/// 48.96 / 48.84 / 48.70, potted [440] 47.42 / 47.25 / 47.02 / 46.78 / 46.67 / 46.65, fuze [135] 41.93 /
+/// 41.95 / 42.08 / 42.06 / 42.02 / 41.99, girl [87] 49.59 / 49.44 / 49.39 / 49.32 / 49.35 / 49.25, bust [89]
+/// 57.56 / 57.64 / 57.56 / 57.58 / 57.59 / 57.54, meshroom_esp32cam [18] 41.63 / 41.72 / 41.67 / 43.52 /
+/// 42.44 / 42.61 (below 3 rounds its map's estimate picks 2:1, 1-2 dB short of the square at 3).
+/// Until session 10 it was 3 rounds everywhere.
+constexpr double kDetailSmoothingTexels = 50.0;
+constexpr int kDetailMaxSmoothing = 6;
 void allocate_detail(const std::vector<Surface>& components, std::vector<ComponentDensity>& density, double budget) {
   double area = 0, max_detail = 0;
   for (const ComponentDensity& d : density)
@@ -181,13 +193,17 @@ void allocate_detail(const std::vector<Surface>& components, std::vector<Compone
     const double mid = 0.5 * (lo + hi);
     (texels(mid) < budget ? lo : hi) = mid;
   }
+  size_t faces = 0;
+  for (const ComponentDensity& d : density) faces += d.area3.size();
+  const double per_face = budget / double(std::max<size_t>(faces, 1));
+  const int rounds = int(std::lround(std::min(double(kDetailMaxSmoothing), kDetailSmoothingTexels / per_face)));
   for (size_t c = 0; c < density.size(); ++c) {
     ComponentDensity& d = density[c];
     const Surface& comp = components[c];
     const size_t nf = d.area3.size();
     std::vector<double> lg(nf), next(nf);
     for (size_t f = 0; f < nf; ++f) lg[f] = std::log(density_at(d, f, hi));
-    for (int round = 0; round < kDetailSmoothing; ++round) {
+    for (int round = 0; round < rounds; ++round) {
       for (size_t f = 0; f < nf; ++f) {
         double sw = d.area3[f], sv = d.area3[f] * lg[f];
         for (int k = 0; k < 3; ++k) {
