@@ -206,3 +206,19 @@ TEST(RealDataGuards, OversizeAndOverBudgetRunsAreRefusedWithoutOutput) {
 }
 
 }  // namespace
+
+// Issue 4 at the default budget (the input's used texels) on the mustard bottle, whose harmonic map is
+// already nearly even and conformal: the default map still beats it by 3 dB (measured 53.73 vs 50.66),
+// by giving the label's print the texels the plain plastic does not need.
+TEST(RealDataMaps, DefaultMapBeatsHarmonicByThreeDecibelsOnTheMustardBottle) {
+  const fs::path input = fs::path(TIGHTEX_SHARED_DATA) / "ycb_006_mustard_bottle" / "006_mustard_bottle_textured.obj";
+  if (!fs::exists(input)) GTEST_SKIP() << "../shared/data/ycb_006_mustard_bottle not present";
+#ifdef __SANITIZE_ADDRESS__
+  GTEST_SKIP() << "figures only: the first CI pass measures them, RealData runs the model under the sanitizers";
+#endif
+  const nlohmann::json def = run_cli(input.string(), "", "default"), harm = run_cli(input.string(), "--map harmonic", "harmonic");
+  ASSERT_TRUE(def.contains("metrics") && harm.contains("metrics"));
+  EXPECT_EQ(def["options"]["size"], harm["options"]["size"]);
+  EXPECT_GE(def["metrics"]["surface_psnr_db"].get<double>(), harm["metrics"]["surface_psnr_db"].get<double>() + 3.0);
+  EXPECT_EQ(def["metrics"]["flipped"].get<size_t>(), 0u);
+}
