@@ -2,7 +2,7 @@
 # Robustness sweep: every model in ../shared/data made messy as unseen scans come (tools/perturb_obj.py:
 # pepper, patches, noise, flip), each through every --map; one line per run with the METRICS.md figures
 # that must hold (flipped 0, charts = components, utilization) and the ones that measure quality.
-# Usage: bench/perturbed.sh [SEED=7] [extra tightex options...]
+# Usage: [MAPS="detail area"] bench/perturbed.sh [SEED=7] [extra tightex options...] (MAPS: all four by default)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seed=${1:-7}; shift || true
@@ -16,7 +16,7 @@ for dir in "$data"/*/; do
   obj=$(ls "$dir"*.obj | head -1); name=$(basename "$dir")
   for mode in pepper patches noise flip; do
     python3 tools/perturb_obj.py "$obj" "$out/in_$name.$mode" "$mode" "$seed"
-    for map in detail texel area harmonic; do
+    for map in ${MAPS:-detail texel area harmonic}; do
       o="$out/$name.$mode.$map"
       if ! "$bin" "$out/in_$name.$mode/$(basename "$obj")" -o "$o" --quiet --map "$map" "$@" > "$o.log" 2>&1; then
         echo "| $name | $mode | $map | FAILED: $(head -c 200 "$o.log" | tr '\n' ' ') |"; continue
