@@ -138,6 +138,7 @@ struct SlimStats {
   int iterations = 0;
   double energy_before = 0, energy = 0;  // area-weighted symmetric Dirichlet energy (2 per unit area = isometric)
   std::string stopped;                   // "converged", "iterations", "no descent" or "solver"
+  int capped_steps = 0;                  // steps whose system solved only with its weights capped
 };
 
 /// Lowers the symmetric Dirichlet energy |J|^2 + |J^-1|^2 of every face, measured against its target

@@ -22,7 +22,9 @@ class SparseCholesky {
  public:
   using Matrix = Eigen::SparseMatrix<double>;
 
-  explicit SparseCholesky(long supernodal_from = kSupernodalFrom) : supernodal_from_(supernodal_from) {}
+  /// CHOLMOD's own printing is off: a failed factorisation is reported through factorize() / solve()
+  /// and handled by the caller (a retry, the fallback), and `tightex -q` prints nothing but errors.
+  explicit SparseCholesky(long supernodal_from = kSupernodalFrom) : supernodal_from_(supernodal_from) { solver_.cholmod().print = 0; }
   void analyzePattern(const Matrix& a) {
     supernodal_ = a.rows() >= supernodal_from_;
     solver_.setMode(supernodal_ ? Eigen::CholmodSupernodalLLt : Eigen::CholmodSimplicialLLt);
