@@ -845,7 +845,7 @@ TEST(Pipeline, CapBudgetKeepsTheSquareUsed) {
   EXPECT_EQ(r.report["metrics"]["charts"], 1);
 }
 
-// A flat 7 x 7 grid of unit squares split along one diagonal, mapped onto the unit square by scaling
+// A flat 7 x 7 grid of unit squares (testing::param_grid), mapped onto the unit square by scaling
 // (an isometry up to scale); the boundary held. For refine_map's failure cases below.
 namespace {
 struct GridDisk {
@@ -856,19 +856,14 @@ struct GridDisk {
 };
 GridDisk grid_disk() {
   constexpr int n = 7;
+  const testing::Geometry grid = testing::param_grid(n + 1, n + 1, false, false, [](int i, int j) { return Vec3(i, j, 0); });
   GridDisk g;
-  for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) {
-      g.mesh.positions.push_back(Vec3(i, j, 0));
-      g.uv.push_back(Vec2(double(i) / n, double(j) / n));
-      g.fixed.push_back(i == 0 || j == 0 || i == n || j == n ? 3 : 0);
-    }
-  auto id = [&](int i, int j) { return uint32_t(j * (n + 1) + i); };
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      g.mesh.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
-      g.mesh.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
-    }
+  g.mesh.positions = grid.positions;
+  g.mesh.triangles = grid.triangles;
+  for (const Vec3& p : grid.positions) {
+    g.uv.push_back(Vec2(p.x() / n, p.y() / n));
+    g.fixed.push_back(p.x() == 0 || p.y() == 0 || p.x() == n || p.y() == n ? 3 : 0);
+  }
   g.mesh = with_identity_parents(g.mesh);
   build_opposite(g.mesh);
   g.target.assign(g.mesh.num_faces(), 1.0 / g.mesh.num_faces());
