@@ -158,17 +158,21 @@ ComponentDensity component_density(const TexturedMesh& input, const Surface& sur
 /// 53.01 / 47.68 / 41.55. Smoothing 1 round: 53.42 / 47.89 / 41.65; 6: 52.67 / 47.48 / 42.04.
 /// Density proportional to detail^1.3: 52.86 / 47.59 / 41.48; ^0.8: 53.01 / 47.73 / 42.05.
 constexpr double kDetailCap = 4.0, kDetailFloor = 0.125;
-/// Smoothing rounds: kDetailSmoothingTexels / (the budget's texels per face), rounded, at most
-/// kDetailMaxSmoothing: faces of a few texels are smoothed over their rings, faces of hundreds of texels
-/// keep their own density. Measured (session 10, surface PSNR at the input's budget, rounds 0 / 1 / 2 /
+/// Smoothing rounds: kDetailSmoothingTexels / (the budget's texels per face), rounded down, at most
+/// kDetailMaxSmoothing (so none from 60 texels a face up): faces of a few texels are smoothed over
+/// their rings, faces of hundreds of texels keep their own density. Measured (session 10, surface PSNR at the input's budget, rounds 0 / 1 / 2 /
 /// 3 / 5 / 8; texels per face in brackets): mustard [694] 53.73 / 53.47 / 53.19 / 52.95 / 52.76 / 52.52,
 /// cracker [565] 47.19 / 46.49 / 46.34 / 46.32 / 46.14 / 45.94, tomato [500] 49.27 / 49.16 / 49.05 /
 /// 48.96 / 48.84 / 48.70, potted [440] 47.42 / 47.25 / 47.02 / 46.78 / 46.67 / 46.65, fuze [135] 41.93 /
 /// 41.95 / 42.08 / 42.06 / 42.02 / 41.99, girl [87] 49.59 / 49.44 / 49.39 / 49.32 / 49.35 / 49.25, bust [89]
 /// 57.56 / 57.64 / 57.56 / 57.58 / 57.59 / 57.54, meshroom_esp32cam [18] 41.63 / 41.72 / 41.67 / 43.52 /
 /// 42.44 / 42.61 (below 3 rounds its map's estimate picks 2:1, 1-2 dB short of the square at 3).
-/// Until session 10 it was 3 rounds everywhere.
-constexpr double kDetailSmoothingTexels = 50.0;
+/// Until session 10 it was 3 rounds everywhere; in session 10 round(50 / texels per face), which gave
+/// 1 round between 60 and 100 texels a face. Session 11, rounds 0 / 1 there: the YCB scans at --size
+/// 1024 [64] cracker 35.24 / 34.71, potted 37.98 / 37.81, mustard 42.51 / 42.25, tomato 38.57 / 38.36;
+/// girl above; bust above (-0.08); and 1 / 2 rounds at 30-33 texels: bust at --size 1024 [33] 55.80 /
+/// 55.76.
+constexpr double kDetailSmoothingTexels = 60.0;
 constexpr int kDetailMaxSmoothing = 6;
 void allocate_detail(const std::vector<Surface>& components, std::vector<ComponentDensity>& density, double budget) {
   double area = 0, max_detail = 0;
@@ -196,7 +200,7 @@ void allocate_detail(const std::vector<Surface>& components, std::vector<Compone
   size_t faces = 0;
   for (const ComponentDensity& d : density) faces += d.area3.size();
   const double per_face = budget / double(std::max<size_t>(faces, 1));
-  const int rounds = int(std::lround(std::min(double(kDetailMaxSmoothing), kDetailSmoothingTexels / per_face)));
+  const int rounds = int(std::floor(std::min(double(kDetailMaxSmoothing), kDetailSmoothingTexels / per_face)));
   for (size_t c = 0; c < density.size(); ++c) {
     ComponentDensity& d = density[c];
     const Surface& comp = components[c];
