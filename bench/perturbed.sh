@@ -2,11 +2,11 @@
 # Robustness sweep: every model in ../shared/data made messy as unseen scans come (tools/perturb_obj.py:
 # pepper, patches, noise, flip), each through every --map; one line per run with the METRICS.md figures
 # that must hold (flipped 0, charts = components, utilization) and the ones that measure quality.
-# Usage: [MAPS="detail area"] bench/perturbed.sh [SEED=7] [extra tightex options...] (MAPS: all four by default)
+# Usage: [MAPS="detail area"] [TIGHTEX=binary] bench/perturbed.sh [SEED=7] [extra tightex options...] (MAPS: all four by default)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seed=${1:-7}; shift || true
-bin=./build/tightex
+bin=${TIGHTEX:-./build/tightex}  # TIGHTEX=path: another build (a before/after pair)
 data=../shared/data
 [ -d "$data" ] || { echo "no $data"; exit 0; }
 out=$(mktemp -d)
