@@ -143,9 +143,9 @@ struct SlimStats {
 
 /// Lowers the symmetric Dirichlet energy |J|^2 + |J^-1|^2 of every face, measured against its target
 /// shape (the 3D triangle scaled to area target[f]; a face of zero 3D area keeps its start shape and
-/// area), weighted by target area; fixed[v] bit 0 holds the
-/// vertex's u, bit 1 its v (3: the vertex stays; 1 or 2: it slides along a side). uv must be fold-free; it stays fold-free (the line search stops short of any triangle's
-/// collapse). SLIM (Rabinovich et al. 2017): a reweighted proxy solved with CHOLMOD, pattern analysed once.
+/// area), weighted by target area; fixed[v] bit 0 holds the vertex's u, bit 1 its v (3: the vertex
+/// stays; 1 or 2: it slides along a side). uv must be fold-free; it stays fold-free (the line search
+/// stops short of any triangle's collapse). SLIM (Rabinovich et al. 2017): a reweighted proxy solved with CHOLMOD, pattern analysed once.
 SlimStats refine_map(const Surface& mesh, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,
                      std::vector<Vec2>& uv, long supernodal_from = kSupernodalFrom,
                      const std::function<void(int step)>& on_step = {});

@@ -43,7 +43,7 @@ std::vector<TargetFrame> target_frames(const Surface& m, const std::vector<doubl
       const double s = std::sqrt(target[f] / (0.5 * cross));
       p = {Vec2(0, 0), Vec2(s * l1, 0), Vec2(s * e1.dot(e2) / l1, s * cross / l1)};
     } else {
-      // No 3D shape (a cap face over a slit-like hole has zero area): its start shape in the map, at its
+      // No 3D shape (a cap face over an S-shaped hole has zero area): its start shape in the map, at its
       // start area, is what it keeps. Without a frame such a face had no energy to keep it open, the
       // step direction collapsed it, and as the line search never lets a face reach zero area, every
       // step shrank to a tenth of the last (the bust with 0.5% of its triangles removed: 2 steps, energy
@@ -129,10 +129,10 @@ SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std
   SlimStats st;
   const size_t nv = m.num_vertices();
   const auto fr = target_frames(m, target, uv);
-  // A vertex all of whose faces have no target frame (a 3D-degenerate face: zero-length edge or three
-  // collinear corners) has no energy term: its row of the system would be zero and the factorisation
-  // fail, leaving the whole map unrefined. It stays where it is (the line search still keeps its faces
-  // from collapsing).
+  // A vertex all of whose faces have no target frame (no target area, or no 3D shape and no area in the
+  // start map) has no energy term: its row of the system would be zero and the factorisation fail,
+  // leaving the whole map unrefined. It stays where it is (the line search still keeps its faces from
+  // collapsing).
   std::vector<char> framed(nv, 0);
   for (size_t f = 0; f < m.num_faces(); ++f)
     if (fr[f].area > 0)

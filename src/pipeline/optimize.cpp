@@ -167,8 +167,8 @@ ComponentDensity component_density(const TexturedMesh& input, const Surface& sur
 constexpr double kDetailCap = 4.0, kDetailFloor = 0.125;
 /// Smoothing rounds: kDetailSmoothingTexels / (the budget's texels per face), rounded down, at most
 /// kDetailMaxSmoothing (so none from 60 texels a face up): faces of a few texels are smoothed over
-/// their rings, faces of hundreds of texels keep their own density. Measured (session 10, surface PSNR at the input's budget, rounds 0 / 1 / 2 /
-/// 3 / 5 / 8; texels per face in brackets): mustard [694] 53.73 / 53.47 / 53.19 / 52.95 / 52.76 / 52.52,
+/// their rings, faces of hundreds of texels keep their own density. Measured (session 10, surface PSNR
+/// at the input's budget, rounds 0 / 1 / 2 / 3 / 5 / 8; texels per face in brackets): mustard [694] 53.73 / 53.47 / 53.19 / 52.95 / 52.76 / 52.52,
 /// cracker [565] 47.19 / 46.49 / 46.34 / 46.32 / 46.14 / 45.94, tomato [500] 49.27 / 49.16 / 49.05 /
 /// 48.96 / 48.84 / 48.70, potted [440] 47.42 / 47.25 / 47.02 / 46.78 / 46.67 / 46.65, fuze [135] 41.93 /
 /// 41.95 / 42.08 / 42.06 / 42.02 / 41.99, girl [87] 49.59 / 49.44 / 49.39 / 49.32 / 49.35 / 49.25, bust [89]
