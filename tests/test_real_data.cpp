@@ -117,14 +117,17 @@ nlohmann::json run_cli(const std::string& input, const std::string& options, con
 }
 
 // Issue 4: --map area spreads the texels evenly, 90% of the surface within a factor 2 of the mean
-// density (the spread does not depend on the size; a small one keeps the bake cheap).
+// density (the spread does not depend on the size; a small one keeps the bake cheap). On these models
+// it holds with room to spare, within a factor 2^0.5 (session 12, measured at this size: P5 -0.36 at
+// worst, meshroom_esp32cam; without the density-equalising flow the dancing girl was at -0.97 and
+// meshroom_esp32cam at -0.89), so that is what is asserted: unseen scans need the margin.
 TEST_P(RealData, AreaMapKeepsNinetyPercentWithinAFactorTwoOfTheMeanDensity) {
   const nlohmann::json r = run_cli(GetParam(), "--map area --size 256 --no-fit", "area");
   ASSERT_TRUE(r.contains("metrics"));
   EXPECT_EQ(r["metrics"]["flipped"].get<size_t>(), 0u);
   EXPECT_EQ(r["metrics"]["lost_triangles"].get<size_t>(), 0u);
-  EXPECT_GE(r["metrics"]["density_spread"]["p5"].get<double>(), -1.0);
-  EXPECT_LE(r["metrics"]["density_spread"]["p95"].get<double>(), 1.0);
+  EXPECT_GE(r["metrics"]["density_spread"]["p5"].get<double>(), -0.5);
+  EXPECT_LE(r["metrics"]["density_spread"]["p95"].get<double>(), 0.5);
 }
 
 INSTANTIATE_TEST_SUITE_P(SharedData, RealData, ::testing::ValuesIn(data_models()),

@@ -70,6 +70,9 @@ struct SquareMapOptions {
   /// Off by default: measured on ../shared/data it narrowed no model's density error once the best
   /// reweighting iterate is kept, and cost meshroom_esp32cam 0.2 dB (41.17 vs 41.36 at --size 1024).
   int correction_rounds = 0;
+  /// After the reweighting, where it stalled short of tolerance_log2: the density-equalising flow
+  /// (flow_density), kept if it narrows the density error. The area map's (set_face_targets).
+  bool density_flow = false;
   /// Linear systems of this many unknowns or more are factorised supernodally, smaller ones
   /// simplicially (see kSupernodalFrom). Tests set it low to run the supernodal path on small meshes.
   long supernodal_from = kSupernodalFrom;
@@ -98,6 +101,9 @@ struct SquareMapStats {
   int refine_iterations = 0, correction_rounds = 0;
   double refine_energy_before = 0, refine_energy = 0;
   std::string refine_stopped;
+  int flow_steps = 0;
+  int flow_shape_steps = 0;  // symmetric Dirichlet steps towards the flowed shapes (0: each flowed map was kept as it was)
+  std::string flow_stopped;  // FlowStats::stopped, ", reverted" added if it was undone; empty if not run
 };
 
 /// The four boundary positions (indices into disk.boundary, in boundary order, distinct unless the
@@ -148,7 +154,36 @@ struct SlimStats {
 /// stops short of any triangle's collapse). SLIM (Rabinovich et al. 2017): a reweighted proxy solved with CHOLMOD, pattern analysed once.
 SlimStats refine_map(const Surface& mesh, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,
                      std::vector<Vec2>& uv, long supernodal_from = kSupernodalFrom,
-                     const std::function<void(int step)>& on_step = {});
+                     const std::function<void(int step)>& on_step = {}, const std::vector<Vec2>* shapes = nullptr);
+
+struct FlowOptions {
+  int grid = 0;             // cells along the rectangle's mean side; 0: 2 sqrt(faces), within 32..256
+  int max_steps = 300;
+  double tolerance = 0.02;  // stop once the diffused density is within +-this of its mean everywhere
+  double time_scale = 1.0;  // diffusion time, in units of the rectangle's longer side squared
+  double start_cells = 1;   // the density starts diffused over this many cells (time: its square x a cell's)
+  /// true: a step is taken only if every face keeps more than half its area. false: the vertices follow
+  /// the flow whatever becomes of the faces between them (a face spanning many cells of a field that
+  /// bends across it can fold): the result is a shape to aim at (refine_map's `shapes`), not a map.
+  bool fold_free = true;
+};
+
+struct FlowStats {
+  int steps = 0;
+  double time = 0;
+  int grid_x = 0, grid_y = 0;
+  std::string stopped;  // "converged", "time", "steps" or "fold" (no step short enough kept every face)
+};
+
+/// The density-equalising flow of Gastner & Newman (2004) in the texel rectangle of width/height
+/// `aspect` (uv in the unit square): each face's target is its population, the density diffuses with
+/// zero flux through the sides, and the vertices move with -grad(rho)/rho until the density is even,
+/// so each face tends to its target area. fixed[v] as for refine_map (bit 0 holds u, bit 1 v); side
+/// vertices slide along their side. Fold-free: a step is taken only if every face keeps more than half
+/// its area (else it is halved), and the flow stops ("fold") where no step would; unless
+/// options.fold_free is false. See density_flow.cpp.
+FlowStats flow_density(const Surface& mesh, const std::vector<char>& fixed, const std::vector<double>& target, double aspect,
+                       std::vector<Vec2>& uv, const FlowOptions& options = {});
 
 /// Number of triangles whose UV signed area is not strictly positive.
 size_t count_folds(const Surface& mesh, const std::vector<Vec2>& uv);

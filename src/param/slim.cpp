@@ -30,9 +30,21 @@ struct TargetFrame {
   double area = 0;
 };
 
-std::vector<TargetFrame> target_frames(const Surface& m, const std::vector<double>& target, const std::vector<Vec2>& start) {
+std::vector<TargetFrame> target_frames(const Surface& m, const std::vector<double>& target, const std::vector<Vec2>& start,
+                                       const std::vector<Vec2>* shapes) {
   std::vector<TargetFrame> fr(m.num_faces());
+  auto perp = [](const Vec2& v) { return Vec2(-v.y(), v.x()); };
   for (size_t f = 0; f < m.num_faces(); ++f) {
+    if (shapes) {
+      // The face's triangle in `shapes`, if it has a positive area there.
+      const Vec2 &a = (*shapes)[m.triangles[f][0]], &b = (*shapes)[m.triangles[f][1]], &c = (*shapes)[m.triangles[f][2]];
+      const double area = signed_area(a, b, c);
+      if (area > 0 && std::isfinite(area)) {
+        fr[f].g = {perp(c - b) / (2 * area), perp(a - c) / (2 * area), perp(b - a) / (2 * area)};
+        fr[f].area = area;
+        continue;
+      }
+    }
     const Vec3 &a = m.positions[m.triangles[f][0]], &b = m.positions[m.triangles[f][1]], &c = m.positions[m.triangles[f][2]];
     const Vec3 e1 = b - a, e2 = c - a;
     const double l1 = e1.norm(), cross = e1.cross(e2).norm();
@@ -56,7 +68,6 @@ std::vector<TargetFrame> target_frames(const Surface& m, const std::vector<doubl
       area = ua;
     }
     const double area2 = 2.0 * area;
-    auto perp = [](const Vec2& v) { return Vec2(-v.y(), v.x()); };
     fr[f].g = {perp(p[2] - p[1]) / area2, perp(p[0] - p[2]) / area2, perp(p[1] - p[0]) / area2};
     fr[f].area = area;
   }
@@ -125,10 +136,11 @@ double max_step(const Surface& m, const std::vector<Vec2>& uv, const std::vector
 }  // namespace
 
 SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,
-                     std::vector<Vec2>& uv, long supernodal_from, const std::function<void(int step)>& on_step) {
+                     std::vector<Vec2>& uv, long supernodal_from, const std::function<void(int step)>& on_step,
+                     const std::vector<Vec2>* shapes) {
   SlimStats st;
   const size_t nv = m.num_vertices();
-  const auto fr = target_frames(m, target, uv);
+  const auto fr = target_frames(m, target, uv, shapes);
   // A vertex all of whose faces have no target frame (no target area, or no 3D shape and no area in the
   // start map) has no energy term: its row of the system would be zero and the factorisation fail,
   // leaving the whole map unrefined. It stays where it is (the line search still keeps its faces from
