@@ -984,8 +984,9 @@ TEST(RefineMap, AVertexWithoutTargetFramesStaysWhileTheRestIsRefined) {
 
 // The density-equalising flow (flow_density) on a flat 24 x 24 grid whose left half asks for 4x the
 // texels of its right half, from the identity map (log2(area / target) -0.68 / +1.32): it evens the
-// density out to within +-0.3 (the faces along the step in the targets stay a little off), folds nothing, keeps the corners where they are and every side vertex
-// on its side, in the square and in a 2:1 rectangle.
+// density out to within +-0.3 (the faces along the step in the targets stay a little off), folds
+// nothing, keeps the corners where they are and every side vertex on its side, in the square and in a
+// 2:1 rectangle.
 TEST(DensityFlow, EvensOutATargetFourTimesDenserOnOneSide) {
   constexpr int n = 24;
   const testing::Geometry grid = testing::param_grid(n + 1, n + 1, false, false, [](int i, int j) { return Vec3(i, j, 0); });

@@ -64,8 +64,9 @@ FlowStats flow_density(const Surface& m, const std::vector<char>& fixed, const s
     const Tri& t = m.triangles[f];
     const Vec2 a(p[t[0]].x() / hx, p[t[0]].y() / hy), b(p[t[1]].x() / hx, p[t[1]].y() / hy), c(p[t[2]].x() / hx, p[t[2]].y() / hy);
     const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
-    const int k = std::clamp(int(std::ceil(2 * longest)), 1, 4096);  // lattice points k (k + 1) / 2 ... centroids of sub-triangles
-    // The k^2 sub-triangles' centroids (each carries 1/k^2 of the face).
+    // Each side cut in k (sub-triangles at most half a cell across; at most 64, so a sliver across the
+    // whole grid costs 4096 points, not millions); the k^2 sub-triangles' centroids carry 1/k^2 each.
+    const int k = longest < 32 ? std::max(1, int(std::ceil(2 * longest))) : 64;
     const double w = mass / double(k * k);
     for (int i = 0; i < k; ++i)
       for (int j = 0; i + j < k; ++j) {
