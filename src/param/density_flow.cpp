@@ -144,19 +144,18 @@ FlowStats flow_density(const Surface& m, const std::vector<char>& fixed, const s
     return vmax;
   };
   std::vector<Vec2> v0(nv), v1(nv), q(nv);
-  std::vector<double> area0(nf);
-  for (size_t f = 0; f < nf; ++f) area0[f] = signed_area(p[m.triangles[f][0]], p[m.triangles[f][1]], p[m.triangles[f][2]]);
-  // A step is taken only if no face collapses or loses more than half its area in it (the flow is
-  // smooth: a face halving in one step means the step was too long for it).
-  auto acceptable = [&](const std::vector<Vec2>& q, std::vector<double>& area) {
+  // A step is taken only if every face keeps more than half its area (the flow is smooth: a face
+  // halving in one step means the step was too long for it).
+  std::vector<double> area(nf), trial_area(nf);
+  for (size_t f = 0; f < nf && options.fold_free; ++f) area[f] = signed_area(p[m.triangles[f][0]], p[m.triangles[f][1]], p[m.triangles[f][2]]);
+  auto acceptable = [&](const std::vector<Vec2>& q) {
     for (size_t f = 0; f < nf; ++f) {
-      const double a = signed_area(q[m.triangles[f][0]], q[m.triangles[f][1]], q[m.triangles[f][2]]);
-      if (!(a > 0.5 * area[f]) && area0[f] > 0) return false;
+      trial_area[f] = signed_area(q[m.triangles[f][0]], q[m.triangles[f][1]], q[m.triangles[f][2]]);
+      if (area[f] > 0 && !(trial_area[f] > 0.5 * area[f])) return false;
     }
-    for (size_t f = 0; f < nf; ++f) area[f] = signed_area(q[m.triangles[f][0]], q[m.triangles[f][1]], q[m.triangles[f][2]]);
+    area.swap(trial_area);
     return true;
   };
-  std::vector<double> area = area0;
   const double h = std::min(hx, hy);
   // Starts blurred by options.start_cells: no ringing from the cells' jumps, and no finer detail than
   // the faces can follow.
@@ -190,7 +189,7 @@ FlowStats flow_density(const Surface& m, const std::vector<char>& fixed, const s
       field(t + step);
       vertex_velocities(q, v1);
       for (size_t v = 0; v < nv; ++v) q[v] = p[v] + 0.5 * step * (v0[v] + v1[v]);
-      if ((taken = !options.fold_free || acceptable(q, area))) break;
+      if ((taken = !options.fold_free || acceptable(q))) break;
     }
     if (!taken) {
       st.stopped = "fold";
@@ -201,8 +200,6 @@ FlowStats flow_density(const Surface& m, const std::vector<char>& fixed, const s
     dt = step;
     ++st.steps;
   }
-  st.time = t;
-  st.grid_x = nx, st.grid_y = ny;
   auto back = [&](const std::vector<Vec2>& from, std::vector<Vec2>& to) {
     for (size_t v = 0; v < nv; ++v) {
       // Sides stay exactly on their lines (their normal velocity was zero; x * lx / lx may miss by an ulp).

@@ -496,7 +496,6 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
     // 0.3 s a step, 7-10 steps a round) and the finer rounds gain little there (-0.31, -0.29, -0.27).
     constexpr double kFlowEnough = 0.5;
     if (options.density_flow && m.num_faces() >= kFlowMinFaces && std::max(-st.spread_p5, st.spread_p95) > options.tolerance_log2) {
-      const std::vector<Vec2> reweighted = uv;
       const double reweighted_p5 = st.spread_p5, reweighted_p95 = st.spread_p95;
       // In the flow every side vertex slides with the field, the bumps' too (a continuous flow along a
       // line keeps its points in order, so none passes a bump); only the corners stay.

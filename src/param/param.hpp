@@ -170,8 +170,6 @@ struct FlowOptions {
 
 struct FlowStats {
   int steps = 0;
-  double time = 0;
-  int grid_x = 0, grid_y = 0;
   std::string stopped;  // "converged", "time", "steps" or "fold" (no step short enough kept every face)
 };
 
