@@ -987,21 +987,32 @@ TEST(RefineMap, AVertexWithoutTargetFramesStaysWhileTheRestIsRefined) {
 // density out to within +-0.3 (the faces along the step in the targets stay a little off), folds
 // nothing, keeps the corners where they are and every side vertex on its side, in the square and in a
 // 2:1 rectangle.
-TEST(DensityFlow, EvensOutATargetFourTimesDenserOnOneSide) {
-  constexpr int n = 24;
-  const testing::Geometry grid = testing::param_grid(n + 1, n + 1, false, false, [](int i, int j) { return Vec3(i, j, 0); });
+/// A flat n x n grid of unit squares mapped onto the unit square as it lies, its sides' vertices
+/// sliding along them (fixed: bit 0 holds u, bit 1 v), as flow_density and refine_map take them.
+struct FlatGrid {
   Surface mesh;
-  mesh.positions = grid.positions;
-  mesh.triangles = grid.triangles;
-  mesh = with_identity_parents(mesh);
-  build_opposite(mesh);
   std::vector<Vec2> start;
   std::vector<char> fixed;
+};
+
+FlatGrid flat_grid(int n) {
+  const testing::Geometry grid = testing::param_grid(n + 1, n + 1, false, false, [](int i, int j) { return Vec3(i, j, 0); });
+  FlatGrid g;
+  g.mesh.positions = grid.positions;
+  g.mesh.triangles = grid.triangles;
+  g.mesh = with_identity_parents(g.mesh);
+  build_opposite(g.mesh);
   for (const Vec3& p : grid.positions) {
-    start.push_back(Vec2(p.x() / n, p.y() / n));
+    g.start.push_back(Vec2(p.x() / n, p.y() / n));
     const bool side_x = p.x() == 0 || p.x() == n, side_y = p.y() == 0 || p.y() == n;
-    fixed.push_back(char((side_x ? 1 : 0) | (side_y ? 2 : 0)));
+    g.fixed.push_back(char((side_x ? 1 : 0) | (side_y ? 2 : 0)));
   }
+  return g;
+}
+
+TEST(DensityFlow, EvensOutATargetFourTimesDenserOnOneSide) {
+  constexpr int n = 24;
+  const auto& [mesh, start, fixed] = flat_grid(n);
   std::vector<double> target(mesh.num_faces());
   for (size_t f = 0; f < target.size(); ++f) {
     const Tri& t = mesh.triangles[f];
@@ -1030,6 +1041,52 @@ TEST(DensityFlow, EvensOutATargetFourTimesDenserOnOneSide) {
     // The dense half grew: the grid's centre moved right, to about 4/5 of the width.
     for (size_t v = 0; v < uv.size(); ++v)
       if (mesh.positions[v] == Vec3(n / 2, n / 2, 0)) EXPECT_GT(uv[v].x(), 0.7);
+  }
+}
+
+TEST(DensityFlow, TracersFollowTheVerticesAndSmallCopiesOfFacesNeverFold) {
+  // A coarse grid (each face spans several cells of the flow's grid) whose corner asks for 16x the
+  // texels, flowed without the fold-free check. Tracers move as the vertices do, and a small copy of
+  // every face carried as tracers keeps its orientation: the flow's own local map never folds (the
+  // area map takes its shapes from such copies, where the flowed vertices of long faces can fold).
+  constexpr int n = 4;
+  const auto& [mesh, start, fixed] = flat_grid(n);
+  std::vector<double> target(mesh.num_faces(), 1.0);
+  for (size_t f = 0; f < target.size(); ++f) {
+    const Tri& t = mesh.triangles[f];
+    const Vec2 c = (start[t[0]] + start[t[1]] + start[t[2]]) / 3;
+    if (c.x() < 0.3 && c.y() < 0.3) target[f] = 16.0;
+  }
+  FlowOptions options;
+  options.fold_free = false;
+  options.grid = 32;
+  // Tracers: every interior vertex, then a copy of each face shrunk 64x about its centroid.
+  std::vector<Vec2> tracers;
+  std::vector<uint32_t> interior;
+  for (uint32_t v = 0; v < start.size(); ++v)
+    if (fixed[v] == 0) interior.push_back(v), tracers.push_back(start[v]);
+  const size_t first_copy = tracers.size();
+  constexpr double kShrink = 1.0 / 64;
+  for (const Tri& t : mesh.triangles) {
+    const Vec2 c = (start[t[0]] + start[t[1]] + start[t[2]]) / 3;
+    for (uint32_t v : t) tracers.push_back(c + kShrink * (start[v] - c));
+  }
+  std::vector<Vec2> uv = start;
+  const FlowStats st = flow_density(mesh, fixed, target, 1.0, uv, options, &tracers);
+  ASSERT_GT(st.steps, 0);
+  ASSERT_EQ(tracers.size(), first_copy + 3 * mesh.num_faces());
+  for (size_t i = 0; i < interior.size(); ++i) {
+    EXPECT_NEAR(tracers[i].x(), uv[interior[i]].x(), 1e-12) << "vertex " << interior[i];
+    EXPECT_NEAR(tracers[i].y(), uv[interior[i]].y(), 1e-12) << "vertex " << interior[i];
+  }
+  // The dense corner's faces grew, so the flow moved things: an interior vertex beside it moved by
+  // more than a tenth of a face.
+  double moved = 0;
+  for (uint32_t v : interior) moved = std::max(moved, (uv[v] - start[v]).norm());
+  EXPECT_GT(moved, 0.1 / n);
+  for (size_t f = 0; f < mesh.num_faces(); ++f) {
+    const Vec2 &a = tracers[first_copy + 3 * f], &b = tracers[first_copy + 3 * f + 1], &c = tracers[first_copy + 3 * f + 2];
+    EXPECT_GT(signed_area(a, b, c), 0) << "face " << f;
   }
 }
 

@@ -25,20 +25,26 @@ using MatX = Eigen::MatrixXd;
 
 }  // namespace
 
+int flow_grid(size_t faces, const FlowOptions& options) {
+  return options.grid > 0 ? options.grid : std::clamp(int(2 * std::sqrt(double(faces))), 32, 256);
+}
+
 FlowStats flow_density(const Surface& m, const std::vector<char>& fixed, const std::vector<double>& target, double aspect,
-                       std::vector<Vec2>& uv, const FlowOptions& options) {
+                       std::vector<Vec2>& uv, const FlowOptions& options, std::vector<Vec2>* tracers) {
   FlowStats st;
   const size_t nf = m.num_faces(), nv = m.num_vertices();
   if (nf == 0 || target.size() != nf || uv.size() != nv || !(aspect > 0)) return st;
   // The rectangle [0, lx] x [0, ly] of area 1, in the texture's proportions (texel spacing equal both
   // ways), so the flow moves texels isotropically.
   const double lx = std::sqrt(aspect), ly = 1 / lx;
-  int n = options.grid;
-  if (n <= 0) n = std::clamp(int(2 * std::sqrt(double(nf))), 32, 256);
+  const int n = flow_grid(nf, options);
   const int nx = std::max(8, int(std::lround(n * lx))), ny = std::max(8, int(std::lround(n * ly)));
   const double hx = lx / nx, hy = ly / ny;
-  std::vector<Vec2> p(nv);
+  // The points carried: the vertices, then the tracers.
+  const size_t nt = tracers ? tracers->size() : 0, np = nv + nt;
+  std::vector<Vec2> p(np);
   for (size_t v = 0; v < nv; ++v) p[v] = Vec2(uv[v].x() * lx, uv[v].y() * ly);
+  for (size_t i = 0; i < nt; ++i) p[nv + i] = Vec2((*tracers)[i].x() * lx, (*tracers)[i].y() * ly);
 
   // The population: each face's target, scaled so the rectangle's mean density is 1, spread over the
   // cells by points on a lattice over the face (spaced at most half a cell), each split between the
@@ -134,16 +140,16 @@ FlowStats flow_density(const Surface& m, const std::vector<char>& fixed, const s
   };
   auto vertex_velocities = [&](const std::vector<Vec2>& at, std::vector<Vec2>& out) {
     double vmax = 0;
-    for (size_t v = 0; v < nv; ++v) {
+    for (size_t v = 0; v < np; ++v) {
       Vec2 w = velocity(at[v]);
-      if (fixed[v] & 1) w.x() = 0;
-      if (fixed[v] & 2) w.y() = 0;
+      if (v < nv && (fixed[v] & 1)) w.x() = 0;
+      if (v < nv && (fixed[v] & 2)) w.y() = 0;
       out[v] = w;
       vmax = std::max(vmax, w.norm());
     }
     return vmax;
   };
-  std::vector<Vec2> v0(nv), v1(nv), q(nv);
+  std::vector<Vec2> v0(np), v1(np), q(np);
   // A step is taken only if every face keeps more than half its area (the flow is smooth: a face
   // halving in one step means the step was too long for it).
   std::vector<double> area(nf), trial_area(nf);
@@ -185,10 +191,10 @@ FlowStats flow_density(const Surface& m, const std::vector<char>& fixed, const s
     bool taken = false;
     for (int tries = 0; tries < 30; ++tries, step *= 0.5) {
       // Heun: Euler predictor, trapezoid corrector.
-      for (size_t v = 0; v < nv; ++v) q[v] = p[v] + step * v0[v];
+      for (size_t v = 0; v < np; ++v) q[v] = p[v] + step * v0[v];
       field(t + step);
       vertex_velocities(q, v1);
-      for (size_t v = 0; v < nv; ++v) q[v] = p[v] + 0.5 * step * (v0[v] + v1[v]);
+      for (size_t v = 0; v < np; ++v) q[v] = p[v] + 0.5 * step * (v0[v] + v1[v]);
       if ((taken = !options.fold_free || acceptable(q))) break;
     }
     if (!taken) {
@@ -208,6 +214,7 @@ FlowStats flow_density(const Surface& m, const std::vector<char>& fixed, const s
     }
   };
   back(p, uv);
+  for (size_t i = 0; i < nt; ++i) (*tracers)[i] = Vec2(p[nv + i].x() / lx, p[nv + i].y() / ly);
   return st;
 }
 

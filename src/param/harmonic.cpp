@@ -441,15 +441,16 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
     // Refined in the rectangle's proportions (area 1: the targets are normalised to the unit square),
     // so the targets' shapes are met in texels. `shapes` (unit square, optional): refine_map's.
     auto refine_in_rect = [&](const std::vector<double>& target, int iterations, const std::function<void(int)>& on_step,
-                              const std::vector<Vec2>* shapes = nullptr) {
+                              const std::vector<FaceShape>* shapes = nullptr) {
       if (aspect == 1.0) return refine_map(m, fixed, target, iterations, uv, options.supernodal_from, on_step, shapes);
       const double sx = std::sqrt(aspect);
       const std::vector<Vec2> before = uv;
       for (Vec2& p : uv) p = Vec2(p.x() * sx, p.y() / sx);
-      std::vector<Vec2> scaled_shapes;
+      std::vector<FaceShape> scaled_shapes;
       if (shapes) {
         scaled_shapes = *shapes;
-        for (Vec2& p : scaled_shapes) p = Vec2(p.x() * sx, p.y() / sx);
+        for (FaceShape& s : scaled_shapes)
+          for (Vec2& p : s) p = Vec2(p.x() * sx, p.y() / sx);
       }
       const SlimStats r = refine_map(m, fixed, target, iterations, uv, options.supernodal_from, on_step, shapes ? &scaled_shapes : nullptr);
       for (Vec2& p : uv) p = Vec2(p.x() / sx, p.y() * sx);
@@ -478,16 +479,23 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
     // moves the whole map on towards them. The flow carries vertices, not triangles: a face spanning
     // many cells of a field that bends across it can fold (the dancing girl with six patches missing:
     // 236 of 18k faces, triangles the reweighting had stretched to 10 cells). Where any folds or
-    // collapses below what the output's coordinates hold, the flowed triangles are the shapes that
-    // kFlowShapeSteps symmetric Dirichlet steps aim at from the map before instead (their line search
-    // never folds), which gets part of the way. So the flow runs in rounds that start from a density
-    // diffused over 4, then 2, then 1 cells (kFlowStarts): the coarse one folds fewer faces (girl: 128
-    // against 236) and leaves the finer ones less to move. Each round is kept only if it narrows the
-    // density error. Measured (P5 / P95 of log2(area / target), the girl and meshroom_esp32cam_pages with
-    // six patches missing, tools/perturb_obj.py seed 7, the area map's 1:2 probe): reweighting -1.93 /
-    // 0.94 and -2.06 / 0.77; one round from 1 cell -0.77 / 0.52 and -1.26 / 0.45; from 4, 2, 1 cells
-    // -0.74 / 0.50 and -0.62 / 0.37. Not on a fragment of under kFlowMinFaces faces: the grid's noise
-    // moves those by more than it evens them out.
+    // collapses below what the output's coordinates hold, kFlowShapeSteps symmetric Dirichlet steps aim
+    // from the map before at the shapes the flow gives each face (their line search never folds). A
+    // face's shape is a small copy of it (a quarter cell across) carried by the flow as tracers and
+    // scaled back: the flow's own local map at the face, which never folds, where the flowed vertices
+    // of a long face can. Session 12 aimed at the flowed vertices' triangles: a folded one kept its 3D
+    // shape, and its neighbours' shapes did not fit together, so the steps stopped short (seed 11 girl
+    // with patches -1.04 / 0.82 and 67 steps; with the tracers' shapes -0.76 / 0.55 in 13 steps; seed
+    // 7 -0.89 / 0.61 -> -0.65 / 0.47). The flow runs in rounds that start from a density diffused over
+    // 4, then 2, then 1 cells (kFlowStarts): the coarse one folds fewer faces (girl: 128 against 236)
+    // and leaves the finer ones less to move. Each round is kept only if it narrows the density error.
+    // Measured in session 12 (P5 / P95 of log2(area / target), the girl and meshroom_esp32cam_pages
+    // with six patches missing, tools/perturb_obj.py seed 7, the area map's 1:2 probe, the flowed
+    // vertices' shapes): reweighting -1.93 / 0.94 and -2.06 / 0.77; one round from 1 cell -0.77 / 0.52
+    // and -1.26 / 0.45; from 4, 2, 1 cells -0.74 / 0.50 and -0.62 / 0.37. A fourth round, from 1 or 0.5
+    // cell, or rounds from 8, 4, 2, 1 cells, with the tracers' shapes: within 0.01 on the seed-11 girl.
+    // Not on a fragment of under kFlowMinFaces faces: the grid's noise moves those by more than it
+    // evens them out.
     constexpr size_t kFlowMinFaces = 100;
     constexpr int kFlowShapeSteps = 30;
     constexpr double kFlowStarts[] = {4, 2, 1};
@@ -509,14 +517,29 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
         FlowOptions fo;
         fo.fold_free = false;
         fo.start_cells = start_cells;
-        const FlowStats fs = flow_density(m, flow_fixed, st.blended_target, aspect, flowed, fo);
+        // Tracers: a small copy of each face about its centroid, at most a quarter cell across: the flow
+        // carries it as its own local map (its Jacobian there) carries the face. See kFlowShapeSteps.
+        const double cell = 1.0 / flow_grid(m.num_faces(), fo);
+        std::vector<Vec2> tracers(3 * m.num_faces());
+        std::vector<double> tracer_scale(m.num_faces());
+        for (size_t f = 0; f < m.num_faces(); ++f) {
+          const Tri& t = m.triangles[f];
+          const Vec2 centroid = (uv[t[0]] + uv[t[1]] + uv[t[2]]) / 3.0;
+          const double longest = std::max({(uv[t[1]] - uv[t[0]]).norm(), (uv[t[2]] - uv[t[1]]).norm(), (uv[t[0]] - uv[t[2]]).norm()});
+          tracer_scale[f] = longest > 0.25 * cell ? 0.25 * cell / longest : 1.0;
+          for (size_t k = 0; k < 3; ++k) tracers[3 * f + k] = centroid + tracer_scale[f] * (uv[t[k]] - centroid);
+        }
+        const FlowStats fs = flow_density(m, flow_fixed, st.blended_target, aspect, flowed, fo, &tracers);
         st.flow_steps += fs.steps;
         st.flow_stopped = fs.stopped;
         const size_t collapsed = count_collapsed(m, flowed, options);
         if (collapsed == 0) {
           uv = flowed;
         } else {
-          const SlimStats shaped = refine_in_rect(st.blended_target, kFlowShapeSteps, {}, &flowed);
+          std::vector<FaceShape> shapes(m.num_faces());
+          for (size_t f = 0; f < m.num_faces(); ++f)
+            for (size_t k = 0; k < 3; ++k) shapes[f][k] = tracers[3 * f + k] / tracer_scale[f];
+          const SlimStats shaped = refine_in_rect(st.blended_target, kFlowShapeSteps, {}, &shapes);
           st.flow_shape_steps += shaped.iterations;
         }
         spread();

@@ -147,14 +147,19 @@ struct SlimStats {
   int capped_steps = 0;                  // steps whose system solved only with its weights capped
 };
 
+/// A triangle's shape in the plane (its corners in the face's order; position and rotation do not matter).
+using FaceShape = std::array<Vec2, 3>;
+
 /// Lowers the symmetric Dirichlet energy |J|^2 + |J^-1|^2 of every face, measured against its target
 /// shape (the 3D triangle scaled to area target[f]; a face of zero 3D area keeps its start shape and
-/// area), weighted by target area; fixed[v] bit 0 holds the vertex's u, bit 1 its v (3: the vertex
-/// stays; 1 or 2: it slides along a side). uv must be fold-free; it stays fold-free (the line search
-/// stops short of any triangle's collapse). SLIM (Rabinovich et al. 2017): a reweighted proxy solved with CHOLMOD, pattern analysed once.
+/// area; `shapes`, optional: face f's shapes[f] instead, where that has a positive area), weighted by
+/// target area; fixed[v] bit 0 holds the vertex's u, bit 1 its v (3: the vertex stays; 1 or 2: it
+/// slides along a side). uv must be fold-free; it stays fold-free (the line search stops short of any
+/// triangle's collapse). SLIM (Rabinovich et al. 2017): a reweighted proxy solved with CHOLMOD, pattern
+/// analysed once.
 SlimStats refine_map(const Surface& mesh, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,
                      std::vector<Vec2>& uv, long supernodal_from = kSupernodalFrom,
-                     const std::function<void(int step)>& on_step = {}, const std::vector<Vec2>* shapes = nullptr);
+                     const std::function<void(int step)>& on_step = {}, const std::vector<FaceShape>* shapes = nullptr);
 
 struct FlowOptions {
   int grid = 0;             // cells along the rectangle's mean side; 0: 2 sqrt(faces), within 32..256
@@ -180,8 +185,12 @@ struct FlowStats {
 /// vertices slide along their side. Fold-free: a step is taken only if every face keeps more than half
 /// its area (else it is halved), and the flow stops ("fold") where no step would; unless
 /// options.fold_free is false. See density_flow.cpp.
+/// `tracers` (optional, unit square like uv): further points carried by the same flow, unconstrained.
 FlowStats flow_density(const Surface& mesh, const std::vector<char>& fixed, const std::vector<double>& target, double aspect,
-                       std::vector<Vec2>& uv, const FlowOptions& options = {});
+                       std::vector<Vec2>& uv, const FlowOptions& options = {}, std::vector<Vec2>* tracers = nullptr);
+
+/// The cells along the flow grid's mean side for a map of `faces` faces (FlowOptions::grid, or its default).
+int flow_grid(size_t faces, const FlowOptions& options = {});
 
 /// Number of triangles whose UV signed area is not strictly positive.
 size_t count_folds(const Surface& mesh, const std::vector<Vec2>& uv);

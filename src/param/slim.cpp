@@ -31,13 +31,13 @@ struct TargetFrame {
 };
 
 std::vector<TargetFrame> target_frames(const Surface& m, const std::vector<double>& target, const std::vector<Vec2>& start,
-                                       const std::vector<Vec2>* shapes) {
+                                       const std::vector<FaceShape>* shapes) {
   std::vector<TargetFrame> fr(m.num_faces());
   auto perp = [](const Vec2& v) { return Vec2(-v.y(), v.x()); };
   for (size_t f = 0; f < m.num_faces(); ++f) {
     if (shapes) {
       // The face's triangle in `shapes`, if it has a positive area there.
-      const Vec2 &a = (*shapes)[m.triangles[f][0]], &b = (*shapes)[m.triangles[f][1]], &c = (*shapes)[m.triangles[f][2]];
+      const Vec2 &a = (*shapes)[f][0], &b = (*shapes)[f][1], &c = (*shapes)[f][2];
       const double area = signed_area(a, b, c);
       if (area > 0 && std::isfinite(area)) {
         fr[f].g = {perp(c - b) / (2 * area), perp(a - c) / (2 * area), perp(b - a) / (2 * area)};
@@ -137,7 +137,7 @@ double max_step(const Surface& m, const std::vector<Vec2>& uv, const std::vector
 
 SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,
                      std::vector<Vec2>& uv, long supernodal_from, const std::function<void(int step)>& on_step,
-                     const std::vector<Vec2>* shapes) {
+                     const std::vector<FaceShape>* shapes) {
   SlimStats st;
   const size_t nv = m.num_vertices();
   const auto fr = target_frames(m, target, uv, shapes);
