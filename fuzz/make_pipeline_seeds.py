@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Writes the seed meshes of fuzz/corpus/fuzz_pipeline in the byte format of mesh_from_bytes
-(fuzz/targets.hpp): flags, vertex count - 3, triangle count - 1, scale index, [-s/-o bytes],
+(fuzz/targets.hpp): flags, vertex count - 3, triangle count - 1, scale index | map << 3 | splits << 5, [-s/-o bytes],
 vertices (3 int8, coordinate = b / 8), triangles (3 indices), corner UVs (2 bytes, byte / 255)."""
 import math
 import os
@@ -9,11 +9,12 @@ import struct
 OUT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "corpus", "fuzz_pipeline")
 TEXTURED, ONE_TEXEL, PER_COMPONENT, HOLES_CUT, WIDE_UV, SO = 4, 8, 1, 2, 64, 128
 SIZE = {64: 0, 16: 16, 8: 32, 128: 48}
+MAP = {"detail": 0, "area": 1, "texel": 2, "harmonic": 3}
 
 
-def write(name, verts, tris, uvs, flags=TEXTURED, size=64, scale=0, so=None):
-    assert 3 <= len(verts) <= 64 and 1 <= len(tris) <= 64 and len(uvs) == 3 * len(tris)
-    b = bytes([flags | SIZE[size] | (SO if so else 0), len(verts) - 3, len(tris) - 1, scale])
+def write(name, verts, tris, uvs, flags=TEXTURED, size=64, scale=0, so=None, map="detail", splits=0):
+    assert 3 <= len(verts) <= 64 and 1 <= len(tris) <= 64 and len(uvs) == 3 * len(tris) and 0 <= splits <= 2
+    b = bytes([flags | SIZE[size] | (SO if so else 0), len(verts) - 3, len(tris) - 1, scale | MAP[map] << 3 | splits << 5])
     if so:
         b += struct.pack("4b", *so)
     for v in verts:
@@ -102,6 +103,16 @@ def main():
     write("non_manifold", v, t, per_vertex_uv(v, t, lambda p: (p[0] / 6, (p[1] + 3) / 6)))
     v = [(0, 0, 0), (1, 0, 0), (2, 0, 0)]
     write("only_degenerate", v, [(0, 1, 2)], [(0, 0), (0.5, 0), (1, 1)])
+    # The other maps, on meshes split to 128..1024 triangles (the area map's density-equalising flow
+    # starts at 100 faces; holes cut into the boundary make its reweighting stall).
+    v, t = grid(6, holes={(1, 1), (3, 3), (3, 1)})
+    uv = per_vertex_uv(v, t, lambda p: (p[0] / 5, p[1] / 5))
+    write("grid_holes_cut_area_split2", v, t, uv, TEXTURED | HOLES_CUT, 128, map="area", splits=2)
+    write("grid_holes_texel_split1", v, t, uv, TEXTURED, 64, map="texel", splits=1)
+    v, t = torus(8, 4)
+    uv = per_vertex_uv(v, t, lambda p: ((math.atan2(p[1], p[0]) + math.pi) / (2 * math.pi), (p[2] + 1) / 2))
+    write("torus_area_split2", v, t, uv, TEXTURED, 128, map="area", splits=2)
+    write("torus_harmonic_split1", v, t, uv, TEXTURED, 64, map="harmonic", splits=1)
 
 
 main()

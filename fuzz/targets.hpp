@@ -6,11 +6,15 @@
 // what the entry point promises about what it returns; a broken promise throws Violation. Any other
 // exception (InternalError, bad_alloc, ...) propagates to the caller, which treats it as a finding.
 #pragma once
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
+#include <vector>
 
 #include "core/error.hpp"
 #include "fuzz_common.hpp"
@@ -145,7 +149,10 @@ inline Outcome run_image(const uint8_t* data, size_t size) {
 //           bits 4-5 size (64, 16, 8, 128), bit 6 UVs in [-1, 2] instead of [0, 1], bit 7 -s/-o follow
 //   byte 1  vertex count - 3 (mod 62): 3..64 vertices
 //   byte 2  triangle count - 1 (mod 64): 1..64 triangles
-//   byte 3  coordinate scale (mod 8): 1, 1e-3, 1e3, 1e-12, 1e12, 1e-150, 6e13, 1e-300
+//   byte 3  bits 0-2 coordinate scale: 1, 1e-3, 1e3, 1e-12, 1e12, 1e-150, 6e13, 1e-300;
+//           bits 3-4 map: detail, area, texel, harmonic; bits 5-6 (mod 3) times every triangle is split in
+//           four at its edges' midpoints, after the bytes are read (up to 1024 triangles: the area map's
+//           density-equalising flow starts at 100 faces)
 //   [bit 7] 4 bytes: map_Kd -s u v, -o u v, each (int8 / 16) or an extreme value
 //   vertices: 3 signed bytes each, coordinate = int8 / 8 * scale
 //   triangles: 3 bytes each, vertex index mod count
@@ -166,7 +173,11 @@ inline TexturedMesh mesh_from_bytes(const uint8_t* data, size_t size, Options& o
   const uint8_t flags = byte();
   const size_t nv = 3 + byte() % 62, nt = 1 + byte() % 64;
   static constexpr double kScales[8] = {1, 1e-3, 1e3, 1e-12, 1e12, 1e-150, 6e13, 1e-300};
-  const double scale = kScales[byte() % 8];
+  const uint8_t shape = byte();
+  const double scale = kScales[shape % 8];
+  static constexpr MapKind kMaps[4] = {MapKind::kDetail, MapKind::kArea, MapKind::kTexel, MapKind::kHarmonic};
+  options.map = kMaps[(shape >> 3) & 3];
+  const int splits = ((shape >> 5) & 3) % 3;
   options.layout = (flags & 1) ? Layout::kPerComponent : Layout::kAtlas;
   options.holes = (flags & 2) ? HoleMode::kCut : HoleMode::kFill;
   static constexpr int kSizes[4] = {64, 16, 8, 128};
@@ -198,6 +209,30 @@ inline TexturedMesh mesh_from_bytes(const uint8_t* data, size_t size, Options& o
     if (flags & 0x40) u = 3 * u - 1, v = 3 * v - 1;
     m.corner_uv.emplace_back(u, v);
   }
+  for (int round = 0; round < splits; ++round) {
+    // Each triangle in four: a vertex at each edge's midpoint (shared by the edge's triangles, keyed by
+    // its two vertices; a repeated index gives a coincident vertex), texture coordinates per corner.
+    std::map<std::pair<uint32_t, uint32_t>, uint32_t> midpoint;
+    auto mid = [&](uint32_t a, uint32_t b) {
+      const auto key = std::minmax(a, b);
+      const auto [it, added] = midpoint.try_emplace({key.first, key.second}, uint32_t(m.positions.size()));
+      if (added) m.positions.push_back(0.5 * (m.positions[a] + m.positions[b]));
+      return it->second;
+    };
+    std::vector<Tri> triangles;
+    std::vector<Vec2> uvs;
+    for (size_t t = 0; t < m.triangles.size(); ++t) {
+      const Tri& c = m.triangles[t];
+      const Vec2* u = &m.corner_uv[3 * t];
+      const uint32_t ab = mid(c[0], c[1]), bc = mid(c[1], c[2]), ca = mid(c[2], c[0]);
+      const Vec2 uab = 0.5 * (u[0] + u[1]), ubc = 0.5 * (u[1] + u[2]), uca = 0.5 * (u[2] + u[0]);
+      triangles.insert(triangles.end(), {Tri{c[0], ab, ca}, Tri{ab, c[1], bc}, Tri{ca, bc, c[2]}, Tri{ab, bc, ca}});
+      uvs.insert(uvs.end(), {u[0], uab, uca, uab, u[1], ubc, uca, ubc, u[2], uab, ubc, uca});
+    }
+    m.triangles.swap(triangles);
+    m.corner_uv.swap(uvs);
+  }
+  const size_t nt_all = m.triangles.size();
   if (flags & 4) {
     Image img(4, 4);
     for (int y = 0; y < 4; ++y)
@@ -206,9 +241,9 @@ inline TexturedMesh mesh_from_bytes(const uint8_t* data, size_t size, Options& o
     m.textures.push_back(Texture{"fuzz-texture", std::move(img)});
     mat.texture = 0;
     m.materials.push_back(mat);
-    m.face_material.assign(nt, 0);
+    m.face_material.assign(nt_all, 0);
   } else {
-    m.face_material.assign(nt, -1);
+    m.face_material.assign(nt_all, -1);
   }
   return m;
 }
