@@ -122,7 +122,14 @@ nlohmann::json run_cli(const std::string& input, const std::string& options, con
 // worst, meshroom_esp32cam; without the density-equalising flow the dancing girl was at -0.97 and
 // meshroom_esp32cam at -0.89), so that is what is asserted: unseen scans need the margin.
 TEST_P(RealData, AreaMapKeepsNinetyPercentWithinAFactorTwoOfTheMeanDensity) {
-  const nlohmann::json r = run_cli(GetParam(), "--map area --size 256 --no-fit", "area");
+  // Under AddressSanitizer (CI's second pass) in the square only: the first pass runs the texture-shape
+  // probes, whose choice it checks; the flow and the refinement run either way.
+#ifdef __SANITIZE_ADDRESS__
+  const char* shape = " --aspect 1";
+#else
+  const char* shape = "";
+#endif
+  const nlohmann::json r = run_cli(GetParam(), std::string("--map area --size 256 --no-fit") + shape, "area");
   ASSERT_TRUE(r.contains("metrics"));
   EXPECT_EQ(r["metrics"]["flipped"].get<size_t>(), 0u);
   EXPECT_EQ(r["metrics"]["lost_triangles"].get<size_t>(), 0u);
@@ -144,6 +151,9 @@ GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(RealData);
 TEST(RealDataMaps, DefaultMapBeatsHarmonicAndTextureDefragOnMeshroomAt1024) {
   const fs::path input = fs::path(TIGHTEX_SHARED_DATA) / "meshroom_esp32cam" / "texturedMesh.obj";
   if (!fs::exists(input)) GTEST_SKIP() << "../shared/data/meshroom_esp32cam not present";
+#ifdef __SANITIZE_ADDRESS__
+  GTEST_SKIP() << "figures only: the first CI pass measures them, RealData runs the model under the sanitizers";
+#endif
   const nlohmann::json def = run_cli(input.string(), "--size 1024", "default"), harm = run_cli(input.string(), "--size 1024 --map harmonic", "harmonic");
   ASSERT_TRUE(def.contains("metrics") && harm.contains("metrics"));
   const double d = def["metrics"]["surface_psnr_db"].get<double>(), h = harm["metrics"]["surface_psnr_db"].get<double>();
