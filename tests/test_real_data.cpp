@@ -41,13 +41,18 @@ TEST_P(RealData, CliOutputIsOneFoldFreeChartPerComponentFillingTheTexture) {
   fs::remove_all(out);
   // The default run. Under AddressSanitizer (CI's second pass, several times slower) only the soup can
   // probes the texture's shape; the others keep the square (--aspect 1), which the first pass has
-  // already run as part of the default: that keeps CI within its time.
+  // already run as part of the default; and the other three YCB scans, whose default textures are
+  // 2700-3400 texels a side, bake at --size 1024 (under the sanitizers 45-60 s each at their default,
+  // mostly the bake and its fit): the first pass checks their default budget and fidelity. That keeps
+  // CI within its time.
 #ifdef __SANITIZE_ADDRESS__
   const bool probe_shape = input.find("tomato_soup_can") != std::string::npos;
+  const bool default_budget = probe_shape || input.find("/ycb_") == std::string::npos;
 #else
-  const bool probe_shape = true;
+  const bool probe_shape = true, default_budget = true;
 #endif
-  const std::string cmd = std::string(TIGHTEX_CLI) + " '" + input + "' -o '" + out.string() + "' --quiet" + (probe_shape ? "" : " --aspect 1");
+  const std::string cmd = std::string(TIGHTEX_CLI) + " '" + input + "' -o '" + out.string() + "' --quiet" + (probe_shape ? "" : " --aspect 1") +
+                          (default_budget ? "" : " --size 1024");
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
 
   const TexturedMesh in = read_obj(input);
@@ -67,11 +72,15 @@ TEST_P(RealData, CliOutputIsOneFoldFreeChartPerComponentFillingTheTexture) {
   // The default budget keeps the input's information: as many texels as the input uses, in a square
   // whose side is a multiple of 4.
   const int side = report["options"]["size"].get<int>();
-  EXPECT_EQ(side, size_for_texels(std::ceil(m.input.used_texels / 4.0) * 4.0));
   EXPECT_EQ(side % 4, 0);
-  EXPECT_GE(double(m.output.texels), m.input.used_texels);
-  // Colour fidelity at that budget (default detail map): measured 42.1 (fuze) to 57.6 dB (bust).
-  EXPECT_GT(m.surface_psnr, 38.0);
+  if (default_budget) {
+    EXPECT_EQ(side, size_for_texels(std::ceil(m.input.used_texels / 4.0) * 4.0));
+    EXPECT_GE(double(m.output.texels), m.input.used_texels);
+    // Colour fidelity at that budget (default detail map): measured 42.1 (fuze) to 57.6 dB (bust).
+    EXPECT_GT(m.surface_psnr, 38.0);
+  } else {
+    EXPECT_EQ(side, 1024);
+  }
   // Colours sit where they were: the real result beats the same result with its texture mirrored by
   // a wide margin.
   TexturedMesh mirrored = result;
