@@ -436,8 +436,14 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
     std::vector<char> held = pinned;
     for (size_t i = 0; i < nb; ++i)
       if (pinned[i] && std::find(corner.begin(), corner.end(), i) == corner.end()) held[(i + 1) % nb] = held[(i + nb - 1) % nb] = 1;
-    std::vector<char> fixed(m.num_vertices(), 0);
-    for (size_t i = 0; i < nb; ++i) fixed[bnd[i]] = held[i] || !options.slide_boundary ? 3 : (side_of[i] % 2 == 0 ? 2 : 1);
+    // A boundary vertex that `holds(i)` stays (3), every other slides along its side (2: a horizontal
+    // side holds v, 1: a vertical one holds u); all stay when the boundary does not slide.
+    auto side_constraints = [&](auto&& holds) {
+      std::vector<char> fixed(m.num_vertices(), 0);
+      for (size_t i = 0; i < nb; ++i) fixed[bnd[i]] = holds(i) || !options.slide_boundary ? 3 : (side_of[i] % 2 == 0 ? 2 : 1);
+      return fixed;
+    };
+    const std::vector<char> fixed = side_constraints([&](size_t i) { return held[i] != 0; });
     // Refined in the rectangle's proportions (area 1: the targets are normalised to the unit square),
     // so the targets' shapes are met in texels. `shapes` (unit square, optional): refine_map's.
     auto refine_in_rect = [&](const std::vector<double>& target, int iterations, const std::function<void(int)>& on_step,
@@ -466,10 +472,12 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
     auto spread = [&] {
       std::vector<std::pair<double, double>> vw(nf);
       double total = 0, sum_t = 0;
-      for (size_t f = 0; f < nf; ++f) total += signed_area(uv[m.triangles[f][0]], uv[m.triangles[f][1]], uv[m.triangles[f][2]]), sum_t += st.blended_target[f];
       for (size_t f = 0; f < nf; ++f) {
-        const double a = signed_area(uv[m.triangles[f][0]], uv[m.triangles[f][1]], uv[m.triangles[f][2]]);
-        log_ratio[f] = std::log2(std::max(a, 1e-300) / (st.blended_target[f] * total / sum_t));
+        log_ratio[f] = signed_area(uv[m.triangles[f][0]], uv[m.triangles[f][1]], uv[m.triangles[f][2]]);  // the area, for now
+        total += log_ratio[f], sum_t += st.blended_target[f];
+      }
+      for (size_t f = 0; f < nf; ++f) {
+        log_ratio[f] = std::log2(std::max(log_ratio[f], 1e-300) / (st.blended_target[f] * total / sum_t));
         vw[f] = {log_ratio[f], st.blended_target[f]};
       }
       st.spread_p5 = weighted_quantile(vw, 0.05);
@@ -503,13 +511,11 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
     // each round costs a map's worth of symmetric Dirichlet steps where faces fold (meshroom_esp32cam:
     // 0.3 s a step, 7-10 steps a round) and the finer rounds gain little there (-0.31, -0.29, -0.27).
     constexpr double kFlowEnough = 0.5;
-    if (options.density_flow && m.num_faces() >= kFlowMinFaces && std::max(-st.spread_p5, st.spread_p95) > options.tolerance_log2) {
+    if (options.density_flow && nf >= kFlowMinFaces && std::max(-st.spread_p5, st.spread_p95) > options.tolerance_log2) {
       const double reweighted_p5 = st.spread_p5, reweighted_p95 = st.spread_p95;
       // In the flow every side vertex slides with the field, the bumps' too (a continuous flow along a
       // line keeps its points in order, so none passes a bump); only the corners stay.
-      std::vector<char> flow_fixed(m.num_vertices(), 0);
-      for (size_t i = 0; i < nb; ++i)
-        flow_fixed[bnd[i]] = std::find(corner.begin(), corner.end(), i) != corner.end() || !options.slide_boundary ? 3 : (side_of[i] % 2 == 0 ? 2 : 1);
+      const std::vector<char> flow_fixed = side_constraints([&](size_t i) { return std::find(corner.begin(), corner.end(), i) != corner.end(); });
       for (double start_cells : kFlowStarts) {
         const std::vector<Vec2> previous = uv;
         const double previous_p5 = st.spread_p5, previous_p95 = st.spread_p95;
@@ -519,10 +525,10 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
         fo.start_cells = start_cells;
         // Tracers: a small copy of each face about its centroid, at most a quarter cell across: the flow
         // carries it as its own local map (its Jacobian there) carries the face. See kFlowShapeSteps.
-        const double cell = 1.0 / flow_grid(m.num_faces(), fo);
-        std::vector<Vec2> tracers(3 * m.num_faces());
-        std::vector<double> tracer_scale(m.num_faces());
-        for (size_t f = 0; f < m.num_faces(); ++f) {
+        const double cell = 1.0 / flow_grid(nf, fo);
+        std::vector<Vec2> tracers(3 * nf);
+        std::vector<double> tracer_scale(nf);
+        for (size_t f = 0; f < nf; ++f) {
           const Tri& t = m.triangles[f];
           const Vec2 centroid = (uv[t[0]] + uv[t[1]] + uv[t[2]]) / 3.0;
           const double longest = std::max({(uv[t[1]] - uv[t[0]]).norm(), (uv[t[2]] - uv[t[1]]).norm(), (uv[t[0]] - uv[t[2]]).norm()});
@@ -536,8 +542,8 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
         if (collapsed == 0) {
           uv = flowed;
         } else {
-          std::vector<FaceShape> shapes(m.num_faces());
-          for (size_t f = 0; f < m.num_faces(); ++f)
+          std::vector<FaceShape> shapes(nf);
+          for (size_t f = 0; f < nf; ++f)
             for (size_t k = 0; k < 3; ++k) shapes[f][k] = tracers[3 * f + k] / tracer_scale[f];
           const SlimStats shaped = refine_in_rect(st.blended_target, kFlowShapeSteps, {}, &shapes);
           st.flow_shape_steps += shaped.iterations;
