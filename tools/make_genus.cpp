@@ -15,9 +15,11 @@
 #include "io/obj_writer.hpp"
 
 int main(int argc, char** argv) {
-  if (argc != 2) {
+  // An option is never an output folder: `tightex_make_genus --help` once wrote the catalogue into a
+  // folder named "--help".
+  if (argc != 2 || argv[1][0] == '-') {
     std::fprintf(stderr, "usage: %s OUTDIR\n", argv[0]);
-    return 1;
+    return argc == 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h") ? 0 : 1;
   }
   try {
     namespace cat = tightex::testing;
