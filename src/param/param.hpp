@@ -102,6 +102,7 @@ struct SquareMapStats {
   double refine_energy_before = 0, refine_energy = 0;
   std::string refine_stopped;
   int flow_steps = 0;
+  int flow_lead_steps = 0;   // symmetric Dirichlet steps before the flow (kFlowLeadSteps, fewer if they converged)
   int flow_shape_steps = 0;  // symmetric Dirichlet steps towards the flowed shapes (0: each flowed map was kept as it was)
   std::string flow_stopped;  // FlowStats::stopped, ", reverted" added if it was undone; empty if not run
 };

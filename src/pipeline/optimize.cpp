@@ -678,6 +678,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
                      {"density_error_log2", {map_stats[c].spread_p5, map_stats[c].spread_p95}},
                      {"refine_iterations", map_stats[c].refine_iterations},
                      {"flow_steps", map_stats[c].flow_steps},
+                     {"flow_lead_steps", map_stats[c].flow_lead_steps},
                      {"flow_shape_steps", map_stats[c].flow_shape_steps},
                      {"flow_stopped", map_stats[c].flow_stopped},
                      {"refine_energy", {map_stats[c].refine_energy_before, map_stats[c].refine_energy}},
