@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The test suite built with AddressSanitizer + UndefinedBehaviorSanitizer (CMake preset "asan",
-# ./build-asan). Any report fails the run.
+# ./build-asan). Any report fails the run. The preset builds with -g1 (line tables only): reports keep
+# their file:line, and the build takes 454 s instead of 528 s on the 2-core VM (session 14).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
