@@ -57,6 +57,8 @@ def main():
         subprocess.run([binary, "-merge=1", f"-merge_control_file={control}", "-use_counters=0", "-use_cmp=0",
                         "-use_value_profile=0", "-timeout=10", "-rss_limit_mb=2048", initial, grown],
                        env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=False)
+        if not os.path.exists(control):
+            sys.exit(f"fuzz_cover: {binary}: the merge wrote no control file (run it by hand to see why)")
         files, first, edges = parse_control(control)
     reached = set()
     for i in range(first):
