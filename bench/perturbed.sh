@@ -23,10 +23,10 @@ for dir in "$data"/*/; do
       fi
       python3 - "$o/report.json" "$name" "$mode" "$map" <<'PY'
 import json, sys
-r = json.load(open(sys.argv[1])); m = r["metrics"]; d = m["density_spread"]; c = r["components"]
+r = json.load(open(sys.argv[1])); m = r["metrics"]; d = m["density_spread"]
 print(f"| {sys.argv[2]} | {sys.argv[3]} | {sys.argv[4]} | {m['surface_psnr_db']:.2f} | {m['flipped']} | {d['p5']:.2f} / {d['p95']:.2f} | "
       f"{m['output']['utilization']*100:.2f}% | {m['charts']} | {r['preparation']['reoriented_triangles']} | "
-      f"{sum(x['holes_filled'] for x in c)} / {sum(x['holes_cut'] for x in c)} |")
+      f"{r['preparation']['holes_filled']} / {r['preparation']['holes_cut']} |")
 PY
     done
   done

@@ -1496,6 +1496,63 @@ TEST(Pipeline, DefaultSizeKeepsTheInputsUsedTexels) {
   EXPECT_EQ(default_size(in, 64), 64) << "capped at max_side";
 }
 
+// Options::size_may_grow: 500 separate quads (a city tile's buildings, a scan's floaters) whose used
+// texels fit a 64² texture, which has room for only 256 rectangles of 4 x 4. The default budget grows
+// to hold them all, each its own chart; an explicit size that cannot hold them is an InputError.
+// The report lists the 256 largest components (the last quad is a fan of 4 triangles: listed though
+// it comes last) and the totals over all of them.
+TEST(Pipeline, TheDefaultBudgetGrowsToHoldEveryComponent) {
+  std::vector<Vec3> positions;
+  std::vector<Tri> triangles;
+  constexpr int kQuads = 500;
+  for (int i = 0; i < kQuads; ++i) {
+    const double x = 3.0 * (i % 25), y = 3.0 * (i / 25);
+    const auto v = uint32_t(positions.size());
+    positions.insert(positions.end(), {Vec3(x, y, 0), Vec3(x + 1, y, 0), Vec3(x + 1, y + 1, 0), Vec3(x, y + 1, 0)});
+    if (i + 1 < kQuads) {
+      triangles.push_back({v, v + 1, v + 2});
+      triangles.push_back({v, v + 2, v + 3});
+    } else {
+      positions.push_back(Vec3(x + 0.5, y + 0.5, 0));  // v + 4: the centre
+      for (uint32_t k = 0; k < 4; ++k) triangles.push_back({v + k, v + (k + 1) % 4, v + 4});
+    }
+  }
+  Image img(64, 64);
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) img.at(x, y) = Rgba8{uint8_t(4 * x), uint8_t(4 * y), 90, 255};
+  const TexturedMesh in = cat::make_textured("quads", positions, triangles, std::move(img));
+  ASSERT_EQ(default_size(in), 64) << "the used texels alone ask for the smallest texture";
+  Options opt;
+  const Result r = optimize(in, opt);
+  EXPECT_EQ(r.report["options"]["size_grown_from"], 64);
+  const int side = r.report["options"]["size"];
+  EXPECT_GE(side, 4 * int(std::ceil(std::sqrt(double(kQuads)))));
+  EXPECT_LE(side, size_for_texels(64.0 * 64.0 + 16.0 * kQuads)) << "no more than 16 texels more per component";
+  EXPECT_EQ(r.report["metrics"]["charts"], kQuads);
+  EXPECT_EQ(r.report["metrics"]["flipped"], 0);
+  EXPECT_EQ(r.output.num_triangles(), in.num_triangles());
+  EXPECT_GT(r.report["metrics"]["surface_psnr_db"].get<double>(), 30.0);
+  const nlohmann::json& comps = r.report["components"];
+  ASSERT_EQ(comps.size(), 256u);
+  EXPECT_EQ(r.report["preparation"]["components"], kQuads);
+  EXPECT_EQ(r.report["preparation"]["components_listed"], 256);
+  EXPECT_EQ(r.report["preparation"]["holes_cut"], 0);
+  size_t last = 0;
+  for (size_t k = 0; k < comps.size(); ++k) {
+    const size_t index = comps[k]["index"];
+    if (k > 0) EXPECT_GT(index, last) << "in plan order";
+    last = index;
+  }
+  EXPECT_EQ(comps.back()["triangles"], 4) << "the largest component is listed, wherever it comes";
+  opt.size = 64;  // asked for: not grown
+  EXPECT_THROW(optimize(in, opt), InputError);
+  opt.size_may_grow = true;
+  const Result grown = optimize(in, opt);
+  EXPECT_EQ(grown.report["options"]["size"], side);
+  opt.size = 512;  // room enough: not grown, and reported as such
+  EXPECT_TRUE(optimize(in, opt).report["options"]["size_grown_from"].is_null());
+}
+
 // Options::fine_fit changes only the texels (same texture coordinates), reports itself, and reproduces
 // the input at least as well as the default fit.
 TEST(Pipeline, FineFitChangesOnlyTheTexelsAndDoesNotLoseFidelity) {
