@@ -328,13 +328,20 @@ void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& tr
   for (const Image& out : images)
     all_units += double((out.width + kTile - 1) / kTile) * double((out.height + kTile - 1) / kTile) * (options.fit ? 1 + kFitUnits : 1);
   ProgressCounter progress(options.progress, all_units, options.progress_interval_s);
+  // The triangles and rectangles of each image, gathered once: scanning all of them per image took 99
+  // of 104 s on 30000 components in the per-component layout (30000 images).
+  std::vector<std::vector<uint32_t>> image_triangles(images.size());
+  std::vector<std::vector<size_t>> image_rects(images.size());
+  for (uint32_t t = 0; t < triangles.size(); ++t)
+    if (triangles[t].image < images.size()) image_triangles[triangles[t].image].push_back(t);
+  for (size_t r = 0; r < rects.size(); ++r)
+    if (rects[r].image >= 0 && size_t(rects[r].image) < images.size()) image_rects[size_t(rects[r].image)].push_back(r);
   for (uint32_t img = 0; img < images.size(); ++img) {
     Image& out = images[img];
     const int tiles_x = (out.width + kTile - 1) / kTile, tiles_y = (out.height + kTile - 1) / kTile;
     std::vector<std::vector<uint32_t>> bins(size_t(tiles_x) * size_t(tiles_y));
-    for (uint32_t t = 0; t < triangles.size(); ++t) {
+    for (uint32_t t : image_triangles[img]) {
       const BakeTriangle& tri = triangles[t];
-      if (tri.image != img) continue;
       double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
       for (const Vec2& p : tri.target_px) x0 = std::min(x0, p.x()), x1 = std::max(x1, p.x()), y0 = std::min(y0, p.y()), y1 = std::max(y1, p.y());
       const int tx0 = std::clamp(int(std::floor(x0)) / kTile, 0, tiles_x - 1), tx1 = std::clamp(int(std::floor(x1)) / kTile, 0, tiles_x - 1);
@@ -377,9 +384,7 @@ void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& tr
     });
 
     // Dilation inside each rectangle, layer by layer (deterministic: a layer reads only earlier layers).
-    std::vector<size_t> my_rects;
-    for (size_t r = 0; r < rects.size(); ++r)
-      if (rects[r].image == int(img)) my_rects.push_back(r);
+    const std::vector<size_t>& my_rects = image_rects[img];
     tbb::parallel_for(size_t(0), my_rects.size(), [&](size_t ri) {
       const Rect& r = rects[my_rects[ri]];
       std::vector<std::pair<int, int>> frontier, next;
