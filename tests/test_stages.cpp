@@ -1496,15 +1496,12 @@ TEST(Pipeline, DefaultSizeKeepsTheInputsUsedTexels) {
   EXPECT_EQ(default_size(in, 64), 64) << "capped at max_side";
 }
 
-// Options::size_may_grow: 500 separate quads (a city tile's buildings, a scan's floaters) whose used
-// texels fit a 64² texture, which has room for only 256 rectangles of 4 x 4. The default budget grows
-// to hold them all, each its own chart; an explicit size that cannot hold them is an InputError.
-// The report lists the 256 largest components (the last quad is a fan of 4 triangles: listed though
-// it comes last) and the totals over all of them.
-TEST(Pipeline, TheDefaultBudgetGrowsToHoldEveryComponent) {
+constexpr int kQuads = 500;
+
+/// 500 separate unit quads of 2 triangles (the last a fan of 4), a 64² texture.
+TexturedMesh many_quads() {
   std::vector<Vec3> positions;
   std::vector<Tri> triangles;
-  constexpr int kQuads = 500;
   for (int i = 0; i < kQuads; ++i) {
     const double x = 3.0 * (i % 25), y = 3.0 * (i / 25);
     const auto v = uint32_t(positions.size());
@@ -1520,7 +1517,16 @@ TEST(Pipeline, TheDefaultBudgetGrowsToHoldEveryComponent) {
   Image img(64, 64);
   for (int y = 0; y < img.height; ++y)
     for (int x = 0; x < img.width; ++x) img.at(x, y) = Rgba8{uint8_t(4 * x), uint8_t(4 * y), 90, 255};
-  const TexturedMesh in = cat::make_textured("quads", positions, triangles, std::move(img));
+  return cat::make_textured("quads", positions, triangles, std::move(img));
+}
+
+// Options::default_budget: 500 separate quads (a city tile's buildings, a scan's floaters) whose used
+// texels fit a 64² texture, which has room for only 256 rectangles of 4 x 4. The default budget grows
+// to hold them all, each its own chart; an explicit size that cannot hold them is an InputError.
+// The report lists the 256 largest components (the last quad is a fan of 4 triangles: listed though
+// it comes last) and the totals over all of them.
+TEST(Pipeline, TheDefaultBudgetGrowsToHoldEveryComponent) {
+  const TexturedMesh in = many_quads();
   ASSERT_EQ(default_size(in), 64) << "the used texels alone ask for the smallest texture";
   Options opt;
   const Result r = optimize(in, opt);
@@ -1546,11 +1552,34 @@ TEST(Pipeline, TheDefaultBudgetGrowsToHoldEveryComponent) {
   EXPECT_EQ(comps.back()["triangles"], 4) << "the largest component is listed, wherever it comes";
   opt.size = 64;  // asked for: not grown
   EXPECT_THROW(optimize(in, opt), InputError);
-  opt.size_may_grow = true;
+  opt.default_budget = true;
   const Result grown = optimize(in, opt);
   EXPECT_EQ(grown.report["options"]["size"], side);
   opt.size = 512;  // room enough: not grown, and reported as such
   EXPECT_TRUE(optimize(in, opt).report["options"]["size_grown_from"].is_null());
+}
+
+// Options::default_budget in the per-component layout: the 500 textures hold the budget together
+// (each got the whole of it before: 500 textures of 64²); an asked-for size is the largest's side.
+TEST(Pipeline, PerComponentTexturesShareTheDefaultBudget) {
+  const TexturedMesh in = many_quads();
+  Options opt;
+  opt.layout = Layout::kPerComponent;
+  opt.map = MapKind::kHarmonic;
+  const Result r = optimize(in, opt);
+  ASSERT_EQ(r.output.textures.size(), size_t(kQuads));
+  double texels = 0;
+  int largest = 0;
+  for (const Texture& t : r.output.textures) texels += double(t.image.width) * t.image.height, largest = std::max(largest, t.image.width);
+  EXPECT_LE(texels, 64.0 * 64.0 + 16.0 * kQuads) << "the budget and each component's 4 x 4 least";
+  EXPECT_EQ(largest, 4) << "each its 4 x 4 least";
+  EXPECT_EQ(r.report["metrics"]["flipped"], 0);
+  EXPECT_EQ(r.report["metrics"]["charts"], kQuads);
+  opt.size = 64;
+  const Result asked = optimize(in, opt);
+  largest = 0;
+  for (const Texture& t : asked.output.textures) largest = std::max(largest, t.image.width);
+  EXPECT_EQ(largest, 64);
 }
 
 // Options::fine_fit changes only the texels (same texture coordinates), reports itself, and reproduces

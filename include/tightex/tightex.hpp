@@ -35,15 +35,18 @@ enum class MapKind { kHarmonic, kArea, kTexel, kDetail };
 
 struct Options {
   /// Atlas: the texture's side; per-component: the largest texture's side. 0 (default): default_size(input),
-  /// as the CLI: as many texels as the input uses, so the output keeps the input's information.
+  /// as the CLI: as many texels as the input uses, so the output keeps the input's information (per
+  /// component: in all the textures together, see default_budget).
   int size = 0;
-  /// The atlas texture may grow beyond `size` where that cannot hold a 4 x 4 rectangle for every
-  /// component (a city tile of thousands of buildings, a scan's thousands of floaters, whose used
-  /// texels are fewer than 16 a component): to the side that holds `size`^2 texels and 16 more per
-  /// component, or more if the layout needs it (report "options": "size_grown_from"). True for the
-  /// default budget (`size` 0); the CLI sets it when neither --size nor --texels is given. Otherwise
-  /// such a texture is an InputError that names the sizes.
-  bool size_may_grow = false;
+  /// `size` is the default budget (the input's used texels; always so for `size` 0), not a side the
+  /// caller asked for. The CLI sets it when neither --size nor --texels is given. Then:
+  /// - the atlas grows where `size` cannot hold a 4 x 4 rectangle for every component (a city tile of
+  ///   thousands of buildings, a scan's thousands of floaters, whose used texels are fewer than 16 a
+  ///   component): to the side that holds `size`^2 texels and 16 more per component, or more if the
+  ///   layout needs it (report "options": "size_grown_from"); an asked-for size that cannot hold them
+  ///   is an InputError that names the sizes;
+  /// - the per-component textures hold `size`^2 texels together (an asked-for size is the largest's side).
+  bool default_budget = false;
   /// Width/height of the texture, which then holds about size x size texels (sides multiples of 4).
   /// 0 (default): chosen per model for the area, texel and detail maps in the atlas layout: the
   /// component that holds most of the texture is mapped into a square, a 1:2 and a 2:1 texture, each

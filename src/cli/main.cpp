@@ -170,7 +170,7 @@ int run_main(int argc, char** argv) {
 
   Options opt;
   opt.size = size;
-  opt.size_may_grow = size_opt->count() == 0 && !(texels > 0);  // the default budget (Options::size_may_grow)
+  opt.default_budget = size_opt->count() == 0 && !(texels > 0);  // the default budget (Options::default_budget)
   opt.layout = layout == "atlas" ? Layout::kAtlas : Layout::kPerComponent;
   opt.holes = holes == "fill" ? HoleMode::kFill : HoleMode::kCut;
   opt.map = map == "harmonic" ? MapKind::kHarmonic : map == "area" ? MapKind::kArea : map == "texel" ? MapKind::kTexel : MapKind::kDetail;
@@ -242,7 +242,7 @@ int run_main(int argc, char** argv) {
                "texture coordinates and texture(s) ({}); see \"kept_original_uvs\" in the report\n",
                kept_components, kept_triangles, *kept_reason);
 
-  // The default budget grown to hold every component (Options::size_may_grow): one line says so.
+  // The default budget grown to hold every component (Options::default_budget): one line says so.
   if (const auto& grown = plan.report["options"]["size_grown_from"]; !grown.is_null() && !quiet)
     fmt::print(stderr, "tightex: note: {} components need a 4x4 texel rectangle each: the texture grew from {}^2 to {}^2 texels (--size sets it)\n",
                plan.components.size(), grown.get<int>(), plan.report["options"]["size"].get<int>());
