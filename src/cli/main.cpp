@@ -73,10 +73,11 @@ int run_main(int argc, char** argv) {
   app.add_option("input", input, "textured model (OBJ + MTL + textures)")->required();
   app.add_option("-o,--output", outdir, "output directory")->required();
   auto* size_opt = app.add_option("--size", size, "texture side in texels (per-component: of the largest component); above 16384 needs --force. "
-                                   "Default: the side that holds as many texels as the input uses (see --texels)")
+                                   "Default: the side that holds as many texels as the input uses (per-component: all the textures together; "
+                                   "grown if the atlas cannot hold a 4x4 rectangle per component; see --texels)")
       ->check(CLI::Range(8, 65536));
   app.add_option("--texels", texels, "texel budget: the texture holds this many texels: the smallest square (side a multiple of 4), or as many "
-                                     "in the shape --aspect gives or chooses. "
+                                     "in the shape --aspect gives or chooses (per-component: the largest component's texture). "
                                      "Default: the input's used texels, so the output keeps the input's information")
       ->check(CLI::PositiveNumber)->excludes(size_opt);
   app.add_option("--map", map, "detail (default): texels where the input texture has detail (colour gradient per 3D length), "
