@@ -354,8 +354,9 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   // there). Tested with the components' areas as their shares (the bisection's limits are the count and
   // the smallest shares, rounded up to 4 x 4 alike for every map), before the detail map spends the
   // budget.
+  const bool default_budget = options.size == 0 || options.default_budget;
   int size_grown_from = 0;
-  if (options.layout == Layout::kAtlas && (options.size == 0 || options.default_budget)) {
+  if (options.layout == Layout::kAtlas && default_budget) {
     auto holds = [&](int s) {
       try {
         (void)layout_atlas(areas, s, s, 4, false);
@@ -631,7 +632,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
     // share (30000 small components each got the whole budget: 30000 textures of 480^2, 9.4 GB at the
     // bake and 5 minutes, where their atlas took 0.3 GB and 6 s).
     int side = size;
-    if (options.size == 0 || options.default_budget) {
+    if (default_budget) {
       const double sum = std::accumulate(shares.begin(), shares.end(), 0.0), largest = *std::max_element(shares.begin(), shares.end());
       if (sum > 0 && largest > 0) side = std::max(4, int(std::lround(double(size) * std::sqrt(largest / sum))));
     }
