@@ -2,7 +2,8 @@
 # Robustness sweep: every model in ../shared/data made messy as unseen scans come (tools/perturb_obj.py:
 # pepper, patches, noise, flip), each through every --map; one line per run with the METRICS.md figures
 # that must hold (flipped 0, charts = components, utilization) and the ones that measure quality.
-# Usage: [MAPS="detail area"] [TIGHTEX=binary] bench/perturbed.sh [SEED=7] [extra tightex options...] (MAPS: all four by default)
+# Usage: [MAPS="detail area"] [MODES="pepper noise"] [TIGHTEX=binary] bench/perturbed.sh [SEED=7] [extra tightex options...]
+# (MAPS: all four by default; MODES: all four perturbations by default)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seed=${1:-7}; shift || true
@@ -14,7 +15,7 @@ echo "| model | perturbation | map | PSNR dB | flipped | density P5 / P95 | util
 echo "|---|---|---|---|---|---|---|---|---|---|"
 for dir in "$data"/*/; do
   obj=$(ls "$dir"*.obj | head -1); name=$(basename "$dir")
-  for mode in pepper patches noise flip; do
+  for mode in ${MODES:-pepper patches noise flip}; do
     python3 tools/perturb_obj.py "$obj" "$out/in_$name.$mode" "$mode" "$seed"
     for map in ${MAPS:-detail texel area harmonic}; do
       o="$out/$name.$mode.$map"

@@ -476,10 +476,11 @@ void check_disk(const Surface& comp, const Disk& disk, HoleMode mode, const CutS
     EXPECT_LE(cap_area, kFillBudget * comp_area * (1 + 1e-9));
     if (genus == 0) EXPECT_EQ(scaffolding > 0, st.holes_filled > 0);
   }
-  if (genus == 0 && !comp_loops.empty()) EXPECT_EQ(st.holes_filled + st.holes_cut, comp_loops.size() - 1);
+  // Every loop but the boundary's root is capped or joined (cut_to_disk's cap_kept: all of them).
+  if (genus == 0 && !comp_loops.empty()) EXPECT_EQ(st.holes_filled + st.holes_cut, comp_loops.size() - (st.longest_loop_capped ? 0 : 1));
   // A component that already is a disk is used as is, unless it is deep (then slit open); anything
   // else must be cut.
-  if (comp_loops.size() == 1 && cc.euler() == 1) {
+  if (comp_loops.size() == 1 && cc.euler() == 1 && !st.longest_loop_capped) {
     if (st.method == "disk") {
       EXPECT_EQ(st.cut_edges, 0u);
       EXPECT_EQ(d.num_vertices(), comp.num_vertices());
@@ -509,6 +510,62 @@ void check_disk(const Surface& comp, const Disk& disk, HoleMode mode, const CutS
     const auto key = std::make_pair(b[i], b[(i + 1) % b.size()]);
     EXPECT_EQ(boundary_he.count(key), 1u) << "no boundary halfedge " << key.first << "->" << key.second;
   }
+}
+
+// A closed sphere with one triangle missing (pepper noise): its only hole, 3 edges, is the disk's
+// boundary as it comes; with cap_kept it is capped too and the closed sphere gets the path cut. Both are
+// disks holding every face once; beyond the cap budget the hole stays the boundary.
+TEST(CutToDisk, ASmallLongestHoleIsCappedTooWhenAsked) {
+  cat::Geometry g = cat::sphere_geometry();
+  g.triangles.erase(g.triangles.begin() + std::ptrdiff_t(g.triangles.size() / 3));
+  const std::vector<Surface> comps = split_components(prepare_surface(cat::make_textured("pepper_sphere", g.positions, g.triangles), nullptr));
+  ASSERT_EQ(comps.size(), 1u);
+  CutStats kept, capped, over;
+  const Disk a = cut_to_disk(comps[0], HoleMode::kFill, &kept);
+  check_disk(comps[0], a, HoleMode::kFill, kept);
+  EXPECT_EQ(kept.longest_loop_edges, 3u);
+  EXPECT_FALSE(kept.longest_loop_capped);
+  EXPECT_EQ(kept.holes_filled, 0u);
+  const Disk b = cut_to_disk(comps[0], HoleMode::kFill, &capped, {}, nullptr, false, {}, kFillBudget, true);
+  check_disk(comps[0], b, HoleMode::kFill, capped);
+  EXPECT_TRUE(capped.longest_loop_capped);
+  EXPECT_EQ(capped.holes_filled, 1u);
+  EXPECT_EQ(capped.longest_loop_edges, 3u);
+  EXPECT_EQ(capped.method.rfind("path", 0), 0u) << capped.method;
+  EXPECT_GT(b.mesh.num_faces(), a.mesh.num_faces());  // the cap
+  const Disk c = cut_to_disk(comps[0], HoleMode::kFill, &over, {}, nullptr, false, {}, 0.0, true);
+  check_disk(comps[0], c, HoleMode::kFill, over);
+  EXPECT_FALSE(over.longest_loop_capped);
+  EXPECT_EQ(over.longest_loop_edges, 3u);
+  // Without kFill nothing is capped, whatever cap_kept says.
+  CutStats cut;
+  cut_to_disk(comps[0], HoleMode::kCut, &cut, {}, nullptr, false, {}, kFillBudget, true);
+  EXPECT_FALSE(cut.longest_loop_capped);
+  EXPECT_EQ(cut.holes_filled, 0u);
+}
+
+// The pipeline maps such a component both ways and keeps the one whose estimated colour error is lower;
+// the report says what each was estimated to give. The paper's map keeps the paper's cut.
+TEST(Pipeline, ASmallLongestHoleIsMappedBothWaysAndTheBetterKept) {
+  cat::Geometry g = cat::sphere_geometry();
+  g.triangles.erase(g.triangles.begin() + std::ptrdiff_t(g.triangles.size() / 3));
+  const TexturedMesh in = cat::make_textured("pepper_sphere", g.positions, g.triangles, cat::checker_image(128, 128, 8));
+  const Result r = optimize(in, Options{});
+  const auto& comp = r.report["components"].at(0);
+  const auto& db = comp["longest_hole_kept_capped_estimated_psnr_db"];
+  ASSERT_EQ(db.size(), 2u) << comp.dump();
+  const bool capped = comp["longest_hole_capped"];
+  EXPECT_EQ(capped, db[1].get<double>() > db[0].get<double>()) << db.dump();
+  EXPECT_EQ(comp["longest_hole_edges"].get<size_t>(), 3u);
+  EXPECT_EQ(r.report["preparation"]["components_longest_hole_capped"].get<size_t>(), capped ? 1u : 0u);
+  EXPECT_EQ(r.report["metrics"]["flipped"].get<size_t>(), 0u);
+  EXPECT_EQ(r.report["metrics"]["charts"].get<size_t>(), 1u);
+  EXPECT_EQ(r.report["metrics"]["lost_triangles"].get<size_t>(), 0u);
+  Options h;
+  h.map = MapKind::kHarmonic;
+  const Result rh = optimize(in, h);
+  EXPECT_TRUE(rh.report["components"].at(0)["longest_hole_kept_capped_estimated_psnr_db"].is_null());
+  EXPECT_FALSE(rh.report["components"].at(0)["longest_hole_capped"].get<bool>());
 }
 
 TEST_P(Catalogue, CutToDisk) {

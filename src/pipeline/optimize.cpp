@@ -2,6 +2,7 @@
 // together, keeps the maps back to the input triangles, and records what each stage did and cost.
 #include <sys/resource.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <algorithm>
 #include <cctype>
@@ -298,6 +299,30 @@ constexpr size_t kAspectMinSamples = 65536;
 /// triangle vase took cut+map 17.5 s square, 95.5 s probed (the square won). Below it the three probes
 /// run side by side.
 constexpr size_t kAspectProbeMaxFaces = 100000;
+/// A longest hole of fewer edges than this is also tried capped (map_component): pepper noise leaves
+/// 3..7-edge holes. As a fixed rule, capping below 4 / 8 edges moved 9 / 21 of 36 pepper runs (seeds
+/// 7, 11, 13, 17), each way by up to 1 dB; mapped both ways and chosen by the estimate, 18 runs move,
+/// +8.3 dB in all, the worst -0.53 (BENCHMARKS.md, "A small longest hole").
+constexpr size_t kSmallKeptLoop = 8;
+/// How map_component treats a small longest hole: map it both ways and keep the better (the square's
+/// probe, any other component), or as already decided for another shape of the same component.
+enum class CapChoice { kCompare, kKeep, kCap };
+
+/// Whether map a (estimated error mse_a, resampling_mse; < 0: not mapped) beats map b by the factor
+/// `gain` (<= 1: a must be that much better). The area map promises its density first: a map that keeps
+/// P5..P95 of log2(area / target) within +-kAreaSpreadPromise beats one that does not, and among maps
+/// that all miss, the nearest wins.
+bool better_map(MapKind kind, const SquareMapStats& a, double mse_a, const SquareMapStats& b, double mse_b, double gain) {
+  if (mse_a < 0) return false;
+  if (mse_b < 0) return true;
+  if (kind == MapKind::kArea) {
+    auto spread = [](const SquareMapStats& m) { return std::max(-m.spread_p5, m.spread_p95); };
+    const bool a_keeps = spread(a) <= kAreaSpreadPromise, b_keeps = spread(b) <= kAreaSpreadPromise;
+    if (a_keeps != b_keeps) return a_keeps;
+    if (!a_keeps) return spread(a) < spread(b);
+  }
+  return mse_a < mse_b * gain;
+}
 
 /// The library's entry check (read_obj guarantees all of this; a mesh built in code may not).
 void validate(const TexturedMesh& m) {
@@ -433,14 +458,14 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   // whichever thread is mapping, one at a time, at most every 0.2 s.
   double all_faces = 0;
   for (const Surface& comp : components) all_faces += double(comp.num_faces());
+  bool have_pixels = false;  // the textures' pixels are loaded (the estimates need them)
+  for (const Texture& t : input.textures) have_pixels = have_pixels || !t.image.empty();
   // The auto aspect maps the dominant component once per probe (its share of the texels at least half).
   size_t dominant = kNone;
   if (options.aspect == 0 && options.map != MapKind::kHarmonic && options.layout == Layout::kAtlas && nc > 0) {
     const size_t c = size_t(std::max_element(shares.begin(), shares.end()) - shares.begin());
     const double sum = std::accumulate(shares.begin(), shares.end(), 0.0);
-    bool pixels = false;
-    for (const Texture& t : input.textures) pixels = pixels || !t.image.empty();
-    if (pixels && density[c].textured && shares[c] >= 0.5 * sum && components[c].num_faces() <= kAspectProbeMaxFaces) dominant = c;
+    if (have_pixels && density[c].textured && shares[c] >= 0.5 * sum && components[c].num_faces() <= kAspectProbeMaxFaces) dominant = c;
   }
   if (dominant != kNone) all_faces += double(components[dominant].num_faces()) * double(std::size(kAspectProbes) - 1);
   ProgressCounter map_progress(options.progress ? std::function<void(double)>([&](double f) { options.progress("cut+map", f); }) : nullptr,
@@ -464,8 +489,34 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
     }
     return ci;
   };
+  // The estimate of a map's colour error (resampling_mse) for component c baked into rect.
+  auto estimate_mse = [&](size_t c, const Disk& d, const std::vector<Vec2>& uv, const Rect& rect) {
+    std::vector<uint32_t> input_tri(d.mesh.num_faces(), kNone);
+    for (size_t f = 0; f < d.mesh.num_faces(); ++f)
+      if (const uint32_t cf = d.mesh.face_parent[f]; cf != kNone) input_tri[f] = surface.face_parent[components[c].face_parent[cf]];
+    const size_t texels = size_t(rect.w) * size_t(rect.h);
+    return resampling_mse(input, plan.reversed, d.mesh, input_tri, uv, rect.w, rect.h, std::clamp(4 * texels, kAspectMinSamples, kAspectSamples));
+  };
+  // Whether component c is also mapped with its longest hole capped (map_component): that hole has
+  // fewer than kSmallKeptLoop edges and its cap fits the budget; not for the paper's map, which keeps
+  // the paper's cut; only where the texture's pixels are known (the estimate needs them), and not
+  // beyond kAspectProbeMaxFaces (each try is a whole map, as a probe is). One cut, without a map.
+  auto small_longest_hole = [&](size_t c, const CutInputs& ci) {
+    if (options.map == MapKind::kHarmonic || options.holes != HoleMode::kFill || !have_pixels || !density[c].textured ||
+        components[c].num_faces() > kAspectProbeMaxFaces)
+      return false;
+    // Holes, or the two sides of a cut handle (the genus-0 surface remove_handles gives back).
+    if (topology_of(ci.denoised ? ci.denoised->surface : components[c]).boundary_loops == 0) return false;
+    CutStats st;
+    try {
+      cut_to_disk(components[c], options.holes, &st, {}, ci.denoised ? &*ci.denoised : nullptr, false, ci.seams, kCapBudget, true);
+    } catch (const InternalError&) {
+      return false;  // that cut fails here: only the usual one
+    }
+    return st.longest_loop_capped && st.longest_loop_edges < kSmallKeptLoop;
+  };
   // Component c cut and mapped for a texel rectangle of rect's shape; `pre`: cut_inputs(c) if known.
-  auto map_component = [&](size_t c, const Rect& rect, Mapped& out, const CutInputs* pre) {
+  auto map_component = [&](size_t c, const Rect& rect, Mapped& out, const CutInputs* pre, CapChoice choice) {
     out.rect = rect;
     SquareMapOptions mo;
     mo.rect_width = rect.w;
@@ -483,15 +534,17 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
     std::vector<Vec2>& uv = out.uv;
     CutStats& cut_stats = out.cut;
     SquareMapStats& map_stats = out.map;
-    try {
-      forced_failure(c, "full method");
-      const CutInputs own = pre ? CutInputs{} : cut_inputs(c);
-      const CutInputs& ci = pre ? *pre : own;
+    // One cut and map of the full method; `cap_kept`: the longest hole is capped too if it fits
+    // (cut_to_disk). Throws InternalError where the map folds.
+    auto cut_and_map = [&](const CutInputs& ci, bool cap_kept, SquareMapOptions& mo, Disk& disk, std::vector<Vec2>& uv,
+                           CutStats& cut_stats, SquareMapStats& map_stats) {
       for (double budget = kCapBudget;;) {
         std::vector<uint32_t> slit_to;
         for (int round = 0;; ++round) {
-          disk = cut_to_disk(components[c], options.holes, &cut_stats, slit_to, ci.denoised ? &*ci.denoised : nullptr, false, ci.seams, budget);
+          disk = cut_to_disk(components[c], options.holes, &cut_stats, slit_to, ci.denoised ? &*ci.denoised : nullptr, false, ci.seams, budget, cap_kept);
+          if (cap_kept && !cut_stats.longest_loop_capped) return;  // nothing else than the usual cut
           set_face_targets(disk, density[c], options, mo);
+          map_stats = SquareMapStats{};
           uv = map_to_square(disk, mo, &map_stats);
           const uint32_t crowded = map_stats.crowded_vertex;
           if (crowded == kNone || round == kCrowdingRounds) break;
@@ -533,6 +586,49 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
       }
       // The map promises no fold; one that folds anyway is a failure of the full method.
       if (map_stats.flipped > 0) fail_internal("the map folds {} triangles", map_stats.flipped);
+    };
+    try {
+      forced_failure(c, "full method");
+      const CutInputs own = pre ? CutInputs{} : cut_inputs(c);
+      const CutInputs& ci = pre ? *pre : own;
+      // A small longest hole (pepper noise: a missing triangle or two where the scan is otherwise
+      // closed) is a poor boundary: a 3-edge loop cannot hold the square's four corners, the map
+      // crowds there and the disk gets slit. Capping it too (the path cut) is better there, but not
+      // everywhere (BENCHMARKS.md, "A small longest hole"): both are mapped, side by side, and the
+      // estimate of the colour error (resampling_mse, as the aspect probes) decides.
+      if (choice == CapChoice::kCompare && !small_longest_hole(c, ci)) choice = CapChoice::kKeep;
+      if (choice == CapChoice::kKeep) {
+        cut_and_map(ci, false, mo, disk, uv, cut_stats, map_stats);
+      } else if (choice == CapChoice::kCap) {
+        bool capped = false;
+        try {
+          cut_and_map(ci, true, mo, disk, uv, cut_stats, map_stats);
+          capped = cut_stats.longest_loop_capped;
+        } catch (const InternalError&) {
+        }
+        if (!capped) cut_and_map(ci, false, mo, disk, uv, cut_stats, map_stats);  // the usual cut, as any other
+      } else {
+        Mapped alt;
+        SquareMapOptions alt_mo = mo;
+        alt_mo.progress = nullptr;  // the kept cut's map reports for both
+        bool mapped = false;
+        tbb::parallel_invoke([&] { cut_and_map(ci, false, mo, disk, uv, cut_stats, map_stats); },
+                             [&] {
+                               try {
+                                 cut_and_map(ci, true, alt_mo, alt.disk, alt.uv, alt.cut, alt.map);
+                                 mapped = alt.cut.longest_loop_capped;
+                               } catch (const InternalError&) {
+                               }
+                             });
+        if (mapped) {
+          const double kept = estimate_mse(c, disk, uv, rect), capped = estimate_mse(c, alt.disk, alt.uv, rect);
+          cut_stats.compared_mse = {kept, capped};
+          if (better_map(options.map, alt.map, capped, map_stats, kept, 1.0)) {
+            alt.cut.compared_mse = cut_stats.compared_mse;
+            disk = std::move(alt.disk), uv = std::move(alt.uv), cut_stats = std::move(alt.cut), map_stats = alt.map;
+          }
+        }
+      }
     } catch (const InternalError& e) {
       // A component the full method cannot handle still gets one chart: the plain cut graph and the
       // fold-free map. The report says so; the run goes on.
@@ -575,7 +671,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
     }
     std::vector<double> mse(probe.size(), -1);
     std::vector<Rect> probe_rect(probe.size());
-    auto run_probe = [&](size_t i) {
+    auto run_probe = [&](size_t i, CapChoice choice) {
       const auto [W, H] = atlas_size(kAspectProbes[i]);
       if (std::max(W, H) > std::max(size, kDefaultSizeMax)) return;  // not beyond the size limit for a shape
       if (kAspectProbes[i] != 1.0 && W == H) return;  // too small a texture to take another shape
@@ -584,37 +680,29 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
       } catch (const InputError&) {
         return;  // this shape cannot hold every component: not probed
       }
-      map_component(dominant, probe_rect[i], probe[i], shared ? &*shared : nullptr);
+      map_component(dominant, probe_rect[i], probe[i], shared ? &*shared : nullptr, choice);
       if (!probe[i].kept.empty()) return;
-      const Disk& d = probe[i].disk;
-      std::vector<uint32_t> input_tri(d.mesh.num_faces(), kNone);
-      for (size_t f = 0; f < d.mesh.num_faces(); ++f)
-        if (const uint32_t cf = d.mesh.face_parent[f]; cf != kNone) input_tri[f] = surface.face_parent[components[dominant].face_parent[cf]];
-      const size_t texels = size_t(probe_rect[i].w) * size_t(probe_rect[i].h);
-      mse[i] = resampling_mse(input, plan.reversed, d.mesh, input_tri, probe[i].uv, probe_rect[i].w, probe_rect[i].h, std::clamp(4 * texels, kAspectMinSamples, kAspectSamples));
+      mse[i] = estimate_mse(dominant, probe[i].disk, probe[i].uv, probe_rect[i]);
     };
-    tbb::parallel_for(size_t(0), probe.size(), run_probe);
-    chosen = 0;  // kAspectProbes[0] is the square
-    // The area map promises its density first: a shape whose map keeps P5..P95 of log2(area / target)
-    // within +-kAreaSpreadPromise beats one that does not, and among shapes that all miss, the nearest
-    // wins (the dancing girl with six patches missing, seed 11: the 1:2 probe was estimated 0.8 dB
-    // above the square but its density missed, -1.39 against -1.01).
-    auto spread = [&](size_t i) { return std::max(-probe[i].map.spread_p5, probe[i].map.spread_p95); };
-    for (size_t i = 1; i < probe.size(); ++i) {
-      if (mse[i] < 0) continue;
-      if (mse[chosen] < 0) {
-        chosen = i;
-        continue;
-      }
-      if (options.map == MapKind::kArea) {
-        const bool keeps = spread(i) <= kAreaSpreadPromise, chosen_keeps = spread(chosen) <= kAreaSpreadPromise;
-        if (keeps != chosen_keeps || !keeps) {
-          if (keeps || (!chosen_keeps && spread(i) < spread(chosen))) chosen = i;
-          continue;
-        }
-      }
-      if (mse[i] < mse[chosen] * (chosen == 0 ? kAspectMinGain : 1.0)) chosen = i;
+    if (shared && small_longest_hole(dominant, *shared)) {
+      // Both cuts are mapped for the square (side by side), and the other shapes take its choice:
+      // four maps instead of six, in about the time of the three probes on two cores.
+      run_probe(0, CapChoice::kCompare);
+      CapChoice decided = CapChoice::kKeep;
+      if (!probe[0].cut.compared_mse.empty() && probe[0].cut.longest_loop_capped) decided = CapChoice::kCap;
+      tbb::parallel_for(size_t(1), probe.size(), [&](size_t i) {
+        run_probe(i, decided);
+        probe[i].cut.compared_mse = probe[0].cut.compared_mse;  // the report's estimates: the square's
+      });
+    } else {
+      tbb::parallel_for(size_t(0), probe.size(), [&](size_t i) { run_probe(i, CapChoice::kKeep); });
     }
+    chosen = 0;  // kAspectProbes[0] is the square
+    // The area map's density promise first (better_map; the dancing girl with six patches missing,
+    // seed 11: the 1:2 probe was estimated 0.8 dB above the square but its density missed, -1.39
+    // against -1.01), then the estimate, where another shape must beat the square by kAspectMinGain.
+    for (size_t i = 1; i < probe.size(); ++i)
+      if (better_map(options.map, probe[i].map, mse[i], probe[chosen].map, mse[chosen], chosen == 0 ? kAspectMinGain : 1.0)) chosen = i;
     aspect = kAspectProbes[chosen];
     for (size_t i = 0; i < probe.size(); ++i) {
       const auto [W, H] = atlas_size(kAspectProbes[i]);
@@ -652,7 +740,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   tbb::parallel_for(size_t(0), nc, [&](size_t c) {
     Mapped m;
     if (c == dominant && rects[c].w == probe[chosen].rect.w && rects[c].h == probe[chosen].rect.h) m = std::move(probe[chosen]);
-    else map_component(c, rects[c], m, nullptr);
+    else map_component(c, rects[c], m, nullptr, CapChoice::kCompare);
     disks[c] = std::move(m.disk);
     uv[c] = std::move(m.uv);
     cut_stats[c] = std::move(m.cut);
@@ -697,10 +785,17 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
       if (!listed[c] && (!cut_stats[c].fallback_reason.empty() || !kept[c].empty())) listed[c] = 1, ++troubled;
   }
   nlohmann::json comps = nlohmann::json::array();
-  size_t holes_filled = 0, holes_cut = 0, fallbacks = 0;
+  size_t holes_filled = 0, holes_cut = 0, fallbacks = 0, longest_capped = 0;
+  // Estimated PSNR of the two cuts tried ([the longest hole kept as the boundary, capped too]).
+  auto compared_db = [](const std::vector<double>& mse) {
+    nlohmann::json db = nlohmann::json::array();
+    for (double m : mse) db.push_back(m > 0 ? 10 * std::log10(255.0 * 255.0 / m) : m == 0 ? 99.0 : -1.0);
+    return mse.empty() ? nlohmann::json(nullptr) : db;
+  };
   for (size_t c = 0; c < nc; ++c) {
     const CutStats& cs = cut_stats[c];
     holes_filled += cs.holes_filled;
+    longest_capped += cs.longest_loop_capped;
     holes_cut += cs.holes_cut;
     fallbacks += !cs.fallback_reason.empty();
     if (!listed[c]) continue;
@@ -713,6 +808,9 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
                      {"holes_filled", cs.holes_filled},
                      {"holes_cut", cs.holes_cut},
                      {"cut", cs.method},
+                     {"longest_hole_edges", cs.longest_loop_edges},
+                     {"longest_hole_capped", cs.longest_loop_capped},
+                     {"longest_hole_kept_capped_estimated_psnr_db", compared_db(cs.compared_mse)},
                      {"slits", cs.slits},
                      {"fallback", cs.fallback_reason},
                      {"cap_budget", cs.fill_budget},
@@ -745,6 +843,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   rep["preparation"]["holes_filled"] = holes_filled;
   rep["preparation"]["holes_cut"] = holes_cut;
   rep["preparation"]["components_with_fallback"] = fallbacks;
+  rep["preparation"]["components_longest_hole_capped"] = longest_capped;
   rep["preparation"]["components_listed"] = comps.size();
   rep["preparation"]["components_kept_original_uvs"] = size_t(std::count_if(kept.begin(), kept.end(), [](const std::string& k) { return !k.empty(); }));
   rep["components"] = comps;

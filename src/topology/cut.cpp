@@ -29,7 +29,7 @@ bool real_faces_apart(const Surface& s, const std::vector<char>& cut_edge, const
 }  // namespace
 
 Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, const std::vector<uint32_t>& slit_to,
-                 const Denoised* denoised, bool plain, const std::vector<char>& seams, double fill_budget) {
+                 const Denoised* denoised, bool plain, const std::vector<char>& seams, double fill_budget, bool cap_kept) {
   CutStats st;
   st.before = topology_of(component);
   st.fill_budget = holes == HoleMode::kFill && !plain ? fill_budget : 0.0;
@@ -47,6 +47,11 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, cons
     base = with_identity_parents(component);
   }
   auto loops = boundary_loops(base);
+  for (double longest = -1; const auto& loop : loops) {
+    double length = 0;
+    for (uint32_t h : loop) length += base.edge_length(h);
+    if (length > longest) longest = length, st.longest_loop_edges = loop.size();
+  }
 
   // Holes: the longest loop stays the disk boundary; with kFill the others are capped smallest first
   // within the area budget.
@@ -54,7 +59,7 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, cons
   double component_area = 0;
   for (const Tri& f : component.triangles)
     component_area += triangle_area(component.positions[f[0]], component.positions[f[1]], component.positions[f[2]]);
-  if (!plain && holes == HoleMode::kFill && loops.size() > 1) {
+  if (!plain && holes == HoleMode::kFill && (loops.size() > 1 || (cap_kept && loops.size() == 1))) {
     std::vector<double> loop_length(loops.size(), 0.0), cap_area(loops.size(), 0.0);
     for (size_t i = 0; i < loops.size(); ++i) {
       Vec3 c = Vec3::Zero();
@@ -69,9 +74,10 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, cons
     std::vector<std::vector<uint32_t>> fill;
     double used = 0;
     for (size_t i : order) {
-      if (i == keep || used + cap_area[i] > fill_budget * component_area) continue;
+      if ((i == keep && !cap_kept) || used + cap_area[i] > fill_budget * component_area) continue;
       used += cap_area[i];
       fill.push_back(loops[i]);
+      st.longest_loop_capped = st.longest_loop_capped || i == keep;
     }
     st.holes_filled = fill.size();
     st.filled_area = component_area > 0 ? used / component_area : 0.0;

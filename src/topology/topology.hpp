@@ -56,6 +56,11 @@ struct CutStats {
   size_t slits = 0;             // slits from the boundary to deep vertices
   std::string fallback_reason;  // non-empty: the full method failed here and the plain cut was used
   std::vector<double> handle_loops;  // 3D length of each handle loop cut (see remove_handles)
+  size_t longest_loop_edges = 0;  // edges of the longest boundary loop (handles removed, before any cap; 0: closed)
+  bool longest_loop_capped = false;  // cap_kept asked for it and the longest loop was capped too
+  // Set by the pipeline where a small longest hole was tried both ways (kept as the boundary, then
+  // capped too): each map's estimated colour error (resampling_mse); empty where not tried.
+  std::vector<double> compared_mse;
 };
 
 struct Disk {
@@ -66,7 +71,7 @@ struct Disk {
 
 /// Turns a connected manifold surface into a topological disk (one boundary loop, Euler characteristic
 /// 1): handles are cut along short loops (remove_handles); holes are capped with scaffolding or joined
-/// into the boundary (see HoleMode; the longest loop is always kept as the boundary); a closed genus-0 surface is cut along the shortest path between two far-apart vertices
+/// into the boundary (see HoleMode; the longest loop is kept as the boundary unless `cap_kept`); a closed genus-0 surface is cut along the shortest path between two far-apart vertices
 /// (double Dijkstra sweep: the paper's single seam); otherwise a cut graph is built by tree-cotree
 /// (shortest-path tree + greedy dual tree, Erickson & Whittlesey 2005) and pruned of dangling branches.
 /// Throws InternalError if the result is not a disk (it always should be).
@@ -84,6 +89,9 @@ struct Denoised {
 /// `seams`: the input's texture seams (find_texture_seams), preferred by the handle loops, the hole
 /// connections and the cut graph (not by the slits, which aim at depth); empty: none.
 /// `fill_budget`: kFill's cap budget (fraction of the component's area).
+/// `cap_kept`: kFill caps the longest loop too when it fits the budget (smallest first, as the others),
+/// so a surface whose holes are all small becomes closed and gets the path cut; the caller compares
+/// both (a 3-edge boundary loop cannot hold the square's four corners, but a cap is not always better).
 /// The real faces (not scaffolding) of the result always hang together through uncut edges, so the
 /// component becomes one chart: where the cut graph would leave the caps as the only link between some
 /// of them, it is rebuilt from a dual tree that joins the real faces before it enters any cap (the
@@ -91,6 +99,6 @@ struct Denoised {
 /// holes are opened instead ("holes opened").
 Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats,
                  const std::vector<uint32_t>& slit_to = {}, const Denoised* denoised = nullptr, bool plain = false,
-                 const std::vector<char>& seams = {}, double fill_budget = kFillBudget);
+                 const std::vector<char>& seams = {}, double fill_budget = kFillBudget, bool cap_kept = false);
 
 }  // namespace tightex
