@@ -304,9 +304,13 @@ constexpr size_t kAspectProbeMaxFaces = 100000;
 /// 7, 11, 13, 17), each way by up to 1 dB; mapped both ways and chosen by the estimate, 18 runs move,
 /// +8.3 dB in all, the worst -0.53 (BENCHMARKS.md, "A small longest hole").
 constexpr size_t kSmallKeptLoop = 8;
-/// How map_component treats a small longest hole: map it both ways and keep the better (the square's
-/// probe, any other component), or as already decided for another shape of the same component.
-enum class CapChoice { kCompare, kKeep, kCap };
+/// How map_component treats the longest hole: kAuto finds out whether it is small (small_longest_hole)
+/// and then compares; kCompare maps it both ways and keeps the better (the caller knows it is small);
+/// kKeep / kCap as already decided for another shape of the same component.
+enum class CapChoice { kAuto, kCompare, kKeep, kCap };
+
+/// The estimate's figure in the report: PSNR of a resampling_mse (< 0: none made).
+double estimated_psnr_db(double mse) { return mse > 0 ? 10 * std::log10(255.0 * 255.0 / mse) : mse == 0 ? 99.0 : -1.0; }
 
 /// Whether map a (estimated error mse_a, resampling_mse; < 0: not mapped) beats map b by the factor
 /// `gain` (<= 1: a must be that much better). The area map promises its density first: a map that keeps
@@ -596,7 +600,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
       // crowds there and the disk gets slit. Capping it too (the path cut) is better there, but not
       // everywhere (BENCHMARKS.md, "A small longest hole"): both are mapped, side by side, and the
       // estimate of the colour error (resampling_mse, as the aspect probes) decides.
-      if (choice == CapChoice::kCompare && !small_longest_hole(c, ci)) choice = CapChoice::kKeep;
+      if (choice == CapChoice::kAuto) choice = small_longest_hole(c, ci) ? CapChoice::kCompare : CapChoice::kKeep;
       if (choice == CapChoice::kKeep) {
         cut_and_map(ci, false, mo, disk, uv, cut_stats, map_stats);
       } else if (choice == CapChoice::kCap) {
@@ -707,7 +711,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
     for (size_t i = 0; i < probe.size(); ++i) {
       const auto [W, H] = atlas_size(kAspectProbes[i]);
       probes_report.push_back({{"aspect", kAspectProbes[i]}, {"width", W}, {"height", H},
-                               {"estimated_psnr_db", mse[i] > 0 ? 10 * std::log10(255.0 * 255.0 / mse[i]) : mse[i] == 0 ? 99.0 : -1.0}});
+                               {"estimated_psnr_db", estimated_psnr_db(mse[i])}});
     }
   }
   if (options.layout == Layout::kAtlas) {
@@ -740,7 +744,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   tbb::parallel_for(size_t(0), nc, [&](size_t c) {
     Mapped m;
     if (c == dominant && rects[c].w == probe[chosen].rect.w && rects[c].h == probe[chosen].rect.h) m = std::move(probe[chosen]);
-    else map_component(c, rects[c], m, nullptr, CapChoice::kCompare);
+    else map_component(c, rects[c], m, nullptr, CapChoice::kAuto);
     disks[c] = std::move(m.disk);
     uv[c] = std::move(m.uv);
     cut_stats[c] = std::move(m.cut);
@@ -789,7 +793,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   // Estimated PSNR of the two cuts tried ([the longest hole kept as the boundary, capped too]).
   auto compared_db = [](const std::vector<double>& mse) {
     nlohmann::json db = nlohmann::json::array();
-    for (double m : mse) db.push_back(m > 0 ? 10 * std::log10(255.0 * 255.0 / m) : m == 0 ? 99.0 : -1.0);
+    for (double m : mse) db.push_back(estimated_psnr_db(m));
     return mse.empty() ? nlohmann::json(nullptr) : db;
   };
   for (size_t c = 0; c < nc; ++c) {

@@ -47,11 +47,11 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, cons
     base = with_identity_parents(component);
   }
   auto loops = boundary_loops(base);
-  for (double longest = -1; const auto& loop : loops) {
-    double length = 0;
-    for (uint32_t h : loop) length += base.edge_length(h);
-    if (length > longest) longest = length, st.longest_loop_edges = loop.size();
-  }
+  std::vector<double> loop_length(loops.size(), 0.0);
+  for (size_t i = 0; i < loops.size(); ++i)
+    for (uint32_t h : loops[i]) loop_length[i] += base.edge_length(h);
+  const size_t keep = size_t(std::max_element(loop_length.begin(), loop_length.end()) - loop_length.begin());
+  if (!loops.empty()) st.longest_loop_edges = loops[keep].size();
 
   // Holes: the longest loop stays the disk boundary; with kFill the others are capped smallest first
   // within the area budget.
@@ -60,14 +60,13 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, cons
   for (const Tri& f : component.triangles)
     component_area += triangle_area(component.positions[f[0]], component.positions[f[1]], component.positions[f[2]]);
   if (!plain && holes == HoleMode::kFill && (loops.size() > 1 || (cap_kept && loops.size() == 1))) {
-    std::vector<double> loop_length(loops.size(), 0.0), cap_area(loops.size(), 0.0);
+    std::vector<double> cap_area(loops.size(), 0.0);
     for (size_t i = 0; i < loops.size(); ++i) {
       Vec3 c = Vec3::Zero();
-      for (uint32_t h : loops[i]) loop_length[i] += base.edge_length(h), c += base.positions[base.from(h)];
+      for (uint32_t h : loops[i]) c += base.positions[base.from(h)];
       c /= double(loops[i].size());
       for (uint32_t h : loops[i]) cap_area[i] += triangle_area(c, base.positions[base.from(h)], base.positions[base.to(h)]);
     }
-    const size_t keep = size_t(std::max_element(loop_length.begin(), loop_length.end()) - loop_length.begin());
     std::vector<size_t> order(loops.size());
     std::iota(order.begin(), order.end(), 0);
     std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return cap_area[a] < cap_area[b]; });
