@@ -74,6 +74,10 @@ const Image* image_of(const TexturedMesh& m, size_t t);
 
 /// 3D area of a triangle.
 double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c);
+/// 3D area of the triangle `t` (three indices into `positions`).
+inline double triangle_area(const std::vector<Vec3>& positions, const Tri& t) {
+  return triangle_area(positions[t[0]], positions[t[1]], positions[t[2]]);
+}
 /// Signed area of a 2D triangle (positive = counter-clockwise).
 double signed_area(const Vec2& a, const Vec2& b, const Vec2& c);
 
