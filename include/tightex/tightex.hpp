@@ -9,6 +9,7 @@
 #include <string_view>
 #include <vector>
 
+#include "tightex/options.hpp"
 #include "core/error.hpp"
 #include "core/mesh.hpp"
 #include "io/image_io.hpp"
@@ -19,19 +20,6 @@
 #include "topology/topology.hpp"
 
 namespace tightex {
-
-enum class Layout { kAtlas, kPerComponent };
-
-/// How texels are spread over the surface (issue 4). kHarmonic: the paper's map exactly (cotangent
-/// harmonic, boundary by arc length). kArea: the same number of texels per unit of 3D area everywhere.
-/// kTexel: the input's own texel density per triangle, so what the scanner captured in detail keeps its
-/// detail. kDetail: texels where the texture has detail — density proportional to the input texture's
-/// colour gradient per unit of 3D length (which minimises the expected reconstruction error for the
-/// budget), capped at 4x the input's own density (beyond it a texel adds little the input holds), at
-/// least an eighth of the mean. All four are fold-free and fill each component's rectangle; all but kHarmonic
-/// then lower a symmetric Dirichlet energy with the boundary sliding along the rectangle's sides
-/// (kArea only as far as its density spread holds).
-enum class MapKind { kHarmonic, kArea, kTexel, kDetail };
 
 struct Options {
   /// Atlas: the texture's side; per-component: the largest texture's side. 0 (default): default_size(input),

@@ -9,12 +9,6 @@
 
 namespace tightex {
 
-/// Which boundary vertices go to the square's four corners (choose_corners; measured in docs/corners.md).
-enum class CornerRule {
-  kEqualArcs,     // four arcs of (nearly) equal boundary length
-  kTurningAngle,  // where the boundary turns most, each arc at least 10% of the length
-};
-
 /// From this many unknowns on, a map's linear systems are factorised supernodally (dense BLAS kernels
 /// on column blocks); below it, simplicially. Measured (BENCHMARKS.md, "Large models"), cut+map
 /// seconds, default map, simplicial -> supernodal with Debian's OpenBLAS (pthread): a vase of 44k

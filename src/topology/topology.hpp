@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "core/surface.hpp"
+#include "tightex/options.hpp"
 
 namespace tightex {
 
@@ -34,12 +35,7 @@ std::vector<char> find_texture_seams(const TexturedMesh& input, const Surface& s
 /// length.
 Surface remove_handles(const Surface& component, std::vector<double>* loop_lengths, const std::vector<char>& seams = {});
 
-/// kFill: holes (and the two sides of each cut handle) are capped with the §4.1 centroid fan while the
-/// caps' total area stays within the fill budget (cut_to_disk's fill_budget; kFillBudget unless the
-/// caller gives another: the pipeline starts at 2% and comes down to it where the caps take more than
-/// 0.8% of the square) of the component's area, smallest first; larger ones are opened into the disk
-/// boundary, since a large cap would waste its texels. kCut: none is capped.
-enum class HoleMode { kFill, kCut };
+/// The cap budget of HoleMode::kFill unless the caller gives another (fraction of the component's area).
 constexpr double kFillBudget = 0.005;
 
 struct CutStats {
