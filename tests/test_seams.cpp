@@ -43,13 +43,13 @@ TEST(TextureSeams, FoundExactly) {
   {  // planar projection: one chart, no seam
     const TexturedMesh m = cat::disk();
     const Surface s = prepare_surface(m, nullptr);
-    EXPECT_EQ(count(find_texture_seams(m, s, split_components(s)[0])), 0u);
+    EXPECT_EQ(count(find_texture_seams(m, split_components(s)[0])), 0u);
   }
   {  // the seamed torus: both halfedges of the kNv meridian edges and the kNu parallel edges
     const TexturedMesh m = seamed_torus(5, 3);
     const Surface s = prepare_surface(m, nullptr);
     const Surface c = split_components(s)[0];
-    const auto seams = find_texture_seams(m, s, c);
+    const auto seams = find_texture_seams(m, c);
     EXPECT_EQ(count(seams), 2u * (kNu + kNv));
     for (uint32_t h = 0; h < seams.size(); ++h)
       if (seams[h]) EXPECT_TRUE(seams[c.opposite[h]]) << "halfedge " << h;
@@ -57,7 +57,7 @@ TEST(TextureSeams, FoundExactly) {
   {  // per-triangle atlas: every interior edge
     const TexturedMesh m = cat::perforated_plate(2);
     const Surface s = prepare_surface(m, nullptr);
-    EXPECT_EQ(count(find_texture_seams(m, s, split_components(s)[0])), 3 * m.num_triangles());
+    EXPECT_EQ(count(find_texture_seams(m, split_components(s)[0])), 3 * m.num_triangles());
   }
   {  // the same UVs but a second material on half the triangles: the material border is a seam
     TexturedMesh m = cat::disk();
@@ -68,7 +68,7 @@ TEST(TextureSeams, FoundExactly) {
       m.face_material[t] = centre.x() > 0 ? 1 : 0;
     }
     const Surface c = split_components(s)[0];
-    const auto seams = find_texture_seams(m, s, c);
+    const auto seams = find_texture_seams(m, c);
     size_t border = 0;  // halfedges whose two triangles differ in material, counted directly
     for (uint32_t h = 0; h < c.opposite.size(); ++h)
       if (c.opposite[h] != kNone) border += m.face_material[s.face_parent[c.face_parent[h / 3]]] != m.face_material[s.face_parent[c.face_parent[c.opposite[h] / 3]]];
@@ -93,7 +93,7 @@ TEST(TextureSeams, CutFollowsThemWhereThereIsAChoice) {
     const TexturedMesh m = seamed_torus(kNu / 3, j0);
     const Surface s = prepare_surface(m, nullptr);
     const Surface c = split_components(s)[0];
-    const auto seams = find_texture_seams(m, s, c);
+    const auto seams = find_texture_seams(m, c);
     CutStats st;
     cut_to_disk(c, HoleMode::kCut, &st, {}, nullptr, false, seams);
     ASSERT_EQ(st.handle_loops.size(), 1u);

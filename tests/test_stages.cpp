@@ -316,11 +316,11 @@ TEST_P(Catalogue, PrepareSurface) {
   const TexturedMesh m = mesh();
   const Expected& e = want();
   RepairStats st;
-  std::vector<char> rev;
-  const Surface s = prepare_surface(m, &st, &rev);
+  const Surface s = prepare_surface(m, &st);
   ASSERT_TRUE(is_manifold(s));
   EXPECT_EQ(st.reoriented_triangles, 0u) << "the catalogue's meshes are wound consistently (a Mobius strip as far as it can be)";
-  ASSERT_EQ(rev.size(), m.num_triangles());
+  ASSERT_EQ(s.input_face, s.face_parent);
+  ASSERT_EQ(s.input_corner.size(), 3 * s.num_faces());
   ASSERT_EQ(s.face_parent.size(), s.num_faces());
   ASSERT_EQ(s.vertex_parent.size(), s.num_vertices());
 
@@ -347,7 +347,7 @@ TEST_P(Catalogue, PrepareSurface) {
   EXPECT_EQ(st.input_vertices, m.num_vertices());
 
   // No triangle with area lost: of each group of equal triangles exactly one is kept, once, with the
-  // input's corners in the input's order (corners 1 and 2 swapped where `rev` says so); nothing without
+  // input's corners in the input's order (as input_corner says); nothing without
   // area is kept.
   std::vector<size_t> kept(m.num_triangles(), 0);
   for (uint32_t t = 0; t < s.num_faces(); ++t) {
@@ -356,7 +356,7 @@ TEST_P(Catalogue, PrepareSurface) {
     kept[p]++;
     for (int k = 0; k < 3; ++k) {
       const uint32_t v = s.triangles[t][k];
-      EXPECT_TRUE(same_bits(s.positions[v], m.positions[m.triangles[p][size_t(input_corner(rev[p], k))]])) << "face " << t << " corner " << k;
+      EXPECT_TRUE(same_bits(s.positions[v], m.positions[m.triangles[p][s.input_corner[3 * t + size_t(k)]]])) << "face " << t << " corner " << k;
     }
   }
   std::map<uint32_t, size_t> group_kept;
@@ -1670,11 +1670,12 @@ TEST(Pipeline, TrianglesWoundTheOtherWayAreReoriented) {
     std::swap(messy.corner_uv[3 * t + 1], messy.corner_uv[3 * t + 2]);
   }
   RepairStats st;
-  std::vector<char> rev;
-  const Surface s = prepare_surface(messy, &st, &rev);
+  const Surface s = prepare_surface(messy, &st);
   EXPECT_EQ(st.reoriented_triangles, reversed);
   EXPECT_EQ(st.inconsistent_edges, 0u);
-  EXPECT_EQ(std::count(rev.begin(), rev.end(), 1), long(reversed));
+  size_t swapped = 0;  // faces whose corner 1 is the input triangle's corner 2
+  for (size_t f = 0; f < s.num_faces(); ++f) swapped += s.input_corner[3 * f + 1] == 2;
+  EXPECT_EQ(swapped, reversed);
   EXPECT_EQ(split_components(s).size(), 1u);
   Options opt;
   opt.size = 128;

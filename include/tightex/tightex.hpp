@@ -86,7 +86,6 @@ struct Result {
 /// input's geometry and UVs, not its texture pixels, so a caller can decode textures meanwhile.
 struct Plan {
   Surface surface;                       // repaired; face_parent -> input triangle
-  std::vector<char> reversed;            // per input triangle: wound the other way in surface (repair)
   std::vector<Surface> components;       // face_parent -> surface face
   std::vector<Disk> disks;               // face_parent -> component face (kNone: scaffolding)
   std::vector<std::vector<Vec2>> uv;     // per disk vertex, unit square

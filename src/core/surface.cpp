@@ -18,6 +18,19 @@ std::vector<std::pair<uint64_t, uint32_t>> halfedges_by_edge(const Surface& s) {
   return keyed;
 }
 
+void inherit_input_map(Surface& child, const Surface& parent) {
+  child.input_face.clear();
+  child.input_corner.clear();
+  if (parent.input_face.empty()) return;
+  child.input_face.resize(child.num_faces());
+  child.input_corner.resize(3 * child.num_faces());
+  for (size_t f = 0; f < child.num_faces(); ++f) {
+    const uint32_t p = child.face_parent[f];
+    child.input_face[f] = p == kNone ? kNone : parent.input_face[p];
+    for (size_t k = 0; k < 3; ++k) child.input_corner[3 * f + k] = p == kNone ? uint8_t(k) : parent.input_corner[3 * size_t(p) + k];
+  }
+}
+
 Surface with_identity_parents(const Surface& s) {
   Surface r = s;
   r.vertex_parent.resize(r.num_vertices());

@@ -16,6 +16,12 @@ struct Surface {
   std::vector<uint32_t> vertex_parent;  // vertex -> vertex of the stage before (kNone: added)
   std::vector<uint32_t> face_parent;    // triangle -> triangle of the stage before (kNone: scaffolding)
   std::vector<uint32_t> opposite;       // per halfedge, see above
+  // The map back to the input model, composed once by each stage that makes a new mesh
+  // (inherit_input_map), so that nothing downstream walks the face_parent chain: per face the input
+  // triangle it is part of (kNone: scaffolding), per corner 3*f+k the corner of that input triangle it
+  // is (prepare_surface's winding fix folded in). Empty for a surface not made from an input model.
+  std::vector<uint32_t> input_face;
+  std::vector<uint8_t> input_corner;
 
   size_t num_vertices() const { return positions.size(); }
   size_t num_faces() const { return triangles.size(); }
@@ -29,6 +35,11 @@ struct Surface {
 /// Halfedges sorted by their undirected edge (key = min vertex << 32 | max vertex): the halfedges of
 /// one edge are neighbours in the result.
 std::vector<std::pair<uint64_t, uint32_t>> halfedges_by_edge(const Surface& s);
+
+/// Sets `child`'s input_face / input_corner from `parent`'s through child.face_parent (kNone:
+/// scaffolding). Every stage keeps each face's corners in its parent face's order. Leaves them empty
+/// where `parent` has none.
+void inherit_input_map(Surface& child, const Surface& parent);
 
 /// A copy whose vertex_parent / face_parent map each element to itself (the start of a stage's maps).
 Surface with_identity_parents(const Surface& s);

@@ -1,7 +1,6 @@
 #include "pipeline/aspect.hpp"
 
 #include "bake/bake.hpp"
-#include "repair/repair.hpp"
 
 #include <algorithm>
 #include <array>
@@ -12,28 +11,31 @@
 
 namespace tightex {
 
-double resampling_mse(const TexturedMesh& input, const std::vector<char>& reversed, const Surface& disk,
-                      const std::vector<uint32_t>& input_triangle, const std::vector<Vec2>& uv, int w, int h, size_t samples) {
+BakeTriangle bake_triangle(const TexturedMesh& input, const Surface& disk, uint32_t f, const std::vector<Vec2>& uv, const Rect& rect) {
+  const uint32_t t = disk.input_face[f];
+  const Tri& ft = disk.triangles[f];
+  BakeTriangle bt;
+  bt.material = input.face_material[t];
+  bt.area3 = triangle_area(disk.positions, ft);
+  for (size_t k = 0; k < 3; ++k) {
+    bt.target_px[k] = rect_pixel(rect, uv[ft[k]]);
+    bt.source_uv[k] = input.sampled_uv(t, disk.input_corner[3 * size_t(f) + k]);
+  }
+  return bt;
+}
+
+double resampling_mse(const TexturedMesh& input, const Surface& disk, const std::vector<Vec2>& uv, int w, int h, size_t samples) {
   const size_t nf = disk.num_faces();
-  if (w < 2 || h < 2 || samples == 0 || uv.size() != disk.num_vertices() || input_triangle.size() != nf) return -1;
+  if (w < 2 || h < 2 || samples == 0 || uv.size() != disk.num_vertices() || disk.input_face.size() != nf) return -1;
   // The faces that have pixels to read, baked as bake_plan places them (the unit square's corners on
   // the corner texels' centres), without the fit.
   std::vector<uint32_t> real;
   std::vector<BakeTriangle> tris;
   for (uint32_t f = 0; f < nf; ++f) {
-    const uint32_t t = input_triangle[f];
+    const uint32_t t = disk.input_face[f];
     if (t == kNone || !image_of(input, t)) continue;
     real.push_back(f);
-    BakeTriangle bt;
-    bt.material = input.face_material[t];
-    const Tri& ft = disk.triangles[f];
-    bt.area3 = triangle_area(disk.positions[ft[0]], disk.positions[ft[1]], disk.positions[ft[2]]);
-    for (int k = 0; k < 3; ++k) {
-      const Vec2& s = uv[disk.triangles[f][size_t(k)]];
-      bt.target_px[size_t(k)] = rect_pixel(Rect{0, 0, 0, w, h}, s);
-      bt.source_uv[size_t(k)] = input.sampled_uv(t, input_corner(!reversed.empty() && reversed[t], k));
-    }
-    tris.push_back(bt);
+    tris.push_back(bake_triangle(input, disk, f, uv, Rect{0, 0, 0, w, h}));
   }
   if (real.empty()) return -1;
   std::vector<Image> images(1, Image(w, h));
@@ -67,7 +69,7 @@ double resampling_mse(const TexturedMesh& input, const std::vector<char>& revers
       Vec2 px = Vec2::Zero(), src = Vec2::Zero();
       for (int k = 0; k < 3; ++k) px += b[k] * bt.target_px[size_t(k)], src += b[k] * bt.source_uv[size_t(k)];
       const auto out = sample_bilinear(images[0], px.x() / w, 1.0 - px.y() / h);
-      const auto in = sample_bilinear(*image_of(input, input_triangle[real[i]]), src.x(), src.y());
+      const auto in = sample_bilinear(*image_of(input, disk.input_face[real[i]]), src.x(), src.y());
       for (int c = 0; c < 3; ++c) se += double(out[size_t(c)] - in[size_t(c)]) * double(out[size_t(c)] - in[size_t(c)]);
     }
     chunk_se[ch] = se;

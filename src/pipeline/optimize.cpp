@@ -127,7 +127,7 @@ ComponentDensity component_density(const TexturedMesh& input, const Surface& sur
   if (map == MapKind::kTexel) {
     std::vector<std::pair<double, double>> vw;
     for (size_t f = 0; f < nf; ++f) {
-      const size_t t = surface.face_parent[comp.face_parent[f]];
+      const size_t t = comp.input_face[f];
       d.face[f] = a3[f] > 0 ? input_texel_area(input, t) / a3[f] : 0.0;
       if (d.face[f] > 0 && std::isfinite(d.face[f])) vw.push_back({d.face[f], a3[f]});
     }
@@ -145,7 +145,7 @@ ComponentDensity component_density(const TexturedMesh& input, const Surface& sur
     d.input_density.resize(nf);
     // 15 points x 4 bilinear samples per face: parallel over faces (each writes its own slot).
     tbb::parallel_for(size_t(0), nf, [&](size_t f) {
-      const size_t t = surface.face_parent[comp.face_parent[f]];
+      const size_t t = comp.input_face[f];
       d.detail[f] = input_detail(input, t);
       d.input_density[f] = a3[f] > 0 ? input_texel_area(input, t) / a3[f] : 0.0;
     });
@@ -366,7 +366,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   // 1. Repair (§4.1): weld, drop degenerate and duplicate triangles, slice non-manifold elements.
   progress("repair", 0);
   RepairStats rs;
-  const Surface& surface = plan.surface = prepare_surface(input, &rs, &plan.reversed);
+  const Surface& surface = plan.surface = prepare_surface(input, &rs);
   if (surface.num_faces() == 0)
     fail_input("{}: no triangle with non-zero area ({} zero-area, {} duplicate)", input.source, rs.zero_area_triangles, rs.duplicate_triangles);
   clock.done("repair");
@@ -486,7 +486,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   };
   auto cut_inputs = [&](size_t c) {
     CutInputs ci;
-    ci.seams = find_texture_seams(input, surface, components[c], plan.reversed);
+    ci.seams = find_texture_seams(input, components[c]);
     if (topology_of(components[c]).genus() > 0) {
       ci.denoised.emplace();
       ci.denoised->surface = remove_handles(components[c], &ci.denoised->handle_loops, ci.seams);
@@ -495,11 +495,8 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   };
   // The estimate of a map's colour error (resampling_mse) for component c baked into rect.
   auto estimate_mse = [&](size_t c, const Disk& d, const std::vector<Vec2>& uv, const Rect& rect) {
-    std::vector<uint32_t> input_tri(d.mesh.num_faces(), kNone);
-    for (size_t f = 0; f < d.mesh.num_faces(); ++f)
-      if (const uint32_t cf = d.mesh.face_parent[f]; cf != kNone) input_tri[f] = surface.face_parent[components[c].face_parent[cf]];
     const size_t texels = size_t(rect.w) * size_t(rect.h);
-    return resampling_mse(input, plan.reversed, d.mesh, input_tri, uv, rect.w, rect.h, std::clamp(4 * texels, kAspectMinSamples, kAspectSamples));
+    return resampling_mse(input, d.mesh, uv, rect.w, rect.h, std::clamp(4 * texels, kAspectMinSamples, kAspectSamples));
   };
   // Whether component c is also mapped with its longest hole capped (map_component): that hole has
   // fewer than kSmallKeptLoop edges and its cap fits the budget; not for the paper's map, which keeps
@@ -862,7 +859,6 @@ Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& opt
   Result result;
   result.report = plan.report;
   nlohmann::json& rep = result.report;
-  const std::vector<char>& reversed = plan.reversed;
   nlohmann::json& timings = rep["timings"];
   StageClock clock(timings);
   const Surface& surface = plan.surface;
@@ -905,24 +901,17 @@ Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& opt
     const int image = image_index[size_t(r.image)];
     const Disk& d = disks[c];
     for (uint32_t f = 0; f < d.mesh.num_faces(); ++f) {
-      const uint32_t cf = d.mesh.face_parent[f];
-      if (cf == kNone) continue;  // scaffolding
-      const uint32_t t = surface.face_parent[components[c].face_parent[cf]];
-      BakeTriangle bt;
+      const uint32_t t = d.mesh.input_face[f];
+      if (t == kNone) continue;  // scaffolding
+      BakeTriangle bt = bake_triangle(input, d.mesh, f, uv[c], r);
       bt.image = uint32_t(image);
-      bt.material = input.face_material[t];
-      bt.area3 = triangle_area(input.positions[input.triangles[t][0]], input.positions[input.triangles[t][1]], input.positions[input.triangles[t][2]]);
-      const bool rev = !reversed.empty() && reversed[t];  // written as the repaired surface winds it
+      const uint8_t* ik = &d.mesh.input_corner[3 * size_t(f)];
       const Tri& it = input.triangles[t];
-      out.triangles.push_back(rev ? Tri{it[0], it[2], it[1]} : it);
+      out.triangles.push_back(Tri{it[ik[0]], it[ik[1]], it[ik[2]]});  // wound as the repaired surface
       for (int k = 0; k < 3; ++k) {
-        const int ik = input_corner(rev, k);
-        const Vec2& s = uv[c][d.mesh.triangles[f][k]];
-        const Vec2 px = rect_pixel(r, s);
-        bt.target_px[k] = px;
-        bt.source_uv[k] = input.sampled_uv(t, ik);
+        const Vec2& px = bt.target_px[size_t(k)];
         out.corner_uv.push_back(Vec2(px.x() / W, 1.0 - px.y() / H));
-        if (normals) out.corner_normal.push_back(input.corner_normal[3 * t + size_t(ik)]);
+        if (normals) out.corner_normal.push_back(input.corner_normal[3 * t + ik[k]]);
       }
       out.face_material.push_back(int32_t(image));
       bake_tris.push_back(bt);
@@ -953,7 +942,7 @@ Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& opt
     if (!is_kept(c)) continue;
     const Surface& comp = components[c];
     for (uint32_t cf = 0; cf < comp.num_faces(); ++cf) {
-      const uint32_t t = surface.face_parent[comp.face_parent[cf]];
+      const uint32_t t = comp.input_face[cf];
       const int32_t in_mat = input.face_material[t];
       int32_t& om = kept_material[size_t(in_mat + 1)];
       if (om < 0) {
@@ -977,11 +966,11 @@ Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& opt
         om = int32_t(out.materials.size());
         out.materials.push_back(std::move(m));
       }
-      const bool rev = !reversed.empty() && reversed[t];
+      const uint8_t* ic = &comp.input_corner[3 * size_t(cf)];
       const Tri& it = input.triangles[t];
-      out.triangles.push_back(rev ? Tri{it[0], it[2], it[1]} : it);
+      out.triangles.push_back(Tri{it[ic[0]], it[ic[1]], it[ic[2]]});
       for (int k = 0; k < 3; ++k) {
-        const size_t ik = size_t(input_corner(rev, k));
+        const size_t ik = ic[k];
         out.corner_uv.push_back(input.corner_uv[3 * t + ik]);
         if (normals) out.corner_normal.push_back(input.corner_normal[3 * t + ik]);
       }

@@ -30,7 +30,7 @@ uint64_t bits(double d) {
 
 }  // namespace
 
-Surface prepare_surface(const TexturedMesh& mesh, RepairStats* stats, std::vector<char>* reversed) {
+Surface prepare_surface(const TexturedMesh& mesh, RepairStats* stats) {
   RepairStats st;
   st.input_vertices = mesh.num_vertices();
 
@@ -90,7 +90,7 @@ Surface prepare_surface(const TexturedMesh& mesh, RepairStats* stats, std::vecto
   //    taken first (union-find with parity), then the others: where a patch cannot agree (a Mobius
   //    strip) the input's own consistent parts stay as they were, and what still disagrees is sliced
   //    below.
-  if (reversed) reversed->assign(mesh.num_triangles(), 0);
+  std::vector<char> reversed(s0.num_faces(), 0);  // per face: corners 1 and 2 swapped
   auto keyed = halfedges_by_edge(s0);
   {
     const uint32_t nf = uint32_t(s0.num_faces());
@@ -142,7 +142,7 @@ Surface prepare_surface(const TexturedMesh& mesh, RepairStats* stats, std::vecto
       if (rel[f] == majority) continue;
       std::swap(s0.triangles[f][1], s0.triangles[f][2]);
       ++st.reoriented_triangles;
-      if (reversed) (*reversed)[s0.face_parent[f]] = 1;
+      reversed[f] = 1;
     }
   }
 
@@ -183,6 +183,11 @@ Surface prepare_surface(const TexturedMesh& mesh, RepairStats* stats, std::vecto
   }
   for (uint32_t c : copies) st.sliced_vertices += c > 1;
   for (uint32_t t = 0; t < s.num_faces(); ++t) s.face_parent[t] = s0.face_parent[t];
+  // The input map: a reversed face's corner k is the input triangle's corner (3 - k) % 3.
+  s.input_face = s.face_parent;
+  s.input_corner.resize(3 * s.num_faces());
+  for (size_t t = 0; t < s.num_faces(); ++t)
+    for (size_t k = 0; k < 3; ++k) s.input_corner[3 * t + k] = uint8_t(reversed[t] ? (3 - k) % 3 : k);
 
   // 6. Close slits. Slicing an edge shared by several sheets can leave a sheet whose fan around each
   //    end vertex is whole but open along that edge: two boundary halfedges a->b and b->a with the same

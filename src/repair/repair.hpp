@@ -23,12 +23,9 @@ struct RepairStats {
 /// connected patch consistently (the orientation most of its area has), and slices every non-manifold
 /// edge and vertex (and every edge whose two triangles still disagree on orientation, so a Mobius strip
 /// becomes an orientable strip). No triangle with area is ever dropped.
-/// Returns a manifold surface; face_parent maps to input triangles, vertex_parent to input vertices.
-/// `reversed` (optional) gets, per input triangle, whether its surface face has corners 1 and 2
-/// swapped: surface corner k is input corner input_corner(reversed[t], k).
-Surface prepare_surface(const TexturedMesh& mesh, RepairStats* stats, std::vector<char>* reversed = nullptr);
-
-/// The input corner of a surface face's corner k (see prepare_surface's `reversed`).
-inline int input_corner(bool reversed, int k) { return reversed ? (3 - k) % 3 : k; }
+/// Returns a manifold surface; face_parent and input_face map to input triangles, vertex_parent to
+/// input vertices, and input_corner gives each corner's input corner (a reoriented triangle has its
+/// corners 1 and 2 swapped).
+Surface prepare_surface(const TexturedMesh& mesh, RepairStats* stats);
 
 }  // namespace tightex

@@ -32,6 +32,7 @@ std::vector<Surface> split_components(const Surface& s) {
         const uint32_t o = s.opposite[3 * c.face_parent[lt] + k];
         if (o != kNone) c.opposite[3 * lt + k] = 3 * local_face[o / 3] + o % 3;
       }
+    inherit_input_map(c, s);
   }
   return out;
 }
@@ -52,6 +53,7 @@ Surface fill_holes(const Surface& s, const std::vector<std::vector<uint32_t>>& l
     }
   }
   build_opposite(r);
+  inherit_input_map(r, s);
   return r;
 }
 

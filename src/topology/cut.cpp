@@ -309,6 +309,7 @@ Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats, cons
   // regroup's maps point into `s`; compose with s's maps so they point into the component.
   for (uint32_t& p : disk.mesh.vertex_parent) p = s.vertex_parent[p];
   for (uint32_t& p : disk.mesh.face_parent) p = s.face_parent[p];  // kNone stays kNone: scaffolding
+  inherit_input_map(disk.mesh, component);
   const Topology dt = topology_of(disk.mesh);
   const auto disk_loops = boundary_loops(disk.mesh);
   if (disk_loops.size() != 1 || dt.euler() != 1)

@@ -133,6 +133,7 @@ Surface remove_handles(const Surface& component, std::vector<double>* loop_lengt
     cur = std::move(cut);
     if (loop_lengths) loop_lengths->push_back(best.length);
   }
+  inherit_input_map(cur, component);
   return cur;
 }
 

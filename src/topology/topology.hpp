@@ -20,12 +20,9 @@ Surface fill_holes(const Surface& s, const std::vector<std::vector<uint32_t>>& l
 /// The input's texture seams along a component's edges: per halfedge (3 * face + corner) of
 /// `component`, 1 where the two input triangles at that edge disagree on the texture coordinate of
 /// either endpoint or on the material, 0 elsewhere and on the boundary (both halfedges of an edge
-/// agree). `component` maps into `surface` (face_parent), `surface` into `input` (face_parent); corners
-/// keep their order along that chain except where prepare_surface reversed a triangle (`reversed`, per
-/// input triangle; empty: none). The cut stages prefer these
+/// agree). Requires the component's input map (Surface::input_face). The cut stages prefer these
 /// edges (kSeamCost in graph.hpp): a new seam there is where the eye already accepts a discontinuity.
-std::vector<char> find_texture_seams(const TexturedMesh& input, const Surface& surface, const Surface& component,
-                                     const std::vector<char>& reversed = {});
+std::vector<char> find_texture_seams(const TexturedMesh& input, const Surface& component);
 
 /// Topological denoising (§4.1): while the component has genus g > 0, finds a short non-separating
 /// loop (the cheapest tree-cotree generator loop over roots placed on the handles; edges on `seams`
