@@ -1,4 +1,4 @@
-// The texture's shape (Options::aspect, session 7): the corners share the boundary out as the
+// The texture's shape (Options::aspect): the corners share the boundary out as the
 // rectangle's perimeter, the refinement is measured in texels, the auto shape follows the surface, and
 // a chart covers every texel centre of its rectangle whatever the texture's size.
 #include <gtest/gtest.h>

@@ -23,12 +23,11 @@ struct GenusCase {
   double min_psnr;     // dB at --size 512, a few dB below the measured figure (see genus_cases)
 };
 
-// Floors: measured surface PSNR at --size 512 (Release, deterministic, default detail map) minus 3 dB.
-// Measured (session 3): plate g1 56.1, g2 43.0, g3 32.7, g5 27.8, g8 30.3, g13 28.4, g25 21.4;
-// arches g1 40.6, g5 37.0, g25 19.0, g38 18.6. With the paper's harmonic map (the session 1 default)
-// they were plate 55.1 / 34.8 / 21.7 / 21.5 / 18.5 / 14.6 / 13.9 and arches 39.2 / 29.0 / 18.2 / 15.1:
-// cutting every hole open turns a plate into a comb-shaped disk that the harmonic map crowds (density
-// P5 down to 2^-24 at g13). For scale: the painted colour has a per-channel amplitude of 110, so an
+// Floors: measured surface PSNR at --size 512 (Release, deterministic, default detail map) minus 3 dB:
+// plate g1 56.1, g2 43.0, g3 32.7, g5 27.8, g8 30.3, g13 28.4, g25 21.4; arches g1 40.6, g5 37.0,
+// g25 19.0, g38 18.6. The paper's harmonic map gives plate 55.1 / 34.8 / 21.7 / 21.5 / 18.5 / 14.6 /
+// 13.9 and arches 39.2 / 29.0 / 18.2 / 15.1: cutting every hole open turns a plate into a comb-shaped
+// disk that the harmonic map crowds (density P5 down to 2^-24 at g13). For scale: the painted colour has a per-channel amplitude of 110, so an
 // output of the mean colour everywhere scores about 10.3 dB and colours at random places about 7.3 dB.
 const std::vector<GenusCase>& genus_cases() {
   static const std::vector<GenusCase> cases = {{"plate", 1, 53.0},  {"plate", 2, 40.0},  {"plate", 3, 29.5},  {"plate", 5, 24.5},

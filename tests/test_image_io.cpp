@@ -544,7 +544,7 @@ TEST_F(ImageIoTest, RandomBytesNeverCrash) {
 }
 
 TEST_F(ImageIoTest, RadianceHdrDoesNotHang) {
-  // An RLE scanline whose run count is 0 made stb_image 2.27 loop forever; HDR is not read at all now.
+  // An RLE scanline whose run count is 0 made stb_image 2.27 loop forever; HDR is not read at all.
   const std::string header = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 1 +X 8\n";
   Bytes hdr(header.begin(), header.end());
   hdr.insert(hdr.end(), {2, 2, 0, 8, 0, 0, 0, 0});

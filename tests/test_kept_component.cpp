@@ -1,4 +1,4 @@
-// The last resort of the pipeline (issue 5): a component that neither the full method nor the plain
+// The last resort of the pipeline: a component that neither the full method nor the plain
 // fallback can map is output as it came, with its input texture coordinates and a copy of its input
 // material(s) and texture(s), and reported; no triangle of the input is ever lost. The failure is forced
 // with the test-only Options::test_fail_components, on meshes of the catalogue.

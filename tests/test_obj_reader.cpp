@@ -422,8 +422,8 @@ TEST_F(ObjReaderTest, MalformedMaterialLibrary) {
 }
 
 TEST_F(ObjReaderTest, DevicesAndPipesNamedByTheModelAreRefused) {
-  // A model naming /dev/zero as its library or texture was read until memory ran out, and a FIFO with
-  // no writer blocked forever; only regular files are read on a model's say-so.
+  // A model naming /dev/zero as its library or texture would be read until memory ran out, and a FIFO
+  // with no writer would block forever; only regular files are read on a model's say-so.
   ASSERT_EQ(::mkfifo((dir_ / "pipe").c_str(), 0600), 0);
   for (const std::string special : {"/dev/zero", "pipe"}) {
     const std::string lib = write("lib.obj", "mtllib " + special + "\n" + kSquareVerts + "f 1/1 2/2 3/3\n");

@@ -89,7 +89,7 @@ TEST_P(RealData, CliOutputIsOneFoldFreeChartPerComponentFillingTheTexture) {
   EXPECT_GT(m.surface_psnr, wrong.surface_psnr + 3.0) << "mirrored control: " << wrong.surface_psnr;
   // The texture's shape (auto): the texture is W x H of the chosen aspect, the chosen probe is the
   // square unless another was estimated at least 5% closer (then the best), and the soup can, whose
-  // side unrolls to about 2:1, gets its long texture (measured 47.66 -> 48.97 dB: docs/maps.md).
+  // side unrolls to about 2:1, gets a long texture (docs/maps.md, "The texture's shape").
   const nlohmann::json& shape = report["aspect"];
   const double chosen = shape["chosen"].get<double>();
   EXPECT_EQ(chosen == 1.0, result.textures[0].image.width == result.textures[0].image.height);
@@ -126,12 +126,10 @@ nlohmann::json run_cli(const std::string& input, const std::string& options, con
   return report;
 }
 
-// Issue 4: --map area spreads the texels evenly, 90% of the surface within a factor 2 of the mean
-// density (the spread does not depend on the size; a small one keeps the bake cheap). On these models
-// it holds with room to spare, within a factor 2^0.5 (session 12, measured at this size: P5 -0.36 at
-// worst, meshroom_esp32cam; without the density-equalising flow the dancing girl was at -0.97 and
-// meshroom_esp32cam at -0.89; session 14, with the steps before the flow: -0.34 at worst, the girl,
-// meshroom -0.24), so that is what is asserted: unseen scans need the margin.
+// --map area spreads the texels evenly, 90% of the surface within a factor 2 of the mean density (the
+// spread does not depend on the size; a small one keeps the bake cheap). On these models it holds with
+// room to spare, within a factor 2^0.5 (measured at this size: P5 -0.34 at worst, the dancing girl;
+// meshroom_esp32cam -0.24), so that is what is asserted: unseen scans need the margin.
 TEST_P(RealData, AreaMapKeepsNinetyPercentWithinAFactorTwoOfTheMeanDensity) {
   // Under AddressSanitizer (CI's second pass) in the square only: the first pass runs the texture-shape
   // probes, whose choice it checks; the flow and the refinement run either way.
@@ -157,8 +155,8 @@ INSTANTIATE_TEST_SUITE_P(SharedData, RealData, ::testing::ValuesIn(data_models()
                          });
 GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(RealData);
 
-// Issue 4 on the Meshroom scan at --size 1024: the default map reaches texture-defrag's 41.3 dB (in
-// 40% of its texels) and beats the paper's harmonic map by at least 3 dB (measured 42.4 vs 35.7).
+// The Meshroom scan at --size 1024: the default map reaches texture-defrag's 41.3 dB (in
+// 40% of its texels) and beats the paper's harmonic map by at least 3 dB (measured 41.70 vs 35.74).
 TEST(RealDataMaps, DefaultMapBeatsHarmonicAndTextureDefragOnMeshroomAt1024) {
   const fs::path input = fs::path(TIGHTEX_SHARED_DATA) / "meshroom_esp32cam" / "texturedMesh.obj";
   if (!fs::exists(input)) GTEST_SKIP() << "../shared/data/meshroom_esp32cam not present";
@@ -231,7 +229,7 @@ TEST(RealDataGuards, OversizeAndOverBudgetRunsAreRefusedWithoutOutput) {
 
 }  // namespace
 
-// Issue 4 at the default budget (the input's used texels) on the mustard bottle, whose harmonic map is
+// At the default budget (the input's used texels) on the mustard bottle, whose harmonic map is
 // already nearly even and conformal: the default map still beats it by 3 dB (measured 53.73 vs 50.66),
 // by giving the label's print the texels the plain plastic does not need.
 TEST(RealDataMaps, DefaultMapBeatsHarmonicByThreeDecibelsOnTheMustardBottle) {

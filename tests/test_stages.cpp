@@ -73,7 +73,7 @@ const std::vector<Expected>& expectations() {
     {
       // A perforated plate: 25 real holes through it, not noise. Cutting all 25 handles and joining
       // the 50 loops into one boundary gives a comb-shaped disk that a map onto a square crowds badly
-      // (issue 3/4: ~17 dB today). The floor guards against regressions and misplaced colours (a
+      // (about 17 dB). The floor guards against regressions and misplaced colours (a
       // mirrored result scores far lower), not the quality goal.
       auto* e = add("holey_slab", cat::holey_slab, 2 - 2 * cat::kSlabHandles, 0, {{cat::kSlabHandles, 0}});
       e->closed = true;
@@ -721,7 +721,7 @@ std::pair<double, double> density_error(const Disk& disk, const std::vector<Vec2
 // density of 90% of the surface within a factor 2 of the mean, never worse than the harmonic map's.
 // Also with larger hole caps than the default (fill_budget 2%): other holes stay open, and the holey
 // slab's boundary then has bumps that a vertex sliding along the side could pass, turning the boundary
-// back on itself (check_square_map's order check) before bumps' neighbours were held.
+// back on itself (check_square_map's order check) unless the bumps' neighbours are held.
 TEST_P(Catalogue, AreaMapEvensTheDensity) {
   const std::vector<Surface> comps = split_components(prepare_surface(mesh(), nullptr));
   for (size_t cb = 0; cb < 2 * comps.size(); ++cb) {
@@ -923,13 +923,11 @@ TEST(Pipeline, AHoleCapWithFacesOfZeroAreaDoesNotCrushTheAreaMap) {
   const Result r = optimize(cat::make_textured("s_hole_plate", g.positions, kept), opt);
   const auto& c = r.report["components"][0];
   ASSERT_EQ(c["holes_filled"], 1) << c.dump();
-  // The reweighting no longer stops at a fold after 2 steps (edge weights 1e-7..1e13 by then), and no
-  // face of the plate comes out crushed: each above 0.4x the mean density (before: 0.25x; the lowest
-  // in session 11, 0.46x, were the two faces across the cap's zero-area faces). The faces at the
-  // plate's four corners have a floor of their own, 0.25x: the square plate is mapped at 1:2 (the
-  // aspect probe's choice), and the symmetric Dirichlet steps before the area map's flow squeeze the
-  // two faces at a corner where a square's map meets a rectangle's (0.30x; without those steps the
-  // flow was undone here and every face kept 0.46x).
+  // The reweighting does not stop at a fold (edge weights 1e-7..1e13 would follow), and no face of the
+  // plate comes out crushed: each above 0.4x the mean density. The faces at the plate's four corners
+  // have a floor of their own, 0.25x: the square plate is mapped at 1:2 (the aspect probe's choice),
+  // and the symmetric Dirichlet steps before the area map's flow squeeze the two faces at a corner
+  // where a square's map meets a rectangle's (to about 0.30x).
   EXPECT_NE(c["density_stopped"], "fold") << c.dump();
   const TexturedMesh& out = r.output;
   double uv_total = 0, area_total = 0;
@@ -959,10 +957,10 @@ TEST(Pipeline, AHoleCapWithFacesOfZeroAreaDoesNotCrushTheAreaMap) {
   }
   EXPECT_EQ(corner_faces, 6u);  // one face at two corners, two at the others (the cells' diagonals)
   EXPECT_EQ(r.report["metrics"]["flipped"], 0);
-  // The maps refined to convergence: the cap's two faces of zero 3D area have no 3D shape to aim at.
-  // Without a target frame they had no energy to keep them open, the step direction collapsed them and
-  // the line search cut every step to a tenth of the last: 3 steps, energy 7.19 -> 7.00 (now 8 steps,
-  // 7.31 -> 5.01; the bust with 0.5% of its triangles removed: 2 steps, 14.80 -> 14.76, now 16, 6.41).
+  // The maps refine to convergence: the cap's two faces of zero 3D area have no 3D shape to aim at, so
+  // they keep their start shape as their target frame. Without one they would have no energy to keep
+  // them open, the step direction would collapse them and the line search would cut every step short
+  // (3 steps instead of 8 here).
   for (MapKind map : {MapKind::kTexel, MapKind::kDetail}) {
     SCOPED_TRACE(map == MapKind::kTexel ? "texel map" : "detail map");
     opt.map = map;
@@ -1031,9 +1029,9 @@ TEST(RefineMap, ASliverInTheStartMapIsRefinedNotGivenUp) {
   for (size_t f = 0; f < g.mesh.num_faces(); ++f) EXPECT_GT(uv_area(g, f), 0.0) << "face " << f;
 }
 
-// A vertex none of whose faces has a target frame (target 0, or a 3D-degenerate face) has no energy:
-// its unknowns used to make the system singular, and the whole map went unrefined. It now stays put
-// while the rest is refined.
+// A vertex none of whose faces has a target frame (target 0, or a 3D-degenerate face) has no energy;
+// its unknowns would make the system singular and leave the whole map unrefined. It stays put while
+// the rest is refined.
 TEST(RefineMap, AVertexWithoutTargetFramesStaysWhileTheRestIsRefined) {
   GridDisk g = grid_disk();
   const uint32_t v = 2 * 8 + 5;  // an interior vertex
@@ -1616,8 +1614,8 @@ TEST(Pipeline, TheDefaultBudgetGrowsToHoldEveryComponent) {
   EXPECT_TRUE(optimize(in, opt).report["options"]["size_grown_from"].is_null());
 }
 
-// Options::default_budget in the per-component layout: the 500 textures hold the budget together
-// (each got the whole of it before: 500 textures of 64²); an asked-for size is the largest's side.
+// Options::default_budget in the per-component layout: the 500 textures hold the budget together (not
+// each the whole of it); an asked-for size is the largest's side.
 TEST(Pipeline, PerComponentTexturesShareTheDefaultBudget) {
   const TexturedMesh in = many_quads();
   Options opt;
@@ -1658,9 +1656,8 @@ TEST(Pipeline, FineFitChangesOnlyTheTexelsAndDoesNotLoseFidelity) {
 }
 
 // Scans and merged exports hold triangles wound the other way. Repair orients each patch the way most
-// of its area is wound, so the model stays one chart, as if it had come clean: before, every such edge
-// was sliced (a sphere with every 5th triangle reversed fell into about 200 charts, and on a real scan
-// the flipped count was the reversed triangles').
+// of its area is wound, so the model stays one chart, as if it had come clean (slicing every such edge
+// instead would split a sphere with every 5th triangle reversed into about 200 charts).
 TEST(Pipeline, TrianglesWoundTheOtherWayAreReoriented) {
   const TexturedMesh clean = cat::sphere();
   TexturedMesh messy = clean;
@@ -1726,7 +1723,7 @@ TEST(Pipeline, ProgressIsOrderedAndSerialised) {
   EXPECT_TRUE(std::any_of(calls.begin(), calls.end(), [](const auto& c) { return c.first == "cut+map"; }));
 }
 
-// Issue 4, --map detail: a flat sheet whose texture is a fine checker on its left half and one flat
+// --map detail: a flat sheet whose texture is a fine checker on its left half and one flat
 // colour on its right. The detail map must give the checkered half clearly more texels per unit area
 // than the flat half, stay fold-free, and reproduce the texture better than the area map at the same
 // (tight) budget; the area map keeps both halves near the same density.

@@ -5,7 +5,7 @@ place in the texture (charts of different boxes overlap), so the input uses far 
 faces sample. Deterministic for a seed.
 
 Usage: tools/make_boxes.py N OUTDIR [--seed 3] [--extent 300]
-Writes OUTDIR/boxes.obj, boxes.mtl, boxes.png (BENCHMARKS.md, "Many components").
+Writes OUTDIR/boxes.obj, boxes.mtl, boxes.png (BENCHMARKS.md, "Scale").
 """
 import argparse
 import os
