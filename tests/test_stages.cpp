@@ -1341,8 +1341,8 @@ TEST(Layout, ASmallComponentBesideABigOneIsNotAStrip) {
   EXPECT_GE(got, 2.5 * ideal);
   EXPECT_LE(got, 6.0 * ideal);
   EXPECT_GE(double(rects[0].w) * rects[0].h, 0.94 * 1024 * 1024);
-  // exact_shares (the area map's same texels per unit area) keeps the proportion, strip or not.
-  const auto exact = layout_atlas(areas, 1024, 1024, 4, true);
+  // AtlasShares::kExact (the area map's same texels per unit area) keeps the proportion, strip or not.
+  const auto exact = layout_atlas(areas, 1024, 1024, 4, AtlasShares::kExact);
   check_atlas(areas, exact, 1024, 1024, 4);
   EXPECT_NEAR(double(exact[1].w) * exact[1].h, ideal, 1024.0);
   // The same in a 2:1 texture, both ways round (the auto shape's probes).
@@ -1364,6 +1364,12 @@ TEST(Layout, AtlasAtCapacity) {
   }
   // One more than fits: refused as bad input, not a crash or an overlapping layout.
   EXPECT_THROW(layout_atlas(std::vector<double>(17, 1.0), 16, 16, 4), InputError);
+  // The same question asked as an attempt: no rectangles instead of the error, the same ones otherwise.
+  EXPECT_FALSE(try_layout_atlas(std::vector<double>(17, 1.0), 16, 16, 4).has_value());
+  const auto attempt = try_layout_atlas(equal, 16, 16, 4);
+  ASSERT_TRUE(attempt.has_value());
+  for (size_t i = 0; i < rects.size(); ++i)
+    EXPECT_TRUE((*attempt)[i].x == rects[i].x && (*attempt)[i].y == rects[i].y && (*attempt)[i].w == rects[i].w && (*attempt)[i].h == rects[i].h) << i;
   // Many tiny items beside one big one: the tiny ones still get min_side squares.
   std::vector<double> skewed(40, 1e-12);
   skewed[0] = 1.0;

@@ -13,11 +13,14 @@ enum class EdgeRule {
   kTopLeft,    // it belongs to exactly one of two triangles sharing the edge (overlap counting)
 };
 
-/// Calls f(x, y, w0, w1, w2) for every texel centre (x + 0.5, y + 0.5) inside triangle p0 p1 p2 (pixel
-/// coordinates), with x in [x_lo, x_hi) and y in [y_lo, y_hi). w are the barycentric weights of
-/// p0, p1, p2 at the centre. Either orientation; degenerate or non-finite triangles yield nothing.
-/// Each row's span is found analytically from the three edges, so a thin triangle costs its area plus
-/// its height, not its bounding box.
+/// The scan line of paper Alg. 3: calls f(x, y, w0, w1, w2) for every texel centre (x + 0.5, y + 0.5)
+/// inside triangle p0 p1 p2 (pixel coordinates), with x in [x_lo, x_hi) and y in [y_lo, y_hi), row by
+/// row, left to right. w are the barycentric weights of p0, p1, p2 at the centre.
+/// Requires: nothing of the triangle (either orientation; any coordinates, huge or NaN included).
+/// Guarantees: degenerate or non-finite triangles yield nothing; with EdgeRule::kTopLeft, a centre on an
+/// edge shared by two triangles is visited for exactly one of them. Each row's span is found
+/// analytically from the three edges, so a thin triangle costs its area plus its height, not its
+/// bounding box. Throws only what f throws.
 template <typename F>
 void scan_triangle(const Vec2& p0, const Vec2& p1, const Vec2& p2, long x_lo, long x_hi, long y_lo, long y_hi,
                    EdgeRule rule, F&& f) {
@@ -48,8 +51,8 @@ void scan_triangle(const Vec2& p0, const Vec2& p1, const Vec2& p2, long x_lo, lo
   const double ymin = std::min({p0.y(), p1.y(), p2.y()}), ymax = std::max({p0.y(), p1.y(), p2.y()});
   const double xmin = std::min({p0.x(), p1.x(), p2.x()}), xmax = std::max({p0.x(), p1.x(), p2.x()});
   // Coordinates are clamped to one texel beyond the range before any conversion to long: a huge or NaN
-  // coordinate (a material's -s/-o of 1e300) would overflow it (found by fuzzing). The same rows and
-  // columns are visited as without the clamp.
+  // coordinate (a material's -s/-o of 1e300) would overflow it. The same rows and columns are visited
+  // as without the clamp.
   auto near = [](double v, long lo, long hi) { return std::fmin(std::fmax(v, double(lo) - 1), double(hi) + 1); };
   const long ya = std::max(y_lo, long(std::ceil(near(ymin, y_lo, y_hi) - 0.5)));
   const long yb = std::min(y_hi - 1, long(std::floor(near(ymax, y_lo, y_hi) - 0.5)));

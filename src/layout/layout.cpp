@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <string>
 
 #include "core/error.hpp"
 
@@ -16,11 +17,50 @@ constexpr double kFreeAspect = 2.0;
 /// The layout moves a cut away from the proportional split only for a modelled gain above this.
 constexpr double kMinLayoutGain = 1e-3;
 
+/// The two groups a cut separates: their total weights and their largest items' weights.
+struct CutGroups {
+  double weight_a = 0, largest_a = 0;
+  double weight_b = 0, largest_b = 0;
+};
+
+/// Where a cut may go: at lo..hi texels along a side of `extent` texels, the other side `across`.
+struct CutRange {
+  int lo = 0, hi = 0, extent = 0, across = 0;
+};
+
+/// The split point of `items` (sorted, largest first) whose prefix weight is closest to half.
+size_t balanced_split(const std::vector<uint32_t>& items, const std::vector<double>& weight, double total) {
+  double acc = 0;
+  size_t split = 1;
+  double best = 1e300;
+  for (size_t k = 1; k < items.size(); ++k) {
+    acc += weight[items[k - 1]];
+    const double d = std::abs(acc - total / 2);
+    if (d < best) best = d, split = k;
+  }
+  return split;
+}
+
+/// Every split point of n items, `split` first, then the others by distance from it.
+std::vector<size_t> split_candidates(size_t n, size_t split) {
+  std::vector<size_t> ks;
+  for (size_t k = 1; k < n; ++k) ks.push_back(k);
+  std::stable_sort(ks.begin(), ks.end(), [&](size_t a, size_t b) {
+    const size_t da = a > split ? a - split : split - a, db = b > split ? b - split : split - b;
+    return da < db;
+  });
+  return ks;
+}
+
+/// The recursive bisection of layout_atlas.
 struct Bisector {
   const std::vector<double>& weight;
   int min_side;
-  bool exact_shares;
+  AtlasShares shares;
   std::vector<Rect>& out;
+  /// Where the bisection found no room (set when place returns false).
+  Rect failed_region;
+  size_t failed_items = 0;
 
   /// The modelled colour error of a group of items in a w x h rectangle. A chart of weight (share) a
   /// holding t texels loses about a^2 / t (its texel spacing squared, over its area: docs/maps.md), and
@@ -35,12 +75,14 @@ struct Bisector {
     return wsum * wsum / (double(w) * double(h)) * 0.5 * (e + 1.0 / e);
   }
 
-  /// The cut in [lo, hi] along `extent` (the other side `across`) with the least cost of the two groups
-  /// (weights wa, wb; their largest items' wmax_a, wmax_b: items are sorted, largest first), if that
-  /// beats the proportional cut `first` by kMinLayoutGain; else `first`. A coarse scan (at most 513
-  /// cuts), then the texels around its best.
-  int least_cost_cut(int first, int lo, int hi, int extent, int across, double wa, double wmax_a, double wb, double wmax_b) const {
-    auto split_cost = [&](int x) { return cost(wa, wmax_a, x, across) + cost(wb, wmax_b, extent - x, across); };
+  /// The cut in `range` with the least cost of the two groups, if that beats the proportional cut
+  /// `first` by kMinLayoutGain; else `first`. A coarse scan (at most 513 cuts), then the texels around
+  /// its best.
+  int least_cost_cut(int first, const CutRange& range, const CutGroups& g) const {
+    auto split_cost = [&](int x) {
+      return cost(g.weight_a, g.largest_a, x, range.across) + cost(g.weight_b, g.largest_b, range.extent - x, range.across);
+    };
+    const int lo = range.lo, hi = range.hi;
     const double proportional = split_cost(first);
     const int stride = std::max(1, (hi - lo) / 512);
     int best = first;
@@ -60,33 +102,19 @@ struct Bisector {
     return int(rows * min_side);
   }
 
-  void place(const std::vector<uint32_t>& items, Rect r) {
+  /// Places `items` (sorted, largest first) in r. Returns false, with failed_region and failed_items
+  /// set, where some region cannot hold its items at min_side x min_side.
+  bool place(const std::vector<uint32_t>& items, Rect r) {
     if (items.size() == 1) {
       r.image = 0;
       out[items[0]] = r;
-      return;
+      return true;
     }
     double total = 0;
     for (uint32_t i : items) total += weight[i];
-    // Split point: prefix whose weight is closest to half.
-    double acc = 0;
-    size_t split = 1;
-    double best = 1e300;
-    for (size_t k = 1; k < items.size(); ++k) {
-      acc += weight[items[k - 1]];
-      const double d = std::abs(acc - total / 2);
-      if (d < best) best = d, split = k;
-    }
     // Cut across the longer side in proportion to the weights; when the minimum sizes make that
     // impossible (many tiny components in a narrow strip), try the other side, then other split points.
-    // Candidate split points: the area split first, then the others by distance from it.
-    std::vector<size_t> ks;
-    for (size_t k = 1; k < items.size(); ++k) ks.push_back(k);
-    std::stable_sort(ks.begin(), ks.end(), [&](size_t a, size_t b) {
-      const size_t da = a > split ? a - split : split - a, db = b > split ? b - split : split - b;
-      return da < db;
-    });
-    for (const size_t k : ks) {
+    for (const size_t k : split_candidates(items.size(), balanced_split(items, weight, total))) {
       const std::vector<uint32_t> a(items.begin(), items.begin() + long(k)), b(items.begin() + long(k), items.end());
       double wa = 0;
       for (uint32_t i : a) wa += weight[i];
@@ -98,7 +126,8 @@ struct Bisector {
         int first = std::clamp(int(std::lround(extent * share)), lo, hi);
         // The proportional cut, unless it squeezes a group into a strip (one big component and a small
         // one: the small one's strip spans the texture): then the cut that the error model prefers.
-        if (!exact_shares) first = least_cost_cut(first, lo, hi, extent, across, wa, weight[a.front()], total - wa, weight[b.front()]);
+        if (shares == AtlasShares::kLeastError)
+          first = least_cost_cut(first, CutRange{lo, hi, extent, across}, CutGroups{wa, weight[a.front()], total - wa, weight[b.front()]});
         Rect ra = r, rb = r;
         if (cut_x) {
           ra.w = first;
@@ -109,24 +138,30 @@ struct Bisector {
           rb.y = r.y + first;
           rb.h = r.h - first;
         }
-        place(a, ra);
-        place(b, rb);
-        return;
+        return place(a, ra) && place(b, rb);
       }
     }
-    fail_input("a {}x{} region cannot hold {} components at {}x{} texels each; use a larger --size", r.w, r.h,
-               items.size(), min_side, min_side);
+    failed_region = r;
+    failed_items = items.size();
+    return false;
   }
 };
 
-}  // namespace
+/// layout_atlas's work: the rectangles, or the message of the InputError it throws.
+struct AtlasAttempt {
+  std::vector<Rect> rects;
+  std::optional<std::string> failure;
+};
 
-std::vector<Rect> layout_atlas(const std::vector<double>& areas, int width, int height, int min_side, bool exact_shares) {
-  std::vector<Rect> out(areas.size());
-  if (areas.empty()) return out;
-  if (long(areas.size()) > long(width / min_side) * long(height / min_side))
-    fail_input("a {}x{} texture cannot hold {} components at {}x{} texels each; use a larger --size", width, height,
-               areas.size(), min_side, min_side);
+AtlasAttempt attempt_atlas(const std::vector<double>& areas, int width, int height, int min_side, AtlasShares shares) {
+  AtlasAttempt attempt;
+  attempt.rects.resize(areas.size());
+  if (areas.empty()) return attempt;
+  if (long(areas.size()) > long(width / min_side) * long(height / min_side)) {
+    attempt.failure = fmt::format("a {}x{} texture cannot hold {} components at {}x{} texels each; use a larger --size", width,
+                                  height, areas.size(), min_side, min_side);
+    return attempt;
+  }
   double total = 0;
   for (double a : areas) total += std::max(a, 0.0);
   // Round tiny shares up to the minimum rectangle so the proportional cut leaves them room.
@@ -136,8 +171,28 @@ std::vector<Rect> layout_atlas(const std::vector<double>& areas, int width, int 
   std::vector<uint32_t> items(areas.size());
   std::iota(items.begin(), items.end(), 0u);
   std::stable_sort(items.begin(), items.end(), [&](uint32_t a, uint32_t b) { return weight[a] > weight[b]; });
-  Bisector{weight, min_side, exact_shares, out}.place(items, Rect{0, 0, 0, width, height});
-  return out;
+  Bisector bisector{weight, min_side, shares, attempt.rects, Rect{}, 0};
+  if (!bisector.place(items, Rect{0, 0, 0, width, height})) {
+    const Rect& r = bisector.failed_region;
+    attempt.failure = fmt::format("a {}x{} region cannot hold {} components at {}x{} texels each; use a larger --size", r.w, r.h,
+                                  bisector.failed_items, min_side, min_side);
+  }
+  return attempt;
+}
+
+}  // namespace
+
+std::vector<Rect> layout_atlas(const std::vector<double>& areas, int width, int height, int min_side, AtlasShares shares) {
+  AtlasAttempt attempt = attempt_atlas(areas, width, height, min_side, shares);
+  if (attempt.failure) throw InputError(*attempt.failure);
+  return std::move(attempt.rects);
+}
+
+std::optional<std::vector<Rect>> try_layout_atlas(const std::vector<double>& areas, int width, int height, int min_side,
+                                                  AtlasShares shares) {
+  AtlasAttempt attempt = attempt_atlas(areas, width, height, min_side, shares);
+  if (attempt.failure) return std::nullopt;
+  return std::move(attempt.rects);
 }
 
 std::vector<Rect> layout_per_component(const std::vector<double>& areas, int size, int min_side, double aspect) {

@@ -388,7 +388,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   if (options.layout == Layout::kAtlas && default_budget) {
     auto holds = [&](int s) {
       try {
-        (void)layout_atlas(areas, s, s, 4, false);
+        (void)layout_atlas(areas, s, s, 4);
         return true;
       } catch (const InputError&) {
         return false;
@@ -441,7 +441,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   double aspect = options.aspect > 0 ? options.aspect : 1.0;
   // The area map promises the same texels per unit area on every component; the others may give a
   // fragment that would be squeezed into a strip more than its share (layout_atlas).
-  const bool exact_shares = options.map == MapKind::kArea;
+  const AtlasShares atlas_shares = options.map == MapKind::kArea ? AtlasShares::kExact : AtlasShares::kLeastError;
 
   // 4. Cut each component to a disk and map it onto the unit square (§4.2). Where even positive
   //    weights fold (a region crowded below floating-point precision), the disk is slit to that
@@ -677,7 +677,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
       if (std::max(W, H) > std::max(size, kDefaultSizeMax)) return;  // not beyond the size limit for a shape
       if (kAspectProbes[i] != 1.0 && W == H) return;  // too small a texture to take another shape
       try {
-        probe_rect[i] = layout_atlas(shares, W, H, 4, exact_shares)[dominant];
+        probe_rect[i] = layout_atlas(shares, W, H, 4, atlas_shares)[dominant];
       } catch (const InputError&) {
         return;  // this shape cannot hold every component: not probed
       }
@@ -713,7 +713,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
   }
   if (options.layout == Layout::kAtlas) {
     const auto [W, H] = atlas_size(aspect);
-    rects = layout_atlas(shares, W, H, 4, exact_shares);
+    rects = layout_atlas(shares, W, H, 4, atlas_shares);
     image_size.push_back({W, H});
   } else {
     // --size is the largest component's side (the paper's layout). The default budget is the input's

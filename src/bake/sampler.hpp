@@ -1,0 +1,108 @@
+// Sampling the original texture through one output triangle's original UVs (paper §4.3), with
+// footprint filtering where the input is minified. Shared by the bake and its least-squares fit.
+#pragma once
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "bake/bake.hpp"
+#include "core/image.hpp"
+#include "core/mesh.hpp"
+
+namespace tightex {
+
+/// A colour in [0, 255] per channel rounded to 8 bits (clamped).
+inline Rgba8 to_rgba(const std::array<float, 4>& c) {
+  auto q = [](float x) { return uint8_t(std::clamp(x + 0.5f, 0.0f, 255.0f)); };
+  return {q(c[0]), q(c[1]), q(c[2]), q(c[3])};
+}
+
+/// What sampling one triangle needs, computed once: the source UV and the barycentric weights as affine
+/// functions of the target pixel position, and the footprint of an output texel in input pixels.
+struct TriangleSampler {
+  const Image* src = nullptr;  // the input texture; nullptr: the triangle takes `flat`
+  Rgba8 flat{255, 255, 255, 255};
+  Vec2 uv0, du_dx, du_dy;    // source uv at target pixel (0,0) and its derivatives (affine per triangle)
+  double bary_x[3], bary_y[3], bary_0[3];  // barycentric weights as affine functions of the target pixel
+  double footprint_x = 0, footprint_y = 0;  // input pixels spanned by one output texel along x and y
+  double weight = 0;         // 3D area per output texel (least-squares fit)
+  bool valid = false;        // false for a degenerate target triangle or a non-finite weight
+  std::array<Vec2, 3> corner_uv;
+
+  /// Requires: `source` outlives the sampler (or is nullptr). Guarantees: `valid` says whether the
+  /// affine maps and the weight are usable; `src` and `flat` are set either way.
+  void init(const BakeTriangle& tri, const Image* source, Rgba8 flat_colour) {
+    src = source;
+    flat = flat_colour;
+    corner_uv = tri.source_uv;
+    const Vec2 &p0 = tri.target_px[0], &p1 = tri.target_px[1], &p2 = tri.target_px[2];
+    const double det = (p1.x() - p0.x()) * (p2.y() - p0.y()) - (p1.y() - p0.y()) * (p2.x() - p0.x());
+    if (!(std::abs(det) > 0) || !std::isfinite(det)) return;
+    // w1, w2 from the 2x2 inverse; w0 = 1 - w1 - w2.
+    const double i00 = (p2.y() - p0.y()) / det, i01 = -(p2.x() - p0.x()) / det;
+    const double i10 = -(p1.y() - p0.y()) / det, i11 = (p1.x() - p0.x()) / det;
+    bary_x[1] = i00, bary_y[1] = i01, bary_0[1] = -(i00 * p0.x() + i01 * p0.y());
+    bary_x[2] = i10, bary_y[2] = i11, bary_0[2] = -(i10 * p0.x() + i11 * p0.y());
+    bary_x[0] = -bary_x[1] - bary_x[2], bary_y[0] = -bary_y[1] - bary_y[2], bary_0[0] = 1 - bary_0[1] - bary_0[2];
+    uv0 = Vec2::Zero(), du_dx = Vec2::Zero(), du_dy = Vec2::Zero();
+    for (int k = 0; k < 3; ++k) {
+      uv0 += bary_0[k] * tri.source_uv[k];
+      du_dx += bary_x[k] * tri.source_uv[k];
+      du_dy += bary_y[k] * tri.source_uv[k];
+    }
+    if (src) {
+      footprint_x = std::hypot(du_dx.x() * src->width, du_dx.y() * src->height);
+      footprint_y = std::hypot(du_dy.x() * src->width, du_dy.y() * src->height);
+    }
+    weight = tri.area3 / (0.5 * std::abs(det));
+    valid = std::isfinite(weight);
+  }
+
+  /// The source UV at target pixel position (x, y), kept inside the triangle: outside it, the
+  /// barycentrics are clamped to 0 and renormalised (approximately the nearest point of the triangle).
+  Vec2 source_uv_at(double x, double y) const {
+    double w[3], total = 0;
+    for (int k = 0; k < 3; ++k) total += w[k] = std::max(0.0, bary_0[k] + bary_x[k] * x + bary_y[k] * y);
+    Vec2 uv = uv0 + x * du_dx + y * du_dy;
+    if (w[0] == 0 || w[1] == 0 || w[2] == 0) {
+      uv = Vec2::Zero();
+      for (int k = 0; k < 3; ++k) uv += (w[k] / total) * corner_uv[k];
+    }
+    return uv;
+  }
+
+  /// Footprint filtering: the mean colour over a box of side `box` output texels centred at target
+  /// pixel position (x, y), from n x m bilinear samples (n, m the box's extent in input pixels along x
+  /// and y, at least 1, at most `max_samples`). The sample points are kept inside the triangle, so a
+  /// texel on a chart's edge never averages in the input's empty space beyond the triangle.
+  /// Requires: `valid` when `src` is set. Returns `flat` without a source texture.
+  std::array<float, 4> footprint_colour(double x, double y, double box, int max_samples) const {
+    if (!src) return {float(flat.r), float(flat.g), float(flat.b), float(flat.a)};
+    // Clamped before the conversion to int: a material's -s can make the footprint 1e300, and a NaN
+    // footprint takes one sample.
+    auto samples_along = [&](double footprint) {
+      const double n = std::ceil(footprint * box - 1e-9);
+      return n >= max_samples ? max_samples : n >= 1 ? int(n) : 1;
+    };
+    // Common case (a footprint of at most one input pixel along both axes): one sample, the same as the
+    // general loop below with nx = ny = 1, without its ceil() calls (the fit takes K^2 samples a texel).
+    if (footprint_x * box - 1e-9 <= 1 && footprint_y * box - 1e-9 <= 1) {
+      const Vec2 uv = source_uv_at(x, y);
+      return sample_bilinear(*src, uv.x(), uv.y());
+    }
+    const int nx = samples_along(footprint_x), ny = samples_along(footprint_y);
+    std::array<float, 4> sum{0, 0, 0, 0};
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        const double sx = x + box * ((i + 0.5) / nx - 0.5), sy = y + box * ((j + 0.5) / ny - 0.5);
+        const Vec2 uv = source_uv_at(sx, sy);
+        const auto c = sample_bilinear(*src, uv.x(), uv.y());
+        for (int ch = 0; ch < 4; ++ch) sum[size_t(ch)] += c[size_t(ch)];
+      }
+    const float inv = 1.0f / float(nx * ny);
+    for (float& c : sum) c *= inv;
+    return sum;
+  }
+};
+
+}  // namespace tightex
