@@ -5,7 +5,7 @@
 #include <cmath>
 #include <mutex>
 
-#include "param/param.hpp"
+#include "param/square_map_options.hpp"
 
 namespace tightex {
 
