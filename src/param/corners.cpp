@@ -1,10 +1,10 @@
-// Which four boundary vertices of a disk go to the square's corners (issue 3; docs/corners.md).
+// Which four boundary vertices of a disk go to the square's corners (docs/corners.md).
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 
 #include "core/error.hpp"
-#include "param/param.hpp"
+#include "param/corners.hpp"
 
 namespace tightex {
 

@@ -1,24 +1,25 @@
-// Beyond the paper: from a fold-free map, minimise the symmetric Dirichlet energy of each triangle
-// against its target shape (the 3D triangle scaled to its target UV area), with the boundary held.
-// Scalable Locally Injective Maps (Rabinovich, Lipman, Sorkine-Hornung 2017): each step solves a
-// reweighted Laplacian-like proxy, then a line search that never lets a triangle reach zero area.
-#include "param/sparse_cholesky.hpp"
+// The symmetric Dirichlet refinement (slim.hpp): from a fold-free map, minimise the symmetric
+// Dirichlet energy of each triangle against its target shape (the 3D triangle scaled to its target UV
+// area), with the boundary held. Scalable Locally Injective Maps (Rabinovich, Lipman, Sorkine-Hornung
+// 2017): each step solves a reweighted Laplacian-like proxy, then a line search that never lets a
+// triangle reach zero area.
+#include "param/slim.hpp"
+
 #include <Eigen/Sparse>
 #include <algorithm>
 #include <cmath>
 
-#include "param/param.hpp"
+#include "param/sparse_cholesky.hpp"
 
 namespace tightex {
 
 namespace {
 
-/// Cap on SLIM's squared weights, for a step whose system failed without it. A triangle squeezed to a
-/// sliver in the start map (sigma_min 1e-10 of its target: found on the bust with six patches missing,
-/// tools/perturb_obj.py) gives weights of 1e28-1e30; the system then fails to factorise ("not positive
-/// definite") and the map went unrefined. Capped, it is well conditioned; the line search still takes
-/// only steps that lower the true energy. Not applied to every step: it changes the path of maps that
-/// solve without it (meshroom_esp32cam's detail map 43.52 -> 43.11 dB with every step capped).
+/// Cap on SLIM's squared weights, for a step whose system failed without it: a triangle squeezed to a
+/// sliver in the start map gives weights of 1e28 and more, and the system fails to factorise. Capped,
+/// it is well conditioned; the line search still takes only steps that lower the true energy. Not
+/// applied to every step, as it changes the path of maps that solve without it. Chosen by
+/// measurement: docs/decisions.md.
 constexpr double kMaxWeight = 1e8;
 
 using SpMat = Eigen::SparseMatrix<double>;
@@ -56,11 +57,9 @@ std::vector<TargetFrame> target_frames(const Surface& m, const std::vector<doubl
       p = {Vec2(0, 0), Vec2(s * l1, 0), Vec2(s * e1.dot(e2) / l1, s * cross / l1)};
     } else {
       // No 3D shape (a cap face over an S-shaped hole has zero area): its start shape in the map, at its
-      // start area, is what it keeps. Without a frame such a face had no energy to keep it open, the
-      // step direction collapsed it, and as the line search never lets a face reach zero area, every
-      // step shrank to a tenth of the last (the bust with 0.5% of its triangles removed: 2 steps, energy
-      // 14.80 -> 14.76). An equilateral frame of the target area kept it open but pulled the hole's rim
-      // together towards the cap's small target (plate faces beside it squeezed to 0.46x the density).
+      // start area, is what it keeps. Without a frame such a face would have no energy to keep it open,
+      // the step direction would collapse it, and the line search would shrink every step to nothing;
+      // an equilateral frame of the target area would pull the hole's rim towards the cap's small target.
       const Vec2 u1 = start[m.triangles[f][1]] - start[m.triangles[f][0]], u2 = start[m.triangles[f][2]] - start[m.triangles[f][0]];
       const double ua = 0.5 * (u1.x() * u2.y() - u1.y() * u2.x());
       if (!(ua > 0) || !std::isfinite(ua)) continue;
@@ -133,49 +132,35 @@ double max_step(const Surface& m, const std::vector<Vec2>& uv, const std::vector
   return t_max;
 }
 
-}  // namespace
-
-SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,
-                     std::vector<Vec2>& uv, long supernodal_from, const std::function<void(int step)>& on_step,
-                     const std::vector<FaceShape>* shapes) {
-  SlimStats st;
+/// The free coordinates' unknowns: index[2 v + a] for coordinate a of vertex v, -1 where it is held.
+/// fixed[v] bit 0 holds u, bit 1 holds v (a vertex sliding along a side of the square keeps one of
+/// them). A vertex all of whose faces have no target frame (no target area, or no 3D shape and no area
+/// in the start map) has no energy term: its row of the system would be zero and the factorisation
+/// fail, leaving the whole map unrefined, so it stays where it is (the line search still keeps its
+/// faces from collapsing).
+std::vector<int> free_coordinates(const Surface& m, const std::vector<TargetFrame>& fr, const std::vector<char>& fixed, int& n) {
   const size_t nv = m.num_vertices();
-  const auto fr = target_frames(m, target, uv, shapes);
-  // A vertex all of whose faces have no target frame (no target area, or no 3D shape and no area in the
-  // start map) has no energy term: its row of the system would be zero and the factorisation fail,
-  // leaving the whole map unrefined. It stays where it is (the line search still keeps its faces from
-  // collapsing).
   std::vector<char> framed(nv, 0);
   for (size_t f = 0; f < m.num_faces(); ++f)
     if (fr[f].area > 0)
       for (uint32_t v : m.triangles[f]) framed[v] = 1;
-  // One unknown per free coordinate: fixed[v] bit 0 holds u, bit 1 holds v (a vertex sliding along a
-  // side of the square keeps one of them).
   std::vector<int> index(2 * nv, -1);
-  int n = 0;
+  n = 0;
   for (size_t v = 0; v < nv; ++v)
     for (int a = 0; a < 2; ++a)
       if (framed[v] && !(fixed[v] & (1 << a))) index[2 * v + size_t(a)] = n++;
-  st.energy_before = st.energy = energy(m, fr, uv);
-  if (n == 0 || !std::isfinite(st.energy)) return st;
-  SparseCholesky solver(supernodal_from);
-  bool analyzed = false;
-  // The matrix's pattern is the same every step: build it once, and where each face's 2x2 blocks land
-  // in its value array, so a step only overwrites values.
-  SpMat A(n, n);
-  std::vector<int> slot(m.num_faces() * 36, -1);  // face, (i, j) corner pair, (a, b) coordinate pair
-  {
-    // Every lower-triangle entry (row >= col) a face contributes, with its slot number.
-    auto for_each_entry = [&](auto&& f) {
-      for (size_t face = 0; face < m.num_faces(); ++face)
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j)
-            for (int a = 0; a < 2; ++a)
-              for (int b = 0; b < 2; ++b) {
-                const int row = index[2 * m.triangles[face][i] + size_t(a)], col = index[2 * m.triangles[face][j] + size_t(b)];
-                if (row >= 0 && col >= 0 && row >= col) f(face * 36 + size_t((i * 3 + j) * 4 + a * 2 + b), row, col);
-              }
-    };
+  return index;
+}
+
+/// The SLIM system over the free coordinates. Its pattern is the same every step: it is built once,
+/// with where each face's 2x2 blocks land in the value array, so a step only overwrites values.
+class SlimSystem {
+ public:
+  SpMat A;
+  Eigen::VectorXd rhs;
+
+  SlimSystem(const Surface& m, const std::vector<TargetFrame>& fr, const std::vector<int>& index, int n)
+      : A(n, n), rhs(n), m_(m), fr_(fr), index_(index), slot_(m.num_faces() * 36, -1) {
     std::vector<Eigen::Triplet<double>> trips;
     trips.reserve(m.num_faces() * 24);
     for_each_entry([&](size_t, int row, int col) { trips.emplace_back(row, col, 1.0); });
@@ -184,73 +169,118 @@ SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std
     for_each_entry([&](size_t s, int row, int col) {
       const int* begin = A.innerIndexPtr() + A.outerIndexPtr()[col];
       const int* end = A.innerIndexPtr() + A.outerIndexPtr()[col + 1];
-      slot[s] = int(std::lower_bound(begin, end, row) - A.innerIndexPtr());
+      slot_[s] = int(std::lower_bound(begin, end, row) - A.innerIndexPtr());
     });
   }
-  std::vector<Vec2> d(nv), trial(nv);
-  Eigen::VectorXd rhs(n);
-  // The SLIM system at the current map, its squared weights at most max_weight.
-  auto assemble = [&](double max_weight) {
+
+  /// The SLIM system at map uv, its squared weights at most max_weight.
+  void assemble(const std::vector<Vec2>& uv, double max_weight) {
     std::fill(A.valuePtr(), A.valuePtr() + A.nonZeros(), 0.0);
-    double* values = A.valuePtr();
     rhs.setZero();
-    for (size_t f = 0; f < m.num_faces(); ++f) {
-      const TargetFrame& F = fr[f];
-      if (F.area <= 0) continue;
-      const Tri& t = m.triangles[f];
-      const Mat2 J = jacobian(F, uv[t[0]], uv[t[1]], uv[t[2]]);
-      Mat2 U, V;
-      Vec2 sigma;
-      svd2(J, U, sigma, V);
-      const Mat2 R = U * V.transpose();
-      Vec2 w2;
-      for (int k = 0; k < 2; ++k) {
-        const double s = sigma(k);
-        // w^2 of SLIM's symmetric Dirichlet weights, at most max_weight.
-        w2(k) = std::min(max_weight, std::abs(s - 1) < 1e-8 ? 4.0 : (s - 1 / (s * s * s)) / (s - 1));
-      }
-      const Mat2 M = U * w2.asDiagonal() * U.transpose();
-      const Mat2 MR = M * R;
-      for (int i = 0; i < 3; ++i) {
-        const Vec2 b = F.area * MR * F.g[i];
-        for (int a = 0; a < 2; ++a) {
-          const int row = index[2 * t[i] + size_t(a)];
-          if (row < 0) continue;
-          rhs(row) += b(a);
-          for (int j = 0; j < 3; ++j) {
-            const Mat2 H = F.area * F.g[i].dot(F.g[j]) * M;
-            const int* sl = &slot[f * 36 + size_t((i * 3 + j) * 4)];
-            for (int b2 = 0; b2 < 2; ++b2) {
-              if (index[2 * t[j] + size_t(b2)] < 0) rhs(row) -= H(a, b2) * uv[t[j]](b2);  // a fixed coordinate
-              else if (sl[a * 2 + b2] >= 0) values[sl[a * 2 + b2]] += H(a, b2);
+    for (size_t f = 0; f < m_.num_faces(); ++f)
+      if (fr_[f].area > 0) add_face(f, uv, max_weight);
+  }
+
+ private:
+  /// Calls f(slot, row, col) for every lower-triangle entry (row >= col) a face contributes; slot:
+  /// face, (i, j) corner pair, (a, b) coordinate pair.
+  template <class F>
+  void for_each_entry(F&& f) const {
+    for (size_t face = 0; face < m_.num_faces(); ++face)
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          for (int a = 0; a < 2; ++a)
+            for (int b = 0; b < 2; ++b) {
+              const int row = index_[2 * m_.triangles[face][i] + size_t(a)], col = index_[2 * m_.triangles[face][j] + size_t(b)];
+              if (row >= 0 && col >= 0 && row >= col) f(face * 36 + size_t((i * 3 + j) * 4 + a * 2 + b), row, col);
             }
+  }
+
+  void add_face(size_t f, const std::vector<Vec2>& uv, double max_weight) {
+    double* values = A.valuePtr();
+    const TargetFrame& F = fr_[f];
+    const Tri& t = m_.triangles[f];
+    const Mat2 J = jacobian(F, uv[t[0]], uv[t[1]], uv[t[2]]);
+    Mat2 U, V;
+    Vec2 sigma;
+    svd2(J, U, sigma, V);
+    const Mat2 R = U * V.transpose();
+    Vec2 w2;
+    for (int k = 0; k < 2; ++k) {
+      const double s = sigma(k);
+      // w^2 of SLIM's symmetric Dirichlet weights, at most max_weight.
+      w2(k) = std::min(max_weight, std::abs(s - 1) < 1e-8 ? 4.0 : (s - 1 / (s * s * s)) / (s - 1));
+    }
+    const Mat2 M = U * w2.asDiagonal() * U.transpose();
+    const Mat2 MR = M * R;
+    for (int i = 0; i < 3; ++i) {
+      const Vec2 b = F.area * MR * F.g[i];
+      for (int a = 0; a < 2; ++a) {
+        const int row = index_[2 * t[i] + size_t(a)];
+        if (row < 0) continue;
+        rhs(row) += b(a);
+        for (int j = 0; j < 3; ++j) {
+          const Mat2 H = F.area * F.g[i].dot(F.g[j]) * M;
+          const int* sl = &slot_[f * 36 + size_t((i * 3 + j) * 4)];
+          for (int b2 = 0; b2 < 2; ++b2) {
+            if (index_[2 * t[j] + size_t(b2)] < 0) rhs(row) -= H(a, b2) * uv[t[j]](b2);  // a fixed coordinate
+            else if (sl[a * 2 + b2] >= 0) values[sl[a * 2 + b2]] += H(a, b2);
           }
         }
       }
     }
-  };
+  }
+
+  const Surface& m_;
+  const std::vector<TargetFrame>& fr_;
+  const std::vector<int>& index_;
+  std::vector<int> slot_;
+};
+
+/// Solves the system assembled at uv; where it fails (weights of 1e28 and more, from a sliver in the
+/// start map), again with its weights capped at kMaxWeight. False if that fails too.
+bool solve_step(SlimSystem& system, SparseCholesky& solver, bool& analyzed, const std::vector<Vec2>& uv, Eigen::VectorXd& x,
+                SlimStats& st) {
+  system.assemble(uv, INFINITY);
+  if (!analyzed) {
+    solver.analyzePattern(system.A);
+    analyzed = true;
+  }
+  if (solver.factorize(system.A) && solver.solve(system.A, system.rhs, x)) return true;
+  system.assemble(uv, kMaxWeight);
+  if (!solver.factorize(system.A) || !solver.solve(system.A, system.rhs, x)) return false;
+  ++st.capped_steps;
+  return true;
+}
+
+}  // namespace
+
+SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,
+                     std::vector<Vec2>& uv, long supernodal_from, const std::function<void(int step)>& on_step,
+                     const std::vector<FaceShape>* shapes) {
+  SlimStats st;
+  const size_t nv = m.num_vertices();
+  const auto fr = target_frames(m, target, uv, shapes);
+  int n = 0;
+  const std::vector<int> index = free_coordinates(m, fr, fixed, n);
+  st.energy_before = st.energy = energy(m, fr, uv);
+  if (n == 0 || !std::isfinite(st.energy)) return st;
+  SparseCholesky solver(supernodal_from);
+  bool analyzed = false;
+  SlimSystem system(m, fr, index, n);
+  std::vector<Vec2> d(nv), trial(nv);
   for (int it = 0; it < iterations; ++it) {
-    assemble(INFINITY);
-    if (!analyzed) {
-      solver.analyzePattern(A);
-      analyzed = true;
-    }
     Eigen::VectorXd x;
-    if (!solver.factorize(A) || !solver.solve(A, rhs, x)) {
-      // Weights of 1e28 and more (a sliver in the start map) make the system fail numerically: try again
-      // with them capped (kMaxWeight).
-      assemble(kMaxWeight);
-      if (!solver.factorize(A) || !solver.solve(A, rhs, x)) {
-        st.stopped = "solver";
-        break;
-      }
-      ++st.capped_steps;
+    if (!solve_step(system, solver, analyzed, uv, x, st)) {
+      st.stopped = "solver";
+      break;
     }
     for (size_t v = 0; v < nv; ++v)
       for (int a = 0; a < 2; ++a) {
         const int k = index[2 * v + size_t(a)];
         d[v](a) = k < 0 ? 0.0 : x(k) - uv[v](a);
       }
+    // Line search: from 0.9 of the longest step that folds nothing, halved until the energy drops.
     double t = std::min(1.0, 0.9 * max_step(m, uv, d));
     double e_new = INFINITY;
     for (int tries = 0; tries < 40; ++tries, t *= 0.5) {

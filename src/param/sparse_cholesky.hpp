@@ -5,15 +5,14 @@
 #include <cmath>
 #include <mutex>
 
-#include "param/param.hpp"
+#include "param/square_map_options.hpp"
 
 namespace tightex {
 
 /// Serialises the supernodal factorisations and solves of all threads. The components are mapped in
 /// parallel, and a BLAS built without locking (Debian's serial OpenBLAS) returns garbage when two
-/// threads call it at once: two 100k-triangle components gave "matrix not positive definite" and a
-/// folded map. One BLAS call at a time is correct with any BLAS, and costs little: a threaded BLAS
-/// uses every core within the call.
+/// threads call it at once. One BLAS call at a time is correct with any BLAS, and costs little: a
+/// threaded BLAS uses every core within the call.
 std::mutex& blas_mutex();
 
 /// Eigen's CHOLMOD wrapper, simplicial or supernodal by the system's size (chosen at analyzePattern;
@@ -52,8 +51,8 @@ class SparseCholesky {
   /// Whether x solves a x = b (a: lower triangle stored) as a backward-stable factorisation would: the
   /// normwise backward error |a x - b| / (|a| |x| + |b|) (infinity norms) at most 1e-8, far above the
   /// rounding of a sound solve (about 1e-16 times a small multiple of the size), far below a wrong one
-  /// (a solution 1% off gives about 1e-2). Catches a factorisation that went wrong without saying so:
-  /// a BLAS unsafe for concurrent calls gave finite garbage, and a 7 dB map.
+  /// (a solution 1% off gives about 1e-2). Catches a factorisation that went wrong without saying so,
+  /// such as the finite garbage of a BLAS unsafe for concurrent calls.
   template <class X, class B>
   static bool solves(const Matrix& a, const Eigen::MatrixBase<X>& x, const Eigen::MatrixBase<B>& b) {
     if (a.rows() == 0) return true;

@@ -1,0 +1,220 @@
+#include "param/density_map.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <utility>
+
+#include "core/statistics.hpp"
+#include "param/density_flow.hpp"
+#include "param/folds.hpp"
+#include "param/slim.hpp"
+
+namespace tightex {
+
+namespace {
+
+/// No flow on a fragment of fewer faces: the grid's noise moves those by more than it evens them out.
+constexpr size_t kFlowMinFaces = 100;
+/// Symmetric Dirichlet steps towards the flowed faces' shapes where the flowed map itself folds or
+/// collapses. Chosen by measurement: docs/decisions.md.
+constexpr int kFlowShapeSteps = 30;
+/// The flow rounds start from a density diffused over these many cells: a coarse start folds fewer
+/// faces and leaves the finer rounds less to move. Chosen by measurement: docs/decisions.md.
+constexpr double kFlowStarts[] = {4, 2, 1};
+/// Symmetric Dirichlet steps towards the targets' shapes before the flow: they take the shear out of
+/// the reweighted map, which the flow then keeps far better. Chosen by measurement: docs/decisions.md.
+constexpr int kFlowLeadSteps = 10;
+/// The flow rounds stop once the density error is within +-this (log2): each round costs a map's
+/// worth of symmetric Dirichlet steps where faces fold. Chosen by measurement: docs/decisions.md.
+constexpr double kFlowEnough = 0.4;
+/// The refinement trades a little density for much less shear; it is kept unless it widens the
+/// density error by more than this (log2).
+constexpr double kRefineSlack = 0.1;
+
+/// The density error's worst side, max(-P5, P95) of log2(area / target).
+double worst_error(double p5, double p95) { return std::max(-p5, p95); }
+
+/// refine_map in the rectangle's proportions (area 1: the targets are normalised to the unit square),
+/// so the targets' shapes are met in texels. `shapes` (unit square, optional): refine_map's.
+SlimStats refine_in_rectangle(const DensityConstraints& c, const std::vector<double>& target, int iterations,
+                              const std::function<void(int)>& on_step, std::vector<Vec2>& uv,
+                              const std::vector<FaceShape>* shapes = nullptr) {
+  if (c.aspect == 1.0) return refine_map(c.mesh, c.fixed, target, iterations, uv, c.options.supernodal_from, on_step, shapes);
+  const double sx = std::sqrt(c.aspect);
+  const std::vector<Vec2> before = uv;
+  for (Vec2& p : uv) p = Vec2(p.x() * sx, p.y() / sx);
+  std::vector<FaceShape> scaled_shapes;
+  if (shapes) {
+    scaled_shapes = *shapes;
+    for (FaceShape& s : scaled_shapes)
+      for (Vec2& p : s) p = Vec2(p.x() * sx, p.y() / sx);
+  }
+  const SlimStats r = refine_map(c.mesh, c.fixed, target, iterations, uv, c.options.supernodal_from, on_step, shapes ? &scaled_shapes : nullptr);
+  for (Vec2& p : uv) p = Vec2(p.x() / sx, p.y() * sx);
+  // Held coordinates come back exactly (x * sx / sx may miss 1 by an ulp: a side's texel centres
+  // would fall outside the chart).
+  for (size_t v = 0; v < uv.size(); ++v)
+    for (int a = 0; a < 2; ++a)
+      if (c.fixed[v] & (1 << a)) uv[v](a) = before[v](a);
+  return r;
+}
+
+/// The density error of uv against st.blended_target (scaled to the map's area) into st.spread_p5 and
+/// st.spread_p95; returns each face's log2(area / target).
+std::vector<double> measure_density_error(const Surface& m, const std::vector<Vec2>& uv, SquareMapStats& st) {
+  const size_t nf = m.num_faces();
+  std::vector<double> log_ratio(nf);
+  std::vector<std::pair<double, double>> vw(nf);
+  double total = 0, sum_t = 0;
+  for (size_t f = 0; f < nf; ++f) {
+    log_ratio[f] = signed_area(uv[m.triangles[f][0]], uv[m.triangles[f][1]], uv[m.triangles[f][2]]);  // the area, for now
+    total += log_ratio[f], sum_t += st.blended_target[f];
+  }
+  for (size_t f = 0; f < nf; ++f) {
+    log_ratio[f] = std::log2(std::max(log_ratio[f], 1e-300) / (st.blended_target[f] * total / sum_t));
+    vw[f] = {log_ratio[f], st.blended_target[f]};
+  }
+  st.spread_p5 = weighted_quantile(vw, 0.05);
+  st.spread_p95 = weighted_quantile(vw, 0.95);
+  return log_ratio;
+}
+
+/// Tracers for the flow: a small copy of each face about its centroid, at most a quarter cell across,
+/// which the flow carries as its own local map (its Jacobian there) carries the face. tracer_scale[f]:
+/// the copy's scale.
+std::vector<Vec2> face_tracers(const Surface& m, const std::vector<Vec2>& uv, double cell, std::vector<double>& tracer_scale) {
+  const size_t nf = m.num_faces();
+  std::vector<Vec2> tracers(3 * nf);
+  tracer_scale.assign(nf, 0.0);
+  for (size_t f = 0; f < nf; ++f) {
+    const Tri& t = m.triangles[f];
+    const Vec2 centroid = (uv[t[0]] + uv[t[1]] + uv[t[2]]) / 3.0;
+    const double longest = std::max({(uv[t[1]] - uv[t[0]]).norm(), (uv[t[2]] - uv[t[1]]).norm(), (uv[t[0]] - uv[t[2]]).norm()});
+    tracer_scale[f] = longest > 0.25 * cell ? 0.25 * cell / longest : 1.0;
+    for (size_t k = 0; k < 3; ++k) tracers[3 * f + k] = centroid + tracer_scale[f] * (uv[t[k]] - centroid);
+  }
+  return tracers;
+}
+
+/// One flow round from a density diffused over `start_cells` cells. The flow carries vertices, not
+/// triangles: a face spanning many cells of a field that bends across it can fold. Where any face of
+/// the flowed map folds or collapses, kFlowShapeSteps symmetric Dirichlet steps aim from the map
+/// before at the shapes the flow gives each face instead: the tracers' (the flow's own local map at
+/// the face, which never folds, where the flowed vertices of a long face can). Kept only if it narrows
+/// the density error.
+void flow_round(const DensityConstraints& c, double start_cells, std::vector<Vec2>& uv, SquareMapStats& st) {
+  const Surface& m = c.mesh;
+  const size_t nf = m.num_faces();
+  const std::vector<Vec2> previous = uv;
+  const double previous_p5 = st.spread_p5, previous_p95 = st.spread_p95;
+  std::vector<Vec2> flowed = uv;
+  FlowOptions fo;
+  fo.fold_free = false;
+  fo.start_cells = start_cells;
+  std::vector<double> tracer_scale;
+  std::vector<Vec2> tracers = face_tracers(m, uv, 1.0 / flow_grid(nf, fo), tracer_scale);
+  const FlowStats fs = flow_density(m, c.flow_fixed, st.blended_target, c.aspect, flowed, fo, &tracers);
+  st.flow_steps += fs.steps;
+  st.flow_stopped = fs.stopped;
+  const size_t collapsed = count_collapsed(m, flowed, c.options);
+  if (collapsed == 0) {
+    uv = flowed;
+  } else {
+    std::vector<FaceShape> shapes(nf);
+    for (size_t f = 0; f < nf; ++f)
+      for (size_t k = 0; k < 3; ++k) shapes[f][k] = tracers[3 * f + k] / tracer_scale[f];
+    const SlimStats shaped = refine_in_rectangle(c, st.blended_target, kFlowShapeSteps, {}, uv, &shapes);
+    st.flow_shape_steps += shaped.iterations;
+  }
+  measure_density_error(m, uv, st);
+  if (!(worst_error(st.spread_p5, st.spread_p95) < worst_error(previous_p5, previous_p95))) {
+    uv = previous;
+    st.spread_p5 = previous_p5, st.spread_p95 = previous_p95;
+  }
+}
+
+/// Rounds of target correction: the symmetric Dirichlet energy balances area against angle; where the
+/// area still misses its target, the target shape itself is corrected (grown where the face came out
+/// small) and the energy lowered again, so the density converges at the cost of a little more shear.
+/// `log_ratio`: the density error of uv per face (measure_density_error).
+void correct_targets(const DensityConstraints& c, std::vector<double> log_ratio, std::vector<Vec2>& uv, SquareMapStats& st) {
+  const size_t nf = c.mesh.num_faces();
+  std::vector<double> corrected = st.blended_target;
+  for (int round = 0; round < c.options.correction_rounds; ++round) {
+    if (worst_error(st.spread_p5, st.spread_p95) <= c.options.tolerance_log2) break;
+    for (size_t f = 0; f < nf; ++f) corrected[f] *= std::exp2(-std::clamp(log_ratio[f], -4.0, 4.0));
+    const std::vector<Vec2> previous = uv;
+    const double previous_p5 = st.spread_p5, previous_p95 = st.spread_p95;
+    const SlimStats cs = refine_in_rectangle(c, corrected, 2, {}, uv);
+    st.refine_iterations += cs.iterations;
+    ++st.correction_rounds;
+    log_ratio = measure_density_error(c.mesh, uv, st);
+    if (worst_error(st.spread_p5, st.spread_p95) > worst_error(previous_p5, previous_p95) + kRefineSlack) {  // worse: undo, stop
+      uv = previous;
+      st.spread_p5 = previous_p5, st.spread_p95 = previous_p95;
+      break;
+    }
+  }
+}
+
+}  // namespace
+
+DensityConstraints density_constraints(const Disk& disk, const SquareBoundary& boundary, const SquareMapOptions& options) {
+  const auto& bnd = disk.boundary;
+  const size_t nb = bnd.size();
+  const auto& corner = boundary.corner;
+  auto is_corner = [&](size_t i) { return std::find(corner.begin(), corner.end(), i) != corner.end(); };
+  std::vector<char> held = boundary.pinned;
+  for (size_t i = 0; i < nb; ++i)
+    if (boundary.pinned[i] && !is_corner(i)) held[(i + 1) % nb] = held[(i + nb - 1) % nb] = 1;
+  // A boundary vertex that `holds(i)` stays (3), every other slides along its side (2: a horizontal
+  // side holds v, 1: a vertical one holds u); all stay when the boundary does not slide.
+  auto side_constraints = [&](auto&& holds) {
+    std::vector<char> fixed(disk.mesh.num_vertices(), 0);
+    for (size_t i = 0; i < nb; ++i) fixed[bnd[i]] = holds(i) || !options.slide_boundary ? 3 : (boundary.side_of[i] % 2 == 0 ? 2 : 1);
+    return fixed;
+  };
+  return {disk.mesh, options, map_aspect(options), side_constraints([&](size_t i) { return held[i] != 0; }), side_constraints(is_corner)};
+}
+
+void flow_towards_targets(const DensityConstraints& c, std::vector<Vec2>& uv, SquareMapStats& st) {
+  if (!c.options.density_flow || c.mesh.num_faces() < kFlowMinFaces || !(worst_error(st.spread_p5, st.spread_p95) > c.options.tolerance_log2))
+    return;
+  const double reweighted_p5 = st.spread_p5, reweighted_p95 = st.spread_p95;
+  const std::vector<Vec2> reweighted = uv;
+  st.flow_lead_steps = refine_in_rectangle(c, st.blended_target, kFlowLeadSteps, {}, uv).iterations;
+  measure_density_error(c.mesh, uv, st);
+  for (double start_cells : kFlowStarts) {
+    flow_round(c, start_cells, uv, st);
+    if (worst_error(st.spread_p5, st.spread_p95) <= kFlowEnough) break;
+  }
+  // No narrower than the reweighted map (the rounds' and the lead steps' work undone): back to it.
+  if (!(worst_error(st.spread_p5, st.spread_p95) < worst_error(reweighted_p5, reweighted_p95))) {
+    uv = reweighted;
+    measure_density_error(c.mesh, uv, st);
+    st.flow_stopped += ", reverted";
+  }
+}
+
+void refine_towards_targets(const DensityConstraints& c, std::vector<Vec2>& uv, SquareMapStats& st) {
+  if (c.options.refine_iterations <= 0) return;
+  const std::vector<Vec2> reweighted = uv;
+  const double reweighted_p5 = st.spread_p5, reweighted_p95 = st.spread_p95;
+  const SlimStats ss = refine_in_rectangle(c, st.blended_target, c.options.refine_iterations, [&](int step) {
+    if (c.options.progress) c.options.progress(0.4 + 0.6 * std::min(1.0, step / 15.0));
+  }, uv);
+  st.refine_iterations = ss.iterations;
+  st.refine_energy_before = ss.energy_before;
+  st.refine_energy = ss.energy;
+  st.refine_stopped = ss.stopped;
+  std::vector<double> log_ratio = measure_density_error(c.mesh, uv, st);
+  if (c.options.refine_keeps_density && worst_error(st.spread_p5, st.spread_p95) > worst_error(reweighted_p5, reweighted_p95) + kRefineSlack) {
+    uv = reweighted;
+    st.refine_stopped = "reverted";
+    log_ratio = measure_density_error(c.mesh, uv, st);
+  }
+  correct_targets(c, std::move(log_ratio), uv, st);
+}
+
+}  // namespace tightex

@@ -1,0 +1,47 @@
+// Beyond the paper: the density maps' last stages, after the reweighting (density_reweighting.hpp):
+// the density-equalising flow and the symmetric Dirichlet refinement, both in the texel rectangle.
+#pragma once
+#include <vector>
+
+#include "param/boundary.hpp"
+#include "param/square_map_options.hpp"
+
+namespace tightex {
+
+/// What the density maps' last stages hold fixed, and the rectangle they work in. Per vertex, bit 0
+/// holds u, bit 1 holds v (refine_map's and flow_density's `fixed`).
+struct DensityConstraints {
+  const Surface& mesh;
+  const SquareMapOptions& options;
+  double aspect = 1;             // the texel rectangle's width/height (map_aspect)
+  std::vector<char> fixed;       // for the refinement: corners, bumps and a bump's two side neighbours stay
+  std::vector<char> flow_fixed;  // for the flow: only the corners stay
+};
+
+/// The constraints for a disk whose boundary map_boundary_to_square placed. Every other boundary
+/// vertex slides along its side (a horizontal side holds v, a vertical one u); all stay when
+/// options.slide_boundary is false. A bump's neighbours on the side are held in the refinement: a free
+/// vertex beside a bump could slide past it without any triangle collapsing (the bump is off the line)
+/// and turn the boundary back on itself, whereas two neighbours on the side cannot pass each other
+/// without their boundary triangle collapsing, which the line search prevents. In the flow every side
+/// vertex slides with the field, the bumps' too (a continuous flow along a line keeps its points in
+/// order, so none passes a bump).
+DensityConstraints density_constraints(const Disk& disk, const SquareBoundary& boundary, const SquareMapOptions& options);
+
+/// Where the reweighting stalled short of the targets (options.density_flow; the density error in
+/// stats above options.tolerance_log2; at least kFlowMinFaces faces), the density-equalising flow
+/// (flow_density) moves the whole map on towards stats.blended_target, in rounds from a coarser to a
+/// finer start, each kept only if it narrows the density error; if none does, the map stays as it
+/// was. Requires uv fold-free and stats.blended_target set (reweight_towards_density). Guarantees uv
+/// stays fold-free. Reports flow_steps, flow_lead_steps, flow_shape_steps, flow_stopped and the density
+/// error (spread_p5, spread_p95).
+void flow_towards_targets(const DensityConstraints& constraints, std::vector<Vec2>& uv, SquareMapStats& stats);
+
+/// The symmetric Dirichlet refinement towards stats.blended_target (options.refine_iterations steps
+/// of refine_map in the rectangle's proportions), undone if options.refine_keeps_density and it widens
+/// the density error by more than 0.1 (log2); then options.correction_rounds rounds of target
+/// correction. Requires uv fold-free and stats.blended_target set. Guarantees uv stays fold-free.
+/// Reports refine_*, correction_rounds and the density error. Calls options.progress from 0.4 on.
+void refine_towards_targets(const DensityConstraints& constraints, std::vector<Vec2>& uv, SquareMapStats& stats);
+
+}  // namespace tightex

@@ -1,0 +1,61 @@
+#include "param/map_to_square.hpp"
+
+#include "core/error.hpp"
+#include "param/boundary.hpp"
+#include "param/density_map.hpp"
+#include "param/density_reweighting.hpp"
+#include "param/folds.hpp"
+#include "param/harmonic.hpp"
+
+namespace tightex {
+
+std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& options, SquareMapStats* stats) {
+  SquareMapStats st;
+  const Surface& m = disk.mesh;
+  const auto& bnd = disk.boundary;
+  if (bnd.size() < 3) fail_internal("map_to_square: boundary has {} vertices", bnd.size());
+  const bool density = !options.face_target.empty();
+  if (density && options.face_target.size() != m.num_faces())
+    fail_internal("map_to_square: {} face targets for {} faces", options.face_target.size(), m.num_faces());
+
+  // Alg. 1: the boundary onto the square's sides.
+  const SquareBoundary boundary = map_boundary_to_square(disk, options);
+  for (int k = 0; k < 4; ++k) st.corners[k] = bnd[boundary.corner[k]];
+  st.bumped_vertices = boundary.bumped_vertices;
+
+  // Alg. 2: the harmonic map with the fold-free fallbacks.
+  DirichletSolver solver(options.supernodal_from);
+  HarmonicAttempts harmonic = fold_free_harmonic_map(m, bnd, boundary.uv, solver);
+  // No weighting solved (a factorisation failed, or its solution did not solve the system): the
+  // interior still sits where the boundary left it. A failure, never a map.
+  if (!harmonic.weights) fail_internal("the sparse solve of the harmonic map failed for every weighting ({} vertices)", m.num_vertices());
+  std::vector<Vec2> uv = std::move(harmonic.uv);
+  st.weights = to_string(*harmonic.weights);
+  st.flipped = harmonic.flipped;
+  st.negative_weights = harmonic.negative_weights;
+  st.folds_per_attempt = harmonic.folds_per_attempt;
+  st.crowded_vertex = harmonic.crowded_vertex;
+
+  // The paper's map can crowd a region so far that its triangles keep a positive area only below what
+  // the output's texture coordinates hold: they count as folds, and their region as crowded (the
+  // caller slits to it). The density maps never get near: they spread this map out.
+  if (!density && st.flipped == 0) {
+    st.flipped = count_collapsed(m, uv, options, &st.crowded_vertex);
+    if (st.flipped) st.folds_per_attempt.push_back(st.flipped);
+  }
+
+  // Beyond the paper: the texel density towards the face targets.
+  if (density && st.flipped == 0 && st.crowded_vertex == kNone) {
+    std::vector<double> positive = harmonic.positive_weights;
+    if (positive.empty()) positive = edge_weights(m, EdgeWeights::kClamped);
+    reweight_towards_density(m, bnd, options, options.slide_boundary ? &boundary : nullptr, std::move(positive), solver, uv, st);
+    const DensityConstraints constraints = density_constraints(disk, boundary, options);
+    flow_towards_targets(constraints, uv, st);
+    refine_towards_targets(constraints, uv, st);
+    st.blended_target.clear();
+  }
+  if (stats) *stats = st;
+  return uv;
+}
+
+}  // namespace tightex

@@ -1,0 +1,35 @@
+// Beyond the paper: the symmetric Dirichlet refinement of a fold-free map (SLIM).
+#pragma once
+#include <array>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "param/square_map_options.hpp"
+
+namespace tightex {
+
+struct SlimStats {
+  int iterations = 0;
+  double energy_before = 0, energy = 0;  // area-weighted symmetric Dirichlet energy (2 per unit area = isometric)
+  std::string stopped;                   // "converged", "iterations", "no descent" or "solver"
+  int capped_steps = 0;                  // steps whose system solved only with its weights capped
+};
+
+/// A triangle's shape in the plane (its corners in the face's order; position and rotation do not matter).
+using FaceShape = std::array<Vec2, 3>;
+
+/// Lowers the symmetric Dirichlet energy |J|^2 + |J^-1|^2 of every face, measured against its target
+/// shape (the 3D triangle scaled to area target[f]; a face of zero 3D area keeps its start shape and
+/// area; `shapes`, optional: face f's shapes[f] instead, where that has a positive area), weighted by
+/// target area; fixed[v] bit 0 holds the vertex's u, bit 1 its v (3: the vertex stays; 1 or 2: it
+/// slides along a side). SLIM (Rabinovich, Lipman and Sorkine-Hornung 2017): each step solves a
+/// reweighted proxy with CHOLMOD (pattern analysed once), then a line search.
+/// Requires uv fold-free, one target per face. Guarantees uv stays fold-free (the line search stops
+/// short of any triangle's collapse) and its energy never rises. Stops after `iterations` steps, when a
+/// step gains less than 0.1%, or when no step lowers the energy; on_step (optional) hears each step.
+SlimStats refine_map(const Surface& mesh, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,
+                     std::vector<Vec2>& uv, long supernodal_from = kSupernodalFrom,
+                     const std::function<void(int step)>& on_step = {}, const std::vector<FaceShape>* shapes = nullptr);
+
+}  // namespace tightex

@@ -1,0 +1,100 @@
+// What the caller asks of the square map (paper §4.2 and the density maps beyond it) and what it
+// reports back.
+#pragma once
+#include <algorithm>
+#include <array>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "topology/topology.hpp"
+
+namespace tightex {
+
+/// From this many unknowns on, a map's linear systems are factorised supernodally (dense BLAS kernels
+/// on column blocks); below it, simplicially, which is as fast there. Chosen by measurement:
+/// docs/decisions.md.
+constexpr long kSupernodalFrom = 40000;
+
+struct SquareMapOptions {
+  /// Size of the texel rectangle the square will be stretched to. Sizes the boundary bumps in texels;
+  /// maps with a density target (face_target given) also take the rectangle's shape into account: the
+  /// corners share the boundary out as the rectangle's perimeter (choose_corners' aspect), and the
+  /// symmetric Dirichlet refinement measures each triangle in texels, so a triangle isometric to its
+  /// target is isometric in the texture, not in the unit square. The paper's harmonic map keeps the
+  /// quarters. The map itself is computed on the unit square.
+  int rect_width = 1024, rect_height = 1024;
+  double bump_texels = 0.3;  // < 0.5: a bump stays inside the chart's own outermost texels
+  /// The largest texel coordinate the rectangle reaches in its texture (0: the rectangle's own size):
+  /// what the written texture coordinates' rounding is relative to (see count_collapsed).
+  double texel_extent = 0;
+  CornerRule corners = CornerRule::kEqualArcs;
+
+  /// Beyond the paper: the texel density. Empty: the paper's harmonic map. Otherwise a target UV area
+  /// for every disk face (any common scale; > 0), e.g. its 3D area (uniform density) or the texels the
+  /// input gave it. The harmonic map is then only the start: see map_to_square.
+  std::vector<double> face_target;
+  /// The trade-off between angle and area distortion: 0 keeps the harmonic map's density (least angle
+  /// distortion), 1 aims at face_target exactly; in between, the target is the geometric blend
+  /// harmonic^(1-balance) * target^balance per face.
+  double balance = 1.0;
+  int max_iterations = 60;
+  double tolerance_log2 = 0.15;  // stop once P5..P95 of log2(area / target) lies within +-this
+  /// Symmetric Dirichlet steps after the reweighting (refine_map); each costs one factorisation of
+  /// twice the interior's size. Chosen by measurement: docs/decisions.md.
+  int refine_iterations = 4;
+  /// true: the refinement is undone if it widens the density error by more than 0.1 (log2) — a map
+  /// whose promise is its density (area). false: it runs to convergence (up to refine_iterations),
+  /// trading density for shear wherever that lowers the energy.
+  bool refine_keeps_density = true;
+  /// The boundary's vertices (all but the four corners and chord bumps) slide along their side of the
+  /// square: between reweighting steps each boundary edge grows or shrinks with the square root of its
+  /// face's target/area, and the refinement moves them along the side.
+  bool slide_boundary = true;
+  /// Rounds of target correction after the refinement (each: the targets scaled by target/area, 2 more
+  /// steps). Off by default: chosen by measurement, docs/decisions.md.
+  int correction_rounds = 0;
+  /// After the reweighting, where it stalled short of tolerance_log2: the density-equalising flow
+  /// (flow_towards_targets), kept if it narrows the density error. The area map's (set_face_targets).
+  bool density_flow = false;
+  /// Linear systems of this many unknowns or more are factorised supernodally, smaller ones
+  /// simplicially (see kSupernodalFrom). Tests set it low to run the supernodal path on small meshes.
+  long supernodal_from = kSupernodalFrom;
+  /// Optional: called from the mapping thread with an estimate of the fraction of this map done (the
+  /// density reweighting up to 0.4, the symmetric Dirichlet steps from there; each step counts as if
+  /// the reweighting took 20 and the steps 15, so the estimate may jump to 1 at the end).
+  std::function<void(double)> progress;
+};
+
+struct SquareMapStats {
+  std::string weights;          // "cotangent", "clamped-cotangent" or "uniform": the first that gave no fold
+  size_t flipped = 0;           // triangles with UV area <= 0 in the returned map (0 unless every weight failed)
+  size_t negative_weights = 0;  // interior edges whose cotangent weight was negative
+  std::array<uint32_t, 4> corners{};  // boundary vertices at (0,0), (1,0), (1,1), (0,1)
+  std::vector<size_t> folds_per_attempt;  // folded triangles of each weighting tried, in order
+  size_t bumped_vertices = 0;
+  /// A vertex of a triangle that folded even with positive weights: the map crowded a region below
+  /// floating-point precision there (harmonic maps crowd exponentially in protrusions). kNone if none.
+  uint32_t crowded_vertex = kNone;
+  // Density iterations (face_target given): P5/P95 of log2(area / target), weighted by target, before
+  // (the harmonic map with the density-placed boundary) and after.
+  int iterations = 0;
+  double spread_before_p5 = 0, spread_before_p95 = 0, spread_p5 = 0, spread_p95 = 0;
+  std::string stopped;  // "converged", "iterations", "stalled" or "fold" (the last fold-free iterate is kept)
+  std::vector<double> blended_target;  // internal: the targets the iterations aimed at (cleared on return)
+  int refine_iterations = 0, correction_rounds = 0;
+  double refine_energy_before = 0, refine_energy = 0;
+  std::string refine_stopped;
+  int flow_steps = 0;
+  int flow_lead_steps = 0;   // symmetric Dirichlet steps before the flow (fewer than asked if they converged)
+  int flow_shape_steps = 0;  // symmetric Dirichlet steps towards the flowed shapes (0: each flowed map was kept as it was)
+  std::string flow_stopped;  // FlowStats::stopped, ", reverted" added if it was undone; empty if not run
+};
+
+/// The width/height of the texel rectangle the map is computed for (texel spacing the same both ways):
+/// the options' rectangle for a map with a density target, 1 (the square) for the paper's map.
+inline double map_aspect(const SquareMapOptions& options) {
+  return options.face_target.empty() ? 1.0 : double(std::max(1, options.rect_width)) / double(std::max(1, options.rect_height));
+}
+
+}  // namespace tightex
