@@ -38,12 +38,19 @@ struct Metrics {
 /// edges included; coordinates outside [0,1] wrap as a renderer's repeat sampler does).
 ModelFigures measure_texture_space(const TexturedMesh& mesh);
 
-/// Charts (triangles joined through edges with equal uv on both sides) and seam length of a model.
+/// Charts (triangles joined through edges with equal uv on both sides) of a model; `seam_length`
+/// (optional) gets METRICS.md's seam length: the 3D length of the edges whose uv differs on the two
+/// sides over the square root of the surface area.
 size_t count_charts(const TexturedMesh& mesh, double* seam_length);
 
-/// Everything in METRICS.md. Triangles correspond by their three corner positions (bit-exact).
+/// Everything in METRICS.md for a result `output` of `input`. Triangles correspond by their three
+/// corner positions (bit-exact); an input triangle without a counterpart is lost and samples black in
+/// the surface PSNR. Requires two valid meshes (as read_obj returns them); the surface PSNR draws
+/// `psnr_samples` points with a fixed seed, so the same models always give the same figures. Never
+/// throws but for allocation.
 Metrics measure(const TexturedMesh& input, const TexturedMesh& output, size_t psnr_samples = 200000);
 
+/// The metrics as report.json's "metrics" section (and `tightex measure`'s output).
 nlohmann::json to_json(const Metrics& m);
 
 }  // namespace tightex

@@ -1,0 +1,128 @@
+// The report of one run, typed: what each stage did and cost, filled by the stages and the CLI and
+// written as JSON in one place (to_json). Every figure here is one of report.json's; the JSON key each
+// field becomes is named beside it where it differs from the field's name.
+#pragma once
+#include <cstddef>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "bake/bake.hpp"
+#include "io/obj_reader.hpp"
+#include "layout/layout.hpp"
+#include "param/param.hpp"
+#include "repair/repair.hpp"
+#include "report/metrics.hpp"
+#include "tightex/options.hpp"
+#include "topology/topology.hpp"
+
+namespace tightex {
+
+/// "input": the model as read.
+struct InputSummary {
+  std::string file;  // TexturedMesh::source
+  size_t vertices = 0, triangles = 0, materials = 0, textures = 0;
+  /// What the OBJ reader did beyond plain reading ("polygons_triangulated", "paths_found"); the CLI
+  /// sets it (the library is given a mesh already read). `lines` is not written.
+  std::optional<ObjReadStats> reader;
+};
+
+/// "options": the choices the run was made with, after defaults were resolved.
+struct OptionsUsed {
+  int size = 0;             // the texture side used (atlas) or the largest texture's (per-component)
+  int size_grown_from = 0;  // the default budget's side before it grew to hold every component; 0: not grown (null)
+  Layout layout = Layout::kAtlas;
+  HoleMode holes = HoleMode::kFill;
+  MapKind map = MapKind::kDetail;
+  double balance = 1.0;
+  bool fit = true;
+  bool fine_fit = false;  // in effect: false without `fit`
+  CornerRule corners = CornerRule::kEqualArcs;
+  double aspect = 0;      // as asked (Options::aspect); 0: "auto"
+};
+
+/// One shape the auto aspect tried ("aspect"/"probes").
+struct AspectProbe {
+  double aspect = 1.0;        // width / height
+  int width = 0, height = 0;  // the texture's size at that shape
+  double estimated_mse = -1;  // resampling_mse of the probed map (< 0: not mapped); written as "estimated_psnr_db"
+};
+
+/// "aspect": the texture's shape, as asked and as chosen.
+struct AspectChoice {
+  double requested = 0;                // Options::aspect; 0: "auto"
+  double chosen = 1.0;
+  size_t probed_component = kNone;     // the component the probes mapped; kNone: none probed (null)
+  std::vector<AspectProbe> probes;     // in probe order; empty unless probed
+};
+
+/// "preparation": the repair's counts and totals over all components (the listed ones are a subset).
+struct Preparation {
+  RepairStats repair;  // written under the keys of the report (e.g. "zero_area_dropped", "vertices_sliced")
+  size_t components = 0;
+  size_t holes_filled = 0, holes_cut = 0;
+  size_t components_with_fallback = 0;        // CutStats::fallback_reason non-empty
+  size_t components_longest_hole_capped = 0;  // CutStats::longest_loop_capped
+  size_t components_kept_original_uvs = 0;    // Plan::kept non-empty
+  // "components_listed" is Report::components.size().
+};
+
+/// One entry of "components": a component as cut, mapped and placed.
+struct ComponentEntry {
+  size_t index = 0;      // in plan order
+  size_t triangles = 0;  // of the component
+  double area = 0;       // its 3D area
+  CutStats cut;          // "euler", "genus", "boundary_loops" from cut.before; "cut" is cut.method, ...
+  SquareMapStats map;    // "weights", "flipped_in_map", "density_*", "refine_*", "flow_*", ...
+  std::string kept_reason;  // non-empty: kept its input UVs ("kept_original_uvs" true), and why
+  Rect rect;             // where its square went
+};
+
+/// One entry of "timings".
+struct StageTiming {
+  std::string stage;
+  double seconds = 0;
+  std::optional<double> peak_rss_mib;  // peak RSS at the stage's end; not written when unset
+};
+
+/// "output": where the CLI wrote the model.
+struct OutputFiles {
+  std::string directory;
+  std::string obj;  // the OBJ file's name within `directory`
+};
+
+/// The whole report. Sections that only some callers fill are optional and not written when unset:
+/// a plan alone has no bake, metrics or peak RSS; only the CLI writes output files and wall time.
+struct Report {
+  InputSummary input;
+  OptionsUsed options;
+  AspectChoice aspect;
+  Preparation preparation;
+  std::vector<ComponentEntry> components;  // the listed ones, in plan order
+  std::vector<StageTiming> timings;        // in the order the stages ran
+  std::optional<BakeStats> bake;
+  std::optional<Metrics> metrics;
+  std::optional<double> peak_rss_mib;
+  std::optional<double> wall_seconds;
+  std::optional<OutputFiles> output;
+};
+
+/// PSNR in dB of an estimated colour error (resampling_mse): 99 for no error, -1 where none was made
+/// (mse < 0). The probes' and the cuts' figures in the report.
+double estimated_psnr_db(double mse);
+
+/// The report as JSON: one key per field as named above ("aspect" and "requested" hold "auto" for 0,
+/// absent optional sections are left out). Never throws but for allocation.
+nlohmann::json to_json(const Report& report);
+
+/// One "timings" entry as JSON (the CLI adds its own stages to a report the library wrote).
+nlohmann::json to_json(const StageTiming& timing);
+
+/// "output" as JSON.
+nlohmann::json to_json(const OutputFiles& files);
+
+/// The reader's figures that "input" holds ("polygons_triangulated", "paths_found").
+nlohmann::json reader_json(const ObjReadStats& stats);
+
+}  // namespace tightex

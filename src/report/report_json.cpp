@@ -1,0 +1,174 @@
+// report.json's schema: every key the report holds is written here and nowhere else.
+#include <cmath>
+#include <string>
+
+#include "report/report.hpp"
+
+namespace tightex {
+
+namespace {
+
+using nlohmann::json;
+
+/// An aspect as asked: the number, or "auto" for 0.
+json aspect_json(double aspect) { return aspect > 0 ? json(aspect) : json("auto"); }
+
+json input_json(const InputSummary& in) {
+  json j = {{"file", in.file}, {"vertices", in.vertices}, {"triangles", in.triangles}, {"materials", in.materials},
+            {"textures", in.textures}};
+  if (in.reader) j.update(reader_json(*in.reader));
+  return j;
+}
+
+json options_json(const OptionsUsed& o) {
+  return {{"size", o.size},
+          {"size_grown_from", o.size_grown_from > 0 ? json(o.size_grown_from) : json(nullptr)},
+          {"layout", std::string(to_string(o.layout))},
+          {"holes", std::string(to_string(o.holes))},
+          {"map", std::string(to_string(o.map))},
+          {"balance", o.balance},
+          {"fit", o.fit},
+          {"fine_fit", o.fine_fit},
+          {"corners", std::string(to_string(o.corners))},
+          {"aspect", aspect_json(o.aspect)}};
+}
+
+json aspect_choice_json(const AspectChoice& a) {
+  json probes = json::array();
+  for (const AspectProbe& p : a.probes)
+    probes.push_back({{"aspect", p.aspect}, {"width", p.width}, {"height", p.height}, {"estimated_psnr_db", estimated_psnr_db(p.estimated_mse)}});
+  return {{"requested", aspect_json(a.requested)},
+          {"chosen", a.chosen},
+          {"probed_component", a.probed_component == kNone ? json(nullptr) : json(a.probed_component)},
+          {"probes", probes}};
+}
+
+json preparation_json(const Preparation& p, size_t listed) {
+  const RepairStats& rs = p.repair;
+  return {{"input_vertices", rs.input_vertices},
+          {"welded_vertices", rs.welded_vertices},
+          {"zero_area_dropped", rs.zero_area_triangles},
+          {"duplicates_dropped", rs.duplicate_triangles},
+          {"non_manifold_edges_sliced", rs.non_manifold_edges},
+          {"inconsistent_edges_sliced", rs.inconsistent_edges},
+          {"reoriented_triangles", rs.reoriented_triangles},
+          {"vertices_sliced", rs.sliced_vertices},
+          {"slits_closed", rs.slits_closed},
+          {"components", p.components},
+          {"holes_filled", p.holes_filled},
+          {"holes_cut", p.holes_cut},
+          {"components_with_fallback", p.components_with_fallback},
+          {"components_longest_hole_capped", p.components_longest_hole_capped},
+          {"components_listed", listed},
+          {"components_kept_original_uvs", p.components_kept_original_uvs}};
+}
+
+/// The estimated PSNR of the cuts a small longest hole was tried with (kept as the boundary, capped);
+/// null where it was not tried.
+json compared_cuts_json(const std::vector<double>& mse) {
+  if (mse.empty()) return json(nullptr);
+  json db = json::array();
+  for (double m : mse) db.push_back(estimated_psnr_db(m));
+  return db;
+}
+
+/// The cut's half of a component entry (CutStats and what the component was).
+json cut_json(const ComponentEntry& e) {
+  const CutStats& cs = e.cut;
+  return {{"index", e.index},
+          {"triangles", e.triangles},
+          {"area", e.area},
+          {"euler", cs.before.euler()},
+          {"boundary_loops", cs.before.boundary_loops},
+          {"genus", cs.before.genus()},
+          {"holes_filled", cs.holes_filled},
+          {"holes_cut", cs.holes_cut},
+          {"cut", cs.method},
+          {"longest_hole_edges", cs.longest_loop_edges},
+          {"longest_hole_capped", cs.longest_loop_capped},
+          {"longest_hole_kept_capped_estimated_psnr_db", compared_cuts_json(cs.compared_mse)},
+          {"slits", cs.slits},
+          {"fallback", cs.fallback_reason},
+          {"cap_budget", cs.fill_budget},
+          {"kept_original_uvs", !e.kept_reason.empty()},
+          {"kept_reason", e.kept_reason},
+          {"handle_loops", cs.handle_loops},
+          {"cut_edges", cs.cut_edges},
+          {"cut_length", cs.cut_length},
+          {"seam_length", cs.seam_length},
+          {"seam_on_input_seams", cs.seam_on_input_seams}};
+}
+
+/// The map's half of a component entry (SquareMapStats) and its rectangle.
+json map_json(const ComponentEntry& e) {
+  const SquareMapStats& ms = e.map;
+  const Rect& r = e.rect;
+  return {{"weights", ms.weights},
+          {"negative_cotangent_weights", ms.negative_weights},
+          {"bumped_boundary_vertices", ms.bumped_vertices},
+          {"flipped_in_map", ms.flipped},
+          {"folds_per_weighting", ms.folds_per_attempt},
+          {"density_iterations", ms.iterations},
+          {"density_stopped", ms.stopped},
+          {"density_correction_rounds", ms.correction_rounds},
+          {"density_error_log2_before", json::array({ms.spread_before_p5, ms.spread_before_p95})},
+          {"density_error_log2", json::array({ms.spread_p5, ms.spread_p95})},
+          {"refine_iterations", ms.refine_iterations},
+          {"flow_steps", ms.flow_steps},
+          {"flow_lead_steps", ms.flow_lead_steps},
+          {"flow_shape_steps", ms.flow_shape_steps},
+          {"flow_stopped", ms.flow_stopped},
+          {"refine_energy", json::array({ms.refine_energy_before, ms.refine_energy})},
+          {"refine_stopped", ms.refine_stopped},
+          {"rect", {{"image", r.image}, {"x", r.x}, {"y", r.y}, {"w", r.w}, {"h", r.h}}}};
+}
+
+json bake_json(const BakeStats& bs) {
+  return {{"texels_filled", bs.texels_filled},
+          {"texels_dilated", bs.texels_dilated},
+          {"texels_footprint_filtered", bs.texels_footprint_filtered},
+          {"tiles_fitted", bs.tiles_fitted},
+          {"tiles", bs.tiles}};
+}
+
+}  // namespace
+
+double estimated_psnr_db(double mse) { return mse > 0 ? 10 * std::log10(255.0 * 255.0 / mse) : mse == 0 ? 99.0 : -1.0; }
+
+json to_json(const StageTiming& timing) {
+  json j = {{"stage", timing.stage}, {"seconds", timing.seconds}};
+  if (timing.peak_rss_mib) j["peak_rss_mib"] = *timing.peak_rss_mib;
+  return j;
+}
+
+json to_json(const OutputFiles& files) { return {{"directory", files.directory}, {"obj", files.obj}}; }
+
+json reader_json(const ObjReadStats& stats) {
+  return {{"polygons_triangulated", stats.polygons_triangulated}, {"paths_found", stats.paths_found}};
+}
+
+json to_json(const Report& report) {
+  json j;
+  j["input"] = input_json(report.input);
+  j["options"] = options_json(report.options);
+  j["aspect"] = aspect_choice_json(report.aspect);
+  j["preparation"] = preparation_json(report.preparation, report.components.size());
+  json components = json::array();
+  for (const ComponentEntry& e : report.components) {
+    json entry = cut_json(e);
+    entry.update(map_json(e));
+    components.push_back(std::move(entry));
+  }
+  j["components"] = std::move(components);
+  json timings = json::array();
+  for (const StageTiming& t : report.timings) timings.push_back(to_json(t));
+  j["timings"] = std::move(timings);
+  if (report.bake) j["bake"] = bake_json(*report.bake);
+  if (report.metrics) j["metrics"] = to_json(*report.metrics);
+  if (report.peak_rss_mib) j["peak_rss_mib"] = *report.peak_rss_mib;
+  if (report.wall_seconds) j["wall_seconds"] = *report.wall_seconds;
+  if (report.output) j["output"] = to_json(*report.output);
+  return j;
+}
+
+}  // namespace tightex

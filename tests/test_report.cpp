@@ -1,0 +1,245 @@
+// The typed report's JSON: every key of report.json's schema, with the value of the field it comes from.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+#include <string>
+
+#include "report/report.hpp"
+
+namespace tightex {
+namespace {
+
+std::set<std::string> keys_of(const nlohmann::json& j) {
+  std::set<std::string> keys;
+  for (const auto& [k, v] : j.items()) keys.insert(k);
+  return keys;
+}
+
+/// A report as a CLI run fills it: two listed components, one of them kept, one probed shape.
+Report filled_report() {
+  Report r;
+  r.input = {"in/model.obj", 502, 1000, 1, 1, std::nullopt};
+  ObjReadStats read;
+  read.polygons_triangulated = 3;
+  read.paths_found = {"A.PNG -> a.png"};
+  read.lines = 99;
+  r.input.reader = read;
+  r.options.size = 368;
+  r.options.size_grown_from = 0;
+  r.options.layout = Layout::kPerComponent;
+  r.options.holes = HoleMode::kCut;
+  r.options.map = MapKind::kArea;
+  r.options.balance = 0.5;
+  r.options.fit = true;
+  r.options.fine_fit = true;
+  r.options.corners = CornerRule::kTurningAngle;
+  r.options.aspect = 0;
+  r.aspect.requested = 0;
+  r.aspect.chosen = 2.0;
+  r.aspect.probed_component = 1;
+  r.aspect.probes = {{1.0, 368, 368, 100.0}, {2.0, 520, 264, -1.0}};
+  r.preparation.repair.input_vertices = 502;
+  r.preparation.repair.welded_vertices = 500;
+  r.preparation.repair.zero_area_triangles = 1;
+  r.preparation.repair.duplicate_triangles = 2;
+  r.preparation.repair.reoriented_triangles = 3;
+  r.preparation.repair.non_manifold_edges = 4;
+  r.preparation.repair.inconsistent_edges = 5;
+  r.preparation.repair.sliced_vertices = 6;
+  r.preparation.repair.slits_closed = 7;
+  r.preparation.components = 3;
+  r.preparation.holes_filled = 8;
+  r.preparation.holes_cut = 9;
+  r.preparation.components_with_fallback = 1;
+  r.preparation.components_longest_hole_capped = 1;
+  r.preparation.components_kept_original_uvs = 1;
+
+  ComponentEntry mapped;
+  mapped.index = 0;
+  mapped.triangles = 900;
+  mapped.area = 0.25;
+  mapped.cut.before = Topology{10, 27, 18, 1};  // euler 1, genus 0
+  mapped.cut.holes_filled = 8;
+  mapped.cut.holes_cut = 9;
+  mapped.cut.method = "path";
+  mapped.cut.longest_loop_edges = 5;
+  mapped.cut.longest_loop_capped = true;
+  mapped.cut.compared_mse = {0.0, 65025.0};
+  mapped.cut.slits = 2;
+  mapped.cut.fill_budget = 0.02;
+  mapped.cut.handle_loops = {1.5};
+  mapped.cut.cut_edges = 29;
+  mapped.cut.cut_length = 0.75;
+  mapped.cut.seam_length = 0.8;
+  mapped.cut.seam_on_input_seams = 0.125;
+  mapped.map.weights = "cotangent";
+  mapped.map.negative_weights = 100;
+  mapped.map.bumped_vertices = 1;
+  mapped.map.flipped = 0;
+  mapped.map.folds_per_attempt = {3, 0};
+  mapped.map.iterations = 13;
+  mapped.map.stopped = "stalled";
+  mapped.map.correction_rounds = 2;
+  mapped.map.spread_before_p5 = -2, mapped.map.spread_before_p95 = 1.5;
+  mapped.map.spread_p5 = -1, mapped.map.spread_p95 = 1;
+  mapped.map.refine_iterations = 4;
+  mapped.map.flow_steps = 5, mapped.map.flow_lead_steps = 6, mapped.map.flow_shape_steps = 7;
+  mapped.map.flow_stopped = "converged";
+  mapped.map.refine_energy_before = 8.5, mapped.map.refine_energy = 5.25;
+  mapped.map.refine_stopped = "converged";
+  mapped.rect = Rect{0, 4, 8, 368, 360};
+  r.components.push_back(mapped);
+  ComponentEntry kept;
+  kept.index = 2;
+  kept.triangles = 100;
+  kept.cut.fallback_reason = "the cut did not give a disk";
+  kept.kept_reason = "the map folds";
+  r.components.push_back(kept);
+
+  r.timings = {{"repair", 0.5, 14.0}, {"read geometry", 0.25, std::nullopt}};
+  BakeStats bake;
+  bake.texels_filled = 10, bake.texels_dilated = 11, bake.texels_footprint_filtered = 12, bake.tiles_fitted = 13, bake.tiles = 14;
+  r.bake = bake;
+  Metrics metrics;
+  metrics.charts = 2;
+  metrics.surface_psnr = 41.5;
+  r.metrics = metrics;
+  r.peak_rss_mib = 18.5;
+  r.wall_seconds = 0.875;
+  r.output = OutputFiles{"out", "model.obj"};
+  return r;
+}
+
+TEST(Report, HasEveryKeyOfTheSchema) {
+  const nlohmann::json j = to_json(filled_report());
+  EXPECT_EQ(keys_of(j), (std::set<std::string>{"input", "options", "aspect", "preparation", "components", "timings", "bake",
+                                                "metrics", "peak_rss_mib", "wall_seconds", "output"}));
+  EXPECT_EQ(keys_of(j["input"]), (std::set<std::string>{"file", "vertices", "triangles", "materials", "textures",
+                                                         "polygons_triangulated", "paths_found"}));
+  EXPECT_EQ(keys_of(j["options"]), (std::set<std::string>{"size", "size_grown_from", "layout", "holes", "map", "balance", "fit",
+                                                           "fine_fit", "corners", "aspect"}));
+  EXPECT_EQ(keys_of(j["aspect"]), (std::set<std::string>{"requested", "chosen", "probed_component", "probes"}));
+  EXPECT_EQ(keys_of(j["aspect"]["probes"][0]), (std::set<std::string>{"aspect", "width", "height", "estimated_psnr_db"}));
+  EXPECT_EQ(keys_of(j["preparation"]),
+            (std::set<std::string>{"input_vertices", "welded_vertices", "zero_area_dropped", "duplicates_dropped",
+                                   "non_manifold_edges_sliced", "inconsistent_edges_sliced", "reoriented_triangles", "vertices_sliced",
+                                   "slits_closed", "components", "holes_filled", "holes_cut", "components_with_fallback",
+                                   "components_longest_hole_capped", "components_listed", "components_kept_original_uvs"}));
+  const std::set<std::string> component_keys{
+      "index", "triangles", "area", "euler", "boundary_loops", "genus", "holes_filled", "holes_cut", "cut", "longest_hole_edges",
+      "longest_hole_capped", "longest_hole_kept_capped_estimated_psnr_db", "slits", "fallback", "cap_budget", "kept_original_uvs",
+      "kept_reason", "handle_loops", "cut_edges", "cut_length", "seam_length", "seam_on_input_seams", "weights",
+      "negative_cotangent_weights", "bumped_boundary_vertices", "flipped_in_map", "folds_per_weighting", "density_iterations",
+      "density_stopped", "density_correction_rounds", "density_error_log2_before", "density_error_log2", "refine_iterations",
+      "flow_steps", "flow_lead_steps", "flow_shape_steps", "flow_stopped", "refine_energy", "refine_stopped", "rect"};
+  ASSERT_EQ(j["components"].size(), 2u);
+  for (const auto& c : j["components"]) EXPECT_EQ(keys_of(c), component_keys);
+  EXPECT_EQ(keys_of(j["components"][0]["rect"]), (std::set<std::string>{"image", "x", "y", "w", "h"}));
+  EXPECT_EQ(keys_of(j["timings"][0]), (std::set<std::string>{"stage", "seconds", "peak_rss_mib"}));
+  EXPECT_EQ(keys_of(j["timings"][1]), (std::set<std::string>{"stage", "seconds"}));
+  EXPECT_EQ(keys_of(j["bake"]), (std::set<std::string>{"texels_filled", "texels_dilated", "texels_footprint_filtered", "tiles_fitted", "tiles"}));
+  EXPECT_EQ(j["metrics"], to_json(*filled_report().metrics));
+  EXPECT_EQ(keys_of(j["output"]), (std::set<std::string>{"directory", "obj"}));
+}
+
+TEST(Report, WritesEachFieldsValue) {
+  const nlohmann::json j = to_json(filled_report());
+  EXPECT_EQ(j["input"]["file"], "in/model.obj");
+  EXPECT_EQ(j["input"]["triangles"], 1000);
+  EXPECT_EQ(j["input"]["polygons_triangulated"], 3);
+  EXPECT_EQ(j["input"]["paths_found"], nlohmann::json::array({"A.PNG -> a.png"}));
+  EXPECT_EQ(j["options"]["size"], 368);
+  EXPECT_TRUE(j["options"]["size_grown_from"].is_null());
+  EXPECT_EQ(j["options"]["layout"], "per-component");
+  EXPECT_EQ(j["options"]["holes"], "cut");
+  EXPECT_EQ(j["options"]["map"], "area");
+  EXPECT_EQ(j["options"]["corners"], "turning");
+  EXPECT_EQ(j["options"]["balance"], 0.5);
+  EXPECT_EQ(j["options"]["fine_fit"], true);
+  EXPECT_EQ(j["options"]["aspect"], "auto");
+  EXPECT_EQ(j["aspect"]["requested"], "auto");
+  EXPECT_EQ(j["aspect"]["chosen"], 2.0);
+  EXPECT_EQ(j["aspect"]["probed_component"], 1);
+  EXPECT_DOUBLE_EQ(j["aspect"]["probes"][0]["estimated_psnr_db"].get<double>(), 10 * std::log10(255.0 * 255.0 / 100.0));
+  EXPECT_EQ(j["aspect"]["probes"][1]["estimated_psnr_db"], -1.0);  // not mapped
+  EXPECT_EQ(j["aspect"]["probes"][1]["width"], 520);
+  EXPECT_EQ(j["preparation"]["zero_area_dropped"], 1);
+  EXPECT_EQ(j["preparation"]["vertices_sliced"], 6);
+  EXPECT_EQ(j["preparation"]["components_listed"], 2);  // the entries, not all components
+  EXPECT_EQ(j["preparation"]["components"], 3);
+
+  const nlohmann::json& c = j["components"][0];
+  EXPECT_EQ(c["euler"], 1);
+  EXPECT_EQ(c["genus"], 0);
+  EXPECT_EQ(c["boundary_loops"], 1);
+  EXPECT_EQ(c["cut"], "path");
+  EXPECT_EQ(c["longest_hole_kept_capped_estimated_psnr_db"], nlohmann::json::array({99.0, 0.0}));
+  EXPECT_EQ(c["fallback"], "");
+  EXPECT_EQ(c["cap_budget"], 0.02);
+  EXPECT_EQ(c["kept_original_uvs"], false);
+  EXPECT_EQ(c["handle_loops"], nlohmann::json::array({1.5}));
+  EXPECT_EQ(c["folds_per_weighting"], nlohmann::json::array({3, 0}));
+  EXPECT_EQ(c["density_error_log2_before"], nlohmann::json::array({-2.0, 1.5}));
+  EXPECT_EQ(c["density_error_log2"], nlohmann::json::array({-1.0, 1.0}));
+  EXPECT_EQ(c["refine_energy"], nlohmann::json::array({8.5, 5.25}));
+  EXPECT_EQ(c["flow_lead_steps"], 6);
+  EXPECT_EQ(c["rect"], (nlohmann::json{{"image", 0}, {"x", 4}, {"y", 8}, {"w", 368}, {"h", 360}}));
+  const nlohmann::json& k = j["components"][1];
+  EXPECT_EQ(k["index"], 2);
+  EXPECT_EQ(k["kept_original_uvs"], true);
+  EXPECT_EQ(k["kept_reason"], "the map folds");
+  EXPECT_EQ(k["fallback"], "the cut did not give a disk");
+  EXPECT_TRUE(k["longest_hole_kept_capped_estimated_psnr_db"].is_null());
+
+  EXPECT_EQ(j["timings"][0]["stage"], "repair");
+  EXPECT_EQ(j["timings"][0]["peak_rss_mib"], 14.0);
+  EXPECT_EQ(j["bake"]["tiles"], 14);
+  EXPECT_EQ(j["peak_rss_mib"], 18.5);
+  EXPECT_EQ(j["wall_seconds"], 0.875);
+  EXPECT_EQ(j["output"]["obj"], "model.obj");
+}
+
+TEST(Report, NumbersKeepTheirTypes) {
+  // Counts are written as integers and figures as floating point, so the text of report.json does not
+  // change with the way a field is filled ("used_texels": 132776.0, "tiles": 36).
+  const nlohmann::json j = to_json(filled_report());
+  EXPECT_TRUE(j["input"]["vertices"].is_number_unsigned());
+  EXPECT_TRUE(j["options"]["size"].is_number_integer());
+  EXPECT_TRUE(j["aspect"]["chosen"].is_number_float());
+  EXPECT_TRUE(j["components"][0]["euler"].is_number_integer());
+  EXPECT_TRUE(j["components"][0]["area"].is_number_float());
+  EXPECT_TRUE(j["components"][0]["density_iterations"].is_number_integer());
+  EXPECT_EQ(j["components"][0]["cap_budget"].dump(), "0.02");
+  EXPECT_EQ(j["aspect"]["chosen"].dump(), "2.0");
+}
+
+TEST(Report, LeavesOutWhatWasNotFilled) {
+  Report r;
+  r.options.aspect = 1.5;
+  r.aspect.requested = 1.5;
+  r.options.size_grown_from = 256;
+  const nlohmann::json j = to_json(r);
+  EXPECT_EQ(keys_of(j), (std::set<std::string>{"input", "options", "aspect", "preparation", "components", "timings"}));
+  EXPECT_FALSE(j["input"].contains("paths_found"));
+  EXPECT_EQ(j["options"]["aspect"], 1.5);
+  EXPECT_EQ(j["options"]["size_grown_from"], 256);
+  EXPECT_EQ(j["aspect"]["requested"], 1.5);
+  EXPECT_TRUE(j["aspect"]["probed_component"].is_null());
+  EXPECT_EQ(j["aspect"]["probes"], nlohmann::json::array());
+  EXPECT_EQ(j["components"], nlohmann::json::array());
+  EXPECT_EQ(j["timings"], nlohmann::json::array());
+  EXPECT_EQ(j["options"]["map"], "detail");
+  EXPECT_EQ(j["options"]["corners"], "arcs");
+  EXPECT_EQ(j["options"]["layout"], "atlas");
+  EXPECT_EQ(j["options"]["holes"], "fill");
+}
+
+TEST(Report, EstimatedPsnrOfNoErrorAndOfNoEstimate) {
+  EXPECT_EQ(estimated_psnr_db(0.0), 99.0);
+  EXPECT_EQ(estimated_psnr_db(-1.0), -1.0);
+  EXPECT_DOUBLE_EQ(estimated_psnr_db(255.0 * 255.0), 0.0);
+}
+
+}  // namespace
+}  // namespace tightex
