@@ -16,7 +16,10 @@ int main(int argc, char** argv) {
   try {
     const tightex::TexturedMesh input = tightex::read_obj(argv[1]);  // textures decoded too
     tightex::Options options;                                        // size 0: the input's used texels
-    options.progress = [](std::string_view stage, double fraction) { std::fprintf(stderr, "%.*s %3.0f%%\r", int(stage.size()), stage.data(), 100 * fraction); };
+    options.progress = [](std::string_view stage, double fraction) {
+      std::fprintf(stderr, "%.*s %3.0f%%\r", int(stage.size()), stage.data(), 100 * fraction);
+      return true;  // false would cancel the run
+    };
     const tightex::Result result = tightex::optimize(input, options);
     std::filesystem::create_directories(argv[2]);
     tightex::write_obj(result.output, argv[2], std::filesystem::path(argv[1]).stem().string(), tightex::ImageFormat::kPng);

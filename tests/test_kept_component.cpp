@@ -1,7 +1,7 @@
 // The last resort of the pipeline: a component that neither the full method nor the plain
 // fallback can map is output as it came, with its input texture coordinates and a copy of its input
 // material(s) and texture(s), and reported; no triangle of the input is ever lost. The failure is forced
-// with the test-only Options::test_fail_components, on meshes of the catalogue.
+// with the pipeline's test hook (PlanHooks), on meshes of the catalogue.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -18,6 +18,7 @@
 #include "io/obj_writer.hpp"
 #include "mesh_catalogue.hpp"
 #include "report/metrics.hpp"
+#include "pipeline/plan_state.hpp"
 #include "tightex/tightex.hpp"
 
 namespace fs = std::filesystem;
@@ -28,7 +29,7 @@ namespace {
 /// Input triangles of component c of a plan.
 std::set<uint32_t> triangles_of(const Plan& plan, size_t c) {
   std::set<uint32_t> s;
-  for (uint32_t cf = 0; cf < plan.components[c].num_faces(); ++cf) s.insert(plan.surface.face_parent[plan.components[c].face_parent[cf]]);
+  for (uint32_t t : plan.state().components[c].input_face) s.insert(t);
   return s;
 }
 
@@ -93,8 +94,8 @@ TEST(KeptComponent, KeepsInputUvsMaterialAndTextureAndLosesNothing) {
   Options opt;
   opt.size = 256;
   const Plan normal = plan_charts(in, opt);
-  ASSERT_GE(normal.components.size(), 3u);
-  for (const std::string& k : normal.kept) EXPECT_TRUE(k.empty());
+  ASSERT_GE(normal.state().components.size(), 3u);
+  for (const std::string& k : normal.state().kept) EXPECT_TRUE(k.empty());
   // Component 1 gets a material of its own, with a tiled and shifted texture of its own.
   const std::set<uint32_t> kept_tris = triangles_of(normal, 1);
   Material skin;
@@ -107,10 +108,9 @@ TEST(KeptComponent, KeepsInputUvsMaterialAndTextureAndLosesNothing) {
   in.textures.push_back(Texture{"textures/skin.jpg", tightex::testing::checker_image(32, 16, 4)});
   for (uint32_t t : kept_tris) in.face_material[t] = 1;
 
-  opt.test_fail_components = {1};
-  const Plan plan = plan_charts(in, opt);
-  ASSERT_EQ(plan.kept.size(), plan.components.size());
-  for (size_t c = 0; c < plan.kept.size(); ++c) EXPECT_EQ(plan.kept[c].empty(), c != 1) << c;
+  const Plan plan = plan_charts(in, opt, PlanHooks{{1}});
+  ASSERT_EQ(plan.state().kept.size(), plan.state().components.size());
+  for (size_t c = 0; c < plan.state().kept.size(); ++c) EXPECT_EQ(plan.state().kept[c].empty(), c != 1) << c;
   EXPECT_EQ(triangles_of(plan, 1), kept_tris);
   const Result r = bake_plan(plan, in, opt);
   const auto& comp = r.report["components"][1];
@@ -157,9 +157,8 @@ TEST(KeptComponent, PerComponentLayoutWritesNoEmptyImage) {
   Options opt;
   opt.size = 128;
   opt.layout = Layout::kPerComponent;
-  opt.test_fail_components = {0};
-  const Plan plan = plan_charts(in, opt);
-  const size_t nc = plan.components.size();
+  const Plan plan = plan_charts(in, opt, PlanHooks{{0}});
+  const size_t nc = plan.state().components.size();
   const Result r = bake_plan(plan, in, opt);
   const TexturedMesh& out = r.output;
   // nc - 1 new images and the input's texture, copied once.
@@ -178,9 +177,8 @@ TEST(KeptComponent, AllKeptAndNoMaterial) {
   for (size_t t = 0; t < in.num_triangles(); t += 3) in.face_material[t] = -1;
   Options opt;
   opt.size = 64;
-  opt.test_fail_components = {0};
-  const Plan plan = plan_charts(in, opt);
-  ASSERT_EQ(plan.components.size(), 1u);
+  const Plan plan = plan_charts(in, opt, PlanHooks{{0}});
+  ASSERT_EQ(plan.state().components.size(), 1u);
   const Result r = bake_plan(plan, in, opt);
   const TexturedMesh& out = r.output;
   ASSERT_EQ(out.materials.size(), 2u);

@@ -1707,6 +1707,7 @@ TEST(Pipeline, ProgressIsOrderedAndSerialised) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));  // widen the window for an overlap
     calls.push_back({std::string(stage), f});
     inside.fetch_sub(1);
+    return true;
   };
   const Result r = optimize(cat::multi_component(), opt);
   EXPECT_FALSE(overlapped);
@@ -1727,6 +1728,44 @@ TEST(Pipeline, ProgressIsOrderedAndSerialised) {
   EXPECT_EQ(calls.back().first, "done");
   EXPECT_EQ(calls.back().second, 1.0);
   EXPECT_TRUE(std::any_of(calls.begin(), calls.end(), [](const auto& c) { return c.first == "cut+map"; }));
+}
+
+// A progress callback that answers false stops the run with Cancelled, from whichever stage it is in
+// (the maps and the bake call it from worker threads).
+TEST(Pipeline, ProgressCallbackCancels) {
+  for (const std::string stop_at : {"repair", "cut+map", "bake"}) {
+    SCOPED_TRACE(stop_at);
+    Options opt;
+    opt.size = 128;
+    std::atomic<int> calls_after{0};
+    std::atomic<bool> stopped{false};
+    opt.progress = [&](std::string_view stage, double) {
+      if (stopped) calls_after++;
+      if (stage == stop_at) stopped = true;
+      return !stopped;
+    };
+    EXPECT_THROW(optimize(cat::multi_component(), opt), Cancelled);
+    EXPECT_TRUE(stopped.load());
+  }
+}
+
+// bake_plan refuses a mesh other than the one planned, with an InputError instead of reading out of
+// bounds.
+TEST(Pipeline, BakePlanRefusesAnotherMesh) {
+  Options opt;
+  opt.size = 64;
+  const TexturedMesh planned = cat::multi_component();
+  const Plan plan = plan_charts(planned, opt);
+  TexturedMesh fewer = planned;
+  fewer.triangles.pop_back();
+  fewer.corner_uv.resize(3 * fewer.triangles.size());
+  fewer.face_material.pop_back();
+  EXPECT_THROW(bake_plan(plan, fewer, opt), InputError);
+  TexturedMesh moved_uv = planned;
+  moved_uv.corner_uv[0].x() += 0.25;
+  EXPECT_THROW(bake_plan(plan, moved_uv, opt), InputError);
+  EXPECT_THROW(bake_plan(Plan(), planned, opt), InputError);
+  EXPECT_NO_THROW(bake_plan(plan, planned, opt));
 }
 
 // --map detail: a flat sheet whose texture is a fine checker on its left half and one flat

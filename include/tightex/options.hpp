@@ -3,6 +3,7 @@
 #pragma once
 #include <array>
 #include <cstddef>
+#include <functional>
 #include <optional>
 #include <string_view>
 
@@ -77,5 +78,52 @@ constexpr std::optional<Enum> from_string(const std::array<Enum, N>& values, std
     if (to_string(v) == name) return v;
   return std::nullopt;
 }
+
+/// Called with a stage name ("repair", "components", "cut+map", "bake", "measure", "done") and the
+/// fraction [0, 1] of it done (an estimate within "cut+map" and "bake", at most every 0.2 s there).
+/// Calls never overlap and never go backwards within a stage, but within "cut+map" and "bake" they may
+/// come from any thread working for the call. Returning false cancels the run: the call in progress
+/// throws tightex::Cancelled soon after, and nothing is returned.
+using ProgressCallback = std::function<bool(std::string_view stage, double fraction)>;
+
+/// What a caller chooses. Every default is the CLI's; 0 means "choose for this model".
+struct Options {
+  /// Atlas: the texture's side; per-component: the largest texture's side. 0 (default): default_size,
+  /// as many texels as the input uses, so the output keeps the input's information.
+  int size = 0;
+  /// `size` is the default budget (the input's used texels; always so for `size` 0), not a side the
+  /// caller asked for. The CLI sets it when neither --size nor --texels is given. Then:
+  /// - the atlas grows where `size` cannot hold a 4 x 4 rectangle for every component, to the side that
+  ///   holds `size`^2 texels and 16 more per component, or more if the layout needs it (report
+  ///   "options": "size_grown_from"); an asked-for size that cannot hold them is an InputError;
+  /// - the per-component textures hold `size`^2 texels together (an asked-for size is the largest's side).
+  bool default_budget = false;
+  /// Width/height of the texture, which then holds about size x size texels (sides multiples of 4).
+  /// 0 (default): chosen per model for the area, texel and detail maps in the atlas layout: the
+  /// component that holds most of the texture is mapped into a square, a 1:2 and a 2:1 texture, each
+  /// map's colour error estimated, and the square kept unless another shape's is at least 5% lower
+  /// (report "aspect"; not probed beyond 100k triangles). Otherwise 1, the paper's square.
+  double aspect = 0;
+  Layout layout = Layout::kAtlas;
+  HoleMode holes = HoleMode::kFill;
+  /// Default kDetail: the highest surface PSNR of the four maps on every model of ../shared/data at
+  /// the input's budget (BENCHMARKS.md, "Quality per map").
+  MapKind map = MapKind::kDetail;
+  /// Angle/area trade-off of the area, texel and detail maps: 0 = the harmonic map's density (least
+  /// angle distortion), 1 = the target density exactly; between, the geometric blend of the two.
+  double balance = 1.0;
+  /// Which boundary vertices become the square's corners (docs/corners.md).
+  CornerRule corners = CornerRule::kEqualArcs;
+  /// Least-squares fit of the baked texels to the input under bilinear read-back.
+  bool fit = true;
+  /// The fit on a 4 x 4 grid of points per texel instead of 2 x 2: a little higher surface PSNR at
+  /// about twice the bake time; the texture coordinates do not change. Ignored without `fit`.
+  bool fine_fit = false;
+  /// Compute the METRICS.md figures into report["metrics"]. A caller that writes the result can turn
+  /// this off and measure beside the write (the CLI does).
+  bool measure = true;
+  /// Progress and cancellation (see ProgressCallback); empty: none.
+  ProgressCallback progress;
+};
 
 }  // namespace tightex

@@ -264,7 +264,7 @@ MemoryGuard check_memory(const CommandLine& line, const TexturedMesh& geometry, 
 /// Checks the memory of the per-component layout's output textures, now that the plan has sized them.
 void check_per_component_memory(const MemoryGuard& guard, const Plan& plan) {
   double out_texels = 0;
-  for (const auto& [w, h] : plan.image_size) out_texels += double(w) * double(h);
+  for (const auto& [w, h] : plan.texture_sizes()) out_texels += double(w) * double(h);
   guard.check(guard.estimate + out_texels * kBytesPerOutputTexel, "this model's per-component textures");
 }
 
@@ -288,6 +288,7 @@ Options library_options(const CommandLine& line, int size, bool show_progress) {
     opt.progress = [](std::string_view stage, double f) {
       if (f > 0 && f < 1) fmt::print(stderr, "\r\033[Ktightex: {} {:.0f}%...", stage, 100 * f);
       else fmt::print(stderr, "\r\033[Ktightex: {}...", stage);
+      return true;
     };
   return opt;
 }
@@ -336,22 +337,14 @@ PlannedModel read_textures_and_plan(const std::string& input, const TexturedMesh
 /// One line each where the result is not what was asked: components kept as they were (Plan::kept),
 /// and the default budget grown to hold every component (Options::default_budget).
 void print_notes(const Plan& plan, const nlohmann::json& report) {
-  size_t kept_components = 0, kept_triangles = 0;
-  const std::string* kept_reason = nullptr;
-  for (size_t c = 0; c < plan.kept.size(); ++c)
-    if (!plan.kept[c].empty()) {
-      ++kept_components;
-      kept_triangles += plan.components[c].num_faces();
-      if (kept_reason == nullptr) kept_reason = &plan.kept[c];
-    }
-  if (kept_components > 0)
+  if (const size_t kept_components = plan.kept_components(); kept_components > 0)
     fmt::print(stderr,
                "tightex: warning: {} component(s), {} triangles, could not be re-parameterized and keep their original "
                "texture coordinates and texture(s) ({}); see \"kept_original_uvs\" in the report\n",
-               kept_components, kept_triangles, *kept_reason);
+               kept_components, plan.kept_triangles(), plan.first_kept_reason());
   if (const auto& grown = report["options"]["size_grown_from"]; !grown.is_null())
     fmt::print(stderr, "tightex: note: {} components need a 4x4 texel rectangle each: the texture grew from {}^2 to {}^2 texels (--size sets it)\n",
-               plan.components.size(), grown.get<int>(), report["options"]["size"].get<int>());
+               report["preparation"]["components"].get<size_t>(), grown.get<int>(), report["options"]["size"].get<int>());
 }
 
 /// How long the CLI's own stages took, in seconds (read_s, textures_s from the start).
@@ -441,7 +434,7 @@ void run(const CommandLine& line) {
   if (line.layout != Layout::kAtlas) check_per_component_memory(guard, planned.plan);
   Result result = bake_plan(planned.plan, planned.mesh, opt);
   if (show_progress) fmt::print(stderr, "\r\033[K");
-  if (!line.quiet) print_notes(planned.plan, planned.plan.report);
+  if (!line.quiet) print_notes(planned.plan, planned.plan.report());
 
   const std::string name = fs::path(line.input).stem().string();
   const Metrics metrics = write_and_measure(line, planned.mesh, result.output, name, timings);

@@ -7,6 +7,11 @@
 #include <chrono>
 #include <functional>
 #include <mutex>
+#include <string>
+#include <string_view>
+
+#include "tightex/error.hpp"
+#include "tightex/options.hpp"
 
 namespace tightex {
 
@@ -15,6 +20,8 @@ class ProgressCounter {
   ProgressCounter(std::function<void(double)> report, double total_units, double interval_s = 0.2)
       : report_(std::move(report)), total_(total_units), interval_(interval_s) {}
 
+  /// The total, where it is known only once the counter has been handed out (before any advance).
+  void set_total(double total_units) { total_ = total_units; }
   void advance(double units) {
     done_.fetch_add(units);
     if (!report_ || !(total_ > 0)) return;
@@ -37,6 +44,24 @@ class ProgressCounter {
   std::mutex mutex_;
   std::chrono::steady_clock::time_point last_{};
   bool reported_once_ = false;
+};
+
+/// The caller's progress callback (Options::progress) as the stages call it: a call that the callback
+/// answers with false throws Cancelled, naming the stage.
+class StageProgress {
+ public:
+  explicit StageProgress(const ProgressCallback& callback) : callback_(callback) {}
+  void operator()(std::string_view stage, double fraction) const {
+    if (callback_ && !callback_(stage, fraction)) throw Cancelled("cancelled during " + std::string(stage));
+  }
+  /// The fraction-only report of one stage (ProgressCounter, the bake), or empty without a callback.
+  std::function<void(double)> of_stage(const char* stage) const {
+    if (!callback_) return nullptr;
+    return [this, stage](double fraction) { (*this)(stage, fraction); };
+  }
+
+ private:
+  const ProgressCallback& callback_;
 };
 
 }  // namespace tightex

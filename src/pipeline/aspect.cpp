@@ -1,82 +1,85 @@
 #include "pipeline/aspect.hpp"
 
-#include "bake/bake.hpp"
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <array>
-#include <cmath>
-#include <random>
+#include <numeric>
 
-#include <tbb/parallel_for.h>
+#include "core/error.hpp"
+#include "pipeline/budget.hpp"
+#include "tightex/tightex.hpp"
 
 namespace tightex {
 
-BakeTriangle bake_triangle(const TexturedMesh& input, const Surface& disk, uint32_t f, const std::vector<Vec2>& uv, const Rect& rect) {
-  const uint32_t t = disk.input_face[f];
-  const Tri& ft = disk.triangles[f];
-  BakeTriangle bt;
-  bt.material = input.face_material[t];
-  bt.area3 = triangle_area(disk.positions, ft);
-  for (size_t k = 0; k < 3; ++k) {
-    bt.target_px[k] = rect_pixel(rect, uv[ft[k]]);
-    bt.source_uv[k] = input.sampled_uv(t, disk.input_corner[3 * size_t(f) + k]);
+namespace {
+
+/// Another shape replaces the square only if its estimated error is this fraction of the square's or
+/// less: the estimate is a simulation, and a square texture is the simpler one to use.
+constexpr double kAspectMinGain = 0.95;
+
+/// The probes share the dominant component's seams and handle search. Where that search meets a bug
+/// (InternalError), none is shared: each probe then meets it again inside map_component, which reports
+/// it as that map's fallback.
+std::optional<CutInputs> shared_cut_inputs(const MapContext& ctx, size_t c) {
+  try {
+    return cut_inputs(ctx.input, ctx.components[c]);
+  } catch (const InternalError&) {
+    return std::nullopt;
   }
-  return bt;
 }
 
-double resampling_mse(const TexturedMesh& input, const Surface& disk, const std::vector<Vec2>& uv, int w, int h, size_t samples) {
-  const size_t nf = disk.num_faces();
-  if (w < 2 || h < 2 || samples == 0 || uv.size() != disk.num_vertices() || disk.input_face.size() != nf) return -1;
-  // The faces that have pixels to read, baked as bake_plan places them (the unit square's corners on
-  // the corner texels' centres), without the fit.
-  std::vector<uint32_t> real;
-  std::vector<BakeTriangle> tris;
-  for (uint32_t f = 0; f < nf; ++f) {
-    const uint32_t t = disk.input_face[f];
-    if (t == kNone || !image_of(input, t)) continue;
-    real.push_back(f);
-    tris.push_back(bake_triangle(input, disk, f, uv, Rect{0, 0, 0, w, h}));
-  }
-  if (real.empty()) return -1;
-  std::vector<Image> images(1, Image(w, h));
-  BakeOptions bo;
-  bo.fit = false;
-  bake_texture(input, tris, {Rect{0, 0, 0, w, h}}, images, nullptr, bo);
+}  // namespace
 
-  // Sample points, uniform by 3D area over the real faces; both colours bilinear, as METRICS.md reads.
-  std::vector<double> cdf(real.size());
-  double acc = 0;
-  for (size_t i = 0; i < real.size(); ++i) {
-    const Tri& t = disk.triangles[real[i]];
-    cdf[i] = acc += triangle_area(disk.positions[t[0]], disk.positions[t[1]], disk.positions[t[2]]);
+size_t aspect_probe_component(const MapContext& ctx, const std::vector<double>& shares) {
+  const Options& o = ctx.options;
+  if (o.aspect != 0 || o.map == MapKind::kHarmonic || o.layout != Layout::kAtlas || shares.empty()) return kNone;
+  const size_t c = size_t(std::max_element(shares.begin(), shares.end()) - shares.begin());
+  const double sum = std::accumulate(shares.begin(), shares.end(), 0.0);
+  if (ctx.have_pixels && ctx.density[c].textured && shares[c] >= 0.5 * sum && ctx.components[c].num_faces() <= kProbeMaxFaces) return c;
+  return kNone;
+}
+
+ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const std::vector<double>& shares, int size, AtlasShares mode) {
+  const size_t n = std::size(kAspectProbes);
+  std::vector<std::optional<Mapped>> probe(n);
+  std::vector<double> mse(n, -1);
+  const std::optional<CutInputs> shared = shared_cut_inputs(ctx, dominant);
+  auto run_probe = [&](size_t i, CapChoice choice) {
+    const auto [W, H] = atlas_size(size, kAspectProbes[i]);
+    if (std::max(W, H) > std::max(size, kDefaultSizeMax)) return;  // not beyond the size limit for a shape
+    if (kAspectProbes[i] != 1.0 && W == H) return;                   // too small a texture to take another shape
+    const auto rects = try_layout_atlas(shares, W, H, 4, mode);
+    if (!rects) return;  // this shape cannot hold every component: not probed
+    probe[i] = map_component(ctx, dominant, (*rects)[dominant], shared ? &*shared : nullptr, choice);
+    if (probe[i]->kept.empty()) mse[i] = estimate_mse(ctx.input, *probe[i]);
+  };
+  if (shared && small_longest_hole(ctx, dominant, *shared)) {
+    // Both cuts are mapped for the square (side by side), and the other shapes take its choice.
+    run_probe(0, CapChoice::kCompare);
+    const CutStats square = probe[0] ? probe[0]->cut : CutStats{};
+    const CapChoice decided = !square.compared_mse.empty() && square.longest_loop_capped ? CapChoice::kCap : CapChoice::kKeep;
+    tbb::parallel_for(size_t(1), n, [&](size_t i) {
+      run_probe(i, decided);
+      if (probe[i]) probe[i]->cut.compared_mse = square.compared_mse;  // the report's estimates: the square's
+    });
+  } else {
+    tbb::parallel_for(size_t(0), n, [&](size_t i) { run_probe(i, CapChoice::kKeep); });
   }
-  if (!(acc > 0)) return -1;
-  // In chunks with their own seeds, summed in order: the same figure for any thread count.
-  constexpr size_t kChunk = 16384;
-  const size_t chunks = (samples + kChunk - 1) / kChunk;
-  std::vector<double> chunk_se(chunks, 0.0);
-  tbb::parallel_for(size_t(0), chunks, [&](size_t ch) {
-    std::mt19937_64 rng(20241201 + ch);
-    std::uniform_real_distribution<double> uni(0.0, 1.0);
-    double se = 0;
-    for (size_t s = ch * kChunk; s < std::min(samples, (ch + 1) * kChunk); ++s) {
-      const double pick = uni(rng) * acc;
-      const size_t i = std::min(size_t(std::upper_bound(cdf.begin(), cdf.end(), pick) - cdf.begin()), real.size() - 1);
-      double r1 = uni(rng), r2 = uni(rng);
-      if (r1 + r2 > 1) r1 = 1 - r1, r2 = 1 - r2;
-      const double b[3] = {1 - r1 - r2, r1, r2};
-      const BakeTriangle& bt = tris[i];
-      Vec2 px = Vec2::Zero(), src = Vec2::Zero();
-      for (int k = 0; k < 3; ++k) px += b[k] * bt.target_px[size_t(k)], src += b[k] * bt.source_uv[size_t(k)];
-      const auto out = sample_bilinear(images[0], px.x() / w, 1.0 - px.y() / h);
-      const auto in = sample_bilinear(*image_of(input, disk.input_face[real[i]]), src.x(), src.y());
-      for (int c = 0; c < 3; ++c) se += double(out[size_t(c)] - in[size_t(c)]) * double(out[size_t(c)] - in[size_t(c)]);
-    }
-    chunk_se[ch] = se;
-  });
-  double se = 0;
-  for (double x : chunk_se) se += x;
-  return se / (3.0 * double(samples));
+  // The area map's density promise first, then the estimate, where another shape must beat the square
+  // by kAspectMinGain.
+  const SquareMapStats none{};
+  auto stats = [&](size_t i) -> const SquareMapStats& { return probe[i] ? probe[i]->map : none; };
+  size_t chosen = 0;
+  for (size_t i = 1; i < n; ++i)
+    if (better_map(ctx.options.map, stats(i), mse[i], stats(chosen), mse[chosen], chosen == 0 ? kAspectMinGain : 1.0)) chosen = i;
+  ShapeChoice choice;
+  choice.aspect = kAspectProbes[chosen];
+  for (size_t i = 0; i < n; ++i) {
+    const auto [W, H] = atlas_size(size, kAspectProbes[i]);
+    choice.probes.push_back({kAspectProbes[i], W, H, mse[i]});
+  }
+  choice.dominant_map = std::move(probe[chosen]);
+  return choice;
 }
 
 }  // namespace tightex

@@ -1,32 +1,33 @@
-// The texture's shape (beyond the paper, session 7): which width/height of the rectangle keeps the most
-// of the input's texture for the same texel budget.
+// The texture's shape (Options::aspect 0): the component that holds most of the texture is mapped into
+// a square, a 1:2 and a 2:1 texture of the same budget, and the shape whose map keeps the most of the
+// input's colour (better_map on resampling_mse) is chosen; the square unless another is clearly better.
 #pragma once
-#include <cstddef>
-#include <cstdint>
+#include <optional>
 #include <vector>
 
-#include "core/mesh.hpp"
-#include "bake/bake.hpp"
-#include "core/surface.hpp"
-#include "layout/layout.hpp"
+#include "pipeline/map_component.hpp"
+#include "report/report.hpp"
 
 namespace tightex {
 
-/// An estimate of the colour error that a map of a disk leaves when baked into a w x h texel rectangle:
-/// the disk's real faces are baked (bake_texture as bake_plan places them: the unit square's corners on
-/// the corner texels' centres; without the least-squares fit, a fifth of the bake's time, which lifts
-/// every map alike) and the result read back bilinearly at `samples` points spread uniformly by 3D area,
-/// against the input's own bilinear colour there, as METRICS.md's surface PSNR compares.
-/// `uv`: per disk vertex, in the unit square; faces without an input triangle (Surface::input_face)
-/// (kNone: scaffolding, not sampled). Returns the mean squared error per RGB channel in 8-bit levels,
-/// or -1 when no face has loaded texture pixels. Deterministic (fixed seed): two maps of the same disk
-/// are compared at the same surface points. Measured against the surface PSNR of the finished run, an
-/// estimate that simulated the texels by point sampling (no footprint filter) ranked meshroom_esp32cam's
-/// 2:1 map 1 dB above its square (real: 0.5 dB below); the real bake ranks them right.
-double resampling_mse(const TexturedMesh& input, const Surface& disk, const std::vector<Vec2>& uv, int w, int h, size_t samples);
+/// The shapes probed, width/height of the texture; the square first, which stays unless another
+/// shape's estimated error is at most kAspectMinGain of it.
+constexpr double kAspectProbes[] = {1.0, 0.5, 2.0};
 
-/// The bake's view of disk face f (not scaffolding): its input triangle's material and texture
-/// coordinates, its 3D area, and its corners' texel positions in `rect` for the map `uv`.
-BakeTriangle bake_triangle(const TexturedMesh& input, const Surface& disk, uint32_t f, const std::vector<Vec2>& uv, const Rect& rect);
+/// The shape chosen, what each probe was estimated to give (estimated_mse < 0: not probed, since the
+/// shape cannot hold every component, or not mapped), and the probed component's map in that shape.
+struct ShapeChoice {
+  double aspect = 1.0;
+  std::vector<AspectProbe> probes;
+  std::optional<Mapped> dominant_map;  // the probed component's map in the chosen shape
+};
+
+/// The component whose shape decides the texture's: the one holding at least half the texels, if the
+/// shape is to be chosen (Options::aspect 0, not the harmonic map, atlas layout), its texture's pixels
+/// are known and it has at most kProbeMaxFaces faces; kNone otherwise.
+size_t aspect_probe_component(const MapContext& ctx, const std::vector<double>& shares);
+
+/// Maps component `dominant` into its rectangle of each probe's texture (size^2 texels) and chooses.
+ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const std::vector<double>& shares, int size, AtlasShares mode);
 
 }  // namespace tightex

@@ -1,6 +1,9 @@
 // Data preparation, second half (paper §4.1) and the cut to a disk: components, holes, cut graph.
 #pragma once
+#include <optional>
 #include <string>
+
+#include "core/error.hpp"
 #include <vector>
 
 #include "core/surface.hpp"
@@ -93,5 +96,29 @@ struct Denoised {
 Disk cut_to_disk(const Surface& component, HoleMode holes, CutStats* stats,
                  const std::vector<uint32_t>& slit_to = {}, const Denoised* denoised = nullptr, bool plain = false,
                  const std::vector<char>& seams = {}, double fill_budget = kFillBudget, bool cap_kept = false);
+
+/// The cut's choices (cut_to_disk above, argument by argument).
+enum class CutMethod { kFull, kPlainCutGraph };
+struct CutOptions {
+  HoleMode holes = HoleMode::kFill;
+  CutMethod method = CutMethod::kFull;
+  double fill_budget = kFillBudget;
+  bool cap_longest_loop = false;
+  std::vector<uint32_t> slit_to;
+  const Denoised* denoised = nullptr;
+  const std::vector<char>* seams = nullptr;
+};
+inline std::optional<Disk> try_cut_to_disk(const Surface& component, const CutOptions& o, CutStats* stats) {
+  try {
+    return cut_to_disk(component, o.holes, stats, o.slit_to, o.denoised, o.method == CutMethod::kPlainCutGraph,
+                       o.seams ? *o.seams : std::vector<char>{}, o.fill_budget, o.cap_longest_loop);
+  } catch (const InternalError&) {
+    return std::nullopt;
+  }
+}
+inline Disk cut_to_disk(const Surface& component, const CutOptions& o, CutStats* stats) {
+  return cut_to_disk(component, o.holes, stats, o.slit_to, o.denoised, o.method == CutMethod::kPlainCutGraph,
+                     o.seams ? *o.seams : std::vector<char>{}, o.fill_budget, o.cap_longest_loop);
+}
 
 }  // namespace tightex

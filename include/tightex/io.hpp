@@ -1,0 +1,53 @@
+// Reading and writing models and texture images: Wavefront OBJ + MTL with the textures they name;
+// PNG and JPEG (and, for reading, what stb_image understands). Every reader refuses bad input with an
+// InputError naming the file, the element and the problem.
+#pragma once
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "tightex/image.hpp"
+#include "tightex/mesh.hpp"
+
+namespace tightex {
+
+struct ObjReadOptions {
+  bool load_textures = true;              // false: materials keep their texture path, no pixels
+  size_t max_texture_pixels = size_t(1) << 30;
+};
+
+/// What the reader did beyond plain reading, for the report.
+struct ObjReadStats {
+  size_t polygons_triangulated = 0;  // faces with more than 3 corners, fan-triangulated
+  size_t lines = 0;
+  /// Files the MTL names that were found only by ignoring case or by a tail of the path as written
+  /// ("WRITTEN -> USED"), e.g. a Windows exporter's absolute path.
+  std::vector<std::string> paths_found;
+};
+
+/// Reads an OBJ file and its MTL libraries and textures.
+/// Requires: a readable OBJ file with at least one triangle and texture coordinates on every face.
+/// Guarantees: positions finite; triangle indices in range; corner_uv finite and 3 per triangle;
+/// face_material in range or -1; every material with map_Kd has a loaded texture.
+/// Throws InputError with "FILE:LINE: problem" for any malformed or unsupported content.
+TexturedMesh read_obj(const std::string& path, const ObjReadOptions& options = {}, ObjReadStats* stats = nullptr);
+
+enum class ImageFormat { kPng, kJpeg };
+
+/// Loads an image file. Throws InputError naming the file and the problem (missing, unreadable,
+/// truncated, corrupt, unsupported, or larger than max_pixels) -- never crashes on a bad file.
+Image load_image(const std::string& path, size_t max_pixels = size_t(1) << 30);
+
+/// Writes an image (RGB; alpha is dropped when it is 255 everywhere). PNG uses fast compression
+/// settings (tightex writes 8K textures; zlib level 9 would dominate the run time). `jpeg_quality`
+/// is 1..100. Throws InputError naming the file when it cannot be written.
+void save_image(const std::string& path, const Image& image, ImageFormat format, int jpeg_quality = 92);
+
+/// Writes OUTDIR/<name>.obj, <name>.mtl and every texture of `mesh` (Texture::path is the file stem inside
+/// OUTDIR; .png or .jpg is appended). Every file is first written under a temporary name and renamed only once
+/// all are complete (the OBJ last), so a failed run leaves no model behind. Positions are written in
+/// shortest round-trip form, so they read back bit-identical; texture coordinates likewise, so no UV
+/// triangle collapses on the way to the file. Throws InputError naming the path on failure.
+void write_obj(const TexturedMesh& mesh, const std::string& outdir, const std::string& name, ImageFormat format);
+
+}  // namespace tightex

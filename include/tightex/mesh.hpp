@@ -1,0 +1,58 @@
+// The textured triangle mesh as flat arrays (structure of arrays), as read from a model file and as
+// written back. Texture coordinates and normals are per corner (3 per triangle), so a stage never has
+// to reconcile split vertices: corner c of triangle t is index 3*t + c.
+#pragma once
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "tightex/image.hpp"
+
+namespace tightex {
+
+using Vec2 = Eigen::Vector2d;
+using Vec3 = Eigen::Vector3d;
+using Tri = std::array<uint32_t, 3>;
+constexpr uint32_t kNone = UINT32_MAX;
+
+/// One material: a name, a constant diffuse colour and optionally a diffuse texture image.
+struct Material {
+  std::string name;
+  std::array<double, 3> kd{1.0, 1.0, 1.0};
+  int texture = -1;                 // index into TexturedMesh::textures, -1 = constant colour
+  std::array<double, 2> uv_scale{1.0, 1.0};   // map_Kd -s
+  std::array<double, 2> uv_offset{0.0, 0.0};  // map_Kd -o
+};
+
+/// A texture image and the path it came from (or will be written to).
+struct Texture {
+  std::string path;
+  Image image;
+  /// The size when the pixels are not loaded (yet): read from the file's header by a caller that
+  /// decodes later. 0 when unknown. A loaded image's own size always wins (see texture_size).
+  int width = 0, height = 0;
+};
+
+struct TexturedMesh {
+  std::vector<Vec3> positions;         // per vertex
+  std::vector<Tri> triangles;          // vertex indices, counter-clockwise = front
+  std::vector<Vec2> corner_uv;         // 3 per triangle
+  std::vector<Vec3> corner_normal;     // 3 per triangle, or empty when the model has none
+  std::vector<int32_t> face_material;  // per triangle, index into materials (-1: none)
+  std::vector<Material> materials;
+  std::vector<Texture> textures;
+  std::string source;                  // file it was read from, for messages
+
+  size_t num_vertices() const { return positions.size(); }
+  size_t num_triangles() const { return triangles.size(); }
+  /// Texture coordinate at a corner after the material's -s/-o transform (what a renderer samples).
+  Vec2 sampled_uv(size_t triangle, int corner) const;
+};
+
+/// Width and height of texture i: its pixels' if loaded, else the header size recorded in the Texture.
+std::pair<int, int> texture_size(const TexturedMesh& mesh, int i);
+
+}  // namespace tightex

@@ -1,0 +1,94 @@
+// bake_plan: the texture half of the method, the output model, the bake (§4.3) and the metrics.
+#include "core/error.hpp"
+#include "core/progress.hpp"
+#include "pipeline/output_model.hpp"
+#include "pipeline/plan_state.hpp"
+#include "pipeline/stage_clock.hpp"
+#include "report/metrics.hpp"
+
+namespace tightex {
+
+namespace {
+
+/// Bakes the new textures of `om` from the input (§4.3, Alg. 3, then the least-squares fit).
+BakeStats bake_new_textures(const TexturedMesh& input, const Options& options, const StageProgress& progress, OutputModel& om) {
+  std::vector<Image> images;
+  for (int i = 0; i < om.new_images; ++i) images.push_back(std::move(om.mesh.textures[size_t(i)].image));
+  BakeStats bs;
+  BakeOptions bo;
+  bo.fit = options.fit;
+  if (options.fine_fit) bo.fit_samples = kFineFitSamples, bo.fit_lambda = kFineFitLambda;
+  bo.progress = progress.of_stage("bake");
+  bake_texture(input, om.bake_triangles, om.rects, images, &bs, bo);
+  for (size_t i = 0; i < images.size(); ++i) om.mesh.textures[i].image = std::move(images[i]);
+  return bs;
+}
+
+}  // namespace
+
+Plan::Plan() = default;
+Plan::Plan(std::unique_ptr<State> state) : state_(std::move(state)) {}
+Plan::Plan(Plan&&) noexcept = default;
+Plan& Plan::operator=(Plan&&) noexcept = default;
+Plan::~Plan() = default;
+
+const Plan::State& Plan::state() const {
+  if (!state_) fail_input("the plan is empty (made by plan_charts?)");
+  return *state_;
+}
+
+const nlohmann::json& Plan::report() const { return state().report_json; }
+
+std::vector<std::pair<int, int>> Plan::texture_sizes() const { return state().image_size; }
+
+size_t Plan::kept_components() const {
+  size_t n = 0;
+  for (const std::string& k : state().kept) n += !k.empty();
+  return n;
+}
+
+size_t Plan::kept_triangles() const {
+  size_t n = 0;
+  for (size_t c = 0; c < state().kept.size(); ++c)
+    if (!state().kept[c].empty()) n += state().components[c].num_faces();
+  return n;
+}
+
+std::string Plan::first_kept_reason() const {
+  for (const std::string& k : state().kept)
+    if (!k.empty()) return k;
+  return {};
+}
+
+Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& options) {
+  const Plan::State& state = plan.state();
+  if (input_fingerprint(input) != state.input_fingerprint)
+    fail_input("{}: not the mesh the plan was made from ({} triangles, {} vertices): bake_plan needs the planned mesh",
+               input.source.empty() ? std::string("mesh") : input.source, input.num_triangles(), input.num_vertices());
+  const StageProgress progress(options.progress);
+  Report rep = state.report;
+  StageClock clock(rep.timings);
+  // 5. The output model: the input's positions and triangles, new texture coordinates; components the
+  //    plan could not map keep their input texture coordinates and materials.
+  OutputModel om = build_output_model(state, input);
+  // 6. Bake the new textures (§4.3).
+  progress("bake", 0);
+  rep.bake = bake_new_textures(input, options, progress, om);
+  Result result;
+  result.output = std::move(om.mesh);
+  clock.done("bake");
+  // 7. Measure (METRICS.md).
+  if (options.measure) {
+    progress("measure", 0);
+    rep.metrics = measure(input, result.output);
+    clock.done("measure");
+  }
+  rep.peak_rss_mib = peak_rss_mib();
+  result.report = to_json(rep);
+  progress("done", 1);
+  return result;
+}
+
+Result optimize(const TexturedMesh& input, const Options& options) { return bake_plan(plan_charts(input, options), input, options); }
+
+}  // namespace tightex

@@ -1,0 +1,167 @@
+#include "pipeline/output_model.hpp"
+
+#include <cctype>
+#include <set>
+
+#include "bake/resampling_error.hpp"
+#include "core/error.hpp"
+
+namespace tightex {
+
+namespace {
+
+/// The file name of a path without folder and extension ("a/b.c.png" -> "b.c").
+std::string file_stem(std::string s) {
+  const size_t slash = s.find_last_of('/');
+  if (slash != std::string::npos) s = s.substr(slash + 1);
+  const size_t dot = s.find_last_of('.');
+  return dot == std::string::npos || dot == 0 ? s : s.substr(0, dot);
+}
+
+std::string lower(std::string s) {
+  for (char& ch : s) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+  return s;
+}
+
+/// A name that is safe as a file stem and an MTL token: letters, digits, '-', '_' and '.' (not first).
+std::string file_name_safe(const std::string& s) {
+  std::string r;
+  for (char ch : s) r += std::isalnum(static_cast<unsigned char>(ch)) || ch == '-' || ch == '_' || (ch == '.' && !r.empty()) ? ch : '_';
+  return r.empty() ? std::string("texture") : r;
+}
+
+/// `base`, or base_2, base_3, ... : the first not in `taken` (without case), which it joins.
+std::string unique_name(std::set<std::string>& taken, const std::string& base) {
+  std::string name = base;
+  for (int i = 2; taken.count(lower(name)) != 0; ++i) name = fmt::format("{}_{}", base, i);
+  taken.insert(lower(name));
+  return name;
+}
+
+bool is_kept(const Plan::State& plan, size_t c) { return c < plan.kept.size() && !plan.kept[c].empty(); }
+
+/// The new images some mapped component uses, renumbered densely (a kept component's own image in the
+/// per-component layout would stay empty and is not written); -1 for the others.
+std::vector<int> renumber_images(const Plan::State& plan, int* new_images) {
+  std::vector<int> index(plan.image_size.size(), -1);
+  for (size_t c = 0; c < plan.components.size(); ++c)
+    if (!is_kept(plan, c)) index[size_t(plan.rects[c].image)] = 0;
+  *new_images = 0;
+  for (int& i : index)
+    if (i == 0) i = (*new_images)++;
+  return index;
+}
+
+/// Appends triangle t of `input` to `out` with its corners in the order `corner` gives.
+void add_input_triangle(const TexturedMesh& input, uint32_t t, const uint8_t* corner, TexturedMesh& out) {
+  const Tri& it = input.triangles[t];
+  out.triangles.push_back(Tri{it[corner[0]], it[corner[1]], it[corner[2]]});
+  if (!input.corner_normal.empty())
+    for (int k = 0; k < 3; ++k) out.corner_normal.push_back(input.corner_normal[3 * t + corner[k]]);
+}
+
+/// The mapped components' triangles: new texture coordinates in their rectangles, the new material.
+void add_mapped_triangles(const Plan::State& plan, const TexturedMesh& input, const std::vector<int>& image_index, OutputModel& om) {
+  for (size_t c = 0; c < plan.components.size(); ++c) {
+    if (is_kept(plan, c)) continue;
+    const Rect& r = plan.rects[c];
+    const auto [W, H] = plan.image_size[size_t(r.image)];
+    const int image = image_index[size_t(r.image)];
+    om.rects.push_back(r);
+    om.rects.back().image = image;
+    const Surface& disk = plan.disks[c].mesh;
+    for (uint32_t f = 0; f < disk.num_faces(); ++f) {
+      const uint32_t t = disk.input_face[f];
+      if (t == kNone) continue;  // scaffolding
+      BakeTriangle bt = bake_triangle(input, disk, f, plan.uv[c], r);
+      bt.image = uint32_t(image);
+      add_input_triangle(input, t, &disk.input_corner[3 * size_t(f)], om.mesh);
+      for (const Vec2& px : bt.target_px) om.mesh.corner_uv.push_back(Vec2(px.x() / W, 1.0 - px.y() / H));
+      om.mesh.face_material.push_back(int32_t(image));
+      om.bake_triangles.push_back(bt);
+    }
+  }
+}
+
+/// The new textures (black until baked) and their materials, named after the input file.
+void add_new_textures(const Plan::State& plan, const std::vector<int>& image_index, std::set<std::string>& names, OutputModel& om) {
+  const std::string stem = file_stem(om.mesh.source);
+  for (int i = 0; i < om.new_images; ++i) {
+    Texture tex;
+    tex.path = om.new_images == 1 ? stem + "_tightex" : fmt::format("{}_tightex_{}", stem, i);
+    size_t src = 0;
+    while (image_index[src] != i) ++src;
+    tex.image = Image(plan.image_size[src].first, plan.image_size[src].second, Rgba8{0, 0, 0, 255});
+    names.insert(lower(tex.path));
+    om.mesh.textures.push_back(std::move(tex));
+    Material m;
+    m.name = om.new_images == 1 ? "tightex" : fmt::format("tightex_{}", i);
+    m.texture = i;
+    names.insert(lower(m.name));
+    om.mesh.materials.push_back(m);
+  }
+}
+
+/// Input material `in_mat` (-1: none) copied for the kept triangles once, with its texture copied under
+/// the input file's own stem; both renamed only where a name is taken ("kept_" keeps a copy from ever
+/// taking an input texture's own file name).
+int32_t kept_material(const TexturedMesh& input, int32_t in_mat, std::vector<int32_t>& material_of, std::vector<int>& texture_of,
+                      std::set<std::string>& names, TexturedMesh& out) {
+  int32_t& om = material_of[size_t(in_mat + 1)];
+  if (om >= 0) return om;
+  Material m;  // no input material: white, as measure() and a renderer take it
+  if (in_mat >= 0) m = input.materials[size_t(in_mat)];
+  m.texture = -1;
+  m.name = unique_name(names, "kept_" + file_name_safe(in_mat >= 0 ? input.materials[size_t(in_mat)].name : "none"));
+  if (in_mat >= 0 && input.materials[size_t(in_mat)].texture >= 0) {
+    const int in_tex = input.materials[size_t(in_mat)].texture;
+    int& ot = texture_of[size_t(in_tex)];
+    if (ot < 0 && !input.textures[size_t(in_tex)].image.empty()) {
+      Texture tex;
+      tex.path = unique_name(names, "kept_" + file_name_safe(file_stem(input.textures[size_t(in_tex)].path)));
+      tex.image = input.textures[size_t(in_tex)].image;
+      ot = int(out.textures.size());
+      out.textures.push_back(std::move(tex));
+    }
+    m.texture = ot;
+  }
+  om = int32_t(out.materials.size());
+  out.materials.push_back(std::move(m));
+  return om;
+}
+
+/// The kept components' triangles, after the mapped ones: input corners and texture coordinates as
+/// they were, each input material they use copied once (first use first, so the order is fixed).
+void add_kept_triangles(const Plan::State& plan, const TexturedMesh& input, std::set<std::string>& names, TexturedMesh& out) {
+  std::vector<int32_t> material_of(input.materials.size() + 1, -1);  // input material + 1 -> output
+  std::vector<int> texture_of(input.textures.size(), -1);
+  for (size_t c = 0; c < plan.components.size(); ++c) {
+    if (!is_kept(plan, c)) continue;
+    const Surface& comp = plan.components[c];
+    for (uint32_t cf = 0; cf < comp.num_faces(); ++cf) {
+      const uint32_t t = comp.input_face[cf];
+      const int32_t om = kept_material(input, input.face_material[t], material_of, texture_of, names, out);
+      const uint8_t* corner = &comp.input_corner[3 * size_t(cf)];
+      add_input_triangle(input, t, corner, out);
+      for (int k = 0; k < 3; ++k) out.corner_uv.push_back(input.corner_uv[3 * t + corner[k]]);
+      out.face_material.push_back(om);
+    }
+  }
+}
+
+}  // namespace
+
+OutputModel build_output_model(const Plan::State& plan, const TexturedMesh& input) {
+  OutputModel om;
+  om.mesh.source = input.source;
+  om.mesh.positions = input.positions;
+  om.bake_triangles.reserve(input.num_triangles());
+  const std::vector<int> image_index = renumber_images(plan, &om.new_images);
+  add_mapped_triangles(plan, input, image_index, om);
+  std::set<std::string> names;  // file stems and material names taken, compared without case
+  add_new_textures(plan, image_index, names, om);
+  add_kept_triangles(plan, input, names, om.mesh);
+  return om;
+}
+
+}  // namespace tightex

@@ -1,0 +1,178 @@
+// plan_charts: the geometric half of the method, stage after stage (paper §4.1, §4.2, then the layout).
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cstring>
+
+#include "core/error.hpp"
+#include "core/progress.hpp"
+#include "pipeline/aspect.hpp"
+#include "pipeline/budget.hpp"
+#include "pipeline/plan_report.hpp"
+#include "pipeline/plan_state.hpp"
+#include "pipeline/stage_clock.hpp"
+#include "pipeline/validate.hpp"
+#include "repair/repair.hpp"
+
+namespace tightex {
+
+namespace {
+
+/// The texture side asked for, checked.
+int requested_size(const TexturedMesh& input, const Options& options) {
+  const int size = options.size == 0 ? default_size(input) : options.size;
+  if (size < 8 || size > 65536) fail_input("--size {} is out of range (8..65536)", size);
+  if (options.aspect != 0 && !(options.aspect >= 1.0 / 16 && options.aspect <= 16))
+    fail_input("aspect {} is out of range (0 for auto, or 1/16..16)", options.aspect);
+  return size;
+}
+
+std::vector<double> component_areas(const std::vector<Surface>& components) {
+  std::vector<double> areas(components.size(), 0.0);
+  for (size_t c = 0; c < components.size(); ++c)
+    for (const Tri& f : components[c].triangles) areas[c] += triangle_area(components[c].positions, f);
+  return areas;
+}
+
+/// Each component's target density (for every map but the harmonic one) and its share of the texture.
+std::vector<double> plan_density(const TexturedMesh& input, const Options& options, const std::vector<Surface>& components,
+                                 const std::vector<double>& areas, int size, std::vector<ComponentDensity>& density) {
+  density.assign(components.size(), ComponentDensity{});
+  if (options.map == MapKind::kHarmonic) return areas;
+  tbb::parallel_for(size_t(0), components.size(), [&](size_t c) { density[c] = component_density(input, components[c], options.map); });
+  if (options.map == MapKind::kDetail) allocate_detail(components, density, double(size) * double(size));
+  return texture_shares(density, areas);
+}
+
+/// Triangles the maps will take (the probed component once per probe), for the progress.
+double faces_to_map(const std::vector<Surface>& components, size_t probed) {
+  double faces = 0;
+  for (const Surface& comp : components) faces += double(comp.num_faces());
+  if (probed != kNone) faces += double(components[probed].num_faces()) * double(std::size(kAspectProbes) - 1);
+  return faces;
+}
+
+bool have_pixels(const TexturedMesh& input) {
+  for (const Texture& t : input.textures)
+    if (!t.image.empty()) return true;
+  return false;
+}
+
+/// The rectangles and texture sizes: one atlas of the chosen shape, or a texture per component.
+void lay_out(const Options& options, const std::vector<double>& shares, int size, double aspect, Plan::State& plan) {
+  const bool default_budget = options.size == 0 || options.default_budget;
+  if (options.layout == Layout::kAtlas) {
+    const auto [W, H] = atlas_size(size, aspect);
+    plan.rects = layout_atlas(shares, W, H, 4, options.map == MapKind::kArea ? AtlasShares::kExact : AtlasShares::kLeastError);
+    plan.image_size.push_back({W, H});
+    return;
+  }
+  const int side = default_budget ? per_component_side(shares, size) : size;
+  plan.rects = layout_per_component(shares, side, 4, aspect);
+  for (const Rect& r : plan.rects) plan.image_size.push_back({r.w, r.h});
+}
+
+/// Every component cut and mapped into its rectangle (the probed one reuses its chosen probe's map);
+/// each one's cut and map statistics for the report.
+void map_components(const MapContext& ctx, std::optional<Mapped>& probed, size_t probed_component, Plan::State& plan,
+                    std::vector<CutStats>& cuts, std::vector<SquareMapStats>& maps) {
+  const size_t nc = plan.components.size();
+  plan.disks.resize(nc);
+  plan.uv.resize(nc);
+  plan.kept.assign(nc, std::string());
+  cuts.resize(nc);
+  maps.resize(nc);
+  tbb::parallel_for(size_t(0), nc, [&](size_t c) {
+    const Rect& rect = plan.rects[c];
+    Mapped m = c == probed_component && probed && rect.w == probed->rect.w && rect.h == probed->rect.h
+                   ? std::move(*probed)
+                   : map_component(ctx, c, rect, nullptr, CapChoice::kAuto);
+    plan.disks[c] = std::move(m.disk);
+    plan.uv[c] = std::move(m.uv);
+    cuts[c] = std::move(m.cut);
+    maps[c] = m.map;
+    plan.kept[c] = std::move(m.kept);
+  });
+}
+
+OptionsUsed options_used(const Options& o, int size) {
+  return {size, 0, o.layout, o.holes, o.map, o.balance, o.fit, o.fit && o.fine_fit, o.corners, o.aspect};
+}
+
+}  // namespace
+
+uint64_t input_fingerprint(const TexturedMesh& input) {
+  uint64_t h = 1469598103934665603ull;  // FNV-1a over the bytes below
+  auto mix = [&](const void* data, size_t bytes) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (size_t i = 0; i < bytes; ++i) h = (h ^ p[i]) * 1099511628211ull;
+  };
+  const size_t counts[2] = {input.num_vertices(), input.num_triangles()};
+  mix(counts, sizeof counts);
+  mix(input.triangles.data(), input.triangles.size() * sizeof(Tri));
+  mix(input.corner_uv.data(), input.corner_uv.size() * sizeof(Vec2));
+  mix(input.face_material.data(), input.face_material.size() * sizeof(int32_t));
+  return h;
+}
+
+Plan plan_charts(const TexturedMesh& input, const Options& options) { return plan_charts(input, options, PlanHooks{}); }
+
+Plan plan_charts(const TexturedMesh& input, const Options& options, const PlanHooks& hooks) {
+  validate_mesh(input);
+  const StageProgress progress(options.progress);
+  auto plan = std::make_unique<Plan::State>();
+  Report& rep = plan->report;
+  rep.options = options_used(options, requested_size(input, options));
+  int& size = rep.options.size;
+  plan->input_fingerprint = input_fingerprint(input);
+  StageClock clock(rep.timings);
+
+  // 1. Preparation (§4.1): weld, drop degenerate and duplicate triangles, orient, slice non-manifold
+  //    elements.
+  progress("repair", 0);
+  const RepairStats& rs = rep.preparation.repair;
+  const Surface surface = prepare_surface(input, &rep.preparation.repair);
+  if (surface.num_faces() == 0)
+    fail_input("{}: no triangle with non-zero area ({} zero-area, {} duplicate)", input.source, rs.zero_area_triangles, rs.duplicate_triangles);
+  clock.done("repair");
+
+  // 2. Connected components, the budget they need, and where the texels go on them.
+  progress("components", 0);
+  plan->components = split_components(surface);
+  const std::vector<double> areas = component_areas(plan->components);
+  if (options.layout == Layout::kAtlas && (options.size == 0 || options.default_budget)) {
+    const int side = atlas_side_holding(areas, size);
+    if (side != size) rep.options.size_grown_from = size, size = side;
+  }
+  std::vector<ComponentDensity> density;
+  const std::vector<double> shares = plan_density(input, options, plan->components, areas, size, density);
+
+  // 3. The texture's shape (auto: probed on the component that dominates the texture), then 4. each
+  //    component cut to a disk and mapped onto its rectangle (§4.2).
+  progress("cut+map", 0);
+  ProgressCounter map_progress(progress.of_stage("cut+map"), 0);
+  const MapContext ctx{input, options, plan->components, density, map_progress, have_pixels(input), hooks};
+  rep.aspect.requested = options.aspect;
+  rep.aspect.probed_component = aspect_probe_component(ctx, shares);
+  map_progress.set_total(faces_to_map(plan->components, rep.aspect.probed_component));
+  rep.aspect.chosen = options.aspect > 0 ? options.aspect : 1.0;
+  std::optional<Mapped> probed;
+  if (rep.aspect.probed_component != kNone) {
+    ShapeChoice choice = choose_aspect(ctx, rep.aspect.probed_component, shares, size,
+                                       options.map == MapKind::kArea ? AtlasShares::kExact : AtlasShares::kLeastError);
+    rep.aspect.chosen = choice.aspect;
+    rep.aspect.probes = std::move(choice.probes);
+    probed = std::move(choice.dominant_map);
+  }
+  lay_out(options, shares, size, rep.aspect.chosen, *plan);
+  std::vector<CutStats> cuts;
+  std::vector<SquareMapStats> maps;
+  map_components(ctx, probed, rep.aspect.probed_component, *plan, cuts, maps);
+  clock.done("cut+map");
+
+  fill_plan_report(input, *plan, areas, cuts, maps, rep);
+  plan->report_json = to_json(rep);
+  return Plan(std::move(plan));
+}
+
+}  // namespace tightex
