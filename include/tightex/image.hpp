@@ -12,9 +12,8 @@
 namespace tightex {
 
 /// Allocator for large flat buffers (textures, coverage masks): blocks of 2 MiB and more are aligned to
-/// 2 MiB and advised as transparent huge pages. A 4096^2 RGBA image is 16384 page faults at 4 KiB; on
-/// this project's VMs each costs ~10 us, about a tenth of a whole run (measured with perf on
-/// meshroom_esp32cam). Where huge pages are off the advice is ignored.
+/// 2 MiB and advised as transparent huge pages, which saves most of their page faults
+/// (docs/decisions.md). Where huge pages are off the advice is ignored.
 template <typename T>
 struct LargeBufferAllocator {
   using value_type = T;

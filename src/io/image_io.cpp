@@ -73,26 +73,9 @@ constexpr size_t kPngChunkCacheLimit = size_t(256) << 20;
 // dozen (libjpeg-turbo's djpeg -maxscans and TurboJPEG's scan limit are the same kind of cap).
 constexpr int kMaxJpegScans = 500;
 
-// PNG encoder settings, measured on the development machine (2-core AMD EPYC VM, spng 0.7.3,
-// zlib 1.2.13) for 4096x4096 RGB images, best of 3 runs (encode time, file size). "Photo-like" is
-// synthetic: smooth gradients, block edges and +-4 levels of noise per channel, like a camera image.
-//
-//                                      photo-like                     meshroom texture_1001.png
-//   level 1, Z_FILTERED, filter NONE       1111 ms  44.2 MB              128 ms  4.05 MB
-//   level 1, Z_FILTERED, filter UP          620 ms  28.4 MB              163 ms  3.35 MB
-//   level 1, Z_FILTERED, filter PAETH       915 ms  28.5 MB              243 ms  3.28 MB
-//   level 1, Z_FILTERED, adaptive (ALL)    1191 ms  27.3 MB              558 ms  3.30 MB
-//   level 2, Z_FILTERED, filter UP          751 ms  28.2 MB              171 ms  3.30 MB
-//   level 6, Z_FILTERED, filter UP         4320 ms  24.2 MB              371 ms  2.94 MB
-//   level 6, Z_FILTERED, adaptive (ALL)    6205 ms  23.1 MB              801 ms  2.84 MB
-//   level 1, Z_RLE,      filter UP          454 ms  24.1 MB              155 ms  3.05 MB   <- chosen
-//   level 1, Z_RLE,      filter PAETH       746 ms  24.3 MB              234 ms  2.80 MB
-//
-// After the UP filter, photographic data has almost no long repeats for LZ77 to find; the bytes are
-// small residuals that Huffman coding compresses. Z_RLE skips the (mostly useless) match search, so it
-// is the fastest setting and about as small as level 6 with the same filter: 5-14x faster than
-// libspng's default (level 6, adaptive filter) for 4-7% more bytes. One fixed filter also avoids
-// trying all five filters on every row.
+// PNG encoder settings: after the UP filter, photographic data has almost no long repeats for LZ77 to
+// find, so Z_RLE skips the mostly useless match search; about as small as zlib level 6 and several
+// times faster (docs/decisions.md). One fixed filter also avoids trying all five on every row.
 constexpr int kPngCompressionLevel = 1;
 constexpr int kPngCompressionStrategy = Z_RLE;
 constexpr int kPngFilterChoice = SPNG_FILTER_CHOICE_UP;
@@ -101,11 +84,8 @@ constexpr int kPngFilterChoice = SPNG_FILTER_CHOICE_UP;
 // charts side by side, so sharp colour edges are everywhere; 4:2:0 averages chroma over 2x2 texels and
 // bleeds colour across chart borders and into the gutters. At quality >= 90 that chroma error is the
 // largest error left, and a user asking for such a quality wants fidelity; below 90 the luma
-// quantisation dominates and 4:2:0's smaller file is the better trade. Measured at quality 92 on
-// 4096x4096 images: 4:4:4 costs +30% bytes on the meshroom texture (0.90 -> 1.17 MB, PSNR 49.2 ->
-// 50.4 dB) and +48% on a photo-like image (2.13 -> 3.16 MB), and about 30 ms more encode time.
-// Huffman-table optimisation (optimize_coding) stays off: 5-10x the encode time (58 -> 515 ms) for a
-// file 8-15% smaller.
+// quantisation dominates and 4:2:0's smaller file is the better trade (docs/decisions.md). Huffman-table
+// optimisation stays off: several times the encode time for a slightly smaller file.
 constexpr int kJpegFullChromaQuality = 90;
 
 std::string errno_message(int error) { return std::generic_category().message(error); }

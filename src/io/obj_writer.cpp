@@ -46,6 +46,96 @@ void write_file(const fs::path& path, const std::string& text) {
   if (!f) fail_input("{}: write failed ({})", path.string(), std::strerror(errno));
 }
 
+/// The MTL file: one material each, map_Kd naming the texture files as written (`texture_file`).
+std::string mtl_text(const TexturedMesh& mesh, const std::vector<std::string>& texture_file) {
+  std::string mtl = "# written by tightex\n";
+  for (const Material& m : mesh.materials) {
+    mtl += fmt::format("\nnewmtl {}\nKa 1 1 1\nKd {} {} {}\nKs 0 0 0\nd 1\nillum 1\n", m.name, format_double(m.kd[0]),
+                       format_double(m.kd[1]), format_double(m.kd[2]));
+    if (m.texture < 0) continue;
+    // -s/-o only where the material has them (a copied input material of a kept component).
+    std::string options;
+    if (m.uv_scale != std::array<double, 2>{1.0, 1.0})
+      options += fmt::format("-s {} {} 1 ", format_double(m.uv_scale[0]), format_double(m.uv_scale[1]));
+    if (m.uv_offset != std::array<double, 2>{0.0, 0.0})
+      options += fmt::format("-o {} {} 0 ", format_double(m.uv_offset[0]), format_double(m.uv_offset[1]));
+    mtl += fmt::format("map_Kd {}{}\n", options, texture_file[size_t(m.texture)]);
+  }
+  return mtl;
+}
+
+void append_vec3(std::string& out, const char* tag, const Vec3& p) {
+  out += tag;
+  append(out, p.x());
+  out += ' ';
+  append(out, p.y());
+  out += ' ';
+  append(out, p.z());
+}
+
+/// The "vt" lines, each distinct texture coordinate once; returns each corner's vt index.
+std::vector<uint32_t> append_texture_coordinates(const TexturedMesh& mesh, std::string& obj) {
+  std::unordered_map<std::pair<uint64_t, uint64_t>, uint32_t, Vec2Hash> uv_index;
+  std::vector<uint32_t> corner_vt(mesh.corner_uv.size());
+  for (size_t c = 0; c < mesh.corner_uv.size(); ++c) {
+    auto [it, inserted] = uv_index.try_emplace(key(mesh.corner_uv[c]), uint32_t(uv_index.size()));
+    if (inserted) {
+      obj += "vt ";
+      append(obj, mesh.corner_uv[c].x());
+      obj += ' ';
+      append(obj, mesh.corner_uv[c].y());
+      obj += '\n';
+    }
+    corner_vt[c] = it->second;
+  }
+  return corner_vt;
+}
+
+/// The "vn" lines, each distinct normal once; returns each corner's vn index.
+std::vector<uint32_t> append_normals(const TexturedMesh& mesh, std::string& obj) {
+  std::unordered_map<std::string, uint32_t> vn_index;
+  std::vector<uint32_t> corner_vn(mesh.corner_normal.size());
+  for (size_t c = 0; c < mesh.corner_normal.size(); ++c) {
+    std::string line;
+    append_vec3(line, "vn ", mesh.corner_normal[c]);
+    auto [it, inserted] = vn_index.try_emplace(line, uint32_t(vn_index.size()));
+    if (inserted) obj += line + '\n';
+    corner_vn[c] = it->second;
+  }
+  return corner_vn;
+}
+
+/// The OBJ file: positions, texture coordinates, normals (when every corner has one), faces by material.
+std::string obj_text(const TexturedMesh& mesh, const std::string& name) {
+  std::string obj;
+  obj.reserve(mesh.num_vertices() * 40 + mesh.num_triangles() * 60);
+  obj += fmt::format("# written by tightex: {} vertices, {} triangles\nmtllib {}.mtl\n", mesh.num_vertices(), mesh.num_triangles(), name);
+  for (const Vec3& p : mesh.positions) {
+    append_vec3(obj, "v ", p);
+    obj += '\n';
+  }
+  const std::vector<uint32_t> corner_vt = append_texture_coordinates(mesh, obj);
+  const bool normals = mesh.corner_normal.size() == mesh.corner_uv.size() && !mesh.corner_normal.empty();
+  const std::vector<uint32_t> corner_vn = normals ? append_normals(mesh, obj) : std::vector<uint32_t>{};
+  int32_t current = -2;
+  for (size_t t = 0; t < mesh.num_triangles(); ++t) {
+    if (mesh.face_material[t] != current) {
+      current = mesh.face_material[t];
+      if (current >= 0) obj += fmt::format("usemtl {}\n", mesh.materials[size_t(current)].name);
+    }
+    obj += 'f';
+    for (int k = 0; k < 3; ++k) {
+      const size_t c = 3 * t + size_t(k);
+      if (normals)
+        obj += fmt::format(" {}/{}/{}", mesh.triangles[t][k] + 1, corner_vt[c] + 1, corner_vn[c] + 1);
+      else
+        obj += fmt::format(" {}/{}", mesh.triangles[t][k] + 1, corner_vt[c] + 1);
+    }
+    obj += '\n';
+  }
+  return obj;
+}
+
 }  // namespace
 
 void write_obj(const TexturedMesh& mesh, const std::string& outdir, const std::string& name, ImageFormat format) {
@@ -62,88 +152,13 @@ void write_obj(const TexturedMesh& mesh, const std::string& outdir, const std::s
   };
   try {
     // Texture::path is the file stem; the extension follows the chosen format.
-    std::vector<std::string> tex_name;
+    std::vector<std::string> texture_file;
     for (const Texture& tex : mesh.textures) {
-      tex_name.push_back(tex.path + (format == ImageFormat::kPng ? ".png" : ".jpg"));
-      save_image(temp_for(tex_name.back()).string(), tex.image, format);
+      texture_file.push_back(tex.path + (format == ImageFormat::kPng ? ".png" : ".jpg"));
+      save_image(temp_for(texture_file.back()).string(), tex.image, format);
     }
-
-    std::string mtl = "# written by tightex\n";
-    for (const Material& m : mesh.materials) {
-      mtl += fmt::format("\nnewmtl {}\nKa 1 1 1\nKd {} {} {}\nKs 0 0 0\nd 1\nillum 1\n", m.name, format_double(m.kd[0]),
-                         format_double(m.kd[1]), format_double(m.kd[2]));
-      if (m.texture < 0) continue;
-      // -s/-o only where the material has them (a copied input material, see bake_plan's kept components).
-      std::string options;
-      if (m.uv_scale != std::array<double, 2>{1.0, 1.0})
-        options += fmt::format("-s {} {} 1 ", format_double(m.uv_scale[0]), format_double(m.uv_scale[1]));
-      if (m.uv_offset != std::array<double, 2>{0.0, 0.0})
-        options += fmt::format("-o {} {} 0 ", format_double(m.uv_offset[0]), format_double(m.uv_offset[1]));
-      mtl += fmt::format("map_Kd {}{}\n", options, tex_name[size_t(m.texture)]);
-    }
-    write_file(temp_for(name + ".mtl"), mtl);
-
-    std::string obj;
-    obj.reserve(mesh.num_vertices() * 40 + mesh.num_triangles() * 60);
-    obj += fmt::format("# written by tightex: {} vertices, {} triangles\nmtllib {}.mtl\n", mesh.num_vertices(),
-                       mesh.num_triangles(), name);
-    for (const Vec3& p : mesh.positions) {
-      obj += "v ";
-      append(obj, p.x());
-      obj += ' ';
-      append(obj, p.y());
-      obj += ' ';
-      append(obj, p.z());
-      obj += '\n';
-    }
-    std::unordered_map<std::pair<uint64_t, uint64_t>, uint32_t, Vec2Hash> uv_index;
-    std::vector<uint32_t> corner_vt(mesh.corner_uv.size());
-    for (size_t c = 0; c < mesh.corner_uv.size(); ++c) {
-      auto [it, inserted] = uv_index.try_emplace(key(mesh.corner_uv[c]), uint32_t(uv_index.size()));
-      if (inserted) {
-        obj += "vt ";
-        append(obj, mesh.corner_uv[c].x());
-        obj += ' ';
-        append(obj, mesh.corner_uv[c].y());
-        obj += '\n';
-      }
-      corner_vt[c] = it->second;
-    }
-    const bool normals = mesh.corner_normal.size() == mesh.corner_uv.size() && !mesh.corner_normal.empty();
-    std::vector<uint32_t> corner_vn;
-    if (normals) {
-      std::unordered_map<std::string, uint32_t> vn_index;
-      corner_vn.resize(mesh.corner_normal.size());
-      for (size_t c = 0; c < mesh.corner_normal.size(); ++c) {
-        const Vec3& n = mesh.corner_normal[c];
-        std::string line = "vn ";
-        append(line, n.x());
-        line += ' ';
-        append(line, n.y());
-        line += ' ';
-        append(line, n.z());
-        auto [it, inserted] = vn_index.try_emplace(line, uint32_t(vn_index.size()));
-        if (inserted) obj += line + '\n';
-        corner_vn[c] = it->second;
-      }
-    }
-    int32_t current = -2;
-    for (size_t t = 0; t < mesh.num_triangles(); ++t) {
-      if (mesh.face_material[t] != current) {
-        current = mesh.face_material[t];
-        if (current >= 0) obj += fmt::format("usemtl {}\n", mesh.materials[size_t(current)].name);
-      }
-      obj += 'f';
-      for (int k = 0; k < 3; ++k) {
-        const size_t c = 3 * t + size_t(k);
-        if (normals)
-          obj += fmt::format(" {}/{}/{}", mesh.triangles[t][k] + 1, corner_vt[c] + 1, corner_vn[c] + 1);
-        else
-          obj += fmt::format(" {}/{}", mesh.triangles[t][k] + 1, corner_vt[c] + 1);
-      }
-      obj += '\n';
-    }
-    write_file(temp_for(name + ".obj"), obj);
+    write_file(temp_for(name + ".mtl"), mtl_text(mesh, texture_file));
+    write_file(temp_for(name + ".obj"), obj_text(mesh, name));
     for (auto& [tmp, final_path] : pending) {
       fs::rename(tmp, final_path, ec);
       if (ec) fail_input("{}: cannot rename into place ({})", final_path.string(), ec.message());
