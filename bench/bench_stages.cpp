@@ -8,10 +8,11 @@
 #include <numbers>
 
 #include "bake/bake.hpp"
+#include "cut/cut.hpp"
 #include "layout/layout.hpp"
 #include "param/param.hpp"
-#include "repair/repair.hpp"
-#include "topology/topology.hpp"
+#include "prepare/components.hpp"
+#include "prepare/repair.hpp"
 
 using namespace tightex;
 

@@ -6,12 +6,13 @@
 #include <cmath>
 #include <cstdint>
 
+#include "cut/cut.hpp"
 #include "mesh_catalogue.hpp"
 #include "param/param.hpp"
-#include "repair/repair.hpp"
+#include "prepare/components.hpp"
+#include "prepare/repair.hpp"
 #include "report/metrics.hpp"
 #include "tightex/tightex.hpp"
-#include "topology/topology.hpp"
 
 namespace tightex {
 namespace {

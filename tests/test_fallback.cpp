@@ -4,10 +4,11 @@
 
 #include <cmath>
 
+#include "cut/cut.hpp"
 #include "mesh_catalogue.hpp"
 #include "param/param.hpp"
-#include "repair/repair.hpp"
-#include "topology/topology.hpp"
+#include "prepare/components.hpp"
+#include "prepare/repair.hpp"
 
 using namespace tightex;
 

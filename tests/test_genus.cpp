@@ -6,11 +6,12 @@
 
 #include <string>
 
+#include "cut/cut.hpp"
 #include "genus_surfaces.hpp"
-#include "repair/repair.hpp"
+#include "prepare/components.hpp"
+#include "prepare/repair.hpp"
 #include "report/metrics.hpp"
 #include "tightex/tightex.hpp"
-#include "topology/topology.hpp"
 
 namespace tightex {
 namespace {

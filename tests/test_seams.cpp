@@ -5,10 +5,12 @@
 #include <cmath>
 #include <numbers>
 
+#include "cut/cut.hpp"
+#include "cut/seams.hpp"
 #include "genus_surfaces.hpp"
 #include "mesh_catalogue.hpp"
-#include "repair/repair.hpp"
-#include "topology/topology.hpp"
+#include "prepare/components.hpp"
+#include "prepare/repair.hpp"
 
 namespace tightex {
 namespace {

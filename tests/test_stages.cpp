@@ -19,14 +19,15 @@
 #include <thread>
 
 #include "core/error.hpp"
+#include "cut/cut.hpp"
 #include "layout/layout.hpp"
 #include "mesh_catalogue.hpp"
 #include "param/param.hpp"
 #include "param/sparse_cholesky.hpp"
-#include "repair/repair.hpp"
+#include "prepare/components.hpp"
+#include "prepare/repair.hpp"
 #include "report/metrics.hpp"
 #include "tightex/tightex.hpp"
-#include "topology/topology.hpp"
 
 namespace tightex {
 namespace {

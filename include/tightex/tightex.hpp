@@ -17,7 +17,7 @@
 #include "io/obj_writer.hpp"
 #include "layout/layout.hpp"
 #include "param/param.hpp"
-#include "topology/topology.hpp"
+#include "cut/cut.hpp"
 
 namespace tightex {
 

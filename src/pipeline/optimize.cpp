@@ -15,10 +15,12 @@
 #include "bake/bake.hpp"
 #include "core/error.hpp"
 #include "core/progress.hpp"
+#include "cut/seams.hpp"
 #include "layout/layout.hpp"
 #include "param/param.hpp"
 #include "pipeline/aspect.hpp"
-#include "repair/repair.hpp"
+#include "prepare/components.hpp"
+#include "prepare/repair.hpp"
 #include "report/metrics.hpp"
 #include "tightex/tightex.hpp"
 

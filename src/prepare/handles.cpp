@@ -6,8 +6,8 @@
 #include <limits>
 
 #include "core/error.hpp"
-#include "topology/graph.hpp"
-#include "topology/topology.hpp"
+#include "cut/graph.hpp"
+#include "prepare/handles.hpp"
 
 namespace tightex {
 

@@ -1,3 +1,5 @@
+#include "cut/cut.hpp"
+
 #include <algorithm>
 #include <array>
 #include <numbers>
@@ -5,8 +7,8 @@
 #include <queue>
 
 #include "core/error.hpp"
-#include "topology/graph.hpp"
-#include "topology/topology.hpp"
+#include "cut/graph.hpp"
+#include "prepare/holes.hpp"
 
 namespace tightex {
 

@@ -1,4 +1,4 @@
-#include "repair/repair.hpp"
+#include "prepare/repair.hpp"
 
 #include <algorithm>
 #include <cstring>

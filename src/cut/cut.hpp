@@ -1,36 +1,13 @@
-// Data preparation, second half (paper §4.1) and the cut to a disk: components, holes, cut graph.
+// The cut (paper §4.2): a component made a topological disk, with its holes capped or opened.
 #pragma once
 #include <string>
 #include <vector>
 
 #include "core/surface.hpp"
+#include "prepare/handles.hpp"
 #include "tightex/options.hpp"
 
 namespace tightex {
-
-/// Splits a manifold surface into its connected components (through shared edges). Each component has
-/// local indices; vertex_parent / face_parent map into `s`. Components are ordered by first triangle.
-std::vector<Surface> split_components(const Surface& s);
-
-/// Closes the given boundary loops (halfedge sequences from boundary_loops) with the §4.1 centroid fan:
-/// one new vertex at the loop's centroid, one triangle per loop edge. New vertices have
-/// vertex_parent = kNone and new triangles face_parent = kNone: they are scaffolding, never output.
-Surface fill_holes(const Surface& s, const std::vector<std::vector<uint32_t>>& loops);
-
-/// The input's texture seams along a component's edges: per halfedge (3 * face + corner) of
-/// `component`, 1 where the two input triangles at that edge disagree on the texture coordinate of
-/// either endpoint or on the material, 0 elsewhere and on the boundary (both halfedges of an edge
-/// agree). Requires the component's input map (Surface::input_face). The cut stages prefer these
-/// edges (kSeamCost in graph.hpp): a new seam there is where the eye already accepts a discontinuity.
-std::vector<char> find_texture_seams(const TexturedMesh& input, const Surface& component);
-
-/// Topological denoising (§4.1): while the component has genus g > 0, finds a short non-separating
-/// loop (the cheapest tree-cotree generator loop over roots placed on the handles; edges on `seams`
-/// cost kSeamCost of their length), tightens it (roots along the loop and in a band beside it, while
-/// the loop gets cheaper) and cuts along it, which leaves two new boundary loops. Returns a genus-0
-/// surface whose face_parent / vertex_parent map into `component`; loop_lengths gets each loop's 3D
-/// length.
-Surface remove_handles(const Surface& component, std::vector<double>* loop_lengths, const std::vector<char>& seams = {});
 
 /// The cap budget of HoleMode::kFill unless the caller gives another (fraction of the component's area).
 constexpr double kFillBudget = 0.005;
@@ -72,10 +49,6 @@ struct Disk {
 /// a map crowded a region there.
 /// `denoised`: remove_handles(component) computed earlier (its loop lengths in `handle_loops`), so that
 /// cutting again with more slits does not search the handles again; null: computed here.
-struct Denoised {
-  Surface surface;
-  std::vector<double> handle_loops;
-};
 /// `plain`: the safety net used when the full method throws on a component: no handle search, no caps,
 /// no slits, only the cut graph (the complement of a dual spanning tree, pruned), which makes a disk
 /// of any connected manifold surface.
