@@ -512,7 +512,10 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
     if (topology_of(ci.denoised ? ci.denoised->surface : components[c]).boundary_loops == 0) return false;
     CutStats st;
     try {
-      cut_to_disk(components[c], options.holes, &st, {}, ci.denoised ? &*ci.denoised : nullptr, false, ci.seams, kCapBudget, true);
+      cut_to_disk(components[c],
+                  {.holes = options.holes, .fill_budget = kCapBudget, .cap_longest_loop = true,
+                   .handles_removed = ci.denoised ? &*ci.denoised : nullptr, .seams = ci.seams},
+                  &st);
     } catch (const InternalError&) {
       return false;  // that cut fails here: only the usual one
     }
@@ -544,7 +547,10 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
       for (double budget = kCapBudget;;) {
         std::vector<uint32_t> slit_to;
         for (int round = 0;; ++round) {
-          disk = cut_to_disk(components[c], options.holes, &cut_stats, slit_to, ci.denoised ? &*ci.denoised : nullptr, false, ci.seams, budget, cap_kept);
+          disk = cut_to_disk(components[c],
+                             {.holes = options.holes, .fill_budget = budget, .cap_longest_loop = cap_kept, .slit_to = slit_to,
+                              .handles_removed = ci.denoised ? &*ci.denoised : nullptr, .seams = ci.seams},
+                             &cut_stats);
           if (cap_kept && !cut_stats.longest_loop_capped) return;  // nothing else than the usual cut
           set_face_targets(disk, density[c], options, mo);
           map_stats = SquareMapStats{};
@@ -638,7 +644,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options) {
       cut_stats = CutStats{};
       try {
         forced_failure(c, "plain fallback");
-        disk = cut_to_disk(components[c], options.holes, &cut_stats, {}, nullptr, true);
+        disk = cut_to_disk(components[c], {.holes = options.holes, .method = CutMethod::kPlain}, &cut_stats);
         cut_stats.fallback_reason = e.what();
         set_face_targets(disk, density[c], options, mo);
         map_stats = SquareMapStats{};

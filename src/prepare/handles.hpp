@@ -1,6 +1,7 @@
 // Topological denoising (paper §4.1, Fig. 5): every handle of a component is cut along a short
 // non-separating loop until the component has genus 0.
 #pragma once
+#include <span>
 #include <vector>
 
 #include "core/surface.hpp"
@@ -17,7 +18,7 @@ namespace tightex {
 /// Guarantees: a genus-0 surface with the same triangles; face_parent / vertex_parent map into
 /// `component`, the input map is inherited from it; `loop_lengths` (if given) gets each loop's 3D length.
 /// Throws: InternalError if cutting a loop fails to lower the genus (a broken invariant).
-Surface remove_handles(const Surface& component, std::vector<double>* loop_lengths, const std::vector<char>& seams = {});
+Surface remove_handles(const Surface& component, std::vector<double>* loop_lengths, std::span<const char> seams = {});
 
 /// remove_handles' result kept for later cuts of the same component, so that cutting again (with more
 /// slits, another cap budget) does not search the handles again.
