@@ -8,10 +8,11 @@
 #include <numbers>
 
 #include "bake/bake.hpp"
+#include "cut/cut.hpp"
 #include "layout/layout.hpp"
 #include "param/param.hpp"
-#include "repair/repair.hpp"
-#include "topology/topology.hpp"
+#include "prepare/components.hpp"
+#include "prepare/repair.hpp"
 
 using namespace tightex;
 
@@ -81,19 +82,19 @@ void BM_PrepareSurface(benchmark::State& state) {
 void BM_CutToDisk(benchmark::State& state) {
   const Surface s = prepare_surface(mesh_for(int(state.range(0))), nullptr);
   const auto comps = split_components(s);
-  for (auto _ : state) benchmark::DoNotOptimize(cut_to_disk(comps[0], HoleMode::kFill, nullptr));
+  for (auto _ : state) benchmark::DoNotOptimize(cut_to_disk(comps[0], {.holes = HoleMode::kFill}, nullptr));
 }
 
 void BM_MapToSquare(benchmark::State& state) {
   const Surface s = prepare_surface(mesh_for(int(state.range(0))), nullptr);
-  const Disk d = cut_to_disk(split_components(s)[0], HoleMode::kFill, nullptr);
+  const Disk d = cut_to_disk(split_components(s)[0], {.holes = HoleMode::kFill}, nullptr);
   for (auto _ : state) benchmark::DoNotOptimize(map_to_square(d, {}, nullptr));
 }
 
 void BM_BakeTexture(benchmark::State& state) {
   const TexturedMesh& m = mesh_for(int(state.range(0)));
   const Surface s = prepare_surface(m, nullptr);
-  const Disk d = cut_to_disk(split_components(s)[0], HoleMode::kFill, nullptr);
+  const Disk d = cut_to_disk(split_components(s)[0], {.holes = HoleMode::kFill}, nullptr);
   const int size = int(state.range(1));
   SquareMapOptions mo;
   mo.rect_width = mo.rect_height = size;

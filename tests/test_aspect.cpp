@@ -6,12 +6,13 @@
 #include <cmath>
 #include <cstdint>
 
+#include "cut/cut.hpp"
 #include "mesh_catalogue.hpp"
 #include "param/param.hpp"
-#include "repair/repair.hpp"
+#include "prepare/components.hpp"
+#include "prepare/repair.hpp"
 #include "report/metrics.hpp"
 #include "tightex/tightex.hpp"
-#include "topology/topology.hpp"
 
 namespace tightex {
 namespace {
@@ -42,7 +43,7 @@ Disk sheet_disk(int nu, int nv) {
   const cat::Geometry g = cat::param_grid(nu, nv, false, false, [](int i, int j) { return Vec3(i, j, 0.0); });
   const auto comps = split_components(prepare_surface(cat::make_textured("grid", g.positions, g.triangles), nullptr));
   EXPECT_EQ(comps.size(), 1u);
-  return cut_to_disk(comps.at(0), HoleMode::kFill, nullptr);
+  return cut_to_disk(comps.at(0), {.holes = HoleMode::kFill}, nullptr);
 }
 
 // Equal arcs for a w:h rectangle: the four arcs between the corners are w, h, w, h shares of the
@@ -90,7 +91,7 @@ TEST(Aspect, AMapIntoARectangleOfTheSurfacesShapeIsLessAnisotropicInTexels) {
   for (Vec3& p : g.positions) p.x() *= 2;
   const auto comps = split_components(prepare_surface(cat::make_textured("ellipse", g.positions, g.triangles), nullptr));
   ASSERT_EQ(comps.size(), 1u);
-  const Disk disk = cut_to_disk(comps[0], HoleMode::kFill, nullptr);
+  const Disk disk = cut_to_disk(comps[0], {.holes = HoleMode::kFill}, nullptr);
   auto anisotropy = [&](int w, int h) {
     SquareMapOptions mo;
     mo.rect_width = w, mo.rect_height = h;

@@ -6,11 +6,12 @@
 #include <algorithm>
 #include <set>
 
+#include "cut/cut.hpp"
 #include "mesh_catalogue.hpp"
 #include "param/param.hpp"
-#include "repair/repair.hpp"
+#include "prepare/components.hpp"
+#include "prepare/repair.hpp"
 #include "tightex/tightex.hpp"
-#include "topology/topology.hpp"
 
 namespace tightex {
 namespace {
@@ -32,7 +33,7 @@ Disk flat_grid(int nu, int nv, const std::function<Vec3(int, int)>& at) {
   const cat::Geometry g = cat::param_grid(nu, nv, false, false, at);
   const auto comps = split_components(prepare_surface(cat::make_textured("grid", g.positions, g.triangles), nullptr));
   EXPECT_EQ(comps.size(), 1u);
-  return cut_to_disk(comps.at(0), HoleMode::kFill, nullptr);
+  return cut_to_disk(comps.at(0), {.holes = HoleMode::kFill}, nullptr);
 }
 
 // On a flat rectangle (a square, and 2:1 and 3:1 ones whose short sides are well above the 10% floor)
@@ -92,7 +93,7 @@ TEST(Corners, BothRulesGiveOrderedCornersAndFoldFreeMapsOnTheCatalogue) {
     const auto comps = split_components(prepare_surface(make(), nullptr));
     for (HoleMode mode : {HoleMode::kFill, HoleMode::kCut})
       for (size_t c = 0; c < comps.size(); ++c) {
-        const Disk disk = cut_to_disk(comps[c], mode, nullptr);
+        const Disk disk = cut_to_disk(comps[c], {.holes = mode}, nullptr);
         const size_t nb = disk.boundary.size();
         const auto arc = arc_lengths(disk);
         for (CornerRule rule : {CornerRule::kEqualArcs, CornerRule::kTurningAngle})

@@ -4,10 +4,11 @@
 
 #include <cmath>
 
+#include "cut/cut.hpp"
 #include "mesh_catalogue.hpp"
 #include "param/param.hpp"
-#include "repair/repair.hpp"
-#include "topology/topology.hpp"
+#include "prepare/components.hpp"
+#include "prepare/repair.hpp"
 
 using namespace tightex;
 
@@ -17,7 +18,7 @@ TEST(PlainCutFallback, EveryCatalogueComponentBecomesAFoldFreeDisk) {
     const Surface s = prepare_surface(make(), nullptr);
     for (const Surface& comp : split_components(s)) {
       CutStats st;
-      const Disk d = cut_to_disk(comp, HoleMode::kFill, &st, {}, nullptr, true);
+      const Disk d = cut_to_disk(comp, {.holes = HoleMode::kFill, .method = CutMethod::kPlain}, &st);
       const auto loops = boundary_loops(d.mesh);
       ASSERT_EQ(loops.size(), 1u);
       EXPECT_EQ(topology_of(d.mesh).euler(), 1);

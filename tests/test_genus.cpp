@@ -6,11 +6,12 @@
 
 #include <string>
 
+#include "cut/cut.hpp"
 #include "genus_surfaces.hpp"
-#include "repair/repair.hpp"
+#include "prepare/components.hpp"
+#include "prepare/repair.hpp"
 #include "report/metrics.hpp"
 #include "tightex/tightex.hpp"
-#include "topology/topology.hpp"
 
 namespace tightex {
 namespace {
@@ -117,7 +118,7 @@ TEST(Genus, CapsNeverHoldTheChartTogether) {
     ASSERT_EQ(comps.size(), 1u);
     for (double budget : {kFillBudget, 0.02, 0.05, 0.2}) {
       CutStats st;
-      const Disk disk = cut_to_disk(comps[0], HoleMode::kFill, &st, {}, nullptr, false, {}, budget);
+      const Disk disk = cut_to_disk(comps[0], {.holes = HoleMode::kFill, .fill_budget = budget}, &st);
       const auto [real, groups] = real_faces_and_groups(disk.mesh);
       EXPECT_EQ(real, comps[0].num_faces()) << "budget " << budget;
       EXPECT_EQ(groups, 1u) << "budget " << budget << ", cut " << st.method << ", " << st.holes_filled << " capped";
@@ -148,7 +149,7 @@ TEST(Genus, ManySmallHolesStayCappedWithHandles) {
     const auto comps = split_components(prepare_surface(testing::make_textured("pepper", g.positions, kept), nullptr));
     ASSERT_EQ(comps.size(), 1u);
     CutStats st;
-    const Disk disk = cut_to_disk(comps[0], HoleMode::kFill, &st);
+    const Disk disk = cut_to_disk(comps[0], {.holes = HoleMode::kFill}, &st);
     EXPECT_EQ(st.method.find("holes opened"), std::string::npos) << st.method;
     EXPECT_GE(st.holes_filled, holes / 2) << st.method << ", " << holes << " holes";  // the budget holds half
     const auto [real, groups] = real_faces_and_groups(disk.mesh);

@@ -5,11 +5,12 @@
 #include <cmath>
 #include <numbers>
 
+#include "cut/graph.hpp"
 #include "genus_surfaces.hpp"
 #include "mesh_catalogue.hpp"
-#include "repair/repair.hpp"
-#include "topology/graph.hpp"
-#include "topology/topology.hpp"
+#include "prepare/components.hpp"
+#include "prepare/handles.hpp"
+#include "prepare/repair.hpp"
 
 namespace tightex {
 namespace {

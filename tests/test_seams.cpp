@@ -5,10 +5,12 @@
 #include <cmath>
 #include <numbers>
 
+#include "cut/cut.hpp"
+#include "cut/seams.hpp"
 #include "genus_surfaces.hpp"
 #include "mesh_catalogue.hpp"
-#include "repair/repair.hpp"
-#include "topology/topology.hpp"
+#include "prepare/components.hpp"
+#include "prepare/repair.hpp"
 
 namespace tightex {
 namespace {
@@ -95,7 +97,7 @@ TEST(TextureSeams, CutFollowsThemWhereThereIsAChoice) {
     const Surface c = split_components(s)[0];
     const auto seams = find_texture_seams(m, c);
     CutStats st;
-    cut_to_disk(c, HoleMode::kCut, &st, {}, nullptr, false, seams);
+    cut_to_disk(c, {.holes = HoleMode::kCut, .seams = seams}, &st);
     ASSERT_EQ(st.handle_loops.size(), 1u);
     EXPECT_NEAR(st.handle_loops[0], meridian, 1e-9);
     EXPECT_GE(st.seam_length, shortest * (1 - 1e-9));
@@ -106,7 +108,7 @@ TEST(TextureSeams, CutFollowsThemWhereThereIsAChoice) {
       EXPECT_LE(st.seam_on_input_seams, meridian * (1 + 1e-9));
     }
     CutStats plain;  // no seams given: nothing preferred, nothing counted
-    cut_to_disk(c, HoleMode::kCut, &plain);
+    cut_to_disk(c, {.holes = HoleMode::kCut}, &plain);
     EXPECT_NEAR(plain.seam_length, shortest, 1e-9);
     EXPECT_EQ(plain.seam_on_input_seams, 0.0);
   }

@@ -5,8 +5,9 @@
 
 #include "mesh_catalogue.hpp"
 #include "param/param.hpp"
-#include "repair/repair.hpp"
-#include "topology/topology.hpp"
+#include "prepare/repair.hpp"
+#include "cut/cut.hpp"
+#include "prepare/components.hpp"
 
 namespace tightex {
 namespace {
@@ -24,7 +25,7 @@ bool on_square_boundary(const Vec2& p) {
 TEST(SquareMapSteps, BoundaryOnTheSquareWithItsCorners) {
   for (auto make : {&cat::disk, &cat::open_cylinder, &cat::sphere_with_holes}) {
     for (const Surface& c : split_components(prepare_surface(make(), nullptr))) {
-      const Disk disk = cut_to_disk(c, HoleMode::kFill, nullptr);
+      const Disk disk = cut_to_disk(c, CutOptions{}, nullptr);
       const SquareMapOptions options;
       const SquareBoundary b = map_boundary_to_square(disk, options);
       ASSERT_EQ(b.uv.size(), disk.boundary.size());
@@ -41,7 +42,7 @@ TEST(SquareMapSteps, HarmonicMapFromAlg1IsThePapersMap) {
   size_t compared = 0;
   for (auto make : {&cat::disk, &cat::open_cylinder, &cat::sphere_with_holes, &cat::obtuse_strip}) {
     for (const Surface& c : split_components(prepare_surface(make(), nullptr))) {
-      const Disk disk = cut_to_disk(c, HoleMode::kFill, nullptr);
+      const Disk disk = cut_to_disk(c, CutOptions{}, nullptr);
       const SquareMapOptions options;
       SquareMapStats st;
       const std::vector<Vec2> expected = map_to_square(disk, options, &st);
@@ -62,7 +63,7 @@ TEST(SquareMapSteps, HarmonicMapFromAlg1IsThePapersMap) {
 TEST(SquareMapSteps, FallbackWeightsAreFoldFreeOnAConvexBoundary) {
   const auto comps = split_components(prepare_surface(cat::obtuse_strip(), nullptr));
   ASSERT_FALSE(comps.empty());
-  const Disk disk = cut_to_disk(comps[0], HoleMode::kFill, nullptr);
+  const Disk disk = cut_to_disk(comps[0], CutOptions{}, nullptr);
   const SquareBoundary b = map_boundary_to_square(disk, SquareMapOptions{});
   DirichletSolver solver;
   const HarmonicAttempts h = fold_free_harmonic_map(disk.mesh, disk.boundary, b.uv, solver);

@@ -19,14 +19,15 @@
 #include <thread>
 
 #include "core/error.hpp"
+#include "cut/cut.hpp"
 #include "layout/layout.hpp"
 #include "mesh_catalogue.hpp"
 #include "param/param.hpp"
 #include "param/sparse_cholesky.hpp"
-#include "repair/repair.hpp"
+#include "prepare/components.hpp"
+#include "prepare/repair.hpp"
 #include "report/metrics.hpp"
 #include "tightex/tightex.hpp"
-#include "topology/topology.hpp"
 
 namespace tightex {
 namespace {
@@ -521,25 +522,25 @@ TEST(CutToDisk, ASmallLongestHoleIsCappedTooWhenAsked) {
   const std::vector<Surface> comps = split_components(prepare_surface(cat::make_textured("pepper_sphere", g.positions, g.triangles), nullptr));
   ASSERT_EQ(comps.size(), 1u);
   CutStats kept, capped, over;
-  const Disk a = cut_to_disk(comps[0], HoleMode::kFill, &kept);
+  const Disk a = cut_to_disk(comps[0], {.holes = HoleMode::kFill}, &kept);
   check_disk(comps[0], a, HoleMode::kFill, kept);
   EXPECT_EQ(kept.longest_loop_edges, 3u);
   EXPECT_FALSE(kept.longest_loop_capped);
   EXPECT_EQ(kept.holes_filled, 0u);
-  const Disk b = cut_to_disk(comps[0], HoleMode::kFill, &capped, {}, nullptr, false, {}, kFillBudget, true);
+  const Disk b = cut_to_disk(comps[0], {.holes = HoleMode::kFill, .fill_budget = kFillBudget, .cap_longest_loop = true}, &capped);
   check_disk(comps[0], b, HoleMode::kFill, capped);
   EXPECT_TRUE(capped.longest_loop_capped);
   EXPECT_EQ(capped.holes_filled, 1u);
   EXPECT_EQ(capped.longest_loop_edges, 3u);
   EXPECT_EQ(capped.method.rfind("path", 0), 0u) << capped.method;
   EXPECT_GT(b.mesh.num_faces(), a.mesh.num_faces());  // the cap
-  const Disk c = cut_to_disk(comps[0], HoleMode::kFill, &over, {}, nullptr, false, {}, 0.0, true);
+  const Disk c = cut_to_disk(comps[0], {.holes = HoleMode::kFill, .fill_budget = 0.0, .cap_longest_loop = true}, &over);
   check_disk(comps[0], c, HoleMode::kFill, over);
   EXPECT_FALSE(over.longest_loop_capped);
   EXPECT_EQ(over.longest_loop_edges, 3u);
   // Without kFill nothing is capped, whatever cap_kept says.
   CutStats cut;
-  cut_to_disk(comps[0], HoleMode::kCut, &cut, {}, nullptr, false, {}, kFillBudget, true);
+  cut_to_disk(comps[0], {.holes = HoleMode::kCut, .fill_budget = kFillBudget, .cap_longest_loop = true}, &cut);
   EXPECT_FALSE(cut.longest_loop_capped);
   EXPECT_EQ(cut.holes_filled, 0u);
 }
@@ -576,7 +577,7 @@ TEST_P(Catalogue, CutToDisk) {
       CutStats st;
       Disk disk;
       try {
-        disk = cut_to_disk(comps[ci], mode, &st);
+        disk = cut_to_disk(comps[ci], {.holes = mode}, &st);
       } catch (const std::exception& ex) {
         ADD_FAILURE() << "cut_to_disk threw: " << ex.what();
         continue;
@@ -686,7 +687,7 @@ TEST_P(Catalogue, MapToSquare) {
   for (HoleMode mode : {HoleMode::kFill, HoleMode::kCut}) {
     for (size_t ci = 0; ci < comps.size(); ++ci) {
       SCOPED_TRACE(std::string(mode == HoleMode::kFill ? "kFill" : "kCut") + " component " + std::to_string(ci));
-      const Disk disk = cut_to_disk(comps[ci], mode, nullptr);
+      const Disk disk = cut_to_disk(comps[ci], {.holes = mode}, nullptr);
       SquareMapStats st;
       const auto uv = map_to_square(disk, options, &st);
       check_square_map(disk, uv, options, st);
@@ -728,7 +729,7 @@ TEST_P(Catalogue, AreaMapEvensTheDensity) {
     const size_t ci = cb % comps.size();
     const double budget = cb < comps.size() ? kFillBudget : 0.02;
     SCOPED_TRACE("component " + std::to_string(ci) + ", cap budget " + std::to_string(budget));
-    const Disk disk = cut_to_disk(comps[ci], HoleMode::kFill, nullptr, {}, nullptr, false, {}, budget);
+    const Disk disk = cut_to_disk(comps[ci], {.holes = HoleMode::kFill, .fill_budget = budget}, nullptr);
     if (disk.mesh.num_faces() < 8) continue;  // a few triangles: nothing to even out
     SquareMapOptions options;
     options.rect_width = options.rect_height = 256;
@@ -799,7 +800,7 @@ TEST(MapToSquare, SupernodalMatchesSimplicialWhenComponentsRunConcurrently) {
   });
   const auto comps = split_components(prepare_surface(testing::make_textured("sheet", g.positions, g.triangles), nullptr));
   ASSERT_EQ(comps.size(), 1u);
-  const Disk disk = cut_to_disk(comps[0], HoleMode::kFill, nullptr);
+  const Disk disk = cut_to_disk(comps[0], {.holes = HoleMode::kFill}, nullptr);
   SquareMapOptions options;
   options.rect_width = options.rect_height = 256;
   options.face_target.resize(disk.mesh.num_faces());
@@ -1169,7 +1170,7 @@ TEST(MapToSquare, NonSquareRectangles) {
       options.rect_width = w;
       options.rect_height = h;
       for (const Surface& c : comps) {
-        const Disk disk = cut_to_disk(c, HoleMode::kFill, nullptr);
+        const Disk disk = cut_to_disk(c, {.holes = HoleMode::kFill}, nullptr);
         SquareMapStats st;
         const auto uv = map_to_square(disk, options, &st);
         check_square_map(disk, uv, options, st);
@@ -1484,7 +1485,7 @@ TEST(Checkers, CatchBrokenOutput) {
   const auto comps = split_components(prepare_surface(cat::sphere_with_holes(), nullptr));
   ASSERT_EQ(comps.size(), 1u);
   CutStats st;
-  const Disk disk = cut_to_disk(comps[0], HoleMode::kCut, &st);
+  const Disk disk = cut_to_disk(comps[0], {.holes = HoleMode::kCut}, &st);
   // check_disk: a face listed twice and another missing.
   {
     Disk broken = disk;

@@ -3,7 +3,7 @@
 #include <array>
 #include <vector>
 
-#include "topology/topology.hpp"
+#include "cut/cut.hpp"
 
 namespace tightex {
 

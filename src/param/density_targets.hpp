@@ -7,7 +7,7 @@
 #include "core/surface.hpp"
 #include "param/param.hpp"
 #include "tightex/options.hpp"
-#include "topology/topology.hpp"
+#include "cut/cut.hpp"
 
 namespace tightex {
 

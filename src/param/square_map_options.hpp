@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "topology/topology.hpp"
+#include "cut/cut.hpp"
 
 namespace tightex {
 

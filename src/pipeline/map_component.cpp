@@ -52,6 +52,16 @@ SquareMapOptions map_options(const MapContext& ctx, const Rect& rect) {
   return mo;
 }
 
+/// The full method's cut: the run's hole mode, the cap budget, the handles removed once, the seams.
+CutOptions full_cut_options(const MapContext& ctx, const CutInputs& ci, double fill_budget) {
+  CutOptions co;
+  co.holes = ctx.options.holes;
+  co.fill_budget = fill_budget;
+  co.handles_removed = ci.denoised ? &*ci.denoised : nullptr;
+  co.seams = ci.seams;
+  return co;
+}
+
 /// A real vertex of the component to slit to where the map crowded `crowded` (a cap's centre, which is
 /// scaffolding, gives a real vertex of that cap); kNone: nothing real near.
 uint32_t slit_target(const Disk& disk, uint32_t crowded) {
@@ -76,24 +86,20 @@ double cap_share(const Disk& disk, const std::vector<Vec2>& uv) {
 
 /// Cuts component c with the cap budget `budget` and maps it; where the map crowds a region, slits to
 /// it and cuts again (kCrowdingRounds). Returns false where `cap_kept` was asked but the longest loop
-/// was not capped, or its cut gave no disk (only the usual cut is to be made: not mapped).
+/// could not be capped (only the usual cut is to be made: not mapped).
 bool cut_and_map_with_slits(const MapContext& ctx, size_t c, const CutInputs& ci, bool cap_kept, double budget,
                             SquareMapOptions& mo, Mapped& out) {
   std::vector<uint32_t> slit_to;
   for (int round = 0;; ++round) {
-    CutOptions co;
-    co.holes = ctx.options.holes;
+    CutOptions co = full_cut_options(ctx, ci, budget);
     co.slit_to = slit_to;
-    co.denoised = ci.denoised ? &*ci.denoised : nullptr;
-    co.seams = &ci.seams;
-    co.fill_budget = budget;
-    co.cap_longest_loop = cap_kept;
     if (cap_kept) {
-      // Capping the longest loop too is a trial: where its cut gives no disk, only the usual cut is made.
-      std::optional<Disk> disk = try_cut_to_disk(ctx.components[c], co, &out.cut);
-      if (!disk) out.cut.longest_loop_capped = false;
-      if (!out.cut.longest_loop_capped) return false;
-      out.disk = std::move(*disk);
+      std::optional<Disk> capped = cut_to_disk_capped(ctx.components[c], co, &out.cut);
+      if (!capped) {
+        out.cut.longest_loop_capped = false;
+        return false;
+      }
+      out.disk = std::move(*capped);
     } else {
       out.disk = cut_to_disk(ctx.components[c], co, &out.cut);
     }
@@ -184,7 +190,7 @@ std::string map_plain(const MapContext& ctx, size_t c, SquareMapOptions& mo, Map
   if (forced_to_fail(ctx, c)) return "plain fallback failure forced by a test hook";
   CutOptions co;
   co.holes = ctx.options.holes;
-  co.method = CutMethod::kPlainCutGraph;
+  co.method = CutMethod::kPlain;
   out.disk = cut_to_disk(ctx.components[c], co, &out.cut);
   set_face_targets(out.disk, ctx.density[c], ctx.options.map, ctx.options.balance, mo);
   out.map = SquareMapStats{};
@@ -212,14 +218,8 @@ bool small_longest_hole(const MapContext& ctx, size_t c, const CutInputs& ci) {
     return false;
   // Holes, or the two sides of a cut handle (the genus-0 surface remove_handles gives back).
   if (topology_of(ci.denoised ? ci.denoised->surface : ctx.components[c]).boundary_loops == 0) return false;
-  CutOptions co;
-  co.holes = o.holes;
-  co.denoised = ci.denoised ? &*ci.denoised : nullptr;
-  co.seams = &ci.seams;
-  co.fill_budget = kCapBudget;
-  co.cap_longest_loop = true;
   CutStats st;
-  return try_cut_to_disk(ctx.components[c], co, &st) && st.longest_loop_capped && st.longest_loop_edges < kSmallKeptLoop;
+  return cut_to_disk_capped(ctx.components[c], full_cut_options(ctx, ci, kCapBudget), &st) && st.longest_loop_edges < kSmallKeptLoop;
 }
 
 Mapped map_component(const MapContext& ctx, size_t c, const Rect& rect, const CutInputs* pre, CapChoice choice) {

@@ -10,7 +10,10 @@
 #include "param/density_targets.hpp"
 #include "param/param.hpp"
 #include "tightex/options.hpp"
-#include "topology/topology.hpp"
+#include "cut/cut.hpp"
+#include "cut/seams.hpp"
+#include "prepare/components.hpp"
+#include "prepare/handles.hpp"
 
 namespace tightex {
 

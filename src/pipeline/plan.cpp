@@ -12,7 +12,7 @@
 #include "pipeline/plan_state.hpp"
 #include "pipeline/stage_clock.hpp"
 #include "pipeline/validate.hpp"
-#include "repair/repair.hpp"
+#include "prepare/repair.hpp"
 
 namespace tightex {
 

@@ -11,7 +11,7 @@
 #include "pipeline/map_component.hpp"
 #include "report/report.hpp"
 #include "tightex/tightex.hpp"
-#include "topology/topology.hpp"
+#include "cut/cut.hpp"
 
 namespace tightex {
 

@@ -12,10 +12,10 @@
 #include "io/obj_reader.hpp"
 #include "layout/layout.hpp"
 #include "param/param.hpp"
-#include "repair/repair.hpp"
+#include "prepare/repair.hpp"
 #include "report/metrics.hpp"
 #include "tightex/options.hpp"
-#include "topology/topology.hpp"
+#include "cut/cut.hpp"
 
 namespace tightex {
 

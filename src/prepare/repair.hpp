@@ -19,13 +19,18 @@ struct RepairStats {
   size_t slits_closed = 0;          // sliced edges glued back within one sheet (see prepare_surface)
 };
 
-/// Welds vertices with bit-equal positions, drops zero-area and duplicated triangles, orients each
-/// connected patch consistently (the orientation most of its area has), and slices every non-manifold
-/// edge and vertex (and every edge whose two triangles still disagree on orientation, so a Mobius strip
-/// becomes an orientable strip). No triangle with area is ever dropped.
-/// Returns a manifold surface; face_parent and input_face map to input triangles, vertex_parent to
-/// input vertices, and input_corner gives each corner's input corner (a reoriented triangle has its
-/// corners 1 and 2 swapped).
+/// Makes the input a clean manifold surface (paper §4.1), in six steps: welds vertices with bit-equal
+/// positions, drops zero-area and duplicated triangles, orients each connected patch consistently (the
+/// orientation most of its area has), pairs the halfedges of every edge used by exactly two triangles in
+/// opposite directions (every other edge is sliced: non-manifold edges, and edges whose two triangles
+/// still disagree on orientation, so a Mobius strip becomes an orientable strip), slices non-manifold
+/// vertices, and closes the slits slicing left inside one sheet.
+/// Requires: nothing of the mesh (any triangle soup; indices in range, as the readers guarantee).
+/// Guarantees: a manifold surface (`opposite` built) in which no triangle with area was dropped;
+/// face_parent and input_face map to input triangles, vertex_parent to input vertices, and input_corner
+/// gives each corner's input corner (a reoriented triangle has its corners 1 and 2 swapped). `stats`,
+/// if given, gets what each step did.
+/// Throws: nothing of its own.
 Surface prepare_surface(const TexturedMesh& mesh, RepairStats* stats);
 
 }  // namespace tightex

@@ -1,5 +1,5 @@
 // The input's texture seams, mapped onto a component's edges (see find_texture_seams).
-#include "topology/topology.hpp"
+#include "cut/seams.hpp"
 
 namespace tightex {
 

@@ -1,20 +1,23 @@
-// Edge graph of a manifold surface and the shortest-path machinery the cut and handle stages share.
+// Edge graph of a manifold surface and the shortest-path machinery the cut (§4.2) and the handle
+// removal (§4.1) share: an edge is numbered by its smaller halfedge, in halfedge order, so per-edge
+// flags (a cut graph) are tied to the surface they were computed on.
 #pragma once
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numeric>
 #include <queue>
+#include <span>
 #include <vector>
 
 #include "core/surface.hpp"
 
 namespace tightex {
 
-
 /// Shortest paths (handle loops, hole connections, the cut graph) pay this fraction of an edge's length
 /// on an edge where the input already has a texture seam: where there is a choice of nearly equal
 /// paths, the new seam lies where the eye already accepts a discontinuity. See find_texture_seams.
+/// Chosen by measurement: docs/decisions.md.
 constexpr double kSeamCost = 0.95;
 
 /// Undirected edges of a manifold surface with vertex adjacency in CSR form.
@@ -28,7 +31,7 @@ struct EdgeGraph {
   std::vector<char> on_seam;            // per edge: an input texture seam
   std::vector<uint32_t> offset, neighbor, via_edge;  // CSR: vertex -> (neighbor, edge)
 
-  explicit EdgeGraph(const Surface& s, const std::vector<char>& seams = {}) {
+  explicit EdgeGraph(const Surface& s, std::span<const char> seams = {}) {
     const uint32_t nh = uint32_t(s.opposite.size());
     halfedge_edge.assign(nh, kNone);
     auto seam_at = [&](uint32_t h) {
@@ -68,8 +71,8 @@ struct EdgeGraph {
 /// `limit`: vertices farther than this are left unreached (dist infinite, pred_edge kNone), and the
 /// search stops there, so a small limit costs only the ball it covers.
 inline void dijkstra(const EdgeGraph& g, size_t nv, const std::vector<uint32_t>& sources,
-              const std::vector<double>& weight, std::vector<double>& dist, std::vector<uint32_t>& pred_edge,
-              double limit = std::numeric_limits<double>::infinity()) {
+                     const std::vector<double>& weight, std::vector<double>& dist, std::vector<uint32_t>& pred_edge,
+                     double limit = std::numeric_limits<double>::infinity()) {
   dist.assign(nv, std::numeric_limits<double>::infinity());
   pred_edge.assign(nv, kNone);
   using Item = std::pair<double, uint32_t>;
@@ -102,18 +105,19 @@ inline void dijkstra(const EdgeGraph& g, size_t nv, const std::vector<uint32_t>&
   }
 }
 
+/// The end of edge e that is not v.
 inline uint32_t other_end(const Surface& s, const EdgeGraph& g, uint32_t e, uint32_t v) {
   const uint32_t h = g.edge_halfedge[e];
   return s.from(h) == v ? s.to(h) : s.from(h);
 }
 
+/// The vertex with the largest finite distance (0 if none is reached).
 inline uint32_t farthest(const std::vector<double>& dist) {
   uint32_t best = 0;
   for (uint32_t v = 0; v < dist.size(); ++v)
     if (std::isfinite(dist[v]) && dist[v] > dist[best]) best = v;
   return best;
 }
-
 
 /// Double sweep: the vertex farthest from an arbitrary start is one end `a` of an approximate
 /// diameter; the sweep from `a` gives dist/pred, whose farthest vertex is the other end (returned).
