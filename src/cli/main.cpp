@@ -159,7 +159,7 @@ CLI::Option* define_options(CLI::App& app, CommandLine& line, ChoiceNames& names
                                              "length; turning: where the boundary turns most (docs/corners.md)")
       ->check(CLI::IsMember(names_of(kCornerRules)));
   auto* no_fit_opt = app.add_flag("--no-fit", line.no_fit, "bake each texel by sampling only, without the least-squares fit to the input");
-  app.add_flag("--fine-fit", line.fine_fit, "fit on 4x4 points per texel instead of 2x2: +0.1-0.3 dB surface PSNR, about twice the bake time")
+  app.add_flag("--fine-fit", line.fine_fit, "fit on 4x4 points per texel instead of 2x2: a little higher surface PSNR, about twice the bake time")
       ->excludes(no_fit_opt);
   app.add_flag("--force", line.force, "allow --size above 16384");
   app.add_option("--max-memory", line.max_memory_mib, "refuse inputs whose estimated memory exceeds this many MiB (default: 90% of RAM)")

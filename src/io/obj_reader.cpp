@@ -1,6 +1,5 @@
 // Wavefront OBJ + MTL reader. The whole file is read into memory and scanned once, line by line, with
-// std::from_chars for numbers: the 3.4 MB Meshroom scan (53k faces) reads in about 10-15 ms, and every
-// problem is reported as "FILE:LINE: problem" on one line.
+// std::from_chars for numbers, and every problem is reported as "FILE:LINE: problem" on one line.
 //
 // Things that cannot be checked while scanning (positive indices that point forward, usemtl before
 // its mtllib, faces without texture coordinates) are recorded with their line and checked once the
@@ -129,10 +128,8 @@ std::optional<fs::path> find_named_file(const fs::path& folder, std::string writ
   return std::nullopt;
 }
 
-// A page fault costs about 10 us on the virtual machines tightex is tested on (Firecracker: zero-filling
-// 16 MB page by page takes 40 ms, prefaulting it in one system call 3 ms), which made filling the
-// buffers for a 3.4 MB scan cost several times more than parsing it. Large buffers the reader is
-// about to fill are therefore mapped in one call. Only whole pages inside the buffer are touched, and
+// Page faults on freshly allocated buffers can cost more than the parsing that fills them
+// (docs/decisions.md), so large buffers the reader is about to fill are mapped in one call. Only whole pages inside the buffer are touched, and
 // populating never changes memory contents; on kernels without MADV_POPULATE_WRITE (before 5.14)
 // this does nothing.
 void prefault_for_write(void* start, size_t bytes) {
@@ -380,6 +377,60 @@ struct MaterialUse {
 struct Corner {
   uint32_t v = kNone, vt = kNone, vn = kNone;
 };
+
+/// Reads map_Kd's options, which come before the file name (each takes a fixed or bounded number of
+/// arguments): -s and -o into `scale` and `offset`, the others checked and skipped.
+void read_map_kd_options(Tokens& tokens, const std::string& mtl_name, size_t mtl_line, std::array<double, 3>& scale,
+                         std::array<double, 3>& offset) {
+  for (std::string_view opt = tokens.peek(); opt.size() > 1 && opt[0] == '-'; opt = tokens.peek()) {
+    tokens.next();
+    const std::string_view name = opt.substr(1);
+    auto numbers = [&](size_t min_count, size_t max_count, double* out) {
+      size_t n = 0;
+      while (n < max_count) {
+        const std::string_view t = tokens.peek();
+        double value = 0.0;
+        const bool ok = !t.empty() && parse_double(t, value);
+        if (!ok) {
+          if (n < min_count)
+            fail_at_line(
+                mtl_name, mtl_line,
+                t.empty()
+                    ? fmt::format("option '{}' of 'map_Kd' needs {} value(s)", opt, min_count)
+                    : fmt::format("malformed number '{}' for option '{}' of 'map_Kd'", excerpt(t), opt));
+          break;
+        }
+        if (!std::isfinite(value))
+          fail_at_line(mtl_name, mtl_line,
+                       fmt::format("NaN or infinite value for option '{}' of 'map_Kd'", opt));
+        tokens.next();
+        if (out != nullptr) out[n] = value;
+        ++n;
+      }
+    };
+    if (name == "s") {
+      numbers(1, 3, scale.data());
+    } else if (name == "o") {
+      numbers(1, 3, offset.data());
+    } else if (name == "t") {
+      numbers(1, 3, nullptr);
+    } else if (name == "mm") {
+      numbers(2, 2, nullptr);
+    } else if (name == "bm" || name == "boost" || name == "texres") {
+      numbers(1, 1, nullptr);
+    } else if (name == "blendu" || name == "blendv" || name == "clamp" || name == "cc") {
+      const std::string_view v = tokens.next();
+      if (v != "on" && v != "off")
+        fail_at_line(mtl_name, mtl_line,
+                     fmt::format("option '{}' of 'map_Kd' needs on or off, got '{}'", opt, excerpt(v)));
+    } else if (name == "imfchan") {
+      if (tokens.next().empty())
+        fail_at_line(mtl_name, mtl_line, "option '-imfchan' of 'map_Kd' needs a channel");
+    } else {
+      fail_at_line(mtl_name, mtl_line, fmt::format("unknown option '{}' in 'map_Kd'", excerpt(opt)));
+    }
+  }
+}
 
 class ObjParser {
  public:
@@ -759,55 +810,7 @@ void ObjParser::load_mtl(const fs::path& mtl_path, const std::string& data) {
     } else if (equals_ignoring_case(keyword, "map_Kd")) {
       std::array<double, 3> scale{1.0, 1.0, 1.0};
       std::array<double, 3> offset{0.0, 0.0, 0.0};
-      // Options come before the file name; each takes a fixed or bounded number of arguments.
-      for (std::string_view opt = tokens.peek(); opt.size() > 1 && opt[0] == '-'; opt = tokens.peek()) {
-        tokens.next();
-        const std::string_view name = opt.substr(1);
-        auto numbers = [&](size_t min_count, size_t max_count, double* out) {
-          size_t n = 0;
-          while (n < max_count) {
-            const std::string_view t = tokens.peek();
-            double value = 0.0;
-            const bool ok = !t.empty() && parse_double(t, value);
-            if (!ok) {
-              if (n < min_count)
-                fail_at_line(
-                    mtl_name, mtl_line,
-                    t.empty()
-                        ? fmt::format("option '{}' of 'map_Kd' needs {} value(s)", opt, min_count)
-                        : fmt::format("malformed number '{}' for option '{}' of 'map_Kd'", excerpt(t), opt));
-              break;
-            }
-            if (!std::isfinite(value))
-              fail_at_line(mtl_name, mtl_line,
-                           fmt::format("NaN or infinite value for option '{}' of 'map_Kd'", opt));
-            tokens.next();
-            if (out != nullptr) out[n] = value;
-            ++n;
-          }
-        };
-        if (name == "s") {
-          numbers(1, 3, scale.data());
-        } else if (name == "o") {
-          numbers(1, 3, offset.data());
-        } else if (name == "t") {
-          numbers(1, 3, nullptr);
-        } else if (name == "mm") {
-          numbers(2, 2, nullptr);
-        } else if (name == "bm" || name == "boost" || name == "texres") {
-          numbers(1, 1, nullptr);
-        } else if (name == "blendu" || name == "blendv" || name == "clamp" || name == "cc") {
-          const std::string_view v = tokens.next();
-          if (v != "on" && v != "off")
-            fail_at_line(mtl_name, mtl_line,
-                         fmt::format("option '{}' of 'map_Kd' needs on or off, got '{}'", opt, excerpt(v)));
-        } else if (name == "imfchan") {
-          if (tokens.next().empty())
-            fail_at_line(mtl_name, mtl_line, "option '-imfchan' of 'map_Kd' needs a channel");
-        } else {
-          fail_at_line(mtl_name, mtl_line, fmt::format("unknown option '{}' in 'map_Kd'", excerpt(opt)));
-        }
-      }
+      read_map_kd_options(tokens, mtl_name, mtl_line, scale, offset);
       const std::string file = with_forward_slashes(tokens.rest());
       if (file.empty()) fail_at_line(mtl_name, mtl_line, "'map_Kd' without a file name");
       if (current == nullptr) continue;  // no material to attach it to
