@@ -35,7 +35,9 @@ struct LargeBufferAllocator {
     std::free(p);
   }
   template <typename U>
-  bool operator==(const LargeBufferAllocator<U>&) const { return true; }
+  bool operator==(const LargeBufferAllocator<U>&) const {
+    return true;
+  }
 };
 
 struct Rgba8 {

@@ -12,7 +12,7 @@
 namespace tightex {
 
 struct ObjReadOptions {
-  bool load_textures = true;              // false: materials keep their texture path, no pixels
+  bool load_textures = true;  // false: materials keep their texture path, no pixels
   size_t max_texture_pixels = size_t(1) << 30;
 };
 

@@ -22,7 +22,7 @@ constexpr uint32_t kNone = UINT32_MAX;
 struct Material {
   std::string name;
   std::array<double, 3> kd{1.0, 1.0, 1.0};
-  int texture = -1;                 // index into TexturedMesh::textures, -1 = constant colour
+  int texture = -1;                           // index into TexturedMesh::textures, -1 = constant colour
   std::array<double, 2> uv_scale{1.0, 1.0};   // map_Kd -s
   std::array<double, 2> uv_offset{0.0, 0.0};  // map_Kd -o
 };
@@ -44,7 +44,7 @@ struct TexturedMesh {
   std::vector<int32_t> face_material;  // per triangle, index into materials (-1: none)
   std::vector<Material> materials;
   std::vector<Texture> textures;
-  std::string source;                  // file it was read from, for messages
+  std::string source;  // file it was read from, for messages
 
   size_t num_vertices() const { return positions.size(); }
   size_t num_triangles() const { return triangles.size(); }

@@ -36,31 +36,41 @@ enum class CornerRule {
 /// every value has one (-Wswitch); parse_* below read them back through the same switch.
 constexpr std::string_view to_string(Layout v) {
   switch (v) {
-    case Layout::kAtlas: return "atlas";
-    case Layout::kPerComponent: return "per-component";
+    case Layout::kAtlas:
+      return "atlas";
+    case Layout::kPerComponent:
+      return "per-component";
   }
   return "";
 }
 constexpr std::string_view to_string(MapKind v) {
   switch (v) {
-    case MapKind::kHarmonic: return "harmonic";
-    case MapKind::kArea: return "area";
-    case MapKind::kTexel: return "texel";
-    case MapKind::kDetail: return "detail";
+    case MapKind::kHarmonic:
+      return "harmonic";
+    case MapKind::kArea:
+      return "area";
+    case MapKind::kTexel:
+      return "texel";
+    case MapKind::kDetail:
+      return "detail";
   }
   return "";
 }
 constexpr std::string_view to_string(HoleMode v) {
   switch (v) {
-    case HoleMode::kFill: return "fill";
-    case HoleMode::kCut: return "cut";
+    case HoleMode::kFill:
+      return "fill";
+    case HoleMode::kCut:
+      return "cut";
   }
   return "";
 }
 constexpr std::string_view to_string(CornerRule v) {
   switch (v) {
-    case CornerRule::kEqualArcs: return "arcs";
-    case CornerRule::kTurningAngle: return "turning";
+    case CornerRule::kEqualArcs:
+      return "arcs";
+    case CornerRule::kTurningAngle:
+      return "turning";
   }
   return "";
 }

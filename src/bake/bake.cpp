@@ -106,8 +106,7 @@ struct TileBins {
   }
 };
 
-TileBins bin_triangles_by_tile(const Image& out, const std::vector<uint32_t>& image_triangles,
-                               const std::vector<BakeTriangle>& triangles) {
+TileBins bin_triangles_by_tile(const Image& out, const std::vector<uint32_t>& image_triangles, const std::vector<BakeTriangle>& triangles) {
   TileBins grid;
   grid.tiles_x = (out.width + kTile - 1) / kTile, grid.tiles_y = (out.height + kTile - 1) / kTile;
   const int tiles_x = grid.tiles_x, tiles_y = grid.tiles_y;
@@ -115,7 +114,8 @@ TileBins bin_triangles_by_tile(const Image& out, const std::vector<uint32_t>& im
   for (uint32_t t : image_triangles) {
     const BakeTriangle& tri = triangles[t];
     double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
-    for (const Vec2& p : tri.target_px) x0 = std::min(x0, p.x()), x1 = std::max(x1, p.x()), y0 = std::min(y0, p.y()), y1 = std::max(y1, p.y());
+    for (const Vec2& p : tri.target_px)
+      x0 = std::min(x0, p.x()), x1 = std::max(x1, p.x()), y0 = std::min(y0, p.y()), y1 = std::max(y1, p.y());
     const int tx0 = std::clamp(int(std::floor(x0)) / kTile, 0, tiles_x - 1), tx1 = std::clamp(int(std::floor(x1)) / kTile, 0, tiles_x - 1);
     const int ty0 = std::clamp(int(std::floor(y0)) / kTile, 0, tiles_y - 1), ty1 = std::clamp(int(std::floor(y1)) / kTile, 0, tiles_y - 1);
     for (int ty = ty0; ty <= ty1; ++ty)
@@ -226,7 +226,8 @@ void dilate_uncovered(const std::vector<Rect>& rects, const std::vector<size_t>&
 /// more (where all do, the bilinear bake is already right).
 bool worth_fitting(const std::vector<uint32_t>& bin, const std::vector<TriangleSampler>& samplers) {
   bool worth = false;
-  for (uint32_t t : bin) worth = worth || (samplers[t].src && samplers[t].valid && std::max(samplers[t].footprint_x, samplers[t].footprint_y) > 0.5);
+  for (uint32_t t : bin)
+    worth = worth || (samplers[t].src && samplers[t].valid && std::max(samplers[t].footprint_x, samplers[t].footprint_y) > 0.5);
   return worth;
 }
 
@@ -263,8 +264,8 @@ void fit_tiles(const BakeContext& ctx, const TileBins& grid, Image& out) {
 
 }  // namespace
 
-void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& triangles,
-                  const std::vector<Rect>& rects, std::vector<Image>& images, BakeStats* stats, const BakeOptions& options) {
+void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& triangles, const std::vector<Rect>& rects,
+                  std::vector<Image>& images, BakeStats* stats, const BakeOptions& options) {
   const std::vector<TriangleSampler> samplers = make_samplers(input, triangles);
   BakeCounters counters;
   ProgressCounter progress(options.progress, bake_progress_units(images, options.fit), options.progress_interval_s);

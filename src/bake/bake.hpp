@@ -19,7 +19,7 @@ struct BakeTriangle {
   std::array<Vec2, 3> target_px;
   std::array<Vec2, 3> source_uv;
   int32_t material = -1;  // input material (-1: none, white)
-  double area3 = 0;        // 3D area: the least-squares fit weighs the surface uniformly, as METRICS.md's PSNR does
+  double area3 = 0;       // 3D area: the least-squares fit weighs the surface uniformly, as METRICS.md's PSNR does
 };
 
 struct BakeOptions {
@@ -58,8 +58,8 @@ constexpr int kFineFitSamples = 4;
 constexpr double kFineFitLambda = 0.3;
 
 struct BakeStats {
-  size_t texels_filled = 0;   // texel centres inside some triangle
-  size_t texels_dilated = 0;  // texels of a rectangle that no triangle covers (scaffolding, rounding)
+  size_t texels_filled = 0;              // texel centres inside some triangle
+  size_t texels_dilated = 0;             // texels of a rectangle that no triangle covers (scaffolding, rounding)
   size_t texels_footprint_filtered = 0;  // texels averaged over more than one sample (minified input)
   size_t tiles_fitted = 0, tiles = 0;    // least-squares fit
 };
@@ -79,8 +79,7 @@ struct BakeStats {
 /// fit. Other texels are left as they were. Parallel over tiles of the output with oneTBB; the result
 /// is the same for any thread count. Fills `stats` when not null.
 /// Throws: nothing but std::bad_alloc (degenerate or non-finite triangles are skipped).
-void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& triangles,
-                  const std::vector<Rect>& rects, std::vector<Image>& images, BakeStats* stats,
-                  const BakeOptions& options = {});
+void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& triangles, const std::vector<Rect>& rects,
+                  std::vector<Image>& images, BakeStats* stats, const BakeOptions& options = {});
 
 }  // namespace tightex

@@ -90,8 +90,8 @@ FitSamples collect_samples(const FitTileInput& input, const SampleGrid& grid, co
     const BakeTriangle& tri = input.triangles[t];
     for (int k = 0; k < grid.classes; ++k) {
       const Vec2 off(grid.offsets[size_t(k)][0], grid.offsets[size_t(k)][1]);
-      scan_triangle(tri.target_px[0] - off, tri.target_px[1] - off, tri.target_px[2] - off, region.x0 + 1, region.x1 - 1,
-                    region.y0 + 1, region.y1 - 1, EdgeRule::kInclusive, [&](long x, long y, double, double, double) {
+      scan_triangle(tri.target_px[0] - off, tri.target_px[1] - off, tri.target_px[2] - off, region.x0 + 1, region.x1 - 1, region.y0 + 1,
+                    region.y1 - 1, EdgeRule::kInclusive, [&](long x, long y, double, double, double) {
                       const size_t i = size_t(k) * region.n + size_t(y - region.y0) * size_t(region.w) + size_t(x - region.x0);
                       if (s.weight[i] > 0) return;
                       const auto c = smp.footprint_colour(double(x) + 0.5 + off.x(), double(y) + 0.5 + off.y(), 1.0 / grid.K, max_samples);

@@ -18,10 +18,10 @@ struct TexelTile {
 
 /// What the fit of one tile reads.
 struct FitTileInput {
-  const Image& base;                              // the plain bake of the whole image (after dilation)
-  const std::vector<BakeTriangle>& triangles;     // all triangles of the bake
-  const std::vector<TriangleSampler>& samplers;   // one per triangle
-  const std::vector<uint32_t>& nearby;            // indices of the triangles that may reach the tile or its halo
+  const Image& base;                             // the plain bake of the whole image (after dilation)
+  const std::vector<BakeTriangle>& triangles;    // all triangles of the bake
+  const std::vector<TriangleSampler>& samplers;  // one per triangle
+  const std::vector<uint32_t>& nearby;           // indices of the triangles that may reach the tile or its halo
 };
 
 /// The fit's halo: texels around a tile that are unknowns of its fit too (not written back), so that

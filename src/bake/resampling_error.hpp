@@ -5,8 +5,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/mesh.hpp"
 #include "bake/bake.hpp"
+#include "core/mesh.hpp"
 #include "core/surface.hpp"
 #include "layout/layout.hpp"
 

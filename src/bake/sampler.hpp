@@ -22,11 +22,11 @@ inline Rgba8 to_rgba(const std::array<float, 4>& c) {
 struct TriangleSampler {
   const Image* src = nullptr;  // the input texture; nullptr: the triangle takes `flat`
   Rgba8 flat{255, 255, 255, 255};
-  Vec2 uv0, du_dx, du_dy;    // source uv at target pixel (0,0) and its derivatives (affine per triangle)
-  double bary_x[3], bary_y[3], bary_0[3];  // barycentric weights as affine functions of the target pixel
+  Vec2 uv0, du_dx, du_dy;                   // source uv at target pixel (0,0) and its derivatives (affine per triangle)
+  double bary_x[3], bary_y[3], bary_0[3];   // barycentric weights as affine functions of the target pixel
   double footprint_x = 0, footprint_y = 0;  // input pixels spanned by one output texel along x and y
-  double weight = 0;         // 3D area per output texel (least-squares fit)
-  bool valid = false;        // false for a degenerate target triangle or a non-finite weight
+  double weight = 0;                        // 3D area per output texel (least-squares fit)
+  bool valid = false;                       // false for a degenerate target triangle or a non-finite weight
   std::array<Vec2, 3> corner_uv;
 
   /// Requires: `source` outlives the sampler (or is nullptr). Guarantees: `valid` says whether the

@@ -134,17 +134,22 @@ CLI::Option* define_options(CLI::App& app, CommandLine& line, ChoiceNames& names
   names.corners = to_string(line.corners);
   app.add_option("input", line.input, "textured model (OBJ + MTL + textures)")->required();
   app.add_option("-o,--output", line.outdir, "output directory")->required();
-  auto* size_opt = app.add_option("--size", line.size, "texture side in texels (per-component: of the largest component); above 16384 needs --force. "
-                                   "Default: the side that holds as many texels as the input uses (per-component: all the textures together; "
-                                   "grown if the atlas cannot hold a 4x4 rectangle per component; see --texels)")
-      ->check(CLI::Range(8, 65536));
-  app.add_option("--texels", line.texels, "texel budget: the texture holds this many texels: the smallest square (side a multiple of 4), or as many "
-                                          "in the shape --aspect gives or chooses (per-component: the largest component's texture). "
-                                          "Default: the input's used texels, so the output keeps the input's information")
-      ->check(CLI::PositiveNumber)->excludes(size_opt);
-  app.add_option("--map", names.map, "detail (default): texels where the input texture has detail (colour gradient per 3D length), "
-                                     "capped at 4x the input's own density; area: the same texels per unit of 3D area everywhere; "
-                                     "texel: the input's own texel density per triangle; harmonic: the paper's map exactly (docs/maps.md)")
+  auto* size_opt =
+      app.add_option("--size", line.size,
+                     "texture side in texels (per-component: of the largest component); above 16384 needs --force. "
+                     "Default: the side that holds as many texels as the input uses (per-component: all the textures together; "
+                     "grown if the atlas cannot hold a 4x4 rectangle per component; see --texels)")
+          ->check(CLI::Range(8, 65536));
+  app.add_option("--texels", line.texels,
+                 "texel budget: the texture holds this many texels: the smallest square (side a multiple of 4), or as many "
+                 "in the shape --aspect gives or chooses (per-component: the largest component's texture). "
+                 "Default: the input's used texels, so the output keeps the input's information")
+      ->check(CLI::PositiveNumber)
+      ->excludes(size_opt);
+  app.add_option("--map", names.map,
+                 "detail (default): texels where the input texture has detail (colour gradient per 3D length), "
+                 "capped at 4x the input's own density; area: the same texels per unit of 3D area everywhere; "
+                 "texel: the input's own texel density per triangle; harmonic: the paper's map exactly (docs/maps.md)")
       ->check(CLI::IsMember(names_of(kMapKinds)));
   app.add_option("--aspect", line.aspect,
                  "width/height of the texture, which holds as many texels as a square would: auto (default, area/texel/detail "
@@ -152,14 +157,17 @@ CLI::Option* define_options(CLI::App& app, CommandLine& line, ChoiceNames& names
                  "texels keep the most of the input is chosen (the square unless another is clearly better); a number "
                  "(e.g. 2) fixes it. With --size the default is 1, a square of that side")
       ->check(check_aspect);
-  app.add_option("--balance", line.balance, "area/texel/detail maps: 1 = target density exactly, 0 = the harmonic map's density (least angle "
-                                            "distortion); between: a geometric blend")
+  app.add_option("--balance", line.balance,
+                 "area/texel/detail maps: 1 = target density exactly, 0 = the harmonic map's density (least angle "
+                 "distortion); between: a geometric blend")
       ->check(CLI::Range(0.0, 1.0));
-  app.add_option("--corners", names.corners, "which boundary points become the square's corners: arcs (default): four arcs of equal "
-                                             "length; turning: where the boundary turns most (docs/corners.md)")
+  app.add_option("--corners", names.corners,
+                 "which boundary points become the square's corners: arcs (default): four arcs of equal "
+                 "length; turning: where the boundary turns most (docs/corners.md)")
       ->check(CLI::IsMember(names_of(kCornerRules)));
   auto* no_fit_opt = app.add_flag("--no-fit", line.no_fit, "bake each texel by sampling only, without the least-squares fit to the input");
-  app.add_flag("--fine-fit", line.fine_fit, "fit on 4x4 points per texel instead of 2x2: a little higher surface PSNR, about twice the bake time")
+  app.add_flag("--fine-fit", line.fine_fit,
+               "fit on 4x4 points per texel instead of 2x2: a little higher surface PSNR, about twice the bake time")
       ->excludes(no_fit_opt);
   app.add_flag("--force", line.force, "allow --size above 16384");
   app.add_option("--max-memory", line.max_memory_mib, "refuse inputs whose estimated memory exceeds this many MiB (default: 90% of RAM)")
@@ -179,8 +187,9 @@ CLI::Option* define_options(CLI::App& app, CommandLine& line, ChoiceNames& names
 /// Parses the main command's arguments. Returns nullopt where the command ends here (--help, or a
 /// parse error CLI11 has printed), with the exit code in `exit_code`.
 std::optional<CommandLine> parse_command_line(int argc, char** argv, int& exit_code) {
-  CLI::App app{"tightex: one compact texture per surface, from a scan's fragmented UV atlas\n"
-               "(global parameterization by a harmonic map onto a square; Chen et al., arXiv 2406.04115)"};
+  CLI::App app{
+      "tightex: one compact texture per surface, from a scan's fragmented UV atlas\n"
+      "(global parameterization by a harmonic map onto a square; Chen et al., arXiv 2406.04115)"};
   CommandLine line;
   ChoiceNames names;
   CLI::Option* size_opt = define_options(app, line, names);
@@ -241,8 +250,8 @@ struct MemoryGuard {
   /// Throws InputError naming `what` if `bytes` is above the limit.
   void check(double bytes, const std::string& what) const {
     if (bytes / double(1 << 20) > limit_mib)
-      fail_input("{}: {} needs about {:.0f} MiB, more than the limit of {:.0f} MiB (--max-memory)", input, what,
-                 bytes / double(1 << 20), limit_mib);
+      fail_input("{}: {} needs about {:.0f} MiB, more than the limit of {:.0f} MiB (--max-memory)", input, what, bytes / double(1 << 20),
+                 limit_mib);
   }
 };
 
@@ -251,9 +260,8 @@ struct MemoryGuard {
 MemoryGuard check_memory(const CommandLine& line, const TexturedMesh& geometry, int size) {
   MemoryGuard guard;
   guard.input = line.input;
-  guard.limit_mib = line.max_memory_mib > 0
-                        ? line.max_memory_mib
-                        : 0.9 * double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE)) / double(1 << 20);
+  guard.limit_mib = line.max_memory_mib > 0 ? line.max_memory_mib
+                                            : 0.9 * double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE)) / double(1 << 20);
   guard.estimate = double(geometry.num_triangles()) * kBytesPerTriangle;
   for (const Texture& t : geometry.textures) guard.estimate += double(t.width) * double(t.height) * 4.0;
   if (line.layout == Layout::kAtlas) guard.estimate += double(size) * double(size) * kBytesPerOutputTexel;
@@ -286,8 +294,10 @@ Options library_options(const CommandLine& line, int size, bool show_progress) {
   opt.measure = false;
   if (show_progress)
     opt.progress = [](std::string_view stage, double f) {
-      if (f > 0 && f < 1) fmt::print(stderr, "\r\033[Ktightex: {} {:.0f}%...", stage, 100 * f);
-      else fmt::print(stderr, "\r\033[Ktightex: {}...", stage);
+      if (f > 0 && f < 1)
+        fmt::print(stderr, "\r\033[Ktightex: {} {:.0f}%...", stage, 100 * f);
+      else
+        fmt::print(stderr, "\r\033[Ktightex: {}...", stage);
       return true;
     };
   return opt;
@@ -343,7 +353,8 @@ void print_notes(const Plan& plan, const nlohmann::json& report) {
                "texture coordinates and texture(s) ({}); see \"kept_original_uvs\" in the report\n",
                kept_components, plan.kept_triangles(), plan.first_kept_reason());
   if (const auto& grown = report["options"]["size_grown_from"]; !grown.is_null())
-    fmt::print(stderr, "tightex: note: {} components need a 4x4 texel rectangle each: the texture grew from {}^2 to {}^2 texels (--size sets it)\n",
+    fmt::print(stderr,
+               "tightex: note: {} components need a 4x4 texel rectangle each: the texture grew from {}^2 to {}^2 texels (--size sets it)\n",
                report["preparation"]["components"].get<size_t>(), grown.get<int>(), report["options"]["size"].get<int>());
 }
 
@@ -354,8 +365,8 @@ struct CliTimings {
 
 /// Writes the output model and measures it, side by side (PNG compression and measuring are
 /// independent). Returns the metrics; the times go to `timings`.
-Metrics write_and_measure(const CommandLine& line, const TexturedMesh& input, const TexturedMesh& output,
-                          const std::string& name, CliTimings& timings) {
+Metrics write_and_measure(const CommandLine& line, const TexturedMesh& input, const TexturedMesh& output, const std::string& name,
+                          CliTimings& timings) {
   const auto tw = std::chrono::steady_clock::now();
   Metrics metrics;
   tbb::parallel_invoke(
@@ -372,14 +383,15 @@ Metrics write_and_measure(const CommandLine& line, const TexturedMesh& input, co
 
 /// Adds what the CLI knows to the library's report: the metrics, its own stages' times (reading first,
 /// writing and measuring last), wall time, peak RSS, the reader's figures and the output files.
-void add_cli_figures(nlohmann::json& rep, const Metrics& metrics, const CliTimings& t, double wall_seconds,
-                     const ObjReadStats& read_stats, const OutputFiles& files) {
+void add_cli_figures(nlohmann::json& rep, const Metrics& metrics, const CliTimings& t, double wall_seconds, const ObjReadStats& read_stats,
+                     const OutputFiles& files) {
   rep["metrics"] = to_json(metrics);
   nlohmann::json& timings = rep["timings"];
   timings.push_back(to_json(StageTiming{"write (beside measure)", t.write_s, std::nullopt}));
   timings.push_back(to_json(StageTiming{"measure (beside write)", t.measure_s, std::nullopt}));
   timings.insert(timings.begin(), to_json(StageTiming{"read geometry", t.read_s, std::nullopt}));
-  timings.insert(timings.begin() + 1, to_json(StageTiming{"read textures (beside the geometric stages, from start)", t.textures_s, std::nullopt}));
+  timings.insert(timings.begin() + 1,
+                 to_json(StageTiming{"read textures (beside the geometric stages, from start)", t.textures_s, std::nullopt}));
   rep["wall_seconds"] = wall_seconds;
   rep["peak_rss_mib"] = peak_rss_mib();
   rep["input"].update(reader_json(read_stats));
@@ -397,18 +409,19 @@ void write_preview(const std::string& preview_path, const TexturedMesh& input, c
 }
 
 /// The one-line summary (and with --verbose the metrics) on stdout.
-void print_summary(const CommandLine& line, const std::string& name, const TexturedMesh& output, size_t components,
-                   const Metrics& metrics, double wall_seconds) {
+void print_summary(const CommandLine& line, const std::string& name, const TexturedMesh& output, size_t components, const Metrics& metrics,
+                   double wall_seconds) {
   // The new texture's size (the first of several: per-component layout).
   std::string texture;
   if (!output.textures.empty()) {
     const Image& img = output.textures[0].image;
     texture = fmt::format("{}x{}{} texture, ", img.width, img.height, output.textures.size() > 1 ? " +" : "");
   }
-  fmt::print("tightex: {} -> {}/{}.obj  ({}{} components, {:.1f}% -> {:.1f}% texels used, {} charts, "
-             "PSNR {:.1f} dB, {} lost, {} flipped, {:.2f} s)\n",
-             line.input, line.outdir, name, texture, components, 100 * metrics.input.utilization, 100 * metrics.output.utilization,
-             metrics.charts, metrics.surface_psnr, metrics.lost_triangles, metrics.flipped, wall_seconds);
+  fmt::print(
+      "tightex: {} -> {}/{}.obj  ({}{} components, {:.1f}% -> {:.1f}% texels used, {} charts, "
+      "PSNR {:.1f} dB, {} lost, {} flipped, {:.2f} s)\n",
+      line.input, line.outdir, name, texture, components, 100 * metrics.input.utilization, 100 * metrics.output.utilization, metrics.charts,
+      metrics.surface_psnr, metrics.lost_triangles, metrics.flipped, wall_seconds);
   if (line.verbose) fmt::print("{}\n", to_json(metrics).dump(2));
 }
 

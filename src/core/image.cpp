@@ -12,7 +12,7 @@ inline int wrap(int i, int n) {
 }
 }  // namespace
 
-std::array<float, 4> sample_bilinear(const Image& image, double u, double v) {
+std::array<float, 4> sample_bilinear(const Image &image, double u, double v) {
   const double x = u * image.width - 0.5;
   const double y = (1.0 - v) * image.height - 0.5;
   if (!std::isfinite(x) || !std::isfinite(y) || image.empty()) return {0, 0, 0, 0};  // no texel to read (int(NaN) is undefined)
@@ -32,13 +32,10 @@ std::array<float, 4> sample_bilinear(const Image& image, double u, double v) {
   const int y0 = wrap(int(std::fmod(std::clamp(fy, -lim, lim), double(image.height))), image.height);
   const int x1 = x0 + 1 == image.width ? 0 : x0 + 1;
   const int y1 = y0 + 1 == image.height ? 0 : y0 + 1;
-  const Rgba8 &p00 = image.at(x0, y0), &p10 = image.at(x1, y0), &p01 = image.at(x0, y1),
-              &p11 = image.at(x1, y1);
+  const Rgba8 &p00 = image.at(x0, y0), &p10 = image.at(x1, y0), &p01 = image.at(x0, y1), &p11 = image.at(x1, y1);
   const float w00 = (1 - tx) * (1 - ty), w10 = tx * (1 - ty), w01 = (1 - tx) * ty, w11 = tx * ty;
-  return {w00 * p00.r + w10 * p10.r + w01 * p01.r + w11 * p11.r,
-          w00 * p00.g + w10 * p10.g + w01 * p01.g + w11 * p11.g,
-          w00 * p00.b + w10 * p10.b + w01 * p01.b + w11 * p11.b,
-          w00 * p00.a + w10 * p10.a + w01 * p01.a + w11 * p11.a};
+  return {w00 * p00.r + w10 * p10.r + w01 * p01.r + w11 * p11.r, w00 * p00.g + w10 * p10.g + w01 * p01.g + w11 * p11.g,
+          w00 * p00.b + w10 * p10.b + w01 * p01.b + w11 * p11.b, w00 * p00.a + w10 * p10.a + w01 * p01.a + w11 * p11.a};
 }
 
 }  // namespace tightex

@@ -39,7 +39,8 @@ double input_detail(const TexturedMesh& mesh, size_t t) {
   const Image& img = mesh.textures[size_t(ti)].image;
   const Vec2 a = mesh.sampled_uv(t, 0), b = mesh.sampled_uv(t, 1), c = mesh.sampled_uv(t, 2);
   const double texels = std::abs(signed_area(a, b, c)) * double(img.width) * double(img.height);
-  const double a3 = triangle_area(mesh.positions[mesh.triangles[t][0]], mesh.positions[mesh.triangles[t][1]], mesh.positions[mesh.triangles[t][2]]);
+  const double a3 =
+      triangle_area(mesh.positions[mesh.triangles[t][0]], mesh.positions[mesh.triangles[t][1]], mesh.positions[mesh.triangles[t][2]]);
   if (!(a3 > 0) || !(texels > 0) || !std::isfinite(texels) || !std::isfinite(a3)) return 0.0;
   // Points: a barycentric grid of n(n+1)/2 points, n from 1 (tiny) to 5 (25+ texels).
   const int n = texels >= 25 ? 5 : std::max(1, int(std::sqrt(texels)));

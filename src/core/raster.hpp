@@ -22,8 +22,7 @@ enum class EdgeRule {
 /// analytically from the three edges, so a thin triangle costs its area plus its height, not its
 /// bounding box. Throws only what f throws.
 template <typename F>
-void scan_triangle(const Vec2& p0, const Vec2& p1, const Vec2& p2, long x_lo, long x_hi, long y_lo, long y_hi,
-                   EdgeRule rule, F&& f) {
+void scan_triangle(const Vec2& p0, const Vec2& p1, const Vec2& p2, long x_lo, long x_hi, long y_lo, long y_hi, EdgeRule rule, F&& f) {
   const Vec2* p[3] = {&p0, &p1, &p2};
   const double area2 = (p1.x() - p0.x()) * (p2.y() - p0.y()) - (p1.y() - p0.y()) * (p2.x() - p0.x());
   if (!(area2 != 0) || !std::isfinite(area2)) return;
@@ -62,9 +61,12 @@ void scan_triangle(const Vec2& p0, const Vec2& p1, const Vec2& p2, long x_lo, lo
     double lo = xmin, hi = xmax;
     for (int i = 0; i < 3; ++i) {
       const double rest = B[i] * py + C[i];
-      if (A[i] > 0) lo = std::max(lo, -rest / A[i]);
-      else if (A[i] < 0) hi = std::min(hi, -rest / A[i]);
-      else if (rest < 0) hi = lo - 2;  // empty row
+      if (A[i] > 0)
+        lo = std::max(lo, -rest / A[i]);
+      else if (A[i] < 0)
+        hi = std::min(hi, -rest / A[i]);
+      else if (rest < 0)
+        hi = lo - 2;  // empty row
     }
     if (hi < lo - 1) continue;
     // One texel of slack on each side: the exact test below decides.

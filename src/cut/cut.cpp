@@ -132,7 +132,8 @@ std::optional<Disk> cut_open(const Surface& s, const EdgeGraph& g, const std::ve
   const Topology dt = topology_of(disk.mesh);
   const auto disk_loops = boundary_loops(disk.mesh);
   if (disk_loops.size() != 1 || dt.euler() != 1) {
-    *why = fmt::format("cut_to_disk: result has {} boundary loops and Euler characteristic {} (expected a disk)", disk_loops.size(), dt.euler());
+    *why = fmt::format("cut_to_disk: result has {} boundary loops and Euler characteristic {} (expected a disk)", disk_loops.size(),
+                       dt.euler());
     return std::nullopt;
   }
   for (uint32_t h : disk_loops[0]) disk.boundary.push_back(disk.mesh.from(h));

@@ -130,8 +130,8 @@ void real_first_dual_tree(const Surface& s, const EdgeGraph& g, const std::vecto
 
 /// The cut graph of a dual spanning tree: the interior edges it does not cross, pruned of dangling
 /// branches (a vertex left with one cut or boundary edge drops that edge, repeatedly).
-void prune_to_cut_graph(const Surface& s, const EdgeGraph& g, const std::vector<char>& crossed,
-                        const std::vector<char>& is_boundary_edge, std::vector<char>& cut_edge) {
+void prune_to_cut_graph(const Surface& s, const EdgeGraph& g, const std::vector<char>& crossed, const std::vector<char>& is_boundary_edge,
+                        std::vector<char>& cut_edge) {
   const size_t nv = s.num_vertices();
   for (uint32_t e = 0; e < g.num_edges(); ++e) cut_edge[e] = !crossed[e] && !is_boundary_edge[e];
   std::vector<uint32_t> degree(nv, 0);
@@ -184,8 +184,8 @@ CutGraph tree_cotree_cut(const Surface& s, const EdgeGraph& g, const std::vector
 bool real_faces_apart(const Surface& s, const EdgeGraph& g, const std::vector<char>& cut_edge) {
   detail::UnionFind uf(s.num_faces());
   for (uint32_t h = 0; h < s.opposite.size(); ++h)
-    if (const uint32_t o = s.opposite[h]; o != kNone && !cut_edge[g.halfedge_edge[h]] && s.face_parent[h / 3] != kNone &&
-                                          s.face_parent[o / 3] != kNone)
+    if (const uint32_t o = s.opposite[h];
+        o != kNone && !cut_edge[g.halfedge_edge[h]] && s.face_parent[h / 3] != kNone && s.face_parent[o / 3] != kNone)
       uf.unite(h / 3, o / 3);
   size_t groups = 0;
   for (uint32_t f = 0; f < s.num_faces(); ++f) groups += s.face_parent[f] != kNone && uf.find(f) == f;

@@ -24,11 +24,11 @@ constexpr double kSeamCost = 0.95;
 /// `seams`: per halfedge of the surface that s.face_parent maps into (the component), 1 on an input
 /// texture seam (find_texture_seams); empty: none. Scaffolding edges are never seams.
 struct EdgeGraph {
-  std::vector<uint32_t> edge_halfedge;  // edge -> a halfedge of it (the one with the smaller id)
-  std::vector<uint32_t> halfedge_edge;  // halfedge -> edge
-  std::vector<double> length;           // 3D length
-  std::vector<double> cost;             // what a shortest path pays: length, times kSeamCost on a seam
-  std::vector<char> on_seam;            // per edge: an input texture seam
+  std::vector<uint32_t> edge_halfedge;               // edge -> a halfedge of it (the one with the smaller id)
+  std::vector<uint32_t> halfedge_edge;               // halfedge -> edge
+  std::vector<double> length;                        // 3D length
+  std::vector<double> cost;                          // what a shortest path pays: length, times kSeamCost on a seam
+  std::vector<char> on_seam;                         // per edge: an input texture seam
   std::vector<uint32_t> offset, neighbor, via_edge;  // CSR: vertex -> (neighbor, edge)
 
   explicit EdgeGraph(const Surface& s, std::span<const char> seams = {}) {
@@ -70,9 +70,8 @@ struct EdgeGraph {
 /// Dijkstra from a set of sources; `weight(e)` gives each edge's length. pred_edge is kNone at sources.
 /// `limit`: vertices farther than this are left unreached (dist infinite, pred_edge kNone), and the
 /// search stops there, so a small limit costs only the ball it covers.
-inline void dijkstra(const EdgeGraph& g, size_t nv, const std::vector<uint32_t>& sources,
-                     const std::vector<double>& weight, std::vector<double>& dist, std::vector<uint32_t>& pred_edge,
-                     double limit = std::numeric_limits<double>::infinity()) {
+inline void dijkstra(const EdgeGraph& g, size_t nv, const std::vector<uint32_t>& sources, const std::vector<double>& weight,
+                     std::vector<double>& dist, std::vector<uint32_t>& pred_edge, double limit = std::numeric_limits<double>::infinity()) {
   dist.assign(nv, std::numeric_limits<double>::infinity());
   pred_edge.assign(nv, kNone);
   using Item = std::pair<double, uint32_t>;
@@ -122,8 +121,7 @@ inline uint32_t farthest(const std::vector<double>& dist) {
 /// Double sweep: the vertex farthest from an arbitrary start is one end `a` of an approximate
 /// diameter; the sweep from `a` gives dist/pred, whose farthest vertex is the other end (returned).
 /// Distances are 3D lengths: the ends are far apart on the surface, whatever the seams.
-inline uint32_t double_sweep(const Surface& s, const EdgeGraph& g, uint32_t* a, std::vector<double>& dist,
-                             std::vector<uint32_t>& pred) {
+inline uint32_t double_sweep(const Surface& s, const EdgeGraph& g, uint32_t* a, std::vector<double>& dist, std::vector<uint32_t>& pred) {
   dijkstra(g, s.num_vertices(), {s.triangles[0][0]}, g.length, dist, pred);
   *a = farthest(dist);
   dijkstra(g, s.num_vertices(), {*a}, g.length, dist, pred);
@@ -154,8 +152,7 @@ struct TreeCotree {
 };
 
 inline TreeCotree tree_cotree(const Surface& s, const EdgeGraph& g, const std::vector<uint32_t>& sources,
-                              const std::vector<std::vector<uint32_t>>& loops,
-                              double radius = std::numeric_limits<double>::infinity()) {
+                              const std::vector<std::vector<uint32_t>>& loops, double radius = std::numeric_limits<double>::infinity()) {
   TreeCotree tc;
   std::vector<double> weight = g.cost;
   for (uint32_t e = 0; e < g.num_edges(); ++e)

@@ -7,11 +7,11 @@
 #include <algorithm>
 #include <cerrno>
 #include <climits>
-#include <fstream>
 #include <csetjmp>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <memory>
 #include <new>
 #include <system_error>
@@ -107,12 +107,10 @@ bool is_jpeg(const unsigned char* data, size_t size) {
 }
 
 // Rejects empty images and images larger than the caller's limit, before any pixel memory is allocated.
-void check_dimensions(const std::string& name, const char* format, uint64_t width, uint64_t height,
-                      size_t max_pixels) {
+void check_dimensions(const std::string& name, const char* format, uint64_t width, uint64_t height, size_t max_pixels) {
   if (width == 0 || height == 0) fail_input("{}: {} image has zero size ({}x{})", name, format, width, height);
   if (width > uint64_t(INT_MAX) || height > uint64_t(INT_MAX) || width * height > max_pixels) {
-    fail_input("{}: {} image is {}x{} pixels, more than the limit of {} pixels", name, format, width, height,
-               max_pixels);
+    fail_input("{}: {} image is {}x{} pixels, more than the limit of {} pixels", name, format, width, height, max_pixels);
   }
 }
 
@@ -141,8 +139,7 @@ std::vector<unsigned char> read_whole_file(const std::string& path) {
   // open() succeeds on a directory; read() would then fail with a less obvious message.
   if (S_ISDIR(info.st_mode)) fail_input("{}: cannot open image ({})", path, errno_message(EISDIR));
   if (S_ISREG(info.st_mode) && uint64_t(info.st_size) > kMaxFileBytes) {
-    fail_input("{}: cannot read image (the file is {} bytes, more than the limit of {})", path,
-               uint64_t(info.st_size), kMaxFileBytes);
+    fail_input("{}: cannot read image (the file is {} bytes, more than the limit of {})", path, uint64_t(info.st_size), kMaxFileBytes);
   }
 
   // Read until end of file rather than trusting st_size, so pipes and files that change size work too.
@@ -258,8 +255,7 @@ Image decode_png(const unsigned char* data, size_t size, const std::string& name
   if (int error = spng_decoded_image_size(ctx.get(), SPNG_FMT_RGBA8, &size_rgba)) fail_png(name, error);
   Image image(int(ihdr.width), int(ihdr.height));
   if (size_rgba != image.pixels.size() * sizeof(Rgba8)) {
-    fail_internal("{}: libspng reports {} bytes for a {}x{} RGBA8 image", name, size_rgba, ihdr.width,
-                  ihdr.height);
+    fail_internal("{}: libspng reports {} bytes for a {}x{} RGBA8 image", name, size_rgba, ihdr.width, ihdr.height);
   }
   // SPNG_FMT_RGBA8 converts every colour type and bit depth (16-bit samples are scaled to 8 bits);
   // SPNG_DECODE_TRNS turns a tRNS chunk (transparent colour or palette alpha) into alpha. Gamma (gAMA)
@@ -403,8 +399,7 @@ bool jpeg_decompress_guarded(JpegDecoder& d, Rgba8* out, bool cmyk) {
   if (setjmp(d.err.jump)) return false;
   d.cinfo.out_color_space = cmyk ? JCS_CMYK : JCS_EXT_RGBA;  // libjpeg-turbo sets alpha to 255
   jpeg_start_decompress(&d.cinfo);
-  if (d.cinfo.output_width != d.cinfo.image_width || d.cinfo.output_height != d.cinfo.image_height ||
-      d.cinfo.output_components != 4) {
+  if (d.cinfo.output_width != d.cinfo.image_width || d.cinfo.output_height != d.cinfo.image_height || d.cinfo.output_components != 4) {
     d.err.pub.msg_code = 0;
     std::snprintf(d.err.message, sizeof(d.err.message), "unexpected decoder output layout");
     return false;
@@ -478,8 +473,8 @@ Image decode_jpeg(const unsigned char* data, size_t size, const std::string& nam
       cmyk = true;
       break;
     default:
-      fail_input("{}: unsupported JPEG colour space ({} components, colour space {})", name,
-                 cinfo.num_components, int(cinfo.jpeg_color_space));
+      fail_input("{}: unsupported JPEG colour space ({} components, colour space {})", name, cinfo.num_components,
+                 int(cinfo.jpeg_color_space));
   }
   check_dimensions(name, "JPEG", cinfo.image_width, cinfo.image_height, max_pixels);
 
@@ -529,8 +524,7 @@ void save_jpeg(OutputFile& out, const Image& image, int quality) {
   // libjpeg's format limit (JPEG_MAX_DIMENSION); checked here to give a clear message.
   constexpr int kMaxJpegSide = 65500;
   if (image.width > kMaxJpegSide || image.height > kMaxJpegSide) {
-    out.fail(fmt::format("{}x{} is larger than JPEG allows ({} pixels a side)", image.width, image.height,
-                         kMaxJpegSide));
+    out.fail(fmt::format("{}x{} is larger than JPEG allows ({} pixels a side)", image.width, image.height, kMaxJpegSide));
   }
   JpegEncoder encoder;
   if (!jpeg_encode_guarded(encoder, out.get(), image, quality)) out.fail(fmt::format("libjpeg: {}", encoder.err.message));
@@ -659,8 +653,7 @@ Image decode_with_stb(const unsigned char* data, size_t size, const std::string&
   int width = 0, height = 0, channels = 0;
   // stbi_info parses only the header, so the size check happens before any pixel memory is allocated.
   if (!stbi_info_from_memory(data, int(size), &width, &height, &channels)) {
-    fail_input("{}: unrecognised image format (not PNG or JPEG, and stb_image cannot read it: {})", name,
-               stb_reason());
+    fail_input("{}: unrecognised image format (not PNG or JPEG, and stb_image cannot read it: {})", name, stb_reason());
   }
   check_dimensions(name, "image", uint64_t(std::max(width, 0)), uint64_t(std::max(height, 0)), max_pixels);
   // stb 2.27 (Debian 12) reads 16-bit PNM samples in the wrong byte order; refusing beats wrong colours.
@@ -670,8 +663,7 @@ Image decode_with_stb(const unsigned char* data, size_t size, const std::string&
   // Loaded with the file's own channel count, and widened to RGBA below, rather than asking stb for 4
   // channels: when the counts differ stb 2.27 converts 16-bit data with its 8-bit converter and reads
   // past its buffer (found by fuzzing this function under ASan, with a 16-bit PNM).
-  std::unique_ptr<stbi_uc, StbImageDeleter> pixels(
-      stbi_load_from_memory(data, int(size), &width, &height, &channels, 0));
+  std::unique_ptr<stbi_uc, StbImageDeleter> pixels(stbi_load_from_memory(data, int(size), &width, &height, &channels, 0));
   if (pixels == nullptr) fail_input("{}: corrupt image (stb_image: {})", name, stb_reason());
   check_dimensions(name, "image", uint64_t(std::max(width, 0)), uint64_t(std::max(height, 0)), max_pixels);
   if (channels < 1 || channels > 4) fail_input("{}: unsupported image with {} channels", name, channels);
@@ -680,10 +672,18 @@ Image decode_with_stb(const unsigned char* data, size_t size, const std::string&
   const stbi_uc* in = pixels.get();
   for (Rgba8& p : image.pixels) {
     switch (channels) {
-      case 1: p = Rgba8{in[0], in[0], in[0], 255}; break;
-      case 2: p = Rgba8{in[0], in[0], in[0], in[1]}; break;
-      case 3: p = Rgba8{in[0], in[1], in[2], 255}; break;
-      default: p = Rgba8{in[0], in[1], in[2], in[3]}; break;
+      case 1:
+        p = Rgba8{in[0], in[0], in[0], 255};
+        break;
+      case 2:
+        p = Rgba8{in[0], in[0], in[0], in[1]};
+        break;
+      case 3:
+        p = Rgba8{in[0], in[1], in[2], 255};
+        break;
+      default:
+        p = Rgba8{in[0], in[1], in[2], in[3]};
+        break;
     }
     in += channels;
   }
@@ -710,8 +710,7 @@ Image decode_image(const unsigned char* data, size_t size, const std::string& na
 
 void save_image(const std::string& path, const Image& image, ImageFormat format, int jpeg_quality) {
   if (image.empty() || image.pixels.size() != size_t(image.width) * size_t(image.height)) {
-    fail_internal("{}: cannot save a {}x{} image with {} pixels", path, image.width, image.height,
-                  image.pixels.size());
+    fail_internal("{}: cannot save a {}x{} image with {} pixels", path, image.width, image.height, image.pixels.size());
   }
   if (format == ImageFormat::kJpeg && (jpeg_quality < 1 || jpeg_quality > 100)) {
     fail_input("{}: JPEG quality {} is outside 1..100", path, jpeg_quality);
@@ -740,7 +739,9 @@ std::pair<int, int> image_dimensions(const std::string& path) {
   f.read(reinterpret_cast<char*>(head.data()), std::streamsize(head.size()));
   head.resize(size_t(f.gcount()));
   const size_t n = head.size();
-  auto be32 = [&](size_t i) { return (uint32_t(head[i]) << 24) | (uint32_t(head[i + 1]) << 16) | (uint32_t(head[i + 2]) << 8) | head[i + 3]; };
+  auto be32 = [&](size_t i) {
+    return (uint32_t(head[i]) << 24) | (uint32_t(head[i + 1]) << 16) | (uint32_t(head[i + 2]) << 8) | head[i + 3];
+  };
   static const unsigned char kPng[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   if (n >= 24 && std::equal(kPng, kPng + 8, head.begin())) {
     const uint32_t w = be32(16), h = be32(20);

@@ -12,8 +12,7 @@ namespace tightex {
 
 /// Decodes an image held in memory (used for fuzzing and for embedded glTF images); `name` is used
 /// in error messages.
-Image decode_image(const unsigned char* data, size_t size, const std::string& name,
-                   size_t max_pixels = size_t(1) << 30);
+Image decode_image(const unsigned char* data, size_t size, const std::string& name, size_t max_pixels = size_t(1) << 30);
 
 /// Width and height from the file's header alone ({0, 0} when unknown), so memory can be estimated
 /// before any pixel is allocated.

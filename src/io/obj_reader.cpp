@@ -129,9 +129,8 @@ std::optional<fs::path> find_named_file(const fs::path& folder, std::string writ
 }
 
 // Page faults on freshly allocated buffers can cost more than the parsing that fills them
-// (docs/decisions.md), so large buffers the reader is about to fill are mapped in one call. Only whole pages inside the buffer are touched, and
-// populating never changes memory contents; on kernels without MADV_POPULATE_WRITE (before 5.14)
-// this does nothing.
+// (docs/decisions.md), so large buffers the reader is about to fill are mapped in one call. Only whole pages inside the buffer are touched,
+// and populating never changes memory contents; on kernels without MADV_POPULATE_WRITE (before 5.14) this does nothing.
 void prefault_for_write(void* start, size_t bytes) {
 #if defined(MADV_POPULATE_WRITE)
   constexpr size_t kWorthIt = size_t(256) << 10;
@@ -393,16 +392,12 @@ void read_map_kd_options(Tokens& tokens, const std::string& mtl_name, size_t mtl
         const bool ok = !t.empty() && parse_double(t, value);
         if (!ok) {
           if (n < min_count)
-            fail_at_line(
-                mtl_name, mtl_line,
-                t.empty()
-                    ? fmt::format("option '{}' of 'map_Kd' needs {} value(s)", opt, min_count)
-                    : fmt::format("malformed number '{}' for option '{}' of 'map_Kd'", excerpt(t), opt));
+            fail_at_line(mtl_name, mtl_line,
+                         t.empty() ? fmt::format("option '{}' of 'map_Kd' needs {} value(s)", opt, min_count)
+                                   : fmt::format("malformed number '{}' for option '{}' of 'map_Kd'", excerpt(t), opt));
           break;
         }
-        if (!std::isfinite(value))
-          fail_at_line(mtl_name, mtl_line,
-                       fmt::format("NaN or infinite value for option '{}' of 'map_Kd'", opt));
+        if (!std::isfinite(value)) fail_at_line(mtl_name, mtl_line, fmt::format("NaN or infinite value for option '{}' of 'map_Kd'", opt));
         tokens.next();
         if (out != nullptr) out[n] = value;
         ++n;
@@ -421,11 +416,9 @@ void read_map_kd_options(Tokens& tokens, const std::string& mtl_name, size_t mtl
     } else if (name == "blendu" || name == "blendv" || name == "clamp" || name == "cc") {
       const std::string_view v = tokens.next();
       if (v != "on" && v != "off")
-        fail_at_line(mtl_name, mtl_line,
-                     fmt::format("option '{}' of 'map_Kd' needs on or off, got '{}'", opt, excerpt(v)));
+        fail_at_line(mtl_name, mtl_line, fmt::format("option '{}' of 'map_Kd' needs on or off, got '{}'", opt, excerpt(v)));
     } else if (name == "imfchan") {
-      if (tokens.next().empty())
-        fail_at_line(mtl_name, mtl_line, "option '-imfchan' of 'map_Kd' needs a channel");
+      if (tokens.next().empty()) fail_at_line(mtl_name, mtl_line, "option '-imfchan' of 'map_Kd' needs a channel");
     } else {
       fail_at_line(mtl_name, mtl_line, fmt::format("unknown option '{}' in 'map_Kd'", excerpt(opt)));
     }
@@ -529,11 +522,9 @@ TexturedMesh ObjParser::read(ObjReadStats* stats) {
 
   if (triangles_.empty()) fail_input("{}: no faces", path_);
   check_forward_refs();
-  if (texcoords_.empty())
-    fail_input("{}: model has no texture coordinates (vt); tightex needs the input's UV atlas", path_);
+  if (texcoords_.empty()) fail_input("{}: model has no texture coordinates (vt); tightex needs the input's UV atlas", path_);
   if (first_face_without_vt_ != 0)
-    fail_input("{}:{}: face has no texture coordinates (every face needs v/vt indices)", path_,
-               first_face_without_vt_);
+    fail_input("{}:{}: face has no texture coordinates (every face needs v/vt indices)", path_, first_face_without_vt_);
 
   TexturedMesh mesh;
   mesh.source = path_;
@@ -589,8 +580,7 @@ size_t ObjParser::parse_numbers(Tokens& tokens, std::string_view keyword, double
 
 void ObjParser::check_coordinate(double value, std::string_view what) const {
   if (!std::isfinite(value)) fail_here("NaN or infinite {}", what);
-  if (std::abs(value) > kAbsurdCoordinate)
-    fail_here("absurd {} {:g} (absolute value above 1e15)", what, value);
+  if (std::abs(value) > kAbsurdCoordinate) fail_here("absurd {} {:g} (absolute value above 1e15)", what, value);
 }
 
 void ObjParser::parse_vertex(Tokens& tokens) {
@@ -619,8 +609,7 @@ void ObjParser::parse_normal(Tokens& tokens) {
   if (n != 3) fail_here("'vn' needs 3 values, got {}", n);
   // Exporters write NaN normals for degenerate faces. Normals are optional, so such a file loses its
   // normals instead of being refused.
-  if (!std::isfinite(values[0]) || !std::isfinite(values[1]) || !std::isfinite(values[2]))
-    normals_finite_ = false;
+  if (!std::isfinite(values[0]) || !std::isfinite(values[1]) || !std::isfinite(values[2])) normals_finite_ = false;
   if (normals_.size() >= size_t(kNone) - 1) fail_here("too many normals");
   normals_.emplace_back(values[0], values[1], values[2]);
 }
@@ -640,20 +629,17 @@ uint32_t ObjParser::resolve_index(std::string_view text, IndexKind kind, std::st
                          : kind == IndexKind::kTexcoord ? texcoords_.size()
                                                         : normals_.size();
   if (ec == std::errc::result_out_of_range)
-    fail_here("{} index {} out of range (file has {} {} so far)", kind_name(kind), excerpt(text), defined,
-              kind_plural(kind));
+    fail_here("{} index {} out of range (file has {} {} so far)", kind_name(kind), excerpt(text), defined, kind_plural(kind));
   if (index == 0) fail_here("index 0 is invalid (OBJ indices start at 1)");
   if (index < 0) {
     // Relative: -1 is the latest element defined before this line.
     if (uint64_t(-index) > defined)
-      fail_here("{} index {} out of range (only {} {} defined before this line)", kind_name(kind), index,
-                defined, kind_plural(kind));
+      fail_here("{} index {} out of range (only {} {} defined before this line)", kind_name(kind), index, defined, kind_plural(kind));
     return uint32_t(int64_t(defined) + index);
   }
   if (uint64_t(index) > defined) {
     // Maybe defined further down; checked at the end with this line's number.
-    if (index >= int64_t(kNone))
-      fail_here("{} index {} out of range (more than any file can hold)", kind_name(kind), index);
+    if (index >= int64_t(kNone)) fail_here("{} index {} out of range (more than any file can hold)", kind_name(kind), index);
     forward_refs_.push_back({line_, index, kind});
   }
   return uint32_t(index - 1);
@@ -751,8 +737,7 @@ void ObjParser::parse_mtllib(std::string_view rest) {
     if (seen) continue;
     std::string data;
     std::string reason;
-    if (!read_whole_file(mtl_path, data, reason, /*regular_only=*/true))
-      fail_here("material library '{}' {}", excerpt(name), reason);
+    if (!read_whole_file(mtl_path, data, reason, /*regular_only=*/true)) fail_here("material library '{}' {}", excerpt(name), reason);
     loaded_mtls_.push_back(key);
     load_mtl(mtl_path, data);
   }
@@ -798,13 +783,11 @@ void ObjParser::load_mtl(const fs::path& mtl_path, const std::string& data) {
       size_t n = 0;
       for (std::string_view t = tokens.next(); !t.empty(); t = tokens.next()) {
         if (n == 3) fail_at_line(mtl_name, mtl_line, "too many values in 'Kd' (at most 3)");
-        if (!parse_double(t, rgb[n]))
-          fail_at_line(mtl_name, mtl_line, fmt::format("malformed number '{}' in 'Kd'", excerpt(t)));
+        if (!parse_double(t, rgb[n])) fail_at_line(mtl_name, mtl_line, fmt::format("malformed number '{}' in 'Kd'", excerpt(t)));
         if (!std::isfinite(rgb[n])) fail_at_line(mtl_name, mtl_line, "NaN or infinite colour in 'Kd'");
         ++n;
       }
-      if (n != 1 && n != 3)
-        fail_at_line(mtl_name, mtl_line, fmt::format("'Kd' needs 1 or 3 values, got {}", n));
+      if (n != 1 && n != 3) fail_at_line(mtl_name, mtl_line, fmt::format("'Kd' needs 1 or 3 values, got {}", n));
       if (n == 1) rgb[1] = rgb[2] = rgb[0];  // "Kd g" means grey g
       if (current != nullptr) current->material.kd = {rgb[0], rgb[1], rgb[2]};
     } else if (equals_ignoring_case(keyword, "map_Kd")) {
@@ -834,8 +817,8 @@ void ObjParser::check_forward_refs() const {
                            : ref.kind == IndexKind::kTexcoord ? texcoords_.size()
                                                               : normals_.size();
     if (uint64_t(ref.index) > defined)
-      fail_input("{}:{}: {} index {} out of range (file has {} {})", path_, ref.line, kind_name(ref.kind),
-                 ref.index, defined, kind_plural(ref.kind));
+      fail_input("{}:{}: {} index {} out of range (file has {} {})", path_, ref.line, kind_name(ref.kind), ref.index, defined,
+                 kind_plural(ref.kind));
   }
 }
 
@@ -848,10 +831,9 @@ void ObjParser::assemble_materials(TexturedMesh& mesh) {
     const auto it = def_by_name_.find(uses_[u].name);
     if (it == def_by_name_.end()) {
       if (!saw_mtllib_)
-        fail_input("{}:{}: material '{}' used but the file names no material library (mtllib)", path_,
-                   uses_[u].first_line, excerpt(uses_[u].name));
-      fail_input("{}:{}: material '{}' is not defined in any material library", path_, uses_[u].first_line,
-                 excerpt(uses_[u].name));
+        fail_input("{}:{}: material '{}' used but the file names no material library (mtllib)", path_, uses_[u].first_line,
+                   excerpt(uses_[u].name));
+      fail_input("{}:{}: material '{}' is not defined in any material library", path_, uses_[u].first_line, excerpt(uses_[u].name));
     }
     material_of_use[u] = int32_t(used_defs.size());
     used_defs.push_back(&defs_[it->second]);
@@ -881,8 +863,7 @@ void ObjParser::assemble_materials(TexturedMesh& mesh) {
   tbb::parallel_for(size_t(0), mesh.textures.size(), [&](size_t i) {
     try {
       std::error_code ec;
-      if (is_special_file(fs::status(mesh.textures[i].path, ec)))
-        fail_input("{}: {}", mesh.textures[i].path, kNotRegular);
+      if (is_special_file(fs::status(mesh.textures[i].path, ec))) fail_input("{}: {}", mesh.textures[i].path, kNotRegular);
       mesh.textures[i].image = load_image(mesh.textures[i].path, options_.max_texture_pixels);
     } catch (const InputError& e) {
       errors[i] = e.what();
@@ -894,8 +875,8 @@ void ObjParser::assemble_materials(TexturedMesh& mesh) {
   for (size_t i = 0; i < errors.size(); ++i) {
     if (errors[i].empty()) continue;
     const MaterialDef& def = *texture_source[i];
-    fail_input("{}:{}: texture '{}' of material '{}' could not be loaded: {}", def.mtl_path, def.texture_line,
-               excerpt(def.texture_written), excerpt(def.material.name), errors[i]);
+    fail_input("{}:{}: texture '{}' of material '{}' could not be loaded: {}", def.mtl_path, def.texture_line, excerpt(def.texture_written),
+               excerpt(def.material.name), errors[i]);
   }
 }
 

@@ -9,4 +9,3 @@
 
 #include "core/mesh.hpp"
 #include "tightex/io.hpp"
-

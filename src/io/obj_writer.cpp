@@ -1,12 +1,12 @@
 #include "io/obj_writer.hpp"
 
+#include <unistd.h>
 #include <charconv>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <unordered_map>
-#include <unistd.h>
 
 #include "core/error.hpp"
 

@@ -3,8 +3,8 @@
 #include <string>
 
 #include "core/mesh.hpp"
-#include "tightex/io.hpp"
 #include "io/image_io.hpp"
+#include "tightex/io.hpp"
 
 namespace tightex {
 

@@ -158,8 +158,8 @@ AtlasAttempt attempt_atlas(const std::vector<double>& areas, int width, int heig
   attempt.rects.resize(areas.size());
   if (areas.empty()) return attempt;
   if (long(areas.size()) > long(width / min_side) * long(height / min_side)) {
-    attempt.failure = fmt::format("a {}x{} texture cannot hold {} components at {}x{} texels each; use a larger --size", width,
-                                  height, areas.size(), min_side, min_side);
+    attempt.failure = fmt::format("a {}x{} texture cannot hold {} components at {}x{} texels each; use a larger --size", width, height,
+                                  areas.size(), min_side, min_side);
     return attempt;
   }
   double total = 0;

@@ -21,7 +21,8 @@ struct Rect {
 /// back as u * W), and whole rows of texels could miss METRICS.md's utilization.
 constexpr double kChartInset = 1e-6;
 inline Vec2 rect_pixel(const Rect& r, const Vec2& s) {
-  return Vec2(r.x + 0.5 - kChartInset + s.x() * (r.w - 1 + 2 * kChartInset), r.y + 0.5 - kChartInset + (1.0 - s.y()) * (r.h - 1 + 2 * kChartInset));
+  return Vec2(r.x + 0.5 - kChartInset + s.x() * (r.w - 1 + 2 * kChartInset),
+              r.y + 0.5 - kChartInset + (1.0 - s.y()) * (r.h - 1 + 2 * kChartInset));
 }
 
 /// How layout_atlas shares the texture out between components.

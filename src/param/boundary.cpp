@@ -20,7 +20,8 @@ std::vector<uint32_t> boundary_edge_faces(const Surface& m, const std::vector<ui
     if (m.opposite[h] == kNone) boundary_face_from[m.from(h)] = h / 3, boundary_face_to[m.to(h)] = h / 3;
   for (size_t i = 0; i < nb; ++i) {
     uint32_t f = boundary_face_from[bnd[i]];
-    if (f == kNone || !(m.triangles[f][0] == bnd[(i + 1) % nb] || m.triangles[f][1] == bnd[(i + 1) % nb] || m.triangles[f][2] == bnd[(i + 1) % nb]))
+    if (f == kNone ||
+        !(m.triangles[f][0] == bnd[(i + 1) % nb] || m.triangles[f][1] == bnd[(i + 1) % nb] || m.triangles[f][2] == bnd[(i + 1) % nb]))
       f = boundary_face_to[bnd[i]];
     edge_face[i] = f;
   }

@@ -52,7 +52,8 @@ void deposit(const FlowGrid& grid, const Vec2& g, double mass, MatX& rho) {
 /// spread by points on a lattice over the face (spaced at most half a cell), each deposited into the
 /// four cells around it: a face of about a cell's size then adds a smooth bump, not a cell or nothing.
 /// `p`: the vertices in the rectangle. Requires total_target > 0.
-MatX population(const Surface& m, const std::vector<double>& target, double total_target, const std::vector<Vec2>& p, const FlowGrid& grid) {
+MatX population(const Surface& m, const std::vector<double>& target, double total_target, const std::vector<Vec2>& p,
+                const FlowGrid& grid) {
   MatX rho0 = MatX::Zero(grid.nx, grid.ny);
   const double hx = grid.hx, hy = grid.hy;
   for (size_t f = 0; f < m.num_faces(); ++f) {
@@ -169,7 +170,8 @@ double point_velocities(const VelocityField& field, const std::vector<char>& fix
 class AreaGuard {
  public:
   AreaGuard(const Surface& m, const std::vector<Vec2>& p, bool active) : m_(m), area_(m.num_faces()), trial_area_(m.num_faces()) {
-    for (size_t f = 0; f < m.num_faces() && active; ++f) area_[f] = signed_area(p[m.triangles[f][0]], p[m.triangles[f][1]], p[m.triangles[f][2]]);
+    for (size_t f = 0; f < m.num_faces() && active; ++f)
+      area_[f] = signed_area(p[m.triangles[f][0]], p[m.triangles[f][1]], p[m.triangles[f][2]]);
   }
   /// Whether q keeps every face; if so, its areas become the reference.
   bool accept(const std::vector<Vec2>& q) {

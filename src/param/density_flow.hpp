@@ -8,7 +8,7 @@
 namespace tightex {
 
 struct FlowOptions {
-  int grid = 0;             // cells along the rectangle's mean side; 0: 2 sqrt(faces), within 32..256
+  int grid = 0;  // cells along the rectangle's mean side; 0: 2 sqrt(faces), within 32..256
   int max_steps = 300;
   double tolerance = 0.02;  // stop once the diffused density is within +-this of its mean everywhere
   double time_scale = 1.0;  // diffusion time, in units of the rectangle's longer side squared

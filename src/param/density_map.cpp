@@ -50,7 +50,8 @@ SlimStats refine_in_rectangle(const DensityConstraints& c, const std::vector<dou
     for (FaceShape& s : scaled_shapes)
       for (Vec2& p : s) p = Vec2(p.x() * sx, p.y() / sx);
   }
-  const SlimStats r = refine_map(c.mesh, c.fixed, target, iterations, uv, c.options.supernodal_from, on_step, shapes ? &scaled_shapes : nullptr);
+  const SlimStats r =
+      refine_map(c.mesh, c.fixed, target, iterations, uv, c.options.supernodal_from, on_step, shapes ? &scaled_shapes : nullptr);
   for (Vec2& p : uv) p = Vec2(p.x() / sx, p.y() * sx);
   // Held coordinates come back exactly (x * sx / sx may miss 1 by an ulp: a side's texel centres
   // would fall outside the chart).
@@ -179,7 +180,8 @@ DensityConstraints density_constraints(const Disk& disk, const SquareBoundary& b
 }
 
 void flow_towards_targets(const DensityConstraints& c, std::vector<Vec2>& uv, SquareMapStats& st) {
-  if (!c.options.density_flow || c.mesh.num_faces() < kFlowMinFaces || !(worst_error(st.spread_p5, st.spread_p95) > c.options.tolerance_log2))
+  if (!c.options.density_flow || c.mesh.num_faces() < kFlowMinFaces ||
+      !(worst_error(st.spread_p5, st.spread_p95) > c.options.tolerance_log2))
     return;
   const double reweighted_p5 = st.spread_p5, reweighted_p95 = st.spread_p95;
   const std::vector<Vec2> reweighted = uv;
@@ -201,15 +203,19 @@ void refine_towards_targets(const DensityConstraints& c, std::vector<Vec2>& uv, 
   if (c.options.refine_iterations <= 0) return;
   const std::vector<Vec2> reweighted = uv;
   const double reweighted_p5 = st.spread_p5, reweighted_p95 = st.spread_p95;
-  const SlimStats ss = refine_in_rectangle(c, st.blended_target, c.options.refine_iterations, [&](int step) {
-    if (c.options.progress) c.options.progress(0.4 + 0.6 * std::min(1.0, step / 15.0));
-  }, uv);
+  const SlimStats ss = refine_in_rectangle(
+      c, st.blended_target, c.options.refine_iterations,
+      [&](int step) {
+        if (c.options.progress) c.options.progress(0.4 + 0.6 * std::min(1.0, step / 15.0));
+      },
+      uv);
   st.refine_iterations = ss.iterations;
   st.refine_energy_before = ss.energy_before;
   st.refine_energy = ss.energy;
   st.refine_stopped = ss.stopped;
   std::vector<double> log_ratio = measure_density_error(c.mesh, uv, st);
-  if (c.options.refine_keeps_density && worst_error(st.spread_p5, st.spread_p95) > worst_error(reweighted_p5, reweighted_p95) + kRefineSlack) {
+  if (c.options.refine_keeps_density &&
+      worst_error(st.spread_p5, st.spread_p95) > worst_error(reweighted_p5, reweighted_p95) + kRefineSlack) {
     uv = reweighted;
     st.refine_stopped = "reverted";
     log_ratio = measure_density_error(c.mesh, uv, st);

@@ -16,7 +16,8 @@ namespace {
 /// square root of target/area of its face, then each side is rescaled to its full length. The order
 /// along a side never changes, so the boundary stays convex and the next Tutte solve cannot fold.
 /// Sides holding a pinned (bumped) vertex stay as they are.
-void slide_boundary(const std::vector<uint32_t>& bnd, const SquareBoundary& b, const std::vector<double>& log_ratio, std::vector<Vec2>& uv) {
+void slide_boundary(const std::vector<uint32_t>& bnd, const SquareBoundary& b, const std::vector<double>& log_ratio,
+                    std::vector<Vec2>& uv) {
   const size_t nb = bnd.size();
   if (nb < 5) return;
   for (int k = 0; k < 4; ++k) {
@@ -47,15 +48,16 @@ void slide_boundary(const std::vector<uint32_t>& bnd, const SquareBoundary& b, c
 /// Each face's signed UV area into `area`; returns their sum.
 double face_areas(const Surface& m, const std::vector<Vec2>& uv, std::vector<double>& area) {
   double total = 0;
-  for (size_t f = 0; f < m.num_faces(); ++f) total += area[f] = signed_area(uv[m.triangles[f][0]], uv[m.triangles[f][1]], uv[m.triangles[f][2]]);
+  for (size_t f = 0; f < m.num_faces(); ++f)
+    total += area[f] = signed_area(uv[m.triangles[f][0]], uv[m.triangles[f][1]], uv[m.triangles[f][2]]);
   return total;
 }
 
 /// The density error of a map against fixed log targets (any common scale).
 struct DensityError {
-  std::vector<double> log_ratio;      // per face log(area / target), the targets scaled to the map's area
-  std::vector<double> scaled_target;  // per face the target so scaled
-  double p5 = 0, p95 = 0;             // P5 and P95 of log2(area / target), weighted by target
+  std::vector<double> log_ratio;                        // per face log(area / target), the targets scaled to the map's area
+  std::vector<double> scaled_target;                    // per face the target so scaled
+  double p5 = 0, p95 = 0;                               // P5 and P95 of log2(area / target), weighted by target
   std::vector<std::pair<double, double>> value_weight;  // scratch for the quantiles
 
   explicit DensityError(size_t faces) : log_ratio(faces), scaled_target(faces), value_weight(faces) {}

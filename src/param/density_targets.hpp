@@ -5,9 +5,9 @@
 
 #include "core/mesh.hpp"
 #include "core/surface.hpp"
+#include "cut/cut.hpp"
 #include "param/param.hpp"
 #include "tightex/options.hpp"
-#include "cut/cut.hpp"
 
 namespace tightex {
 

@@ -14,7 +14,6 @@ size_t count_folds(const Surface& mesh, const std::vector<Vec2>& uv);
 /// their area in texels is below what rounding the texture coordinates (2^-52 of the texel extent)
 /// can move per unit of their perimeter, so a reader may find them folded or empty. Folded ones count
 /// too. `worst_vertex` (optional) gets a vertex of the worst one; untouched when none.
-size_t count_collapsed(const Surface& mesh, const std::vector<Vec2>& uv, const SquareMapOptions& options,
-                       uint32_t* worst_vertex = nullptr);
+size_t count_collapsed(const Surface& mesh, const std::vector<Vec2>& uv, const SquareMapOptions& options, uint32_t* worst_vertex = nullptr);
 
 }  // namespace tightex

@@ -11,9 +11,12 @@ namespace tightex {
 
 std::string_view to_string(EdgeWeights kind) {
   switch (kind) {
-    case EdgeWeights::kCotangent: return "cotangent";
-    case EdgeWeights::kClamped: return "clamped-cotangent";
-    case EdgeWeights::kUniform: return "uniform";
+    case EdgeWeights::kCotangent:
+      return "cotangent";
+    case EdgeWeights::kClamped:
+      return "clamped-cotangent";
+    case EdgeWeights::kUniform:
+      return "uniform";
   }
   return "";
 }
@@ -22,8 +25,7 @@ std::vector<double> edge_weights(const Surface& m, EdgeWeights kind, size_t* neg
   const size_t nh = m.opposite.size();
   std::vector<double> half_cot(nh, 0.0);  // 1/2 cot of the angle opposite halfedge h in its triangle
   for (uint32_t h = 0; h < nh; ++h) {
-    const Vec3 &a = m.positions[m.from(h)], &b = m.positions[m.to(h)],
-               &c = m.positions[m.triangles[h / 3][(h % 3 + 2) % 3]];
+    const Vec3 &a = m.positions[m.from(h)], &b = m.positions[m.to(h)], &c = m.positions[m.triangles[h / 3][(h % 3 + 2) % 3]];
     const Vec3 u = a - c, v = b - c;
     const double cross = u.cross(v).norm();
     const double dot = u.dot(v);
@@ -47,8 +49,10 @@ std::vector<double> edge_weights(const Surface& m, EdgeWeights kind, size_t* neg
   for (uint32_t h = 0; h < nh; ++h) {
     const uint32_t o = m.opposite[h];
     if (o != kNone && o < h) continue;
-    if (kind == EdgeWeights::kUniform) w[h] = 1.0;
-    else if (kind == EdgeWeights::kClamped) w[h] = std::max(w[h], 1e-3 * mean_abs);
+    if (kind == EdgeWeights::kUniform)
+      w[h] = 1.0;
+    else if (kind == EdgeWeights::kClamped)
+      w[h] = std::max(w[h], 1e-3 * mean_abs);
   }
   return w;
 }

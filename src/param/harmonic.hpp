@@ -58,13 +58,13 @@ bool harmonic_map(const Surface& mesh, const std::vector<uint32_t>& boundary, co
 
 /// The outcome of fold_free_harmonic_map.
 struct HarmonicAttempts {
-  std::vector<Vec2> uv;                     // the map of the last weighting tried
-  std::optional<EdgeWeights> weights;       // the last weighting that solved; none if none did
-  std::vector<double> positive_weights;     // the last positive weighting tried; empty if only cotangent was
-  size_t flipped = 0;                       // folded triangles of the last weighting that solved
-  size_t negative_weights = 0;              // edges whose cotangent weight is negative
-  std::vector<size_t> folds_per_attempt;    // folded triangles of each weighting that solved, in order
-  uint32_t crowded_vertex = kNone;          // a vertex of a triangle folded with the clamped weights
+  std::vector<Vec2> uv;                   // the map of the last weighting tried
+  std::optional<EdgeWeights> weights;     // the last weighting that solved; none if none did
+  std::vector<double> positive_weights;   // the last positive weighting tried; empty if only cotangent was
+  size_t flipped = 0;                     // folded triangles of the last weighting that solved
+  size_t negative_weights = 0;            // edges whose cotangent weight is negative
+  std::vector<size_t> folds_per_attempt;  // folded triangles of each weighting that solved, in order
+  uint32_t crowded_vertex = kNone;        // a vertex of a triangle folded with the clamped weights
 };
 
 /// Alg. 2 with the fold-free fallbacks: harmonic_map with cotangent weights; if any triangle folds

@@ -223,8 +223,10 @@ class SlimSystem {
           const Mat2 H = F.area * F.g[i].dot(F.g[j]) * M;
           const int* sl = &slot_[f * 36 + size_t((i * 3 + j) * 4)];
           for (int b2 = 0; b2 < 2; ++b2) {
-            if (index_[2 * t[j] + size_t(b2)] < 0) rhs(row) -= H(a, b2) * uv[t[j]](b2);  // a fixed coordinate
-            else if (sl[a * 2 + b2] >= 0) values[sl[a * 2 + b2]] += H(a, b2);
+            if (index_[2 * t[j] + size_t(b2)] < 0)
+              rhs(row) -= H(a, b2) * uv[t[j]](b2);  // a fixed coordinate
+            else if (sl[a * 2 + b2] >= 0)
+              values[sl[a * 2 + b2]] += H(a, b2);
           }
         }
       }

@@ -29,7 +29,7 @@ using FaceShape = std::array<Vec2, 3>;
 /// short of any triangle's collapse) and its energy never rises. Stops after `iterations` steps, when a
 /// step gains less than 0.1%, or when no step lowers the energy; on_step (optional) hears each step.
 SlimStats refine_map(const Surface& mesh, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,
-                     std::vector<Vec2>& uv, long supernodal_from = kSupernodalFrom,
-                     const std::function<void(int step)>& on_step = {}, const std::vector<FaceShape>* shapes = nullptr);
+                     std::vector<Vec2>& uv, long supernodal_from = kSupernodalFrom, const std::function<void(int step)>& on_step = {},
+                     const std::vector<FaceShape>* shapes = nullptr);
 
 }  // namespace tightex

@@ -67,10 +67,10 @@ struct SquareMapOptions {
 };
 
 struct SquareMapStats {
-  std::string weights;          // "cotangent", "clamped-cotangent" or "uniform": the first that gave no fold
-  size_t flipped = 0;           // triangles with UV area <= 0 in the returned map (0 unless every weight failed)
-  size_t negative_weights = 0;  // interior edges whose cotangent weight was negative
-  std::array<uint32_t, 4> corners{};  // boundary vertices at (0,0), (1,0), (1,1), (0,1)
+  std::string weights;                    // "cotangent", "clamped-cotangent" or "uniform": the first that gave no fold
+  size_t flipped = 0;                     // triangles with UV area <= 0 in the returned map (0 unless every weight failed)
+  size_t negative_weights = 0;            // interior edges whose cotangent weight was negative
+  std::array<uint32_t, 4> corners{};      // boundary vertices at (0,0), (1,0), (1,1), (0,1)
   std::vector<size_t> folds_per_attempt;  // folded triangles of each weighting tried, in order
   size_t bumped_vertices = 0;
   /// A vertex of a triangle that folded even with positive weights: the map crowded a region below
@@ -80,7 +80,7 @@ struct SquareMapStats {
   // (the harmonic map with the density-placed boundary) and after.
   int iterations = 0;
   double spread_before_p5 = 0, spread_before_p95 = 0, spread_p5 = 0, spread_p95 = 0;
-  std::string stopped;  // "converged", "iterations", "stalled" or "fold" (the last fold-free iterate is kept)
+  std::string stopped;                 // "converged", "iterations", "stalled" or "fold" (the last fold-free iterate is kept)
   std::vector<double> blended_target;  // internal: the targets the iterations aimed at (cleared on return)
   int refine_iterations = 0, correction_rounds = 0;
   double refine_energy_before = 0, refine_energy = 0;

@@ -47,7 +47,7 @@ ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const std::vec
   auto run_probe = [&](size_t i, CapChoice choice) {
     const auto [W, H] = atlas_size(size, kAspectProbes[i]);
     if (std::max(W, H) > std::max(size, kDefaultSizeMax)) return;  // not beyond the size limit for a shape
-    if (kAspectProbes[i] != 1.0 && W == H) return;                   // too small a texture to take another shape
+    if (kAspectProbes[i] != 1.0 && W == H) return;                 // too small a texture to take another shape
     const auto rects = try_layout_atlas(shares, W, H, 4, mode);
     if (!rects) return;  // this shape cannot hold every component: not probed
     probe[i] = map_component(ctx, dominant, (*rects)[dominant], shared ? &*shared : nullptr, choice);

@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "core/error.hpp"
 #include "bake/resampling_error.hpp"
+#include "core/error.hpp"
 
 namespace tightex {
 
@@ -87,8 +87,8 @@ double cap_share(const Disk& disk, const std::vector<Vec2>& uv) {
 /// Cuts component c with the cap budget `budget` and maps it; where the map crowds a region, slits to
 /// it and cuts again (kCrowdingRounds). Returns false where `cap_kept` was asked but the longest loop
 /// could not be capped (only the usual cut is to be made: not mapped).
-bool cut_and_map_with_slits(const MapContext& ctx, size_t c, const CutInputs& ci, bool cap_kept, double budget,
-                            SquareMapOptions& mo, Mapped& out) {
+bool cut_and_map_with_slits(const MapContext& ctx, size_t c, const CutInputs& ci, bool cap_kept, double budget, SquareMapOptions& mo,
+                            Mapped& out) {
   std::vector<uint32_t> slit_to;
   for (int round = 0;; ++round) {
     CutOptions co = full_cut_options(ctx, ci, budget);
@@ -135,7 +135,8 @@ std::string cut_and_map(const MapContext& ctx, size_t c, const CutInputs& ci, bo
     set_face_targets(out.disk, component_density(ctx.input, ctx.components[c], MapKind::kArea), MapKind::kArea, ctx.options.balance, mo);
     out.map = SquareMapStats{};
     out.uv = map_to_square(out.disk, mo, &out.map);
-    out.cut.fallback_reason = fmt::format("the harmonic map collapses {} triangles below the output's precision: the area map instead", collapsed);
+    out.cut.fallback_reason =
+        fmt::format("the harmonic map collapses {} triangles below the output's precision: the area map instead", collapsed);
   }
   if (out.map.flipped > 0) return fmt::format("the map folds {} triangles", out.map.flipped);
   return "";

@@ -6,14 +6,14 @@
 #include <vector>
 
 #include "core/progress.hpp"
+#include "cut/cut.hpp"
+#include "cut/seams.hpp"
 #include "layout/layout.hpp"
 #include "param/density_targets.hpp"
 #include "param/param.hpp"
-#include "tightex/options.hpp"
-#include "cut/cut.hpp"
-#include "cut/seams.hpp"
 #include "prepare/components.hpp"
 #include "prepare/handles.hpp"
+#include "tightex/options.hpp"
 
 namespace tightex {
 

@@ -10,7 +10,7 @@
 namespace tightex {
 
 struct OutputModel {
-  TexturedMesh mesh;                        // its first `new_images` textures are the new, still black ones
+  TexturedMesh mesh;  // its first `new_images` textures are the new, still black ones
   int new_images = 0;
   std::vector<BakeTriangle> bake_triangles;  // every mapped triangle, as the bake reads it
   std::vector<Rect> rects;                   // every mapped component's rectangle (images renumbered)

@@ -133,7 +133,8 @@ Plan plan_charts(const TexturedMesh& input, const Options& options, const PlanHo
   const RepairStats& rs = rep.preparation.repair;
   const Surface surface = prepare_surface(input, &rep.preparation.repair);
   if (surface.num_faces() == 0)
-    fail_input("{}: no triangle with non-zero area ({} zero-area, {} duplicate)", input.source, rs.zero_area_triangles, rs.duplicate_triangles);
+    fail_input("{}: no triangle with non-zero area ({} zero-area, {} duplicate)", input.source, rs.zero_area_triangles,
+               rs.duplicate_triangles);
   clock.done("repair");
 
   // 2. Connected components, the budget they need, and where the texels go on them.

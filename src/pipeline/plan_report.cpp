@@ -38,7 +38,8 @@ void add_totals(const Plan::State& plan, const std::vector<CutStats>& cuts, Prep
     p.holes_cut += cs.holes_cut;
     p.components_with_fallback += !cs.fallback_reason.empty();
   }
-  p.components_kept_original_uvs = size_t(std::count_if(plan.kept.begin(), plan.kept.end(), [](const std::string& k) { return !k.empty(); }));
+  p.components_kept_original_uvs =
+      size_t(std::count_if(plan.kept.begin(), plan.kept.end(), [](const std::string& k) { return !k.empty(); }));
 }
 
 }  // namespace
@@ -49,7 +50,8 @@ void fill_plan_report(const TexturedMesh& input, const Plan::State& plan, const 
   add_totals(plan, cuts, report.preparation);
   const std::vector<char> listed = listed_components(plan, cuts);
   for (size_t c = 0; c < plan.components.size(); ++c)
-    if (listed[c]) report.components.push_back({c, plan.components[c].num_faces(), areas[c], cuts[c], maps[c], plan.kept[c], plan.rects[c]});
+    if (listed[c])
+      report.components.push_back({c, plan.components[c].num_faces(), areas[c], cuts[c], maps[c], plan.kept[c], plan.rects[c]});
 }
 
 }  // namespace tightex

@@ -7,26 +7,26 @@
 #include <vector>
 
 #include "core/surface.hpp"
+#include "cut/cut.hpp"
 #include "layout/layout.hpp"
 #include "pipeline/map_component.hpp"
 #include "report/report.hpp"
 #include "tightex/tightex.hpp"
-#include "cut/cut.hpp"
 
 namespace tightex {
 
 struct Plan::State {
-  std::vector<Surface> components;        // Surface::input_face -> input triangle
-  std::vector<Disk> disks;                // per component; face_parent -> component face (kNone: scaffolding)
-  std::vector<std::vector<Vec2>> uv;      // per component, per disk vertex, in the unit square
-  std::vector<Rect> rects;                // per component
+  std::vector<Surface> components;    // Surface::input_face -> input triangle
+  std::vector<Disk> disks;            // per component; face_parent -> component face (kNone: scaffolding)
+  std::vector<std::vector<Vec2>> uv;  // per component, per disk vertex, in the unit square
+  std::vector<Rect> rects;            // per component
   std::vector<std::pair<int, int>> image_size;
   /// Per component: empty when it was mapped; otherwise why it could not be. Such a component keeps
   /// its input texture coordinates and a copy of its input material(s) and texture(s) (bake_plan), so
   /// no triangle is ever dropped; its disk and uv are empty.
   std::vector<std::string> kept;
-  Report report;              // what was done so far
-  nlohmann::json report_json;  // the same, as Plan::report() gives it
+  Report report;                   // what was done so far
+  nlohmann::json report_json;      // the same, as Plan::report() gives it
   uint64_t input_fingerprint = 0;  // input_fingerprint() of the mesh planned
 };
 

@@ -7,8 +7,10 @@ namespace tightex {
 void validate_mesh(const TexturedMesh& m) {
   const std::string& f = m.source.empty() ? std::string("mesh") : m.source;
   if (m.triangles.empty()) fail_input("{}: no triangles", f);
-  if (m.corner_uv.size() != 3 * m.triangles.size()) fail_input("{}: {} texture coordinates for {} triangles (needs 3 per triangle)", f, m.corner_uv.size(), m.triangles.size());
-  if (m.face_material.size() != m.triangles.size()) fail_input("{}: {} face materials for {} triangles", f, m.face_material.size(), m.triangles.size());
+  if (m.corner_uv.size() != 3 * m.triangles.size())
+    fail_input("{}: {} texture coordinates for {} triangles (needs 3 per triangle)", f, m.corner_uv.size(), m.triangles.size());
+  if (m.face_material.size() != m.triangles.size())
+    fail_input("{}: {} face materials for {} triangles", f, m.face_material.size(), m.triangles.size());
   for (size_t v = 0; v < m.positions.size(); ++v)
     if (!m.positions[v].allFinite()) fail_input("{}: vertex {} has a NaN or infinite coordinate", f, v);
   for (size_t t = 0; t < m.triangles.size(); ++t) {
@@ -17,10 +19,12 @@ void validate_mesh(const TexturedMesh& m) {
     for (int k = 0; k < 3; ++k)
       if (!m.corner_uv[3 * t + size_t(k)].allFinite()) fail_input("{}: triangle {} has a NaN or infinite texture coordinate", f, t);
     const int32_t mat = m.face_material[t];
-    if (mat < -1 || mat >= int32_t(m.materials.size())) fail_input("{}: triangle {} uses material {} (mesh has {})", f, t, mat, m.materials.size());
+    if (mat < -1 || mat >= int32_t(m.materials.size()))
+      fail_input("{}: triangle {} uses material {} (mesh has {})", f, t, mat, m.materials.size());
   }
   for (size_t i = 0; i < m.materials.size(); ++i)
-    if (m.materials[i].texture >= int(m.textures.size())) fail_input("{}: material {} uses texture {} (mesh has {})", f, i, m.materials[i].texture, m.textures.size());
+    if (m.materials[i].texture >= int(m.textures.size()))
+      fail_input("{}: material {} uses texture {} (mesh has {})", f, i, m.materials[i].texture, m.textures.size());
 }
 
 }  // namespace tightex

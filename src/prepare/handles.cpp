@@ -13,8 +13,8 @@ namespace {
 
 struct Loop {
   std::vector<uint32_t> edges;
-  std::vector<uint32_t> vertices;  // in order along the loop
-  double length = 0;               // 3D
+  std::vector<uint32_t> vertices;                         // in order along the loop
+  double length = 0;                                      // 3D
   double cost = std::numeric_limits<double>::infinity();  // g.cost: what the search minimises
 };
 

@@ -175,7 +175,8 @@ void pair_halfedges(Surface& s0, const std::vector<std::pair<uint64_t, uint32_t>
 /// reversed face's corner k is the input triangle's corner (3 - k) % 3).
 Surface slice_non_manifold_vertices(const Surface& s0, const std::vector<char>& reversed, RepairStats& st) {
   uint32_t groups = 0;
-  const auto corner_vertex = group_corners(s0, [](uint32_t) { return true; }, &groups);
+  const auto corner_vertex = group_corners(
+      s0, [](uint32_t) { return true; }, &groups);
   Surface s = regroup(s0, corner_vertex, groups);
   // regroup maps to s0's vertices and faces; compose with s0's maps so they point at the input.
   std::vector<uint32_t> copies(s0.num_vertices(), 0);

@@ -59,8 +59,8 @@ void raster(const Vec2& a, const Vec2& b, const Vec2& c, int W, int H, F&& f) {
   if (!(x1 - x0 <= 4.0 * W && y1 - y0 <= 4.0 * H)) return;  // absurd or non-finite span: a broken input triangle
   // So far out (a material's -o of 1e300) that its texel indices overflow: no texel a renderer can address.
   if (!(std::abs(x0) < 1e15 && std::abs(x1) < 1e15 && std::abs(y0) < 1e15 && std::abs(y1) < 1e15)) return;
-  scan_triangle(p[0], p[1], p[2], long(std::floor(x0)) - 1, long(std::ceil(x1)) + 1, long(std::floor(y0)) - 1,
-                long(std::ceil(y1)) + 1, EdgeRule::kInclusive, [&](long x, long y, double, double, double) { f(x, y); });
+  scan_triangle(p[0], p[1], p[2], long(std::floor(x0)) - 1, long(std::ceil(x1)) + 1, long(std::floor(y0)) - 1, long(std::ceil(y1)) + 1,
+                EdgeRule::kInclusive, [&](long x, long y, double, double, double) { f(x, y); });
 }
 
 std::array<uint8_t, 3> colour_at(const TexturedMesh& m, size_t t, const Vec2& uv) {
@@ -304,7 +304,8 @@ DensityFigures measure_density(const TexturedMesh& in, const TexturedMesh& out, 
     const auto [Wo, Ho] = texel_scale(out, o);
     const double at = std::abs(signed_area(out.sampled_uv(o, 0), out.sampled_uv(o, 1), out.sampled_uv(o, 2))) * Wo * Ho;
     dens[t] = at / c.area3[t];
-    if (ii) din[t] = std::abs(signed_area(in.sampled_uv(t, 0), in.sampled_uv(t, 1), in.sampled_uv(t, 2))) * ii->width * ii->height / c.area3[t];
+    if (ii)
+      din[t] = std::abs(signed_area(in.sampled_uv(t, 0), in.sampled_uv(t, 1), in.sampled_uv(t, 2))) * ii->width * ii->height / c.area3[t];
     sum_at += at;
     sum_a3 += c.area3[t];
     area_total += c.area3[t];
@@ -363,8 +364,7 @@ constexpr uint64_t kPsnrSeed = 20240606;
 /// METRICS.md "surface PSNR": `samples` points uniform by area on the input (fixed seed), the input's
 /// colour against the output's at the same barycentric point of the matched triangle (black if lost).
 /// Returns the PSNR in dB (99 for no error) and the number of points drawn.
-std::pair<double, size_t> measure_surface_psnr(const TexturedMesh& in, const TexturedMesh& out, const Correspondence& c,
-                                               size_t samples) {
+std::pair<double, size_t> measure_surface_psnr(const TexturedMesh& in, const TexturedMesh& out, const Correspondence& c, size_t samples) {
   std::vector<double> cdf(in.num_triangles());
   double acc = 0;
   for (size_t t = 0; t < in.num_triangles(); ++t) cdf[t] = acc += c.area3[t];
@@ -400,7 +400,7 @@ std::pair<double, size_t> measure_surface_psnr(const TexturedMesh& in, const Tex
 Metrics measure(const TexturedMesh& in, const TexturedMesh& out, size_t psnr_samples) {
   Metrics r;
   tbb::parallel_invoke([&] { r.input = measure_texture_space(in); }, [&] { r.output = measure_texture_space(out); },
-                      [&] { count_charts(in, &r.seam_length_input); }, [&] { r.charts = count_charts(out, &r.seam_length); });
+                       [&] { count_charts(in, &r.seam_length_input); }, [&] { r.charts = count_charts(out, &r.seam_length); });
   const Correspondence c = match_triangles(in, out);
   r.lost_triangles = c.lost_triangles;
   tbb::parallel_invoke([&] { count_flips(out, &r.flipped, &r.degenerate); }, [&] { r.overlap = overlap_fraction(out); },
@@ -417,7 +417,8 @@ Metrics measure(const TexturedMesh& in, const TexturedMesh& out, size_t psnr_sam
 nlohmann::json to_json(const Metrics& m) {
   nlohmann::json j;
   auto fig = [](const ModelFigures& f) {
-    return nlohmann::json{{"utilization", f.utilization}, {"image_utilization", f.image_utilization}, {"used_texels", f.used_texels}, {"texels", f.texels}};
+    return nlohmann::json{
+        {"utilization", f.utilization}, {"image_utilization", f.image_utilization}, {"used_texels", f.used_texels}, {"texels", f.texels}};
   };
   j["input"] = fig(m.input);
   j["output"] = fig(m.output);

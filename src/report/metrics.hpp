@@ -13,10 +13,10 @@ struct Quantiles {
 };
 
 struct ModelFigures {
-  double utilization = 0;              // texel-weighted over all images
+  double utilization = 0;  // texel-weighted over all images
   std::vector<double> image_utilization;
   double used_texels = 0;
-  size_t texels = 0;                   // sum of W x H
+  size_t texels = 0;  // sum of W x H
 };
 
 struct Metrics {
@@ -27,7 +27,7 @@ struct Metrics {
   double overlap = 0;
   size_t charts = 0;
   double seam_length_input = 0, seam_length = 0;
-  Quantiles density_spread;            // log2(d / mean d), area-weighted
+  Quantiles density_spread;  // log2(d / mean d), area-weighted
   double detail_loss_area = 0;
   double angle_distortion_mean = 0, angle_distortion_p95 = 0;
   double surface_psnr = 0;

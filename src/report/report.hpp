@@ -9,13 +9,13 @@
 #include <vector>
 
 #include "bake/bake.hpp"
+#include "cut/cut.hpp"
 #include "io/obj_reader.hpp"
 #include "layout/layout.hpp"
 #include "param/param.hpp"
 #include "prepare/repair.hpp"
 #include "report/metrics.hpp"
 #include "tightex/options.hpp"
-#include "cut/cut.hpp"
 
 namespace tightex {
 
@@ -39,7 +39,7 @@ struct OptionsUsed {
   bool fit = true;
   bool fine_fit = false;  // in effect: false without `fit`
   CornerRule corners = CornerRule::kEqualArcs;
-  double aspect = 0;      // as asked (Options::aspect); 0: "auto"
+  double aspect = 0;  // as asked (Options::aspect); 0: "auto"
 };
 
 /// One shape the auto aspect tried ("aspect"/"probes").
@@ -51,10 +51,10 @@ struct AspectProbe {
 
 /// "aspect": the texture's shape, as asked and as chosen.
 struct AspectChoice {
-  double requested = 0;                // Options::aspect; 0: "auto"
+  double requested = 0;  // Options::aspect; 0: "auto"
   double chosen = 1.0;
-  size_t probed_component = kNone;     // the component the probes mapped; kNone: none probed (null)
-  std::vector<AspectProbe> probes;     // in probe order; empty unless probed
+  size_t probed_component = kNone;  // the component the probes mapped; kNone: none probed (null)
+  std::vector<AspectProbe> probes;  // in probe order; empty unless probed
 };
 
 /// "preparation": the repair's counts and totals over all components (the listed ones are a subset).
@@ -70,13 +70,13 @@ struct Preparation {
 
 /// One entry of "components": a component as cut, mapped and placed.
 struct ComponentEntry {
-  size_t index = 0;      // in plan order
-  size_t triangles = 0;  // of the component
-  double area = 0;       // its 3D area
-  CutStats cut;          // "euler", "genus", "boundary_loops" from cut.before; "cut" is cut.method, ...
-  SquareMapStats map;    // "weights", "flipped_in_map", "density_*", "refine_*", "flow_*", ...
+  size_t index = 0;         // in plan order
+  size_t triangles = 0;     // of the component
+  double area = 0;          // its 3D area
+  CutStats cut;             // "euler", "genus", "boundary_loops" from cut.before; "cut" is cut.method, ...
+  SquareMapStats map;       // "weights", "flipped_in_map", "density_*", "refine_*", "flow_*", ...
   std::string kept_reason;  // non-empty: kept its input UVs ("kept_original_uvs" true), and why
-  Rect rect;             // where its square went
+  Rect rect;                // where its square went
 };
 
 /// One entry of "timings".

@@ -14,8 +14,8 @@ using nlohmann::json;
 json aspect_json(double aspect) { return aspect > 0 ? json(aspect) : json("auto"); }
 
 json input_json(const InputSummary& in) {
-  json j = {{"file", in.file}, {"vertices", in.vertices}, {"triangles", in.triangles}, {"materials", in.materials},
-            {"textures", in.textures}};
+  json j = {
+      {"file", in.file}, {"vertices", in.vertices}, {"triangles", in.triangles}, {"materials", in.materials}, {"textures", in.textures}};
   if (in.reader) j.update(reader_json(*in.reader));
   return j;
 }
@@ -36,7 +36,8 @@ json options_json(const OptionsUsed& o) {
 json aspect_choice_json(const AspectChoice& a) {
   json probes = json::array();
   for (const AspectProbe& p : a.probes)
-    probes.push_back({{"aspect", p.aspect}, {"width", p.width}, {"height", p.height}, {"estimated_psnr_db", estimated_psnr_db(p.estimated_mse)}});
+    probes.push_back(
+        {{"aspect", p.aspect}, {"width", p.width}, {"height", p.height}, {"estimated_psnr_db", estimated_psnr_db(p.estimated_mse)}});
   return {{"requested", aspect_json(a.requested)},
           {"chosen", a.chosen},
           {"probed_component", a.probed_component == kNone ? json(nullptr) : json(a.probed_component)},
