@@ -2,13 +2,15 @@
 // endian (per-face texcoords with two texture pages and texnumber, per-vertex texture coordinates under
 // each of their names, quads, every scalar type, skipped elements and properties), a table of hostile
 // files that must be refused with one line naming the file, and a catalogue mesh written as PLY that
-// goes through optimize.
+// goes through optimize and through the command line.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -453,6 +455,16 @@ TEST_F(PlyReaderTest, CatalogueMeshAsPlyOptimizesCleanly) {
   EXPECT_EQ(metrics["flipped"].get<size_t>(), 0u);
   EXPECT_EQ(metrics["charts"].get<size_t>(), r.report["preparation"]["components"].get<size_t>());
 
+  // The command line reads it too, and measures it against its output.
+  const fs::path out = dir_ / "out";
+  const std::string cmd = std::string(TIGHTEX_CLI) + " '" + ply.string() + "' -o '" + out.string() + "' --size 128 --quiet";
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  ASSERT_EQ(WEXITSTATUS(status), 0);
+  const Metrics m = measure(in, read_obj((out / "multi.obj").string()), 20000);
+  EXPECT_EQ(m.lost_triangles, 0u);
+  EXPECT_EQ(m.flipped, 0u);
+  EXPECT_EQ(m.charts, r.report["preparation"]["components"].get<size_t>());
 }
 
 }  // namespace
