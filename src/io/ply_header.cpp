@@ -191,7 +191,7 @@ void assign_vertex_roles(const std::string& file, PlyElement& vertex, PlyHeader&
   PlyProperty* by_name[3] = {nullptr, nullptr, nullptr};
   for (PlyProperty& p : vertex.properties)
     for (int axis = 0; axis < 3; ++axis)
-      if (p.name == std::string_view("xyz" + axis, 1)) by_name[axis] = &p;
+      if (p.name.size() == 1 && p.name[0] == "xyz"[axis]) by_name[axis] = &p;
   for (int axis = 0; axis < 3; ++axis) {
     PlyProperty* p = by_name[axis];
     if (p == nullptr) fail_input("{}:{}: element 'vertex' has no property '{}'", file, vertex.line, "xyz"[axis]);
