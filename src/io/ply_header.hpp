@@ -49,12 +49,12 @@ struct PlyHeader {
   PlyFormat format = PlyFormat::kAscii;
   std::vector<PlyElement> elements;
   std::vector<PlyTextureFile> texture_files;
-  size_t body_offset = 0;  // first byte after the end_header line
-  size_t lines = 0;        // the header's, end_header included
+  size_t body_offset = 0;       // first byte after the end_header line
+  size_t lines = 0;             // the header's, end_header included
   size_t vertex = 0, face = 0;  // indices into elements
-  bool face_texcoord = false;  // the face element has a texcoord list
-  bool vertex_uv = false;      // the vertex element has a pair of texture coordinates
-  bool texnumber = false;      // the face element has a texnumber
+  bool face_texcoord = false;   // the face element has a texcoord list
+  bool vertex_uv = false;       // the vertex element has a pair of texture coordinates
+  bool texnumber = false;       // the face element has a texnumber
 };
 
 /// Parses and checks the header at the start of `data`: the format line, element and property lines

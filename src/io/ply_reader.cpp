@@ -337,8 +337,10 @@ TexturedMesh PlyReader::read(ModelReadStats* stats) {
   if (!read_whole_file(path_, data, reason)) fail_input("{}: {}", path_, reason);
   header_ = parse_ply_header(path_, data);
   if (!header_.face_texcoord && !header_.vertex_uv)
-    fail_input("{}: model has no texture coordinates (face texcoord, or vertex s t / u v / texture_u texture_v); tightex needs the input's UV atlas",
-               path_);
+    fail_input(
+        "{}: model has no texture coordinates (face texcoord, or vertex s t / u v / texture_u texture_v); tightex needs the input's UV "
+        "atlas",
+        path_);
   PlyBody body(path_, std::string_view(data).substr(header_.body_offset), header_.format, header_.lines);
   for (size_t i = 0; i < header_.elements.size(); ++i) {
     const PlyElement& e = header_.elements[i];
