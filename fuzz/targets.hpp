@@ -20,6 +20,7 @@
 #include "fuzz_common.hpp"
 #include "io/image_io.hpp"
 #include "io/obj_reader.hpp"
+#include "tightex/io.hpp"
 #include "report/metrics.hpp"
 #include "tightex/tightex.hpp"
 
@@ -65,9 +66,9 @@ inline const fs::path& obj_dir() {
   return dir;
 }
 
-/// The guarantees read_obj documents (obj_reader.hpp).
+/// The guarantees read_obj (and read_ply) documents (tightex/io.hpp).
 inline void check_mesh(const TexturedMesh& m, bool textures_loaded) {
-  require(!m.triangles.empty(), "read_obj returned no triangles");
+  require(!m.triangles.empty(), "the reader returned no triangles");
   for (const Vec3& p : m.positions) require(p.allFinite() && p.cwiseAbs().maxCoeff() <= 1e15, "position not finite or absurd");
   for (const Tri& t : m.triangles)
     for (uint32_t v : t) require(v < m.positions.size(), "vertex index out of range");
@@ -112,6 +113,34 @@ inline Outcome run_obj(const uint8_t* data, size_t size) {
   options.load_textures = true;
   try {
     check_mesh(read_obj(path, options), true);
+  } catch (const InputError&) {
+    return Outcome::kRefused;
+  }
+  return Outcome::kAccepted;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// fuzz_ply: the PLY reader.
+//
+// Input: a PLY file (any format), written as in.ply into the fuzz_obj folder, whose textures a
+// `comment TextureFile` line can name (t.png, t.jpg, bad.png, "sub dir/t 2.png", the folder d/).
+
+inline Outcome run_ply(const uint8_t* data, size_t size) {
+  const fs::path& dir = obj_dir();
+  write_file(dir / "in.ply", std::string_view(reinterpret_cast<const char*>(data), size));
+  const std::string path = (dir / "in.ply").string();
+  ModelReadOptions options;
+  options.max_texture_pixels = size_t(1) << 20;
+  options.load_textures = false;
+  try {
+    check_mesh(read_ply(path, options), false);
+  } catch (const InputError&) {
+    return Outcome::kRefused;
+  }
+  // Parsing is the same with the textures, so only texture loading can refuse it now.
+  options.load_textures = true;
+  try {
+    check_mesh(read_ply(path, options), true);
   } catch (const InputError&) {
     return Outcome::kRefused;
   }

@@ -1,5 +1,5 @@
-// Reading and writing models and texture images: Wavefront OBJ + MTL with the textures they name;
-// PNG and JPEG (and, for reading, what stb_image understands). Every reader refuses bad input with an
+// Reading and writing models and texture images: Wavefront OBJ + MTL and PLY (read) with the textures
+// they name; PNG and JPEG (and, for reading, what stb_image understands). Every reader refuses bad input with an
 // InputError naming the file, the element and the problem.
 #pragma once
 #include <cstddef>
@@ -19,8 +19,8 @@ struct ObjReadOptions {
 /// What the reader did beyond plain reading, for the report.
 struct ObjReadStats {
   size_t polygons_triangulated = 0;  // faces with more than 3 corners, fan-triangulated
-  size_t lines = 0;
-  /// Files the MTL names that were found only by ignoring case or by a tail of the path as written
+  size_t lines = 0;                  // text lines read (a binary PLY: its header's)
+  /// Files the MTL (a PLY: its TextureFile comments) names that were found only by ignoring case or by a tail of the path as written
   /// ("WRITTEN -> USED"), e.g. a Windows exporter's absolute path.
   std::vector<std::string> paths_found;
 };
@@ -31,6 +31,28 @@ struct ObjReadStats {
 /// face_material in range or -1; every material with map_Kd has a loaded texture.
 /// Throws InputError with "FILE:LINE: problem" for any malformed or unsupported content.
 TexturedMesh read_obj(const std::string& path, const ObjReadOptions& options = {}, ObjReadStats* stats = nullptr);
+
+/// The options and the report of every model reader (read_obj, read_ply, read_model).
+using ModelReadOptions = ObjReadOptions;
+using ModelReadStats = ObjReadStats;
+
+/// Reads a PLY file (ascii, binary_little_endian or binary_big_endian) as photogrammetry tools write
+/// it, with the textures its `comment TextureFile <name>` lines name (relative to the PLY's folder,
+/// found as read_obj finds an MTL's files). Elements may come in any order; elements and properties
+/// other than those below are skipped. Vertex: x y z, and texture coordinates as s t, u v or
+/// texture_u texture_v. Face: a vertex_indices (or vertex_index) list, fan-triangulated beyond three
+/// corners; a texcoord list (two values a corner), which wins over the vertex's; texnumber, the
+/// texture of the face (-1: none; without it every face has the first). One material per TextureFile.
+/// Requires: a readable PLY with at least one face, and texture coordinates for every face.
+/// Guarantees: those of read_obj; no allocation before the header's counts are checked against the
+/// file's size.
+/// Throws InputError on one line, "FILE:LINE: problem" for the header and for an ascii body,
+/// "FILE: ELEMENT N: problem" for a binary body, for any malformed, lying or unsupported content.
+TexturedMesh read_ply(const std::string& path, const ModelReadOptions& options = {}, ModelReadStats* stats = nullptr);
+
+/// Reads a model by its file name's extension, without case: .ply with read_ply, anything else with
+/// read_obj. Requires, guarantees and throws as they do.
+TexturedMesh read_model(const std::string& path, const ModelReadOptions& options = {}, ModelReadStats* stats = nullptr);
 
 enum class ImageFormat { kPng, kJpeg };
 

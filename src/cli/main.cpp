@@ -62,7 +62,7 @@ int run_measure(int argc, char** argv) {
   CLI::App app{"tightex measure: the figures of METRICS.md for an input model and an output model"};
   std::string in_path, out_path;
   size_t samples = 200000;
-  app.add_option("input", in_path, "the original model (OBJ)")->required();
+  app.add_option("input", in_path, "the original model (OBJ or PLY)")->required();
   app.add_option("output", out_path, "the re-textured model (OBJ)")->required();
   app.add_option("--samples", samples, "surface PSNR samples");
   try {
@@ -70,7 +70,7 @@ int run_measure(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 1;
   }
-  const TexturedMesh in = read_obj(in_path), out = read_obj(out_path);
+  const TexturedMesh in = read_model(in_path), out = read_model(out_path);
   std::cout << to_json(measure(in, out, samples)).dump(2) << "\n";
   return 0;
 }
@@ -132,7 +132,7 @@ struct ChoiceNames {
 CLI::Option* define_options(CLI::App& app, CommandLine& line, ChoiceNames& names) {
   names.layout = to_string(line.layout), names.holes = to_string(line.holes), names.map = to_string(line.map);
   names.corners = to_string(line.corners);
-  app.add_option("input", line.input, "textured model (OBJ + MTL + textures)")->required();
+  app.add_option("input", line.input, "textured model (OBJ + MTL, or PLY; with textures)")->required();
   app.add_option("-o,--output", line.outdir, "output directory")->required();
   auto* size_opt =
       app.add_option("--size", line.size,
@@ -320,7 +320,7 @@ PlannedModel read_textures_and_plan(const std::string& input, const TexturedMesh
   std::exception_ptr texture_error, plan_error;
   auto read_textures = [&] {
     try {
-      r.mesh = read_obj(input);
+      r.mesh = read_model(input);
       r.textures_s = seconds_since(t0);
     } catch (...) {
       texture_error = std::current_exception();
@@ -430,12 +430,12 @@ void run(const CommandLine& line) {
   const auto t0 = std::chrono::steady_clock::now();
   check_paths(line);
   // Geometry first (milliseconds); the texture pixels are decoded while the geometric stages run. The
-  // OBJ is parsed twice: cheap, and every texture error keeps its MTL file and line.
+  // model is parsed twice: cheap, and every texture error keeps its file and line.
   CliTimings timings;
   ObjReadStats read_stats;
   ObjReadOptions geometry_only;
   geometry_only.load_textures = false;
-  TexturedMesh geometry = read_obj(line.input, geometry_only, &read_stats);
+  TexturedMesh geometry = read_model(line.input, geometry_only, &read_stats);
   timings.read_s = seconds_since(t0);
   for (Texture& t : geometry.textures) std::tie(t.width, t.height) = image_dimensions(t.path);
   const int size = texture_side(line, geometry);

@@ -6,11 +6,6 @@
 // whole file is read, so the error still names the line that caused it.
 #include "io/obj_reader.hpp"
 
-#include <sys/mman.h>
-#include <tbb/parallel_for.h>
-#include <unistd.h>
-
-#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -25,6 +20,7 @@
 
 #include "core/error.hpp"
 #include "io/image_io.hpp"
+#include "io/model_files.hpp"
 
 namespace tightex {
 namespace {
@@ -44,171 +40,14 @@ std::string_view trim(std::string_view s) {
   return s;
 }
 
-// Input text quoted in a message: bounded and printable, so a binary file handed in as an OBJ cannot
-// turn an error into a screenful of garbage or break the one-line message.
-std::string excerpt(std::string_view s) {
-  constexpr size_t kMaxChars = 60;
-  std::string out;
-  for (size_t i = 0; i < s.size() && i < kMaxChars; ++i) {
-    const auto c = static_cast<unsigned char>(s[i]);
-    out += (c >= 0x20 && c != 0x7f) ? char(c) : '?';
-  }
-  if (s.size() > kMaxChars) out += "...";
-  return out;
-}
-
 [[noreturn]] void fail_at_line(const std::string& file, size_t line, const std::string& problem) {
   fail_input("{}:{}: {}", file, line, problem);
-}
-
-bool equals_ignoring_case(std::string_view a, std::string_view b) {
-  if (a.size() != b.size()) return false;
-  for (size_t i = 0; i < a.size(); ++i) {
-    const char x = (a[i] >= 'A' && a[i] <= 'Z') ? char(a[i] - 'A' + 'a') : a[i];
-    const char y = (b[i] >= 'A' && b[i] <= 'Z') ? char(b[i] - 'A' + 'a') : b[i];
-    if (x != y) return false;
-  }
-  return true;
-}
-
-// Paths written on Windows use backslashes; on every platform tightex runs on '/' works.
-std::string with_forward_slashes(std::string_view s) {
-  std::string out(s);
-  for (char& c : out)
-    if (c == '\\') c = '/';
-  return out;
-}
-
-/// The file an MTL names, as the exporter meant it: `written` (forward slashes) under `folder`, else
-/// the same path matched without case (exported on Windows or macOS, where TEXTURE.JPG and texture.jpg
-/// are one file), else the longest tail of it that exists under `folder` that way (an absolute path of
-/// the machine that wrote it, "C:/Users/me/scan/textures/tex_0.jpg", or "../textures/tex_0.jpg" after
-/// the files were moved). One pair of surrounding double quotes is dropped. nullopt if none exists.
-std::optional<fs::path> find_named_file(const fs::path& folder, std::string written) {
-  if (written.size() >= 2 && written.front() == '"' && written.back() == '"') written = written.substr(1, written.size() - 2);
-  if (written.empty()) return std::nullopt;
-  std::error_code ec;
-  const fs::path exact = folder / written;
-  if (fs::exists(exact, ec)) return exact;
-  // Each component matched without case, one directory listing per component (directories of scans
-  // hold few files; a folder that cannot be listed ends the search).
-  auto without_case = [&](const std::vector<std::string>& parts) -> std::optional<fs::path> {
-    fs::path at = folder;
-    for (const std::string& part : parts) {
-      if (part == ".") continue;
-      if (part == "..") {
-        at /= part;
-        continue;
-      }
-      if (fs::exists(at / part, ec)) {
-        at /= part;
-        continue;
-      }
-      std::optional<fs::path> match;
-      for (fs::directory_iterator it(at, ec), end; !ec && it != end; it.increment(ec))
-        if (equals_ignoring_case(it->path().filename().string(), part)) {
-          if (match) return std::nullopt;  // two names differ only in case: ambiguous
-          match = it->path();
-        }
-      if (!match) return std::nullopt;
-      at = *match;
-    }
-    return at;
-  };
-  std::vector<std::string> parts;
-  for (const auto& part : fs::path(written).relative_path()) parts.push_back(part.string());
-  // A Windows drive ("C:") is a component of its own on this platform: never part of a tail.
-  const bool absolute = fs::path(written).has_root_directory() || (written.size() >= 2 && written[1] == ':');
-  for (size_t first = 0; first < parts.size(); ++first) {
-    if (first == 0 && absolute) continue;
-    if (parts[first] == ".." || parts[first] == ".") continue;
-    const std::vector<std::string> tail(parts.begin() + long(first), parts.end());
-    if (auto found = without_case(tail); found && fs::is_regular_file(*found, ec)) return found;
-  }
-  return std::nullopt;
-}
-
-// Page faults on freshly allocated buffers can cost more than the parsing that fills them
-// (docs/decisions.md), so large buffers the reader is about to fill are mapped in one call. Only whole pages inside the buffer are touched,
-// and populating never changes memory contents; on kernels without MADV_POPULATE_WRITE (before 5.14) this does nothing.
-void prefault_for_write(void* start, size_t bytes) {
-#if defined(MADV_POPULATE_WRITE)
-  constexpr size_t kWorthIt = size_t(256) << 10;
-  if (bytes < kWorthIt) return;
-  const auto page = uintptr_t(sysconf(_SC_PAGESIZE));
-  const uintptr_t begin = (uintptr_t(start) + page - 1) & ~(page - 1);
-  const uintptr_t end = (uintptr_t(start) + bytes) & ~(page - 1);
-  if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_POPULATE_WRITE);
-#else
-  (void)start;
-  (void)bytes;
-#endif
 }
 
 template <typename T>
 void reserve_prefaulted(std::vector<T>& v, size_t n) {
   v.reserve(n);
   prefault_for_write(v.data(), n * sizeof(T));
-}
-
-// A file that a model names (material library, texture) must be a regular file: a device or FIFO named
-// by a hostile model would otherwise be read until memory runs out (/dev/zero) or block forever (a FIFO
-// with no writer). Only the model given on the command line may be a pipe.
-constexpr const char* kNotRegular = "is not a regular file (a device, pipe or socket)";
-
-bool is_special_file(const fs::file_status& status) {
-  return fs::exists(status) && !fs::is_regular_file(status) && !fs::is_directory(status);
-}
-
-/// Reads a whole file. On failure returns false and a reason that reads after the file name
-/// ("not found", "is a directory, not a file", ...). `regular_only`: refuse devices, pipes and sockets.
-bool read_whole_file(const fs::path& path, std::string& data, std::string& reason, bool regular_only = false) {
-  std::error_code ec;
-  const fs::file_status status = fs::status(path, ec);
-  if (status.type() == fs::file_type::not_found) {
-    reason = "not found";
-    return false;
-  }
-  if (ec) {
-    reason = fmt::format("cannot be accessed ({})", ec.message());
-    return false;
-  }
-  if (fs::is_directory(status)) {
-    reason = "is a directory, not a file";
-    return false;
-  }
-  if (regular_only && is_special_file(status)) {
-    reason = kNotRegular;
-    return false;
-  }
-  std::FILE* file = std::fopen(path.c_str(), "rb");
-  if (file == nullptr) {
-    reason = fmt::format("cannot be opened ({})", std::strerror(errno));
-    return false;
-  }
-  data.clear();
-  const uintmax_t size = fs::is_regular_file(status) ? fs::file_size(path, ec) : 0;
-  if (!ec && size > 0) {
-    data.reserve(size_t(size));
-    prefault_for_write(data.data(), size_t(size));
-    data.resize(size_t(size));
-    data.resize(std::fread(data.data(), 1, size_t(size), file));
-  }
-  // Whatever follows comes in chunks: all of a pipe, which has no size, or the end of a file that
-  // grew since its size was taken.
-  char chunk[1 << 16];
-  for (;;) {
-    const size_t got = std::fread(chunk, 1, sizeof chunk, file);
-    data.append(chunk, got);
-    if (got < sizeof chunk) break;
-  }
-  const bool failed = std::ferror(file) != 0;
-  std::fclose(file);
-  if (failed) {
-    reason = "could not be read (I/O error)";
-    return false;
-  }
-  return true;
 }
 
 /// How many statements of each kind a file holds, counted in a quick first pass so the arrays are
@@ -300,29 +139,6 @@ class Tokens {
   const char* p_;
   const char* end_;
 };
-
-/// Parses a whole token as a double. "nan" and "inf" parse (the caller refuses them with a clearer
-/// message than "malformed").
-bool parse_double(std::string_view token, double& out) {
-  const char* b = token.data();
-  const char* e = b + token.size();
-  // from_chars refuses a leading '+', which some exporters write.
-  if (b != e && *b == '+') {
-    ++b;
-    if (b != e && *b == '-') return false;
-  }
-  if (b == e) return false;
-  const auto [ptr, ec] = std::from_chars(b, e, out);
-  if (ptr != e) return false;
-  if (ec == std::errc::result_out_of_range) {
-    // A well-formed number beyond double's range: strtod tells overflow (±HUGE_VAL, refused later as
-    // infinite) from underflow (a value that rounds to 0, which is fine).
-    const std::string copy(b, e);
-    out = std::strtod(copy.c_str(), nullptr);
-    return true;
-  }
-  return ec == std::errc();
-}
 
 enum class IndexKind : uint8_t { kVertex, kTexcoord, kNormal };
 
@@ -856,22 +672,9 @@ void ObjParser::assemble_materials(TexturedMesh& mesh) {
   }
   if (!options_.load_textures) return;
 
-  // Decoding an 8K PNG takes a fraction of a second; multi-page atlases decode in parallel. Errors are
-  // kept per texture and the first in file order is reported, so the message does not depend on
-  // thread timing.
-  std::vector<std::string> errors(mesh.textures.size());
-  tbb::parallel_for(size_t(0), mesh.textures.size(), [&](size_t i) {
-    try {
-      std::error_code ec;
-      if (is_special_file(fs::status(mesh.textures[i].path, ec))) fail_input("{}: {}", mesh.textures[i].path, kNotRegular);
-      mesh.textures[i].image = load_image(mesh.textures[i].path, options_.max_texture_pixels);
-    } catch (const InputError& e) {
-      errors[i] = e.what();
-      // The report is one line; a decoder's message must not break it.
-      for (char& c : errors[i])
-        if (c == '\n' || c == '\r') c = ' ';
-    }
-  });
+  // Errors are kept per texture and the first in file order is reported, so the message does not
+  // depend on thread timing.
+  const std::vector<std::string> errors = load_texture_images(mesh.textures, options_.max_texture_pixels);
   for (size_t i = 0; i < errors.size(); ++i) {
     if (errors[i].empty()) continue;
     const MaterialDef& def = *texture_source[i];

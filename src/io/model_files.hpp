@@ -1,0 +1,58 @@
+// What the model readers (OBJ, PLY) share: reading a whole file, finding the files a model names as
+// its exporter meant them, loading the textures, and quoting input text in a one-line message.
+#pragma once
+#include <cstddef>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "tightex/mesh.hpp"
+
+namespace tightex {
+
+/// Input text quoted in a message: at most 60 characters, unprintable ones as '?', so a binary file
+/// handed in as a model cannot turn an error into a screenful of garbage or break the one-line message.
+std::string excerpt(std::string_view s);
+
+bool equals_ignoring_case(std::string_view a, std::string_view b);
+
+/// Paths written on Windows use backslashes; on every platform tightex runs on '/' works.
+std::string with_forward_slashes(std::string_view s);
+
+/// The file a model names, as the exporter meant it: `written` (forward slashes) under `folder`, else
+/// the same path matched without case (exported on Windows or macOS, where TEXTURE.JPG and texture.jpg
+/// are one file), else the longest tail of it that exists under `folder` that way (an absolute path of
+/// the machine that wrote it, "C:/Users/me/scan/textures/tex_0.jpg", or "../textures/tex_0.jpg" after
+/// the files were moved). One pair of surrounding double quotes is dropped. nullopt if none exists.
+std::optional<std::filesystem::path> find_named_file(const std::filesystem::path& folder, std::string written);
+
+/// Page faults on freshly allocated buffers can cost more than the parsing that fills them
+/// (docs/decisions.md), so large buffers a reader is about to fill are mapped in one call. Only whole
+/// pages inside the buffer are touched, and populating never changes memory contents; on kernels
+/// without MADV_POPULATE_WRITE (before 5.14) this does nothing.
+void prefault_for_write(void* start, size_t bytes);
+
+/// A file that a model names (material library, texture) must be a regular file: a device or FIFO named
+/// by a hostile model would otherwise be read until memory runs out (/dev/zero) or block forever (a FIFO
+/// with no writer). Only the model given on the command line may be a pipe.
+inline constexpr const char* kNotRegular = "is not a regular file (a device, pipe or socket)";
+
+/// True for a device, pipe or socket.
+bool is_special_file(const std::filesystem::file_status& status);
+
+/// Reads a whole file. On failure returns false and a reason that reads after the file name
+/// ("not found", "is a directory, not a file", ...). `regular_only`: refuse devices, pipes and sockets.
+bool read_whole_file(const std::filesystem::path& path, std::string& data, std::string& reason, bool regular_only = false);
+
+/// Parses a whole token as a double (a leading '+' allowed). "nan" and "inf" parse (the caller refuses
+/// them with a clearer message than "malformed"); a number beyond double's range parses as ±infinity.
+bool parse_double(std::string_view token, double& out);
+
+/// Decodes every texture's image from its path (in parallel; a device or pipe is refused). Returns one
+/// message per texture: empty where it loaded, else load_image's reason on one line, so a reader can
+/// report the first failure in file order with its own file and line, whatever the thread timing.
+std::vector<std::string> load_texture_images(std::vector<Texture>& textures, size_t max_pixels);
+
+}  // namespace tightex

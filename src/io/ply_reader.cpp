@@ -1,0 +1,377 @@
+// PLY reader. The whole file is read into memory; the header is parsed and checked first
+// (io/ply_header.cpp), then the body is read element by element in the header's order, each value
+// converted to double (exact for every PLY type), with every problem reported on one line naming the
+// file, the element and the entry (and, in ascii, the line).
+#include <bit>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <optional>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "core/error.hpp"
+#include "io/model_files.hpp"
+#include "io/ply_header.hpp"
+#include "tightex/io.hpp"
+
+namespace tightex {
+namespace {
+
+namespace fs = std::filesystem;
+
+// As the OBJ reader: beyond this a coordinate is an exporter bug, and squaring it would overflow.
+constexpr double kAbsurdCoordinate = 1e15;
+// Corners of one polygon: more than any scan's faces, few enough that a lying list size cannot make
+// the scratch arrays large.
+constexpr size_t kMaxCorners = 1024;
+
+bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
+
+/// The body after the header: values read one at a time as the header declares them, ascii or binary,
+/// with the element and entry being read kept for messages.
+class PlyBody {
+ public:
+  PlyBody(const std::string& file, std::string_view body, PlyFormat format, size_t header_lines)
+      : file_(file), p_(body.data()), end_(body.data() + body.size()), format_(format), line_(header_lines + 1) {
+    swap_ = format != PlyFormat::kAscii && (format == PlyFormat::kBinaryBigEndian) != (std::endian::native == std::endian::big);
+  }
+
+  /// The element and entry that messages name from now on.
+  void at(const std::string& element, uint64_t index) {
+    element_ = &element;
+    index_ = index;
+  }
+  /// One value of `type`.
+  double value(PlyType type) { return format_ == PlyFormat::kAscii ? ascii_value(type) : binary_value(type); }
+  /// A list's size (of type `count_type`), refused above `max_size` (`what` names the list).
+  size_t list_size(PlyType count_type, size_t max_size, std::string_view what);
+  /// Reads past one property's value (or list) without keeping it.
+  void skip(const PlyProperty& p);
+  /// Text lines of the body read so far (0 for binary).
+  size_t lines_read(size_t header_lines) const { return format_ == PlyFormat::kAscii ? line_ - header_lines - 1 : 0; }
+
+  template <typename... Args>
+  [[noreturn]] void fail(fmt::format_string<Args...> f, Args&&... args) const {
+    const std::string problem = fmt::format(f, std::forward<Args>(args)...);
+    const std::string element = element_ != nullptr ? excerpt(*element_) : std::string("body");
+    if (format_ == PlyFormat::kAscii) fail_input("{}:{}: {} {}: {}", file_, line_, element, index_, problem);
+    fail_input("{}: {} {}: {}", file_, element, index_, problem);
+  }
+
+ private:
+  double ascii_value(PlyType type);
+  double binary_value(PlyType type);
+  std::string_view next_token();
+  [[noreturn]] void fail_truncated() const { fail("the file ends early (truncated)"); }
+
+  const std::string& file_;
+  const char* p_;
+  const char* end_;
+  PlyFormat format_;
+  bool swap_ = false;
+  size_t line_;
+  const std::string* element_ = nullptr;
+  uint64_t index_ = 0;
+};
+
+std::string_view PlyBody::next_token() {
+  while (p_ < end_ && is_space(*p_)) {
+    if (*p_ == '\n') ++line_;
+    ++p_;
+  }
+  const char* start = p_;
+  while (p_ < end_ && !is_space(*p_)) ++p_;
+  return {start, size_t(p_ - start)};
+}
+
+double PlyBody::ascii_value(PlyType type) {
+  const std::string_view token = next_token();
+  if (token.empty()) fail_truncated();
+  double v = 0.0;
+  if (!parse_double(token, v)) fail("malformed number '{}'", excerpt(token));
+  if (!is_integer(type)) return v;
+  const size_t bits = 8 * type_size(type);
+  const bool is_signed = type == PlyType::kInt8 || type == PlyType::kInt16 || type == PlyType::kInt32;
+  const double lo = is_signed ? -std::ldexp(1.0, int(bits) - 1) : 0.0;
+  const double hi = is_signed ? std::ldexp(1.0, int(bits) - 1) - 1 : std::ldexp(1.0, int(bits)) - 1;
+  if (!(v == std::floor(v) && v >= lo && v <= hi)) fail("'{}' is not a value of type {}", excerpt(token), type_name(type));
+  return v;
+}
+
+/// A value of T stored at `p` in the file's byte order.
+template <typename T>
+T load(const char* p, bool swap) {
+  unsigned char bytes[sizeof(T)];
+  std::memcpy(bytes, p, sizeof(T));
+  if (swap)
+    for (size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(bytes[i], bytes[sizeof(T) - 1 - i]);
+  T v;
+  std::memcpy(&v, bytes, sizeof(T));
+  return v;
+}
+
+double PlyBody::binary_value(PlyType type) {
+  const size_t size = type_size(type);
+  if (size_t(end_ - p_) < size) fail_truncated();
+  const char* at = p_;
+  p_ += size;
+  switch (type) {
+    case PlyType::kInt8:
+      return load<int8_t>(at, swap_);
+    case PlyType::kUint8:
+      return load<uint8_t>(at, swap_);
+    case PlyType::kInt16:
+      return load<int16_t>(at, swap_);
+    case PlyType::kUint16:
+      return load<uint16_t>(at, swap_);
+    case PlyType::kInt32:
+      return load<int32_t>(at, swap_);
+    case PlyType::kUint32:
+      return load<uint32_t>(at, swap_);
+    case PlyType::kFloat32:
+      return double(load<float>(at, swap_));
+    case PlyType::kFloat64:
+      return load<double>(at, swap_);
+  }
+  return 0.0;
+}
+
+size_t PlyBody::list_size(PlyType count_type, size_t max_size, std::string_view what) {
+  const double n = value(count_type);
+  if (n < 0) fail("negative size {} of list '{}'", n, excerpt(what));
+  if (n > double(max_size)) fail("list '{}' of {} values (at most {})", excerpt(what), n, max_size);
+  return size_t(n);
+}
+
+void PlyBody::skip(const PlyProperty& p) {
+  if (!p.is_list) {
+    (void)value(p.type);
+    return;
+  }
+  const double n = value(p.count_type);
+  if (n < 0) fail("negative size {} of list '{}'", n, excerpt(p.name));
+  if (format_ == PlyFormat::kAscii) {
+    // Each value is a token of its own; a size beyond the file ends in "truncated".
+    for (uint64_t i = 0; i < uint64_t(n); ++i)
+      if (next_token().empty()) fail_truncated();
+    return;
+  }
+  const size_t bytes_left = size_t(end_ - p_);
+  if (n > double(bytes_left / type_size(p.type))) fail_truncated();
+  p_ += size_t(n) * type_size(p.type);
+}
+
+/// One face as read, before it is triangulated.
+struct FaceEntry {
+  std::vector<uint32_t> corners;
+  std::vector<double> texcoord;
+  int32_t texnumber = 0;
+};
+
+class PlyReader {
+ public:
+  PlyReader(const std::string& path, const ModelReadOptions& options) : path_(path), options_(options) {}
+  TexturedMesh read(ModelReadStats* stats);
+
+ private:
+  void read_vertices(PlyBody& body, const PlyElement& e);
+  void read_faces(PlyBody& body, const PlyElement& e);
+  void read_face(PlyBody& body, const PlyElement& e, FaceEntry& face);
+  void add_face(PlyBody& body, const FaceEntry& face);
+  void skip_element(PlyBody& body, const PlyElement& e);
+  double coordinate(PlyBody& body, PlyType type, std::string_view what);
+  void assemble_uvs(TexturedMesh& mesh);
+  void assemble_materials(TexturedMesh& mesh);
+
+  const std::string& path_;
+  const ModelReadOptions& options_;
+  PlyHeader header_;
+
+  std::vector<Vec3> positions_;
+  std::vector<Vec2> vertex_uv_;  // per vertex, when the vertex element has a pair
+  std::vector<Tri> triangles_;
+  std::vector<Vec2> corner_uv_;        // 3 per triangle, from the faces' texcoord lists
+  std::vector<int32_t> face_texture_;  // per triangle: texnumber, -1 for none
+  size_t polygons_triangulated_ = 0;
+  std::vector<std::string> paths_found_;
+};
+
+double PlyReader::coordinate(PlyBody& body, PlyType type, std::string_view what) {
+  const double v = body.value(type);
+  if (!std::isfinite(v)) body.fail("NaN or infinite {}", what);
+  if (std::abs(v) > kAbsurdCoordinate) body.fail("absurd {} {:g} (absolute value above 1e15)", what, v);
+  return v;
+}
+
+void PlyReader::read_vertices(PlyBody& body, const PlyElement& e) {
+  if (e.count >= uint64_t(kNone)) body.fail("too many vertices ({})", e.count);
+  // The header's counts were weighed against the file's size: these fit in memory.
+  positions_.reserve(size_t(e.count));
+  if (header_.vertex_uv) vertex_uv_.reserve(size_t(e.count));
+  for (uint64_t i = 0; i < e.count; ++i) {
+    body.at(e.name, i);
+    Vec3 p = Vec3::Zero();
+    Vec2 uv = Vec2::Zero();
+    for (const PlyProperty& prop : e.properties) {
+      switch (prop.role) {
+        case PlyRole::kX:
+        case PlyRole::kY:
+        case PlyRole::kZ:
+          p[int(prop.role) - int(PlyRole::kX)] = coordinate(body, prop.type, "coordinate");
+          break;
+        case PlyRole::kU:
+        case PlyRole::kV:
+          uv[int(prop.role) - int(PlyRole::kU)] = coordinate(body, prop.type, "texture coordinate");
+          break;
+        default:
+          body.skip(prop);
+      }
+    }
+    positions_.push_back(p);
+    if (header_.vertex_uv) vertex_uv_.push_back(uv);
+  }
+}
+
+void PlyReader::read_face(PlyBody& body, const PlyElement& e, FaceEntry& face) {
+  face.texnumber = 0;
+  const uint64_t vertices = header_.elements[header_.vertex].count;
+  for (const PlyProperty& prop : e.properties) {
+    if (prop.role == PlyRole::kVertexIndices) {
+      const size_t n = body.list_size(prop.count_type, kMaxCorners, prop.name);
+      if (n < 3) body.fail("face has {} corner{} (needs at least 3)", n, n == 1 ? "" : "s");
+      face.corners.resize(n);
+      for (uint32_t& c : face.corners) {
+        const double v = body.value(prop.type);
+        if (v < 0 || v >= double(vertices)) body.fail("vertex index {} out of range (the file has {} vertices)", v, vertices);
+        c = uint32_t(v);
+      }
+    } else if (prop.role == PlyRole::kTexcoord) {
+      face.texcoord.resize(body.list_size(prop.count_type, 2 * kMaxCorners, prop.name));
+      for (double& t : face.texcoord) t = coordinate(body, prop.type, "texture coordinate");
+    } else if (prop.role == PlyRole::kTexnumber) {
+      const double t = body.value(prop.type);
+      const size_t pages = header_.texture_files.size();
+      if (t != -1 && !(t >= 0 && t < double(pages) && t == std::floor(t)))
+        body.fail("texnumber {} out of range (the header names {} texture file{})", t, pages, pages == 1 ? "" : "s");
+      face.texnumber = int32_t(t);
+    } else {
+      body.skip(prop);
+    }
+  }
+}
+
+void PlyReader::add_face(PlyBody& body, const FaceEntry& face) {
+  const size_t n = face.corners.size();
+  if (header_.face_texcoord && face.texcoord.size() != 2 * n)
+    body.fail("texcoord list of {} values for a face of {} corners (needs {})", face.texcoord.size(), n, 2 * n);
+  if (n > 3) ++polygons_triangulated_;
+  const int32_t texture = header_.texture_files.empty() ? -1 : face.texnumber;
+  // Fan around the first corner, as the OBJ reader: exact for the convex polygons exporters write.
+  for (size_t i = 1; i + 1 < n; ++i) {
+    triangles_.push_back({face.corners[0], face.corners[i], face.corners[i + 1]});
+    face_texture_.push_back(texture);
+    if (!header_.face_texcoord) continue;
+    for (const size_t k : {size_t(0), i, i + 1}) corner_uv_.emplace_back(face.texcoord[2 * k], face.texcoord[2 * k + 1]);
+  }
+}
+
+void PlyReader::read_faces(PlyBody& body, const PlyElement& e) {
+  // One triangle per face is exact for the triangle meshes scanners write; polygons grow the arrays.
+  triangles_.reserve(size_t(e.count));
+  face_texture_.reserve(size_t(e.count));
+  if (header_.face_texcoord) corner_uv_.reserve(3 * size_t(e.count));
+  FaceEntry face;
+  for (uint64_t i = 0; i < e.count; ++i) {
+    body.at(e.name, i);
+    read_face(body, e, face);
+    add_face(body, face);
+  }
+}
+
+void PlyReader::skip_element(PlyBody& body, const PlyElement& e) {
+  if (e.properties.empty()) return;  // takes no bytes, whatever its count
+  for (uint64_t i = 0; i < e.count; ++i) {
+    body.at(e.name, i);
+    for (const PlyProperty& prop : e.properties) body.skip(prop);
+  }
+}
+
+void PlyReader::assemble_uvs(TexturedMesh& mesh) {
+  if (header_.face_texcoord) {
+    mesh.corner_uv = std::move(corner_uv_);
+    return;
+  }
+  // Per-vertex coordinates, copied to each corner (read after the vertices, whatever the order).
+  mesh.corner_uv.reserve(3 * triangles_.size());
+  for (const Tri& t : triangles_)
+    for (const uint32_t v : t) mesh.corner_uv.push_back(vertex_uv_[v]);
+}
+
+void PlyReader::assemble_materials(TexturedMesh& mesh) {
+  const fs::path folder = fs::path(path_).parent_path();
+  for (const PlyTextureFile& file : header_.texture_files) {
+    const std::string written = with_forward_slashes(file.name);
+    const std::optional<fs::path> found = find_named_file(folder, written);
+    if (found && *found != folder / written) paths_found_.push_back(fmt::format("{} -> {}", written, found->lexically_normal().string()));
+    Material m;
+    m.name = fs::path(written).stem().string();
+    m.texture = int(mesh.textures.size());
+    mesh.materials.push_back(m);
+    mesh.textures.push_back(Texture{(found ? *found : folder / written).lexically_normal().string(), Image{}});
+  }
+  if (!options_.load_textures) return;
+  // The first failure in file order is reported, whatever the order the textures decoded in.
+  const std::vector<std::string> errors = load_texture_images(mesh.textures, options_.max_texture_pixels);
+  for (size_t i = 0; i < errors.size(); ++i)
+    if (!errors[i].empty())
+      fail_input("{}:{}: texture '{}' (comment TextureFile) could not be loaded: {}", path_, header_.texture_files[i].line,
+                 excerpt(header_.texture_files[i].name), errors[i]);
+}
+
+TexturedMesh PlyReader::read(ModelReadStats* stats) {
+  std::string data;
+  std::string reason;
+  if (!read_whole_file(path_, data, reason)) fail_input("{}: {}", path_, reason);
+  header_ = parse_ply_header(path_, data);
+  if (!header_.face_texcoord && !header_.vertex_uv)
+    fail_input(
+        "{}: model has no texture coordinates (face texcoord, or vertex s t / u v / texture_u texture_v); tightex needs the input's UV "
+        "atlas",
+        path_);
+  PlyBody body(path_, std::string_view(data).substr(header_.body_offset), header_.format, header_.lines);
+  for (size_t i = 0; i < header_.elements.size(); ++i) {
+    const PlyElement& e = header_.elements[i];
+    if (i == header_.vertex)
+      read_vertices(body, e);
+    else if (i == header_.face)
+      read_faces(body, e);
+    else
+      skip_element(body, e);
+  }
+  if (triangles_.empty()) fail_input("{}: no faces", path_);
+
+  TexturedMesh mesh;
+  mesh.source = path_;
+  mesh.positions = std::move(positions_);
+  assemble_uvs(mesh);
+  mesh.triangles = std::move(triangles_);
+  mesh.face_material = std::move(face_texture_);
+  assemble_materials(mesh);
+  if (stats != nullptr) {
+    stats->polygons_triangulated = polygons_triangulated_;
+    stats->lines = header_.lines + body.lines_read(header_.lines);
+    stats->paths_found = paths_found_;
+  }
+  return mesh;
+}
+
+}  // namespace
+
+TexturedMesh read_ply(const std::string& path, const ModelReadOptions& options, ModelReadStats* stats) {
+  return PlyReader(path, options).read(stats);
+}
+
+}  // namespace tightex
