@@ -255,13 +255,26 @@ struct MemoryGuard {
   }
 };
 
-/// Checks the memory the model needs at this size; per-component outputs are checked once the layout
-/// is known (check_per_component_memory).
-MemoryGuard check_memory(const CommandLine& line, const TexturedMesh& geometry, int size) {
+/// The guard for this command line: --max-memory, or 90% of this machine's memory.
+MemoryGuard memory_guard(const CommandLine& line) {
   MemoryGuard guard;
   guard.input = line.input;
   guard.limit_mib = line.max_memory_mib > 0 ? line.max_memory_mib
                                             : 0.9 * double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE)) / double(1 << 20);
+  return guard;
+}
+
+/// Refuses, from the image headers alone, a texture whose decoded pixels would not fit the limit (a
+/// hostile header can declare 200000 x 200000 pixels); before anything is sized by those pixels.
+void check_texture_headers(const MemoryGuard& guard, const TexturedMesh& geometry) {
+  for (const Texture& t : geometry.textures)
+    guard.check(double(t.width) * double(t.height) * 4.0, fmt::format("texture {} ({} x {} pixels)", t.path, t.width, t.height));
+}
+
+/// Checks the memory the model needs at this size; per-component outputs are checked once the layout
+/// is known (check_per_component_memory).
+MemoryGuard check_memory(const CommandLine& line, const TexturedMesh& geometry, int size) {
+  MemoryGuard guard = memory_guard(line);
   guard.estimate = double(geometry.num_triangles()) * kBytesPerTriangle;
   for (const Texture& t : geometry.textures) guard.estimate += double(t.width) * double(t.height) * 4.0;
   if (line.layout == Layout::kAtlas) guard.estimate += double(size) * double(size) * kBytesPerOutputTexel;
@@ -438,6 +451,7 @@ void run(const CommandLine& line) {
   TexturedMesh geometry = read_model(line.input, geometry_only, &read_stats);
   timings.read_s = seconds_since(t0);
   for (Texture& t : geometry.textures) std::tie(t.width, t.height) = image_dimensions(t.path);
+  check_texture_headers(memory_guard(line), geometry);
   const int size = texture_side(line, geometry);
   const bool show_progress = !line.quiet && isatty(STDERR_FILENO);
   const MemoryGuard guard = check_memory(line, geometry, size);
