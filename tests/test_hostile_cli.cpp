@@ -105,10 +105,10 @@ std::vector<Case> catalogue() {
   c.push_back({"missing_material", grid_obj("mtllib m.mtl\nusemtl nope\n"), kMtl, true, "", false});
   c.push_back({"missing_texture", grid_obj(), kMtl, false, "", false});
   c.push_back({"corrupt_texture", grid_obj(), kMtl, false, "\x89PNG\r\n\x1a\n garbage garbage", false});
-  // A 75-byte PNG whose header declares 200000 x 200000 pixels: refused from its header, before anything
+  // A 68-byte PNG whose header declares 200000 x 200000 pixels: refused from its header, before anything
   // is sized by it.
-  c.push_back({"texture_header_declares_200000_squared", grid_obj(), kMtl, false,
-               std::string("\x89\x50\x4e\x47\x0d\x0a\x1a\x0a\x00\x00\x00\x0d\x49\x48\x44\x52\x00\x03\x0d\x40\x00\x03\x0d\x40\x08\x02\x00\x00\x00\x76\x59\x1f\x5d\x00\x00\x00\x0b\x49\x44\x41\x54\x78\x9c\x63\x60\x80\x01\x00\x00\x0a\x00\x01\x7f\x80\x74\x5e\x00\x00\x00\x00\x49\x45\x4e\x44\xae\x42\x60\x82", 75), false});
+  static const char kHugePng[] = "\x89\x50\x4e\x47\x0d\x0a\x1a\x0a\x00\x00\x00\x0d\x49\x48\x44\x52\x00\x03\x0d\x40\x00\x03\x0d\x40\x08\x02\x00\x00\x00\x76\x59\x1f\x5d\x00\x00\x00\x0b\x49\x44\x41\x54\x78\x9c\x63\x60\x80\x01\x00\x00\x0a\x00\x01\x7f\x80\x74\x5e\x00\x00\x00\x00\x49\x45\x4e\x44\xae\x42\x60\x82";
+  c.push_back({"texture_header_declares_200000_squared", grid_obj(), kMtl, false, std::string(kHugePng, sizeof kHugePng - 1), false});
   c.push_back({"mtllib_is_a_device", grid_obj("mtllib /dev/zero\nusemtl a\n"), "", false, "", false});
   c.push_back({"texture_is_a_device", grid_obj(), "newmtl a\nmap_Kd /dev/zero\n", false, "", false});
   c.push_back({"binary_garbage", std::string("\x00\x01\x02\xff\xfe", 5) + "v 1 2", "", false, "", false});
