@@ -140,7 +140,7 @@ TEST(Report, HasEveryKeyOfTheSchema) {
   EXPECT_EQ(keys_of(j["timings"][1]), (std::set<std::string>{"stage", "seconds"}));
   EXPECT_EQ(keys_of(j["bake"]), (std::set<std::string>{"texels_filled", "texels_dilated", "texels_footprint_filtered", "tiles_fitted", "tiles"}));
   EXPECT_EQ(j["metrics"], to_json(*filled_report().metrics));
-  EXPECT_EQ(keys_of(j["output"]), (std::set<std::string>{"directory", "obj"}));
+  EXPECT_EQ(keys_of(j["output"]), (std::set<std::string>{"directory", "model"}));
 }
 
 TEST(Report, WritesEachFieldsValue) {
@@ -197,7 +197,7 @@ TEST(Report, WritesEachFieldsValue) {
   EXPECT_EQ(j["bake"]["tiles"], 14);
   EXPECT_EQ(j["peak_rss_mib"], 18.5);
   EXPECT_EQ(j["wall_seconds"], 0.875);
-  EXPECT_EQ(j["output"]["obj"], "model.obj");
+  EXPECT_EQ(j["output"]["model"], "model.obj");
 }
 
 TEST(Report, NumbersKeepTheirTypes) {

@@ -1,4 +1,4 @@
-// Reading and writing models and texture images: Wavefront OBJ + MTL and PLY (read) with the textures
+// Reading and writing models and texture images: Wavefront OBJ + MTL and PLY with the textures
 // they name; PNG and JPEG (and, for reading, what stb_image understands). Every reader refuses bad input with an
 // InputError naming the file, the element and the problem.
 #pragma once
@@ -71,5 +71,20 @@ void save_image(const std::string& path, const Image& image, ImageFormat format,
 /// shortest round-trip form, so they read back bit-identical; texture coordinates likewise, so no UV
 /// triangle collapses on the way to the file. Throws InputError naming the path on failure.
 void write_obj(const TexturedMesh& mesh, const std::string& outdir, const std::string& name, ImageFormat format);
+
+/// Writes OUTDIR/<name>.ply and every texture of `mesh` (named as write_obj names them), atomically as
+/// write_obj does (the PLY last): a binary_little_endian PLY as photogrammetry tools write it and
+/// MeshLab reads it. Header: one `comment TextureFile <file>` per texture, in the order of
+/// mesh.textures, so that a face's `texnumber` indexes them. Vertex: x y z, as float when every
+/// coordinate is exactly a float, else as double, so positions always read back bit-identical; no
+/// normals (TexturedMesh's are per corner, and the model's own shading is recomputed by viewers).
+/// Face: `vertex_indices` (uchar count, int indices), `texcoord` (uchar 6, float: the coordinate the
+/// renderer samples, TexturedMesh::sampled_uv, since PLY has no texture transform; float keeps it
+/// within 2^-24 relative, far below a texel of any texture tightex writes) and `texnumber` (int: the
+/// texture of the face's material; -1 where the face has no material or its material has no texture).
+/// PLY has no place for a material's name or Kd colour: they are not written.
+/// Requires: a mesh as read_model guarantees it, with fewer than 2^31 vertices.
+/// Throws InputError naming the path on failure (too many vertices, cannot create, write or rename).
+void write_ply(const TexturedMesh& mesh, const std::string& outdir, const std::string& name, ImageFormat format);
 
 }  // namespace tightex

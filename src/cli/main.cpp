@@ -18,6 +18,7 @@
 
 #include "core/error.hpp"
 #include "core/resources.hpp"
+#include "io/model_files.hpp"
 #include "io/obj_reader.hpp"
 #include "io/obj_writer.hpp"
 #include "report/metrics.hpp"
@@ -63,7 +64,7 @@ int run_measure(int argc, char** argv) {
   std::string in_path, out_path;
   size_t samples = 200000;
   app.add_option("input", in_path, "the original model (OBJ or PLY)")->required();
-  app.add_option("output", out_path, "the re-textured model (OBJ)")->required();
+  app.add_option("output", out_path, "the re-textured model (OBJ or PLY)")->required();
   app.add_option("--samples", samples, "surface PSNR samples");
   try {
     app.parse(argc, argv);
@@ -91,6 +92,9 @@ Enum parsed(const std::array<Enum, N>& values, const std::string& name) {
   return *v;
 }
 
+/// The kinds of model the CLI writes.
+enum class ModelFormat { kObj, kPly };
+
 /// What the command line asks for.
 struct CommandLine {
   std::string input, outdir;
@@ -106,6 +110,7 @@ struct CommandLine {
   MapKind map = MapKind::kDetail;
   CornerRule corners = CornerRule::kEqualArcs;
   ImageFormat format = ImageFormat::kPng;
+  ModelFormat output_format = ModelFormat::kObj;  // --output-format, else the input's kind
   bool quiet = false, verbose = false, force = false, no_fit = false, fine_fit = false;
   double max_memory_mib = 0;  // 0: 90% of RAM
 };
@@ -125,6 +130,7 @@ std::string check_aspect(const std::string& v) {
 /// The option names as given on the command line, before they become enum values.
 struct ChoiceNames {
   std::string layout, format = "png", holes, map, corners;
+  std::string output_format;  // empty: not given
 };
 
 /// Declares every option of the main command on `app`, bound to `line` and `names`. Returns --size's
@@ -175,6 +181,10 @@ CLI::Option* define_options(CLI::App& app, CommandLine& line, ChoiceNames& names
   app.add_option("--layout", names.layout, "atlas: all components in one texture; per-component: one texture each (the paper's)")
       ->check(CLI::IsMember(names_of(kLayouts)));
   app.add_option("--format", names.format, "texture file format")->check(CLI::IsMember({"png", "jpg"}));
+  app.add_option("--output-format", names.output_format,
+                 "model file format: obj (OBJ + MTL) or ply (binary PLY, textures named by comment TextureFile). "
+                 "Default: the input's kind (a .ply input gives a .ply, anything else an .obj)")
+      ->check(CLI::IsMember({"obj", "ply"}));
   app.add_option("--holes", names.holes, "fill: cap holes with scaffolding (paper §4.1); cut: open them into the seam")
       ->check(CLI::IsMember(names_of(kHoleModes)));
   app.add_option("--report", line.report_path, "where to write the JSON report (default OUTDIR/report.json)");
@@ -205,18 +215,31 @@ std::optional<CommandLine> parse_command_line(int argc, char** argv, int& exit_c
   line.map = parsed(kMapKinds, names.map);
   line.corners = parsed(kCornerRules, names.corners);
   line.format = names.format == "png" ? ImageFormat::kPng : ImageFormat::kJpeg;
+  const bool ply_input = equals_ignoring_case(fs::path(line.input).extension().string(), ".ply");
+  const std::string output_format = names.output_format.empty() ? (ply_input ? "ply" : "obj") : names.output_format;
+  line.output_format = output_format == "ply" ? ModelFormat::kPly : ModelFormat::kObj;
   return line;
 }
 
+/// The output model's file name inside the output folder: the input's stem and the output format's
+/// extension.
+std::string output_model_name(const CommandLine& line) {
+  return fs::path(line.input).stem().string() + (line.output_format == ModelFormat::kPly ? ".ply" : ".obj");
+}
+
 /// Refuses an input that is a folder, and an output folder that is the input's own: the outputs are
-/// named after the input, so written there they would replace it. Throws InputError.
+/// named after the input, so written there they would replace it or lie among its files. Throws
+/// InputError.
 void check_paths(const CommandLine& line) {
   if (fs::is_directory(line.input)) fail_input("{}: is a directory, not a model file", line.input);
   std::error_code ec;
   const fs::path in_dir = fs::absolute(fs::path(line.input)).parent_path();
-  if (fs::exists(line.outdir, ec) && fs::exists(in_dir, ec) && fs::equivalent(line.outdir, in_dir, ec))
-    fail_input("{}: the output folder {} is the input's own folder; {}.obj would replace the input (choose another -o)", line.input,
-               line.outdir, fs::path(line.input).stem().string());
+  if (fs::exists(line.outdir, ec) && fs::exists(in_dir, ec) && fs::equivalent(line.outdir, in_dir, ec)) {
+    const std::string model = output_model_name(line);
+    const bool replaces = model == fs::path(line.input).filename().string();
+    fail_input("{}: the output folder {} is the input's own folder; {} would {} (choose another -o)", line.input, line.outdir, model,
+               replaces ? "replace the input" : "be written among the input's files");
+  }
 }
 
 /// The texture side: --size, else the side for --texels, else the default for the input's used texels
@@ -384,7 +407,10 @@ Metrics write_and_measure(const CommandLine& line, const TexturedMesh& input, co
   Metrics metrics;
   tbb::parallel_invoke(
       [&] {
-        write_obj(output, line.outdir, name, line.format);
+        if (line.output_format == ModelFormat::kPly)
+          write_ply(output, line.outdir, name, line.format);
+        else
+          write_obj(output, line.outdir, name, line.format);
         timings.write_s = seconds_since(tw);
       },
       [&] {
@@ -422,8 +448,7 @@ void write_preview(const std::string& preview_path, const TexturedMesh& input, c
 }
 
 /// The one-line summary (and with --verbose the metrics) on stdout.
-void print_summary(const CommandLine& line, const std::string& name, const TexturedMesh& output, size_t components, const Metrics& metrics,
-                   double wall_seconds) {
+void print_summary(const CommandLine& line, const TexturedMesh& output, size_t components, const Metrics& metrics, double wall_seconds) {
   // The new texture's size (the first of several: per-component layout).
   std::string texture;
   if (!output.textures.empty()) {
@@ -431,10 +456,10 @@ void print_summary(const CommandLine& line, const std::string& name, const Textu
     texture = fmt::format("{}x{}{} texture, ", img.width, img.height, output.textures.size() > 1 ? " +" : "");
   }
   fmt::print(
-      "tightex: {} -> {}/{}.obj  ({}{} components, {:.1f}% -> {:.1f}% texels used, {} charts, "
+      "tightex: {} -> {}/{}  ({}{} components, {:.1f}% -> {:.1f}% texels used, {} charts, "
       "PSNR {:.1f} dB, {} lost, {} flipped, {:.2f} s)\n",
-      line.input, line.outdir, name, texture, components, 100 * metrics.input.utilization, 100 * metrics.output.utilization, metrics.charts,
-      metrics.surface_psnr, metrics.lost_triangles, metrics.flipped, wall_seconds);
+      line.input, line.outdir, output_model_name(line), texture, components, 100 * metrics.input.utilization,
+      100 * metrics.output.utilization, metrics.charts, metrics.surface_psnr, metrics.lost_triangles, metrics.flipped, wall_seconds);
   if (line.verbose) fmt::print("{}\n", to_json(metrics).dump(2));
 }
 
@@ -466,12 +491,11 @@ void run(const CommandLine& line) {
   const std::string name = fs::path(line.input).stem().string();
   const Metrics metrics = write_and_measure(line, planned.mesh, result.output, name, timings);
   const double wall_seconds = seconds_since(t0);
-  add_cli_figures(result.report, metrics, timings, wall_seconds, read_stats, OutputFiles{line.outdir, name + ".obj"});
+  add_cli_figures(result.report, metrics, timings, wall_seconds, read_stats, OutputFiles{line.outdir, output_model_name(line)});
   if (!line.preview_path.empty()) write_preview(line.preview_path, planned.mesh, result.output);
   const std::string report_path = line.report_path.empty() ? (fs::path(line.outdir) / "report.json").string() : line.report_path;
   write_text_atomically(report_path, result.report.dump(2) + "\n");
-  if (!line.quiet)
-    print_summary(line, name, result.output, result.report["preparation"]["components"].get<size_t>(), metrics, wall_seconds);
+  if (!line.quiet) print_summary(line, result.output, result.report["preparation"]["components"].get<size_t>(), metrics, wall_seconds);
 }
 
 /// The main command from its arguments to its exit code (0, or 1 for a command-line error).

@@ -1,14 +1,12 @@
 #include "io/obj_writer.hpp"
 
-#include <unistd.h>
 #include <charconv>
-#include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <unordered_map>
 
 #include "core/error.hpp"
+#include "io/output_files.hpp"
 
 namespace tightex {
 
@@ -36,14 +34,6 @@ void append(std::string& s, double v) {
   char buf[32];
   auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
   s.append(buf, end);
-}
-
-void write_file(const fs::path& path, const std::string& text) {
-  std::ofstream f(path, std::ios::binary);
-  if (!f) fail_input("{}: cannot write ({})", path.string(), std::strerror(errno));
-  f.write(text.data(), std::streamsize(text.size()));
-  f.close();
-  if (!f) fail_input("{}: write failed ({})", path.string(), std::strerror(errno));
 }
 
 /// The MTL file: one material each, map_Kd naming the texture files as written (`texture_file`).
@@ -139,34 +129,12 @@ std::string obj_text(const TexturedMesh& mesh, const std::string& name) {
 }  // namespace
 
 void write_obj(const TexturedMesh& mesh, const std::string& outdir, const std::string& name, ImageFormat format) {
-  std::error_code ec;
-  fs::create_directories(outdir, ec);
-  if (!fs::is_directory(outdir)) fail_input("{}: cannot create output directory", outdir);
-  const std::string tag = fmt::format(".tmp{}", ::getpid());
-  std::vector<std::pair<fs::path, fs::path>> pending;  // temporary -> final, in rename order
-  auto temp_for = [&](const std::string& file) {
-    const fs::path final_path = fs::path(outdir) / file;
-    const fs::path tmp = fs::path(outdir) / ("." + file + tag);
-    pending.push_back({tmp, final_path});
-    return tmp;
-  };
-  try {
-    // Texture::path is the file stem; the extension follows the chosen format.
-    std::vector<std::string> texture_file;
-    for (const Texture& tex : mesh.textures) {
-      texture_file.push_back(tex.path + (format == ImageFormat::kPng ? ".png" : ".jpg"));
-      save_image(temp_for(texture_file.back()).string(), tex.image, format);
-    }
-    write_file(temp_for(name + ".mtl"), mtl_text(mesh, texture_file));
-    write_file(temp_for(name + ".obj"), obj_text(mesh, name));
-    for (auto& [tmp, final_path] : pending) {
-      fs::rename(tmp, final_path, ec);
-      if (ec) fail_input("{}: cannot rename into place ({})", final_path.string(), ec.message());
-    }
-  } catch (...) {
-    for (auto& [tmp, final_path] : pending) fs::remove(tmp, ec);
-    throw;
-  }
+  std::vector<OutputFile> files = texture_output_files(mesh, format);
+  std::vector<std::string> texture_file;
+  for (const OutputFile& f : files) texture_file.push_back(f.name);
+  files.push_back({name + ".mtl", [&](const fs::path& tmp) { write_whole_file(tmp, mtl_text(mesh, texture_file)); }});
+  files.push_back({name + ".obj", [&](const fs::path& tmp) { write_whole_file(tmp, obj_text(mesh, name)); }});
+  write_files_atomically(outdir, files);
 }
 
 }  // namespace tightex

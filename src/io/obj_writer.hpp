@@ -1,4 +1,4 @@
-// Writing the result: OBJ + MTL + texture images, atomically.
+// Writing the result: OBJ + MTL + texture images, atomically (write_obj, declared in tightex/io.hpp).
 #pragma once
 #include <string>
 

@@ -89,7 +89,7 @@ struct StageTiming {
 /// "output": where the CLI wrote the model.
 struct OutputFiles {
   std::string directory;
-  std::string obj;  // the OBJ file's name within `directory`
+  std::string model;  // the model file's name within `directory` (OBJ or PLY)
 };
 
 /// The whole report. Sections that only some callers fill are optional and not written when unset:

@@ -142,7 +142,7 @@ json to_json(const StageTiming& timing) {
   return j;
 }
 
-json to_json(const OutputFiles& files) { return {{"directory", files.directory}, {"obj", files.obj}}; }
+json to_json(const OutputFiles& files) { return {{"directory", files.directory}, {"model", files.model}}; }
 
 json reader_json(const ObjReadStats& stats) {
   return {{"polygons_triangulated", stats.polygons_triangulated}, {"paths_found", stats.paths_found}};

@@ -1,0 +1,58 @@
+#include "io/output_files.hpp"
+
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <utility>
+
+#include "core/error.hpp"
+
+namespace tightex {
+
+namespace fs = std::filesystem;
+
+void write_files_atomically(const std::string& folder, const std::vector<OutputFile>& files) {
+  std::error_code ec;
+  fs::create_directories(folder, ec);
+  if (!fs::is_directory(folder)) fail_input("{}: cannot create output directory", folder);
+  const std::string tag = fmt::format(".tmp{}", ::getpid());
+  std::vector<std::pair<fs::path, fs::path>> pending;  // temporary -> final, in rename order
+  try {
+    for (const OutputFile& file : files) {
+      const fs::path final_path = fs::path(folder) / file.name;
+      const fs::path tmp = fs::path(folder) / ("." + file.name + tag);
+      pending.push_back({tmp, final_path});
+      file.write(tmp);
+    }
+    for (auto& [tmp, final_path] : pending) {
+      fs::rename(tmp, final_path, ec);
+      if (ec) fail_input("{}: cannot rename into place ({})", final_path.string(), ec.message());
+    }
+  } catch (...) {
+    for (auto& [tmp, final_path] : pending) fs::remove(tmp, ec);
+    throw;
+  }
+}
+
+void write_whole_file(const fs::path& path, const std::string& bytes) {
+  std::ofstream f(path, std::ios::binary);
+  if (!f) fail_input("{}: cannot write ({})", path.string(), std::strerror(errno));
+  f.write(bytes.data(), std::streamsize(bytes.size()));
+  f.close();
+  if (!f) fail_input("{}: write failed ({})", path.string(), std::strerror(errno));
+}
+
+std::string texture_file_name(const Texture& texture, ImageFormat format) {
+  return texture.path + (format == ImageFormat::kPng ? ".png" : ".jpg");
+}
+
+std::vector<OutputFile> texture_output_files(const TexturedMesh& mesh, ImageFormat format) {
+  std::vector<OutputFile> files;
+  for (const Texture& tex : mesh.textures)
+    files.push_back({texture_file_name(tex, format), [&tex, format](const fs::path& tmp) { save_image(tmp.string(), tex.image, format); }});
+  return files;
+}
+
+}  // namespace tightex

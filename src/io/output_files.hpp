@@ -1,0 +1,39 @@
+// What the model writers (OBJ, PLY) share: a set of files that appears in its folder all together or
+// not at all, a file written from a string, and the names the texture files take.
+#pragma once
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "tightex/io.hpp"
+
+namespace tightex {
+
+/// One file of a set: its name inside the folder, and what writes its content to the path it is given
+/// (a temporary one).
+struct OutputFile {
+  std::string name;
+  std::function<void(const std::filesystem::path&)> write;
+};
+
+/// Creates `folder` if needed, writes every file under a hidden temporary name beside its final one
+/// (".NAME.tmpPID", so a rename never crosses file systems and a reader never sees half a file), in
+/// order, and only once all are complete renames them into place in the same order (the model last, so
+/// a model file that exists is complete with its textures). On any failure the temporary files are
+/// removed and the exception is rethrown, so a failed run leaves no model behind.
+/// Throws InputError naming the folder or file that cannot be created, written or renamed.
+void write_files_atomically(const std::string& folder, const std::vector<OutputFile>& files);
+
+/// Writes `bytes` to `path` as they are. Throws InputError naming the path (and the system's reason).
+void write_whole_file(const std::filesystem::path& path, const std::string& bytes);
+
+/// The name a texture is written under: Texture::path (the file stem inside the output folder) and the
+/// extension of `format` (.png or .jpg).
+std::string texture_file_name(const Texture& texture, ImageFormat format);
+
+/// One OutputFile per texture of `mesh`, in its order, named by texture_file_name and writing the image
+/// in `format`. The writers refer to `mesh`, which must outlive them.
+std::vector<OutputFile> texture_output_files(const TexturedMesh& mesh, ImageFormat format);
+
+}  // namespace tightex
