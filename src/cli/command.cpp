@@ -1,0 +1,517 @@
+// The tightex command as a library (command.hpp): the options' one definition, and the run from an
+// input file to the written model, report and figures.
+#include "cli/command.hpp"
+
+#include <unistd.h>
+
+#include <tbb/parallel_invoke.h>
+
+#include <CLI/CLI.hpp>
+#include <array>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <optional>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "core/error.hpp"
+#include "core/resources.hpp"
+#include "io/model_files.hpp"
+#include "io/obj_reader.hpp"
+#include "io/obj_writer.hpp"
+#include "report/metrics.hpp"
+#include "report/preview.hpp"
+#include "report/report.hpp"
+
+namespace fs = std::filesystem;
+
+namespace tightex::cli {
+
+namespace {
+fs::path temporary_beside(const fs::path& path) { return path.parent_path() / ("." + path.filename().string() + ".tmp"); }
+
+/// Writes `text` to `path` under a temporary name, then renames it into place. Throws InputError
+/// naming the path if it cannot be written or renamed (the temporary file is removed then).
+void write_text_atomically(const fs::path& path, const std::string& text) {
+  const fs::path tmp = temporary_beside(path);
+  {
+    std::ofstream f(tmp, std::ios::binary);
+    if (!f) fail_input("{}: cannot write", path.string());
+    f << text;
+    if (!f) fail_input("{}: write failed", path.string());
+  }
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  if (ec) {
+    fs::remove(tmp, ec);
+    fail_input("{}: cannot rename into place", path.string());
+  }
+}
+
+/// Seconds from t0 to now.
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// The names of every value of an enum, in the table's order: the CLI's list of allowed values.
+template <typename Enum, size_t N>
+std::vector<std::string> names_of(const std::array<Enum, N>& values) {
+  std::vector<std::string> names;
+  for (Enum v : values) names.emplace_back(to_string(v));
+  return names;
+}
+
+/// The value a name checked by CLI::IsMember(names_of(values)) stands for.
+template <typename Enum, size_t N>
+Enum parsed(const std::array<Enum, N>& values, const std::string& name) {
+  const std::optional<Enum> v = from_string(values, name);
+  if (!v) throw InternalError("command line: '" + name + "' passed the option's check but names no value");
+  return *v;
+}
+
+/// --aspect's check: "auto" or a number in [1/16, 16]; an empty string means it passes.
+std::string check_aspect(const std::string& v) {
+  if (v == "auto") return std::string();
+  try {
+    size_t used = 0;
+    const double a = std::stod(v, &used);
+    if (used == v.size() && a >= 0.0625 && a <= 16) return std::string();
+  } catch (...) {
+  }
+  return std::string("must be auto or a number in [1/16, 16]");
+}
+
+/// The option names as given on the command line, before they become enum values.
+struct ChoiceNames {
+  std::string layout, format = "png", holes, map, corners;
+  std::string output_format;  // empty: not given
+};
+
+/// Declares every option of the main command on `app`, bound to `line` and `names`. Returns --size's
+/// option, whose count says whether it was given.
+CLI::Option* define_options(CLI::App& app, CommandLine& line, ChoiceNames& names) {
+  names.layout = to_string(line.layout), names.holes = to_string(line.holes), names.map = to_string(line.map);
+  names.corners = to_string(line.corners);
+  app.add_option("input", line.input, "textured model (OBJ + MTL, or PLY; with textures)")->required();
+  app.add_option("-o,--output", line.outdir, "output directory")->required();
+  auto* size_opt =
+      app.add_option("--size", line.size,
+                     "texture side in texels (per-component: of the largest component); above 16384 needs --force. "
+                     "Default: the side that holds as many texels as the input uses (per-component: all the textures together; "
+                     "grown if the atlas cannot hold a 4x4 rectangle per component; see --texels)")
+          ->check(CLI::Range(8, 65536));
+  app.add_option("--texels", line.texels,
+                 "texel budget: the texture holds this many texels: the smallest square (side a multiple of 4), or as many "
+                 "in the shape --aspect gives or chooses (per-component: the largest component's texture). "
+                 "Default: the input's used texels, so the output keeps the input's information")
+      ->check(CLI::PositiveNumber)
+      ->excludes(size_opt);
+  app.add_option("--map", names.map,
+                 "detail (default): texels where the input texture has detail (colour gradient per 3D length), "
+                 "capped at 4x the input's own density; area: the same texels per unit of 3D area everywhere; "
+                 "texel: the input's own texel density per triangle; harmonic: the paper's map exactly (docs/maps.md)")
+      ->check(CLI::IsMember(names_of(kMapKinds)));
+  app.add_option("--aspect", line.aspect,
+                 "width/height of the texture, which holds as many texels as a square would: auto (default, area/texel/detail "
+                 "maps): the component holding most of the texture is mapped at 1:2, 1:1 and 2:1 and the shape whose "
+                 "texels keep the most of the input is chosen (the square unless another is clearly better); a number "
+                 "(e.g. 2) fixes it. With --size the default is 1, a square of that side")
+      ->check(check_aspect);
+  app.add_option("--balance", line.balance,
+                 "area/texel/detail maps: 1 = target density exactly, 0 = the harmonic map's density (least angle "
+                 "distortion); between: a geometric blend")
+      ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--corners", names.corners,
+                 "which boundary points become the square's corners: arcs (default): four arcs of equal "
+                 "length; turning: where the boundary turns most (docs/corners.md)")
+      ->check(CLI::IsMember(names_of(kCornerRules)));
+  auto* no_fit_opt = app.add_flag("--no-fit", line.no_fit, "bake each texel by sampling only, without the least-squares fit to the input");
+  app.add_flag("--fine-fit", line.fine_fit,
+               "fit on 4x4 points per texel instead of 2x2: a little higher surface PSNR, about twice the bake time")
+      ->excludes(no_fit_opt);
+  app.add_flag("--force", line.force, "allow --size above 16384");
+  app.add_option("--max-memory", line.max_memory_mib, "refuse inputs whose estimated memory exceeds this many MiB (default: 90% of RAM)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--layout", names.layout, "atlas: all components in one texture; per-component: one texture each (the paper's)")
+      ->check(CLI::IsMember(names_of(kLayouts)));
+  app.add_option("--format", names.format, "texture file format")->check(CLI::IsMember({"png", "jpg"}));
+  app.add_option("--output-format", names.output_format,
+                 "model file format: obj (OBJ + MTL) or ply (binary PLY, textures named by comment TextureFile). "
+                 "Default: the input's kind (a .ply input gives a .ply, anything else an .obj)")
+      ->check(CLI::IsMember({"obj", "ply"}));
+  app.add_option("--holes", names.holes, "fill: cap holes with scaffolding (paper §4.1); cut: open them into the seam")
+      ->check(CLI::IsMember(names_of(kHoleModes)));
+  app.add_option("--report", line.report_path, "where to write the JSON report (default OUTDIR/report.json)");
+  app.add_option("--preview", line.preview_path, "write a PNG of the input texture(s) beside the output texture");
+  app.add_flag("-q,--quiet", line.quiet, "print nothing but errors");
+  app.add_flag("-v,--verbose", line.verbose, "print the report's main figures");
+  return size_opt;
+}
+
+constexpr const char* kDescription =
+    "tightex: one compact texture per surface, from a scan's fragmented UV atlas\n"
+    "(global parameterization by a harmonic map onto a square; Chen et al., arXiv 2406.04115)";
+
+/// The command line once CLI11 has parsed it into `line` and `names`: the enum values, whether --size
+/// was given, the output format.
+void finish_command_line(CommandLine& line, const ChoiceNames& names, const CLI::Option* size_opt) {
+  line.size_given = size_opt->count() > 0;
+  line.layout = parsed(kLayouts, names.layout);
+  line.holes = parsed(kHoleModes, names.holes);
+  line.map = parsed(kMapKinds, names.map);
+  line.corners = parsed(kCornerRules, names.corners);
+  line.format = names.format == "png" ? ImageFormat::kPng : ImageFormat::kJpeg;
+  const bool ply_input = equals_ignoring_case(fs::path(line.input).extension().string(), ".ply");
+  const std::string output_format = names.output_format.empty() ? (ply_input ? "ply" : "obj") : names.output_format;
+  line.output_format = output_format == "ply" ? ModelFormat::kPly : ModelFormat::kObj;
+}
+
+/// The output model's file name inside the output folder: the input's stem and the output format's
+/// extension.
+std::string output_model_name(const CommandLine& line) {
+  return fs::path(line.input).stem().string() + (line.output_format == ModelFormat::kPly ? ".ply" : ".obj");
+}
+
+/// Refuses an input that is a folder, and an output folder that is the input's own: the outputs are
+/// named after the input, so written there they would replace it or lie among its files. Throws
+/// InputError.
+void check_paths(const CommandLine& line) {
+  if (fs::is_directory(line.input)) fail_input("{}: is a directory, not a model file", line.input);
+  std::error_code ec;
+  const fs::path in_dir = fs::absolute(fs::path(line.input)).parent_path();
+  if (fs::exists(line.outdir, ec) && fs::exists(in_dir, ec) && fs::equivalent(line.outdir, in_dir, ec)) {
+    const std::string model = output_model_name(line);
+    const bool replaces = model == fs::path(line.input).filename().string();
+    fail_input("{}: the output folder {} is the input's own folder; {} would {} (choose another -o)", line.input, line.outdir, model,
+               replaces ? "replace the input" : "be written among the input's files");
+  }
+}
+
+/// The texture side: --size, else the side for --texels, else the default for the input's used texels
+/// (at most 16384 without --force). Throws InputError for a side above 16384 without --force.
+int texture_side(const CommandLine& line, const TexturedMesh& geometry) {
+  int size = line.size;
+  if (size == 0) {
+    const int max_side = line.force ? 65536 : kDefaultSizeMax;
+    size = line.texels > 0 ? std::min(size_for_texels(line.texels), max_side) : default_size(geometry, max_side);
+  }
+  if (size > 16384 && !line.force)
+    fail_input("--size {} is above 16384 ({:.1f} GiB of RGBA texture); add --force to allow it", size,
+               double(size) * size * 4 / double(1 << 30));
+  return size;
+}
+
+/// Memory a run needs per input triangle (the mesh and its stages; the peak on the scans of
+/// ../shared/data) and per output texel (RGBA and the bake's coverage masks), in bytes.
+constexpr double kBytesPerTriangle = 1200.0;
+constexpr double kBytesPerOutputTexel = 7.0;
+
+/// The resource guard: refuses a run whose estimated memory is above --max-memory (default 90% of RAM)
+/// before any pixel is allocated.
+struct MemoryGuard {
+  std::string input;
+  double limit_mib = 0;
+  /// The memory before the per-component output textures: decoded input textures (RGBA), the mesh and
+  /// its stages, and for the atlas the output texture.
+  double estimate = 0;
+
+  /// Throws InputError naming `what` if `bytes` is above the limit.
+  void check(double bytes, const std::string& what) const {
+    if (bytes / double(1 << 20) > limit_mib)
+      fail_input("{}: {} needs about {:.0f} MiB, more than the limit of {:.0f} MiB (--max-memory)", input, what, bytes / double(1 << 20),
+                 limit_mib);
+  }
+};
+
+/// The guard for this command line: --max-memory, or 90% of this machine's memory.
+MemoryGuard memory_guard(const CommandLine& line) {
+  MemoryGuard guard;
+  guard.input = line.input;
+  guard.limit_mib = line.max_memory_mib > 0 ? line.max_memory_mib
+                                            : 0.9 * double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE)) / double(1 << 20);
+  return guard;
+}
+
+/// Refuses, from the image headers alone, a texture whose decoded pixels would not fit the limit (a
+/// hostile header can declare 200000 x 200000 pixels); before anything is sized by those pixels.
+void check_texture_headers(const MemoryGuard& guard, const TexturedMesh& geometry) {
+  for (const Texture& t : geometry.textures)
+    guard.check(double(t.width) * double(t.height) * 4.0, fmt::format("texture {} ({} x {} pixels)", t.path, t.width, t.height));
+}
+
+/// Checks the memory the model needs at this size; per-component outputs are checked once the layout
+/// is known (check_per_component_memory).
+MemoryGuard check_memory(const CommandLine& line, const TexturedMesh& geometry, int size) {
+  MemoryGuard guard = memory_guard(line);
+  guard.estimate = double(geometry.num_triangles()) * kBytesPerTriangle;
+  for (const Texture& t : geometry.textures) guard.estimate += double(t.width) * double(t.height) * 4.0;
+  if (line.layout == Layout::kAtlas) guard.estimate += double(size) * double(size) * kBytesPerOutputTexel;
+  guard.check(guard.estimate, "this model at this --size");
+  return guard;
+}
+
+/// Checks the memory of the per-component layout's output textures, now that the plan has sized them.
+void check_per_component_memory(const MemoryGuard& guard, const Plan& plan) {
+  double out_texels = 0;
+  for (const auto& [w, h] : plan.texture_sizes()) out_texels += double(w) * double(h);
+  guard.check(guard.estimate + out_texels * kBytesPerOutputTexel, "this model's per-component textures");
+}
+
+/// The library's options for this command line at texture side `size`. Metrics are left to the CLI,
+/// which measures beside the write.
+Options library_options(const CommandLine& line, int size, ProgressCallback progress) {
+  Options opt;
+  opt.size = size;
+  opt.default_budget = !line.size_given && !(line.texels > 0);
+  opt.layout = line.layout;
+  opt.holes = line.holes;
+  opt.map = line.map;
+  opt.balance = line.balance;
+  // --size promises a side: a square, unless a shape is asked for.
+  opt.aspect = line.aspect.empty() ? (line.size_given ? 1.0 : 0.0) : line.aspect == "auto" ? 0.0 : std::stod(line.aspect);
+  opt.corners = line.corners;
+  opt.fit = !line.no_fit;
+  opt.fine_fit = line.fine_fit;
+  opt.measure = false;
+  opt.progress = std::move(progress);
+  return opt;
+}
+
+/// The progress line on a terminal's stderr.
+bool print_progress(std::string_view stage, double f) {
+  if (f > 0 && f < 1)
+    fmt::print(stderr, "\r\033[Ktightex: {} {:.0f}%...", stage, 100 * f);
+  else
+    fmt::print(stderr, "\r\033[Ktightex: {}...", stage);
+  return true;
+}
+
+/// The model with its texture pixels and the plan made from it.
+struct PlannedModel {
+  TexturedMesh mesh;
+  Plan plan;
+  double textures_s = 0;  // when the textures were read, in seconds from the start
+};
+
+/// Reads the textures and plans the charts. The geometric stages need no pixels, so the textures are
+/// decoded beside them, unless the plan needs the pixels (the detail map places texels by them, the
+/// auto aspect compares its shapes with them): then textures first. A texture error is thrown before a
+/// plan error: a bad texture is the user's first problem.
+PlannedModel read_textures_and_plan(const std::string& input, const TexturedMesh& geometry, const Options& opt,
+                                    std::chrono::steady_clock::time_point t0) {
+  PlannedModel r;
+  std::exception_ptr texture_error, plan_error;
+  auto read_textures = [&] {
+    try {
+      r.mesh = read_model(input);
+      r.textures_s = seconds_since(t0);
+    } catch (...) {
+      texture_error = std::current_exception();
+    }
+  };
+  auto plan_from = [&](const TexturedMesh& model) {
+    try {
+      r.plan = plan_charts(model, opt);
+    } catch (...) {
+      plan_error = std::current_exception();
+    }
+  };
+  if (opt.map == MapKind::kDetail || (opt.aspect == 0 && opt.map != MapKind::kHarmonic && opt.layout == Layout::kAtlas)) {
+    read_textures();
+    if (!texture_error) plan_from(r.mesh);
+  } else {
+    tbb::parallel_invoke(read_textures, [&] { plan_from(geometry); });
+  }
+  if (texture_error) std::rethrow_exception(texture_error);
+  if (plan_error) std::rethrow_exception(plan_error);
+  return r;
+}
+
+/// One line each where the result is not what was asked: components kept as they were (Plan::kept),
+/// and the default budget grown to hold every component (Options::default_budget).
+void print_notes(const Plan& plan, const nlohmann::json& report) {
+  if (const size_t kept_components = plan.kept_components(); kept_components > 0)
+    fmt::print(stderr,
+               "tightex: warning: {} component(s), {} triangles, could not be re-parameterized and keep their original "
+               "texture coordinates and texture(s) ({}); see \"kept_original_uvs\" in the report\n",
+               kept_components, plan.kept_triangles(), plan.first_kept_reason());
+  if (const auto& grown = report["options"]["size_grown_from"]; !grown.is_null())
+    fmt::print(stderr,
+               "tightex: note: {} components need a 4x4 texel rectangle each: the texture grew from {}^2 to {}^2 texels (--size sets it)\n",
+               report["preparation"]["components"].get<size_t>(), grown.get<int>(), report["options"]["size"].get<int>());
+}
+
+/// How long the CLI's own stages took, in seconds (read_s, textures_s from the start).
+struct CliTimings {
+  double read_s = 0, textures_s = 0, write_s = 0, measure_s = 0;
+};
+
+/// Writes the output model and measures it, side by side (PNG compression and measuring are
+/// independent). Returns the metrics; the times go to `timings`.
+Metrics write_and_measure(const CommandLine& line, const TexturedMesh& input, const TexturedMesh& output, const std::string& name,
+                          CliTimings& timings) {
+  const auto tw = std::chrono::steady_clock::now();
+  Metrics metrics;
+  tbb::parallel_invoke(
+      [&] {
+        if (line.output_format == ModelFormat::kPly)
+          write_ply(output, line.outdir, name, line.format);
+        else
+          write_obj(output, line.outdir, name, line.format);
+        timings.write_s = seconds_since(tw);
+      },
+      [&] {
+        metrics = measure(input, output);
+        timings.measure_s = seconds_since(tw);
+      });
+  return metrics;
+}
+
+/// Adds what the CLI knows to the library's report: the metrics, its own stages' times (reading first,
+/// writing and measuring last), wall time, peak RSS, the reader's figures and the output files.
+void add_cli_figures(nlohmann::json& rep, const Metrics& metrics, const CliTimings& t, double wall_seconds, const ObjReadStats& read_stats,
+                     const OutputFiles& files) {
+  rep["metrics"] = to_json(metrics);
+  nlohmann::json& timings = rep["timings"];
+  timings.push_back(to_json(StageTiming{"write (beside measure)", t.write_s, std::nullopt}));
+  timings.push_back(to_json(StageTiming{"measure (beside write)", t.measure_s, std::nullopt}));
+  timings.insert(timings.begin(), to_json(StageTiming{"read geometry", t.read_s, std::nullopt}));
+  timings.insert(timings.begin() + 1,
+                 to_json(StageTiming{"read textures (beside the geometric stages, from start)", t.textures_s, std::nullopt}));
+  rep["wall_seconds"] = wall_seconds;
+  rep["peak_rss_mib"] = peak_rss_mib();
+  rep["input"].update(reader_json(read_stats));
+  rep["output"] = to_json(files);
+}
+
+/// Writes the preview picture under a temporary name, then renames it into place.
+void write_preview(const std::string& preview_path, const TexturedMesh& input, const TexturedMesh& output) {
+  const fs::path p(preview_path);
+  const fs::path tmp = temporary_beside(p);
+  save_image(tmp.string(), make_preview(input, output), ImageFormat::kPng);
+  std::error_code ec;
+  fs::rename(tmp, p, ec);
+  if (ec) fail_input("{}: cannot write preview ({})", preview_path, ec.message());
+}
+
+/// The one-line summary (and with --verbose the metrics) on stdout.
+void print_summary(const CommandLine& line, const TexturedMesh& output, size_t components, const Metrics& metrics, double wall_seconds) {
+  // The new texture's size (the first of several: per-component layout).
+  std::string texture;
+  if (!output.textures.empty()) {
+    const Image& img = output.textures[0].image;
+    texture = fmt::format("{}x{}{} texture, ", img.width, img.height, output.textures.size() > 1 ? " +" : "");
+  }
+  fmt::print(
+      "tightex: {} -> {}/{}  ({}{} components, {:.1f}% -> {:.1f}% texels used, {} charts, "
+      "PSNR {:.1f} dB, {} lost, {} flipped, {:.2f} s)\n",
+      line.input, line.outdir, output_model_name(line), texture, components, 100 * metrics.input.utilization,
+      100 * metrics.output.utilization, metrics.charts, metrics.surface_psnr, metrics.lost_triangles, metrics.flipped, wall_seconds);
+  if (line.verbose) fmt::print("{}\n", to_json(metrics).dump(2));
+}
+
+/// The model's geometry (no pixels) with its textures' sizes from their headers, checked against the
+/// memory limit; the reader's figures into `read_stats`.
+TexturedMesh read_geometry(const CommandLine& line, ObjReadStats* read_stats) {
+  ObjReadOptions geometry_only;
+  geometry_only.load_textures = false;
+  TexturedMesh geometry = read_model(line.input, geometry_only, read_stats);
+  for (Texture& t : geometry.textures) std::tie(t.width, t.height) = image_dimensions(t.path);
+  check_texture_headers(memory_guard(line), geometry);
+  return geometry;
+}
+
+}  // namespace
+
+std::optional<CommandLine> parse_command_line(int argc, char** argv, int& exit_code) {
+  CLI::App app{kDescription};
+  CommandLine line;
+  ChoiceNames names;
+  const CLI::Option* size_opt = define_options(app, line, names);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    exit_code = app.exit(e) == 0 ? 0 : 1;
+    return std::nullopt;
+  }
+  finish_command_line(line, names, size_opt);
+  return line;
+}
+
+CommandLine parse_arguments(const std::vector<std::string>& args) {
+  CLI::App app{kDescription};
+  CommandLine line;
+  ChoiceNames names;
+  const CLI::Option* size_opt = define_options(app, line, names);
+  try {
+    std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 takes them last first
+    app.parse(reversed);
+  } catch (const CLI::ParseError& e) {
+    fail_input("options: {}", e.what());
+  }
+  finish_command_line(line, names, size_opt);
+  return line;
+}
+
+nlohmann::json run_command(const CommandLine& line, const CommandHooks& hooks) {
+  const auto t0 = std::chrono::steady_clock::now();
+  check_paths(line);
+  // Geometry first (milliseconds); the texture pixels are decoded while the geometric stages run. The
+  // model is parsed twice: cheap, and every texture error keeps its file and line.
+  CliTimings timings;
+  ObjReadStats read_stats;
+  TexturedMesh geometry = read_geometry(line, &read_stats);
+  timings.read_s = seconds_since(t0);
+  const int size = texture_side(line, geometry);
+  const bool printing = hooks.print && !line.quiet;
+  const bool show_progress = !hooks.progress && printing && isatty(STDERR_FILENO);
+  const MemoryGuard guard = check_memory(line, geometry, size);
+  const Options opt = library_options(line, size, show_progress ? ProgressCallback(print_progress) : hooks.progress);
+  PlannedModel planned = read_textures_and_plan(line.input, geometry, opt, t0);
+  timings.textures_s = planned.textures_s;
+  if (line.layout != Layout::kAtlas) check_per_component_memory(guard, planned.plan);
+  Result result = bake_plan(planned.plan, planned.mesh, opt);
+  if (show_progress) fmt::print(stderr, "\r\033[K");
+  if (printing) print_notes(planned.plan, planned.plan.report());
+
+  const std::string name = fs::path(line.input).stem().string();
+  const Metrics metrics = write_and_measure(line, planned.mesh, result.output, name, timings);
+  const double wall_seconds = seconds_since(t0);
+  add_cli_figures(result.report, metrics, timings, wall_seconds, read_stats, OutputFiles{line.outdir, output_model_name(line)});
+  if (!line.preview_path.empty()) write_preview(line.preview_path, planned.mesh, result.output);
+  const std::string report_path = line.report_path.empty() ? (fs::path(line.outdir) / "report.json").string() : line.report_path;
+  write_text_atomically(report_path, result.report.dump(2) + "\n");
+  if (printing) print_summary(line, result.output, result.report["preparation"]["components"].get<size_t>(), metrics, wall_seconds);
+  return result.report;
+}
+
+double estimate_memory_bytes(const CommandLine& line) {
+  const TexturedMesh geometry = read_geometry(line, nullptr);
+  const int size = texture_side(line, geometry);
+  CommandLine as_atlas = line;
+  as_atlas.layout = Layout::kAtlas;
+  as_atlas.max_memory_mib = std::numeric_limits<double>::max();
+  return check_memory(as_atlas, geometry, size).estimate;
+}
+
+Result optimize_mesh(const CommandLine& line, const TexturedMesh& mesh, const ProgressCallback& progress) {
+  const auto t0 = std::chrono::steady_clock::now();
+  check_texture_headers(memory_guard(line), mesh);
+  const int size = texture_side(line, mesh);
+  const MemoryGuard checked = check_memory(line, mesh, size);
+  Options opt = library_options(line, size, progress);
+  const Plan plan = plan_charts(mesh, opt);
+  if (line.layout != Layout::kAtlas) check_per_component_memory(checked, plan);
+  opt.measure = true;
+  Result result = bake_plan(plan, mesh, opt);
+  result.report["wall_seconds"] = seconds_since(t0);
+  result.report["peak_rss_mib"] = peak_rss_mib();
+  return result;
+}
+
+}  // namespace tightex::cli
