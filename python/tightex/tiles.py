@@ -1,0 +1,577 @@
+"""Whole tile sets through tightex on a Dask cluster: one task per tile.
+
+    /usr/bin/python3 -m tightex.tiles INPUT OUTPUT [--scheduler ADDRESS] [--workers N] [--force] [tightex options]
+
+INPUT is a folder of models (.obj, .ply, and .glb where the library reads it; searched recursively),
+or a 3D Tiles ``tileset.json`` whose content is 1.0 ``.b3dm`` (the embedded GLB is optimized; the
+feature and batch tables are kept byte for byte), 1.1 ``.glb`` or a model file (external tilesets,
+``.json`` content, are followed). OUTPUT mirrors INPUT: the tile ``a/b/t.obj`` is written to the folder
+``OUTPUT/a/b/t/`` (its model, material, texture and ``report.json``), and each tileset.json is rewritten
+with its content URIs pointing at the new files (bounding volumes and everything else unchanged).
+
+tightex options (``--size 1024``, ``--map area``, ...) come after INPUT and OUTPUT and are the
+command's; ``--allow-large-size`` passes the command's own ``--force``.
+
+- Without ``--scheduler`` a LocalCluster runs on this machine (``--workers`` processes, default one per
+  core); with it, the running cluster at that address.
+- Each task asks for the memory tightex's own guard estimates (``tightex.estimate_memory``) as the
+  worker resource "memory"; local workers offer their share of this machine's memory, so a worker never
+  runs two tiles together that would not fit. Workers of an external cluster that declare no "memory"
+  resource run tiles without that check (a note says so).
+- A tile whose input is bad is reported with its one-line error and the others complete; a tile whose
+  worker died is retried elsewhere (Dask's allowed-failures). A tile's outputs are written into a
+  temporary folder beside it and renamed into place, so a half tile never appears.
+- ``OUTPUT/manifest.jsonl`` records each tile done, with the hash of its input files and the options; a
+  re-run skips those whose hash, options and output still match, unless ``--force``. A failed tile of
+  a tileset gets its input content copied unchanged, so the tileset stays complete.
+- At the end ``OUTPUT/summary.json`` and ``summary.csv``: per tile its status, input and output texels,
+  surface PSNR, time, peak memory (the worker process's peak resident set during the tile) and error.
+
+Exit status: 0 when every tile is done or skipped, 1 when some failed (see the summary), 2 for a bad
+command line.
+"""
+
+import argparse
+import csv
+import hashlib
+import importlib.util
+import json
+import logging
+import os
+import re
+import shutil
+import sys
+import time
+import urllib.parse
+import uuid
+
+MODEL_EXTENSIONS = (".obj", ".ply", ".glb")
+CONTENT_EXTENSIONS = MODEL_EXTENSIONS + (".b3dm",)
+MANIFEST = "manifest.jsonl"
+CSV_COLUMNS = ("tile", "status", "input_texels", "input_used_texels", "output_texels", "psnr_db", "lost_triangles", "flipped",
+               "seconds", "peak_mib", "error")
+
+
+# ----------------------------------------------------------------------------------------------
+# One tile, on a worker.
+
+
+def _reset_peak_memory():
+    """Starts a new peak of this process's resident set (Linux: /proc/self/clear_refs 5)."""
+    try:
+        with open("/proc/self/clear_refs", "w") as f:
+            f.write("5")
+    except OSError:
+        pass
+
+
+def _peak_memory_mib():
+    """This process's peak resident set since the last reset, in MiB (VmHWM); None where unknown."""
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    return None
+
+
+def _replace_folder(tmp, final):
+    """Renames the folder ``tmp`` to ``final``; a previous ``final`` is moved aside first and removed
+    after, so ``final`` is always either the old tile or the new one, whole."""
+    old = None
+    if os.path.exists(final):
+        old = f"{final}.old-{uuid.uuid4().hex[:8]}"
+        os.rename(final, old)
+    os.rename(tmp, final)
+    if old:
+        shutil.rmtree(old, ignore_errors=True)
+
+
+def _optimize_model(model, outdir, args):
+    """The command on one model file; returns the report and the output model's file name."""
+    from . import _tightex
+    report = json.loads(_tightex.optimize_file(model, outdir, list(args), None))
+    return report, report["output"]["model"]
+
+
+def _optimize_b3dm(path, outdir, args):
+    """A .b3dm tile: its GLB optimized and wrapped again with the input's tables. Returns the report
+    and the output file's name."""
+    from . import _tightex
+    from .b3dm import B3dm, build_b3dm, parse_b3dm
+    with open(path, "rb") as f:
+        tile = parse_b3dm(f.read(), path)
+    stem = os.path.splitext(os.path.basename(path))[0]
+    work = os.path.join(outdir, ".input")
+    os.makedirs(work)
+    glb_in = os.path.join(work, stem + ".glb")
+    with open(glb_in, "wb") as f:
+        f.write(tile.glb)
+    report, model = _optimize_model(glb_in, outdir, args)
+    shutil.rmtree(work)
+    if not model.lower().endswith(".glb"):
+        raise _tightex.InputError(f"{path}: tightex wrote {model}, not a GLB, so it cannot go back into the b3dm")
+    glb_out = os.path.join(outdir, model)
+    with open(glb_out, "rb") as f:
+        tile.glb = f.read()
+    os.remove(glb_out)
+    with open(os.path.join(outdir, stem + ".b3dm"), "wb") as f:
+        f.write(build_b3dm(tile))
+    report["output"]["model"] = stem + ".b3dm"
+    with open(os.path.join(outdir, "report.json"), "w") as f:
+        json.dump(report, f, indent=2)
+    return report, stem + ".b3dm"
+
+
+def _figures(report):
+    """The summary's figures from a tile's report."""
+    m = report.get("metrics", {})
+    return {
+        "input_texels": m.get("input", {}).get("texels"),
+        "input_used_texels": m.get("input", {}).get("used_texels"),
+        "output_texels": m.get("output", {}).get("texels"),
+        "psnr_db": m.get("surface_psnr_db"),
+        "lost_triangles": m.get("lost_triangles"),
+        "flipped": m.get("flipped"),
+    }
+
+
+def run_tile(tile, args):
+    """Optimizes one tile (a dict: "id", "input", "out_dir", "kind" "model" or "b3dm") with the
+    command's arguments ``args``, into a temporary folder renamed to tile["out_dir"] when complete.
+    Returns its summary record; a tightex error or a file system error is the record's "error" (one
+    line), anything else (a bug) is raised."""
+    from . import Error
+    start = time.monotonic()
+    _reset_peak_memory()
+    final = tile["out_dir"]
+    parent = os.path.dirname(final)
+    os.makedirs(parent, exist_ok=True)
+    tmp = os.path.join(parent, f".{os.path.basename(final)}.tmp-{uuid.uuid4().hex[:8]}")
+    record = {"tile": tile["id"], "status": "failed", "error": None}
+    try:
+        os.makedirs(tmp)
+        run = _optimize_b3dm if tile["kind"] == "b3dm" else _optimize_model
+        report, content = run(tile["input"], tmp, args)
+        _replace_folder(tmp, final)
+        record.update(_figures(report), status="done", content=os.path.join(final, content))
+    except (Error, OSError) as e:
+        record["error"] = f"{type(e).__name__}: {e}".replace("\n", " ")
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    record["seconds"] = time.monotonic() - start
+    record["peak_mib"] = _peak_memory_mib()
+    return record
+
+
+# ----------------------------------------------------------------------------------------------
+# Finding the tiles.
+
+
+def _referenced_files(path):
+    """The files a model names (an OBJ's MTL libraries and their textures, a PLY's TextureFile
+    comments), found as written relative to the model's folder; those missing are left out (the run
+    reports them)."""
+    folder = os.path.dirname(path)
+    found = []
+    ext = os.path.splitext(path)[1].lower()
+    try:
+        if ext == ".obj":
+            with open(path, "rb") as f:
+                for line in f:
+                    if line.startswith(b"mtllib"):
+                        found += [os.path.join(folder, n.decode("utf-8", "replace")) for n in line.split()[1:]]
+            for mtl in list(found):
+                if os.path.isfile(mtl):
+                    with open(mtl, "rb") as f:
+                        for line in f:
+                            words = line.split()
+                            if words and words[0].lower().startswith(b"map_") and len(words) > 1:
+                                found.append(os.path.join(os.path.dirname(mtl), words[-1].decode("utf-8", "replace")))
+        elif ext == ".ply":
+            with open(path, "rb") as f:
+                for line in f:
+                    if line.startswith(b"comment TextureFile"):
+                        found.append(os.path.join(folder, line.split(None, 2)[2].strip().decode("utf-8", "replace")))
+                    if line.startswith(b"end_header"):
+                        break
+    except OSError:
+        pass
+    return [p for p in found if os.path.isfile(p)]
+
+
+def input_hash(path):
+    """SHA-256 over a tile's model file and the files it names (names and contents)."""
+    h = hashlib.sha256()
+    for p in [path] + sorted(set(_referenced_files(path))):
+        h.update(os.path.basename(p).encode() + b"\0")
+        with open(p, "rb") as f:
+            for block in iter(lambda: f.read(1 << 20), b""):
+                h.update(block)
+    return h.hexdigest()
+
+
+def _tile(input_root, output_root, path):
+    """The task description of the model or content file ``path`` under ``input_root``."""
+    rel = os.path.relpath(path, input_root)
+    stem, ext = os.path.splitext(rel)
+    return {"id": rel.replace(os.sep, "/"), "input": os.path.abspath(path), "out_dir": os.path.join(output_root, stem),
+            "kind": "b3dm" if ext.lower() == ".b3dm" else "model"}
+
+
+def folder_tiles(input_root, output_root):
+    """Every model file under ``input_root`` (sorted), as tasks writing under ``output_root``. Two
+    models of the same stem in one folder (a.obj, a.ply) get folders named with their extension."""
+    paths = []
+    for folder, dirs, files in os.walk(input_root):
+        dirs[:] = sorted(d for d in dirs if not d.startswith("."))
+        paths += [os.path.join(folder, f) for f in sorted(files) if os.path.splitext(f)[1].lower() in MODEL_EXTENSIONS]
+    tiles = [_tile(input_root, output_root, p) for p in paths]
+    stems = [t["out_dir"] for t in tiles]
+    for t in tiles:
+        if stems.count(t["out_dir"]) > 1:
+            t["out_dir"] = os.path.join(output_root, os.path.relpath(t["input"], input_root))
+    return tiles
+
+
+def _contents(tile_json):
+    """The content objects of one tile of a tileset (1.0 "content", 1.1 "contents")."""
+    found = [tile_json["content"]] if isinstance(tile_json.get("content"), dict) else []
+    return found + [c for c in tile_json.get("contents", []) if isinstance(c, dict)]
+
+
+def _walk_tiles(tile_json):
+    """Every tile of a tileset's tree, depth first."""
+    stack = [tile_json]
+    while stack:
+        t = stack.pop()
+        yield t
+        stack += reversed(t.get("children", []))
+
+
+def _local_path(uri, base):
+    """The file a content URI names relative to the folder ``base``; None for an absolute URL."""
+    parsed = urllib.parse.urlparse(uri)
+    if parsed.scheme or parsed.netloc or os.path.isabs(parsed.path):
+        return None
+    return os.path.normpath(os.path.join(base, urllib.parse.unquote(parsed.path)))
+
+
+def read_tileset(tileset_path, output_root):
+    """The tilesets (this one and every external one its content names) and the tiles they hold.
+    Returns (tilesets, tiles): each tileset a dict with "input", "output" (paths) and "json" (parsed),
+    "refs" [(content dict, key, tile id or None)]; tiles as folder_tiles gives them."""
+    from . import InputError
+    input_root = os.path.dirname(os.path.abspath(tileset_path))
+    tilesets, tiles, seen = [], {}, set()
+    queue = [os.path.abspath(tileset_path)]
+    while queue:
+        path = queue.pop(0)
+        if path in seen:
+            continue
+        seen.add(path)
+        try:
+            with open(path, "rb") as f:
+                data = json.loads(f.read())
+        except (OSError, ValueError) as e:
+            raise InputError(f"{path}: not a readable tileset JSON ({e})")
+        if not isinstance(data.get("root"), dict):
+            raise InputError(f"{path}: no \"root\" tile")
+        entry = {"input": path, "output": os.path.join(output_root, os.path.relpath(path, input_root)), "json": data, "refs": []}
+        for t in _walk_tiles(data["root"]):
+            for content in _contents(t):
+                key = "uri" if "uri" in content else "url"
+                target = _local_path(str(content.get(key, "")), os.path.dirname(path))
+                if target is None:
+                    continue
+                ext = os.path.splitext(target)[1].lower()
+                if ext == ".json":
+                    queue.append(target)
+                elif ext in CONTENT_EXTENSIONS:
+                    tile = _tile(input_root, output_root, target)
+                    tiles.setdefault(tile["id"], tile)
+                    entry["refs"].append((content, key, tile["id"]))
+        tilesets.append(entry)
+    return tilesets, list(tiles.values())
+
+
+def write_tilesets(tilesets, records, input_root, output_root):
+    """Writes each tileset under OUTPUT with its content URIs pointing at the new files; a tile that
+    failed keeps its URI, its input content copied there unchanged."""
+    for ts in tilesets:
+        base = os.path.dirname(ts["output"])
+        for content, key, tile_id in ts["refs"]:
+            record = records.get(tile_id, {})
+            if record.get("status") in ("done", "skipped") and record.get("content"):
+                content[key] = urllib.parse.quote(os.path.relpath(record["content"], base).replace(os.sep, "/"))
+            else:
+                source = os.path.join(input_root, tile_id)
+                copy = os.path.join(output_root, tile_id)
+                os.makedirs(os.path.dirname(copy), exist_ok=True)
+                if os.path.isfile(source) and not os.path.exists(copy):
+                    shutil.copyfile(source, copy)
+        _write_atomically(ts["output"], json.dumps(ts["json"], indent=2) + "\n")
+
+
+def _write_atomically(path, text):
+    """Writes ``text`` to ``path`` through a temporary file renamed into place."""
+    os.makedirs(os.path.dirname(path) or ".", exist_ok=True)
+    tmp = f"{path}.tmp-{uuid.uuid4().hex[:8]}"
+    with open(tmp, "w") as f:
+        f.write(text)
+    os.replace(tmp, path)
+
+
+# ----------------------------------------------------------------------------------------------
+# Resuming.
+
+
+def read_manifest(output_root):
+    """The last record of each tile done in earlier runs: {tile id: {"hash", "args", "record"}}."""
+    done = {}
+    try:
+        with open(os.path.join(output_root, MANIFEST)) as f:
+            for line in f:
+                try:
+                    entry = json.loads(line)
+                    done[entry["tile"]] = entry
+                except (ValueError, KeyError):
+                    continue  # a line cut short by a killed run
+    except OSError:
+        pass
+    return done
+
+
+def append_manifest(output_root, record, digest, args):
+    """Records one tile done (one JSON line, flushed at once, so a killed run loses no finished tile)."""
+    with open(os.path.join(output_root, MANIFEST), "a") as f:
+        f.write(json.dumps({"tile": record["tile"], "hash": digest, "args": list(args), "record": record}) + "\n")
+        f.flush()
+        os.fsync(f.fileno())
+
+
+def is_done(tile, manifest, digest, args):
+    """Whether an earlier run did this tile from the same input and options and its output is there."""
+    entry = manifest.get(tile["id"])
+    return bool(entry and entry["hash"] == digest and entry["args"] == list(args) and
+                os.path.isfile(entry["record"].get("content") or ""))
+
+
+# ----------------------------------------------------------------------------------------------
+# The run.
+
+
+def _total_memory():
+    """This machine's memory in bytes."""
+    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+
+
+def _start_client(opts):
+    """The Dask client: the cluster at --scheduler, or a LocalCluster of --workers processes, each
+    offering its share of this machine's memory as the resource "memory". Returns (client, cluster)."""
+    from distributed import Client, LocalCluster
+    if opts.scheduler:
+        return Client(opts.scheduler), None
+    workers = opts.workers or os.cpu_count() or 1
+    threads = opts.threads_per_worker or max(1, (os.cpu_count() or 1) // workers)
+    share = _total_memory() // workers
+    dashboard = ":8787" if importlib.util.find_spec("bokeh") else None
+    cluster = LocalCluster(n_workers=workers, threads_per_worker=threads, processes=True, memory_limit=share,
+                           resources={"memory": share}, dashboard_address=dashboard, silence_logs=logging.ERROR)
+    return Client(cluster), cluster
+
+
+def _memory_offered(client):
+    """The largest "memory" resource a worker of the cluster declares; 0 when none does."""
+    workers = client.scheduler_info().get("workers", {}).values()
+    return max((w.get("resources", {}).get("memory", 0) for w in workers), default=0)
+
+
+def _estimate(tile, args):
+    """Bytes tightex's guard estimates for the tile; for a b3dm (whose GLB is read on the worker) or a
+    model the estimate cannot read, 16 times its file size."""
+    from . import Error, _tightex
+    if tile["kind"] == "model":
+        try:
+            return _tightex.estimate_memory(tile["input"], list(args))
+        except Error:
+            pass
+    return 16.0 * os.path.getsize(tile["input"])
+
+
+def _duration(seconds):
+    """``seconds`` as 1h02m, 3m05s or 12s."""
+    s = int(seconds)
+    return f"{s // 3600}h{s % 3600 // 60:02d}m" if s >= 3600 else f"{s // 60}m{s % 60:02d}s" if s >= 60 else f"{s}s"
+
+
+class ProgressLine:
+    """Tiles done / failed / running / queued and the ETA, on one line of stderr (rewritten on a
+    terminal, else printed every 10 s)."""
+
+    def __init__(self, total, skipped):
+        self.total, self.skipped = total, skipped
+        self.start = time.monotonic()
+        self.last = 0.0
+        self.tty = sys.stderr.isatty()
+
+    def show(self, done, failed, running, final=False):
+        now = time.monotonic()
+        if not final and now - self.last < (0.5 if self.tty else 10.0):
+            return
+        self.last = now
+        finished = done + failed
+        queued = self.total - finished - running
+        eta = (now - self.start) / finished * (self.total - finished) if finished else None
+        line = (f"tiles: {done} done, {failed} failed, {running} running, {queued} queued of {self.total}"
+                f"{f', {self.skipped} skipped' if self.skipped else ''}, "
+                f"{'ETA ' + _duration(eta) if eta is not None and not final else _duration(now - self.start)}")
+        if self.tty:
+            sys.stderr.write("\r\033[K" + line + ("\n" if final else ""))
+        else:
+            sys.stderr.write(line + "\n")
+        sys.stderr.flush()
+
+
+def _error_record(tile, exc):
+    """The record of a tile whose task itself failed (its worker died too often, or a bug)."""
+    return {"tile": tile["id"], "status": "failed", "error": f"{type(exc).__name__}: {exc}".replace("\n", " ")}
+
+
+def run_tiles(client, tiles, args, output_root, use_resources):
+    """Submits one task per tile and waits for them, printing progress and recording each tile done
+    in the manifest. Returns {tile id: record}."""
+    from distributed import wait
+    futures = {}
+    for tile in tiles:
+        resources = {"memory": min(tile["estimate"], use_resources)} if use_resources else None
+        futures[client.submit(run_tile, tile, list(args), key=f"tile-{uuid.uuid4().hex}", resources=resources, pure=False)] = tile
+    records, pending = {}, set(futures)
+    progress = ProgressLine(len(tiles), 0)
+    done = failed = 0
+    while pending:
+        try:
+            finished, pending = wait(pending, timeout=0.5, return_when="FIRST_COMPLETED")
+        except Exception:  # the timeout: nothing finished in the last half second
+            finished = set()
+        for future in finished:
+            tile = futures[future]
+            try:
+                record = future.result()
+            except Exception as e:
+                record = _error_record(tile, e)
+            records[tile["id"]] = record
+            if record["status"] == "done":
+                done += 1
+                append_manifest(output_root, record, tile["hash"], args)
+            else:
+                failed += 1
+        running = sum(len(v) for v in client.processing().values()) if pending else 0
+        progress.show(done, failed, min(running, len(pending)))
+    progress.show(done, failed, 0, final=True)
+    return records
+
+
+def write_summary(output_root, records, wall_seconds, workers):
+    """OUTPUT/summary.json (totals and every tile's record) and summary.csv (one row per tile)."""
+    rows = sorted(records.values(), key=lambda r: r["tile"])
+    counts = {s: sum(r["status"] == s for r in rows) for s in ("done", "skipped", "failed")}
+    summary = {"tiles": len(rows), **counts, "wall_seconds": wall_seconds, "workers": workers, "per_tile": rows}
+    _write_atomically(os.path.join(output_root, "summary.json"), json.dumps(summary, indent=2) + "\n")
+    tmp = os.path.join(output_root, f".summary.csv.tmp-{uuid.uuid4().hex[:8]}")
+    with open(tmp, "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=CSV_COLUMNS, extrasaction="ignore")
+        writer.writeheader()
+        writer.writerows(rows)
+    os.replace(tmp, os.path.join(output_root, "summary.csv"))
+    return summary
+
+
+def parse_command_line(argv):
+    """The tiles command's own options, and the tightex options after them."""
+    ap = argparse.ArgumentParser(prog="python3 -m tightex.tiles", description=__doc__.split("\n")[0],
+                                 epilog="tightex options (e.g. --size 1024 --map area) follow INPUT and OUTPUT.")
+    ap.add_argument("input", help="a folder of models or a 3D Tiles tileset.json")
+    ap.add_argument("output", help="the output folder (mirrors INPUT)")
+    ap.add_argument("--scheduler", help="address of a running Dask scheduler (default: a LocalCluster here)")
+    ap.add_argument("--workers", type=int, help="LocalCluster worker processes (default: one per core)")
+    ap.add_argument("--threads-per-worker", type=int, help="LocalCluster threads per worker (default: cores / workers)")
+    ap.add_argument("--force", action="store_true", help="redo tiles an earlier run completed")
+    ap.add_argument("--allow-large-size", action="store_true", help="tightex's own --force (a --size above 16384)")
+    opts, tightex_args = ap.parse_known_args(argv)
+    if opts.allow_large_size:
+        tightex_args.append("--force")
+    for a in tightex_args:
+        if re.fullmatch(r"-o|--output|--report|--preview|-q|--quiet|-v|--verbose", a.split("=")[0]):
+            ap.error(f"{a}: the tiles command sets where each tile's files go and prints its own progress")
+    return opts, tightex_args
+
+
+def collect_tiles(opts, output_root):
+    """The tiles of INPUT and, for a tileset, the tilesets to rewrite (else None)."""
+    if os.path.isfile(opts.input) and opts.input.lower().endswith(".json"):
+        return read_tileset(opts.input, output_root)
+    if os.path.isdir(opts.input):
+        return None, folder_tiles(os.path.abspath(opts.input), output_root)
+    from . import InputError
+    raise InputError(f"{opts.input}: neither a folder of models nor a tileset .json file")
+
+
+def main(argv=None):
+    """The command; returns its exit status."""
+    from . import Error, _tightex
+    opts, args = parse_command_line(argv)
+    start = time.monotonic()
+    try:
+        _tightex.check_arguments(args)
+        output_root = os.path.abspath(opts.output)
+        input_root = os.path.dirname(os.path.abspath(opts.input)) if os.path.isfile(opts.input) else os.path.abspath(opts.input)
+        if output_root == input_root or output_root.startswith(input_root + os.sep):
+            raise _tightex.InputError(f"{opts.output}: the output folder must lie outside the input's")
+        tilesets, tiles = collect_tiles(opts, output_root)
+    except Error as e:
+        print(f"tightex.tiles: error: {e}", file=sys.stderr)
+        return 2
+    os.makedirs(output_root, exist_ok=True)
+    manifest = {} if opts.force else read_manifest(output_root)
+    records, todo = {}, []
+    for tile in tiles:
+        tile["hash"] = input_hash(tile["input"])
+        if is_done(tile, manifest, tile["hash"], args):
+            records[tile["id"]] = dict(manifest[tile["id"]]["record"], status="skipped")
+        else:
+            tile["estimate"] = _estimate(tile, args)
+            todo.append(tile)
+    print(f"tightex.tiles: {len(tiles)} tiles, {len(tiles) - len(todo)} done before (skipped), {len(todo)} to do", file=sys.stderr)
+    workers = 0
+    if todo:
+        client, cluster = _start_client(opts)
+        try:
+            workers = len(client.scheduler_info().get("workers", {}))
+            dashboard = client.dashboard_link if importlib.util.find_spec("bokeh") or opts.scheduler else None
+            print(f"tightex.tiles: {workers} workers; dashboard: "
+                  f"{dashboard or 'unavailable (needs bokeh, which Debian 12 does not package)'}", file=sys.stderr)
+            offered = _memory_offered(client)
+            if not offered:
+                print("tightex.tiles: note: no worker declares the resource \"memory\": tiles run without the memory check",
+                      file=sys.stderr)
+            records.update(run_tiles(client, todo, args, output_root, offered))
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+    if tilesets is not None:
+        write_tilesets(tilesets, records, os.path.dirname(os.path.abspath(opts.input)), output_root)
+    summary = write_summary(output_root, records, time.monotonic() - start, workers)
+    for r in sorted(records.values(), key=lambda r: r["tile"]):
+        if r["status"] == "failed":
+            print(f"tightex.tiles: {r['tile']}: {r['error']}", file=sys.stderr)
+    print(f"tightex.tiles: {summary['done']} done, {summary['skipped']} skipped, {summary['failed']} failed in "
+          f"{summary['wall_seconds']:.1f} s; {os.path.join(opts.output, 'summary.json')}", file=sys.stderr)
+    return 1 if summary["failed"] else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
