@@ -440,7 +440,7 @@ def _error_record(tile, exc):
     return {"tile": tile["id"], "status": "failed", "error": f"{type(exc).__name__}: {exc}".replace("\n", " ")}
 
 
-def run_tiles(client, tiles, args, output_root, use_resources):
+def run_tiles(client, tiles, args, output_root, use_resources, skipped=0):
     """Submits one task per tile and waits for them, printing progress and recording each tile done
     in the manifest. Returns {tile id: record}."""
     from distributed import wait
@@ -449,7 +449,7 @@ def run_tiles(client, tiles, args, output_root, use_resources):
         resources = {"memory": min(tile["estimate"], use_resources)} if use_resources else None
         futures[client.submit(run_tile, tile, list(args), key=f"tile-{uuid.uuid4().hex}", resources=resources, pure=False)] = tile
     records, pending = {}, set(futures)
-    progress = ProgressLine(len(tiles), 0)
+    progress = ProgressLine(len(tiles), skipped)
     done = failed = 0
     while pending:
         try:
@@ -557,7 +557,7 @@ def main(argv=None):
             if not offered:
                 print("tightex.tiles: note: no worker declares the resource \"memory\": tiles run without the memory check",
                       file=sys.stderr)
-            records.update(run_tiles(client, todo, args, output_root, offered))
+            records.update(run_tiles(client, todo, args, output_root, offered, len(tiles) - len(todo)))
         finally:
             client.close()
             if cluster is not None:

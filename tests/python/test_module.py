@@ -1,0 +1,141 @@
+"""The module tightex: optimize on files, the array API, errors, cancellation, the memory estimate."""
+import json
+import os
+import threading
+
+import numpy as np
+import pytest
+
+from conftest import SHARED_DATA, make_bad_obj
+
+
+def check_output(report, folder, name):
+    """The written model's report: nothing lost or flipped, the texture used, the files there."""
+    m = report["metrics"]
+    assert m["lost_triangles"] == 0 and m["flipped"] == 0
+    assert m["output"]["utilization"] >= 0.99
+    assert m["charts"] == report["preparation"]["components"]
+    assert os.path.isfile(os.path.join(folder, name))
+    with open(os.path.join(folder, "report.json")) as f:
+        assert json.load(f) == report
+
+
+def test_errors_are_one_family(tightex):
+    for e in (tightex.InputError, tightex.InternalError, tightex.Cancelled):
+        assert issubclass(e, tightex.Error) and e.__module__ == "tightex"
+    assert tightex.optimize.__doc__ and tightex.optimize_arrays.__doc__
+
+
+def test_optimize_generated_model(tightex, boxes_model, tmp_path):
+    stages = []
+    report = tightex.optimize(boxes_model, tmp_path / "out", progress=lambda s, f: stages.append((s, f)), map="area")
+    check_output(report, tmp_path / "out", "boxes.obj")
+    assert report["options"]["map"] == "area" and report["preparation"]["components"] == 12
+    assert [s for s, _ in stages][0] == "repair" and stages[-1] == ("done", 1.0)
+    assert all(0 <= f <= 1 for _, f in stages)
+
+
+def test_optimize_real_scan(tightex, tmp_path):
+    model = os.path.join(SHARED_DATA, "fuze", "fuze.obj")
+    if not os.path.isfile(model):
+        pytest.skip("../shared/data/fuze not present")
+    report = tightex.optimize(model, tmp_path, output_format="ply")
+    check_output(report, tmp_path, "fuze.ply")
+    assert report["metrics"]["input"]["utilization"] < report["metrics"]["output"]["utilization"]
+
+
+def test_bad_input_raises_input_error_and_writes_nothing(tightex, boxes_model, tmp_path):
+    bad = make_bad_obj(tmp_path / "bad.obj")
+    out = tmp_path / "out"
+    with pytest.raises(tightex.InputError, match="bad.obj"):
+        tightex.optimize(bad, out)
+    with pytest.raises(tightex.InputError, match="missing.obj"):
+        tightex.optimize(tmp_path / "missing.obj", out)
+    with pytest.raises(tightex.InputError, match="--size"):
+        tightex.optimize(boxes_model, out, size=3)
+    with pytest.raises(tightex.InputError, match="--no-such-option"):
+        tightex.optimize(boxes_model, out, no_such_option=1)
+    with pytest.raises(tightex.InputError, match="input's own folder"):
+        tightex.optimize(boxes_model, os.path.dirname(boxes_model))
+    assert not out.exists() or not any(out.iterdir())
+
+
+def test_progress_returning_false_cancels(tightex, boxes_model, tmp_path):
+    with pytest.raises(tightex.Cancelled):
+        tightex.optimize(boxes_model, tmp_path, progress=lambda stage, f: stage != "bake")
+    assert not os.path.exists(tmp_path / "boxes.obj") and not os.path.exists(tmp_path / "report.json")
+
+
+def test_progress_exception_propagates(tightex, boxes_model, tmp_path):
+    def progress(stage, fraction):
+        if stage == "cut+map":
+            raise KeyError("from the callback")
+
+    with pytest.raises(KeyError, match="from the callback"):
+        tightex.optimize(boxes_model, tmp_path, progress=progress)
+
+
+def grid_mesh(n=16):
+    """A trimesh-like mesh: a wavy (n+1)^2 grid, per-vertex UVs in the middle of a noise texture."""
+    xs, ys = np.meshgrid(np.linspace(0, 1, n + 1), np.linspace(0, 1, n + 1))
+    positions = np.stack([xs.ravel(), ys.ravel(), 0.1 * np.sin(3 * xs.ravel())], 1)
+    a = (np.arange(n)[None, :] + (n + 1) * np.arange(n)[:, None]).ravel()
+    faces = np.concatenate([np.stack([a, a + 1, a + n + 2], 1), np.stack([a, a + n + 2, a + n + 1], 1)])
+    uvs = positions[:, :2] * 0.5 + 0.25
+    image = np.random.default_rng(1).integers(0, 256, (256, 256, 3), dtype=np.uint8)
+    return positions, faces, uvs, image
+
+
+def canonical(faces):
+    """Each triangle rotated to start at its smallest index (winding kept), sorted."""
+    rolled = [tuple(np.roll(f, -int(np.argmin(f)))) for f in faces]
+    return sorted(rolled)
+
+
+def test_arrays_round_trip(tightex):
+    positions, faces, uvs, image = grid_mesh()
+    threads = set()
+    out = tightex.optimize_arrays(positions, faces, uvs, [image], progress=lambda s, f: threads.add(threading.get_ident()))
+    assert np.array_equal(out["positions"], positions)
+    assert canonical(out["faces"]) == canonical(faces)
+    assert out["uvs"].shape == (len(faces), 3, 2) and out["uvs"].min() >= 0 and out["uvs"].max() <= 1
+    side = out["report"]["options"]["size"]
+    assert [i.shape for i in out["images"]] == [(side, side, 4)] and out["images"][0].dtype == np.uint8
+    # The input's used texels: a quarter of 256^2, so a 128^2 texture.
+    assert side == 128
+    assert np.all(out["material_ids"] == 0)
+    m = out["report"]["metrics"]
+    assert m["lost_triangles"] == 0 and m["flipped"] == 0 and m["output"]["utilization"] >= 0.99
+    # The same mesh with per-corner UVs, and with UVs indexed per face, gives the same result.
+    per_corner = tightex.optimize_arrays(positions, faces, uvs[faces], image)
+    indexed = tightex.optimize_arrays(positions, faces, uvs[::-1], image, face_uvs=len(uvs) - 1 - faces)
+    for other in (per_corner, indexed):
+        assert np.array_equal(other["uvs"], out["uvs"]) and np.array_equal(other["images"][0], out["images"][0])
+
+
+def test_arrays_bad_input(tightex):
+    positions, faces, uvs, image = grid_mesh(4)
+    with pytest.raises(tightex.InputError, match="faces element"):
+        tightex.optimize_arrays(positions, faces + len(positions), uvs, image)
+    with pytest.raises(tightex.InputError, match="positions has shape"):
+        tightex.optimize_arrays(positions[:, :2], faces, uvs, image)
+    with pytest.raises(tightex.InputError, match="uvs has 3 rows"):
+        tightex.optimize_arrays(positions, faces, uvs[:3], image)
+    with pytest.raises(tightex.InputError, match="material_ids"):
+        tightex.optimize_arrays(positions, faces, uvs, image, material_ids=np.full(len(faces), 1))
+    with pytest.raises(tightex.InputError, match="images"):
+        tightex.optimize_arrays(positions, faces, uvs, [image[:, :, 0]])
+    with pytest.raises(tightex.Cancelled):
+        tightex.optimize_arrays(positions, faces, uvs, image, progress=lambda s, f: False)
+
+
+def test_estimate_memory_is_the_guards(tightex, boxes_model, tmp_path):
+    small = tightex.estimate_memory(boxes_model, size=256)
+    large = tightex.estimate_memory(boxes_model, size=1024)
+    # 7 bytes per output texel (RGBA and the bake's masks), the rest the same.
+    assert large - small == pytest.approx(7 * (1024**2 - 256**2))
+    limit_mib = (small + large) / 2 / 2**20
+    with pytest.raises(tightex.InputError, match="--max-memory"):
+        tightex.optimize(boxes_model, tmp_path, size=1024, max_memory=limit_mib)
+    report = tightex.optimize(boxes_model, tmp_path, size=256, max_memory=limit_mib)
+    assert report["options"]["size"] == 256
