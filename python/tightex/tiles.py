@@ -21,8 +21,10 @@ command's; ``--allow-large-size`` passes the command's own ``--force``.
 - A tile whose input is bad is reported with its one-line error and the others complete; a tile whose
   worker died is retried elsewhere (Dask's allowed-failures). A tile's outputs are written into a
   temporary folder beside it and renamed into place, so a half tile never appears.
-- ``OUTPUT/manifest.jsonl`` records each tile done, with the hash of its input files and the options; a
-  re-run skips those whose hash, options and output still match, unless ``--force``. A failed tile of
+- ``OUTPUT/manifest.jsonl`` records each tile done (or refused as bad input), with the hash of its
+  input files and the options; a re-run skips those whose hash, options and output still match (a
+  refused tile is reported failed again without a run), unless ``--force``. Tiles that failed
+  otherwise (a worker died too often, a full disk) are run again. A failed tile of
   a tileset gets its input content copied unchanged, so the tileset stays complete.
 - At the end ``OUTPUT/summary.json`` and ``summary.csv``: per tile its status, input and output texels,
   surface PSNR, time, peak memory (the worker process's peak resident set during the tile) and error.
@@ -142,14 +144,19 @@ def run_tile(tile, args):
     """Optimizes one tile (a dict: "id", "input", "out_dir", "kind" "model" or "b3dm") with the
     command's arguments ``args``, into a temporary folder renamed to tile["out_dir"] when complete.
     Returns its summary record; a tightex error or a file system error is the record's "error" (one
-    line), anything else (a bug) is raised."""
+    line), anything else (a bug) is raised. Removes what an earlier attempt at the tile left (its
+    worker killed mid-tile) first."""
     from . import Error
     start = time.monotonic()
     _reset_peak_memory()
     final = tile["out_dir"]
     parent = os.path.dirname(final)
     os.makedirs(parent, exist_ok=True)
-    tmp = os.path.join(parent, f".{os.path.basename(final)}.tmp-{uuid.uuid4().hex[:8]}")
+    prefix = f".{os.path.basename(final)}.tmp-"
+    for left in os.listdir(parent):  # an earlier attempt's, whose worker died mid-tile
+        if left.startswith(prefix):
+            shutil.rmtree(os.path.join(parent, left), ignore_errors=True)
+    tmp = os.path.join(parent, prefix + uuid.uuid4().hex[:8])
     record = {"tile": tile["id"], "status": "failed", "error": None}
     try:
         os.makedirs(tmp)
@@ -345,7 +352,7 @@ def read_manifest(output_root):
 
 
 def append_manifest(output_root, record, digest, args):
-    """Records one tile done (one JSON line, flushed at once, so a killed run loses no finished tile)."""
+    """Records one tile done or refused as bad input (one JSON line, flushed at once, so a killed run loses no finished tile)."""
     with open(os.path.join(output_root, MANIFEST), "a") as f:
         f.write(json.dumps({"tile": record["tile"], "hash": digest, "args": list(args), "record": record}) + "\n")
         f.flush()
@@ -353,10 +360,15 @@ def append_manifest(output_root, record, digest, args):
 
 
 def is_done(tile, manifest, digest, args):
-    """Whether an earlier run did this tile from the same input and options and its output is there."""
+    """Whether an earlier run settled this tile from the same input and options: done with its output
+    still there, or refused as bad input (InputError: the same input fails the same way)."""
     entry = manifest.get(tile["id"])
-    return bool(entry and entry["hash"] == digest and entry["args"] == list(args) and
-                os.path.isfile(entry["record"].get("content") or ""))
+    if not entry or entry["hash"] != digest or entry["args"] != list(args):
+        return False
+    record = entry["record"]
+    if record.get("status") == "failed":
+        return str(record.get("error", "")).startswith("InputError")
+    return os.path.isfile(record.get("content") or "")
 
 
 # ----------------------------------------------------------------------------------------------
@@ -463,11 +475,10 @@ def run_tiles(client, tiles, args, output_root, use_resources, skipped=0):
             except Exception as e:
                 record = _error_record(tile, e)
             records[tile["id"]] = record
-            if record["status"] == "done":
-                done += 1
+            if record["status"] == "done" or str(record.get("error")).startswith("InputError"):
                 append_manifest(output_root, record, tile["hash"], args)
-            else:
-                failed += 1
+            done += record["status"] == "done"
+            failed += record["status"] != "done"
         running = sum(len(v) for v in client.processing().values()) if pending else 0
         progress.show(done, failed, min(running, len(pending)))
     progress.show(done, failed, 0, final=True)
@@ -540,11 +551,12 @@ def main(argv=None):
     for tile in tiles:
         tile["hash"] = input_hash(tile["input"])
         if is_done(tile, manifest, tile["hash"], args):
-            records[tile["id"]] = dict(manifest[tile["id"]]["record"], status="skipped")
+            earlier = manifest[tile["id"]]["record"]
+            records[tile["id"]] = dict(earlier, status="skipped" if earlier["status"] == "done" else "failed", skipped=True)
         else:
             tile["estimate"] = _estimate(tile, args)
             todo.append(tile)
-    print(f"tightex.tiles: {len(tiles)} tiles, {len(tiles) - len(todo)} done before (skipped), {len(todo)} to do", file=sys.stderr)
+    print(f"tightex.tiles: {len(tiles)} tiles, {len(tiles) - len(todo)} settled by an earlier run (skipped), {len(todo)} to do", file=sys.stderr)
     workers = 0
     if todo:
         client, cluster = _start_client(opts)

@@ -1,0 +1,153 @@
+"""python3 -m tightex.tiles on small generated tile sets, with a 2-worker LocalCluster: a folder and a
+tileset.json, one bad tile among them, a worker killed mid-run, a re-run that skips every tile."""
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from conftest import make_bad_obj, make_boxes
+
+pytest.importorskip("distributed")
+
+
+def run_tiles(*args):
+    """The tiles command as a new user runs it; its exit status and stderr."""
+    p = subprocess.run([sys.executable, "-m", "tightex.tiles", *map(str, args)], capture_output=True, text=True, timeout=300)
+    return p.returncode, p.stderr
+
+
+def tile_folder(root, boxes=(30, 60, 45)):
+    """ROOT/a/t0, a/t1, b/t2 (boxes models, as many components as boxes) and b/bad.obj."""
+    for i, count in enumerate(boxes):
+        make_boxes(os.path.join(root, "a" if i < 2 else "b", f"t{i}"), count, i + 1)
+    make_bad_obj(os.path.join(root, "b", "bad.obj"))
+
+
+def check_done_tile(record):
+    """A tile done: its model and report there, nothing lost or flipped, the texture used."""
+    assert record["status"] in ("done", "skipped") and record["error"] is None
+    assert os.path.isfile(record["content"])
+    with open(os.path.join(os.path.dirname(record["content"]), "report.json")) as f:
+        m = json.load(f)["metrics"]
+    assert m["lost_triangles"] == 0 and m["flipped"] == 0 and m["output"]["utilization"] >= 0.99
+    assert record["input_texels"] > 0 and record["output_texels"] > 0 and record["psnr_db"] > 0
+
+
+def no_temporaries(root):
+    return [os.path.join(d, n) for d, dirs, files in os.walk(root) for n in dirs + files if ".tmp-" in n or ".old-" in n]
+
+
+def test_folder_bad_tile_and_rerun(tightex, tmp_path):
+    tile_folder(tmp_path / "in")
+    rc, err = run_tiles(tmp_path / "in", tmp_path / "out", "--workers", "2", "--size", "128")
+    assert rc == 1, err
+    with open(tmp_path / "out" / "summary.json") as f:
+        summary = json.load(f)
+    assert (summary["done"], summary["failed"], summary["workers"]) == (3, 1, 2)
+    records = {r["tile"]: r for r in summary["per_tile"]}
+    for tile in ("a/t0/boxes.obj", "a/t1/boxes.obj", "b/t2/boxes.obj"):
+        check_done_tile(records[tile])
+    bad = records["b/bad.obj"]
+    assert bad["status"] == "failed" and bad["error"].startswith("InputError: ") and "bad.obj:" in bad["error"]
+    assert "\n" not in bad["error"] and "b/bad.obj: InputError" in err
+    with open(tmp_path / "out" / "summary.csv") as f:
+        assert len(f.read().splitlines()) == 5
+    assert not no_temporaries(tmp_path / "out")
+
+    # A re-run settles every tile from the manifest: nothing runs, no output is touched.
+    mtimes = {t: os.stat(records[t]["content"]).st_mtime_ns for t in records if records[t]["status"] == "done"}
+    rc, err = run_tiles(tmp_path / "in", tmp_path / "out", "--workers", "2", "--size", "128")
+    assert rc == 1 and "0 to do" in err, err
+    with open(tmp_path / "out" / "summary.json") as f:
+        again = json.load(f)
+    assert (again["skipped"], again["failed"], again["workers"]) == (3, 1, 0)
+    assert all(os.stat(records[t]["content"]).st_mtime_ns == m for t, m in mtimes.items())
+    # Changed options redo the tiles.
+    rc, err = run_tiles(tmp_path / "in", tmp_path / "out", "--workers", "2", "--size", "64")
+    assert rc == 1 and "4 to do" in err, err
+
+
+def write_tileset(root, tileset):
+    with open(root / "tileset.json", "w") as f:
+        json.dump(tileset, f)
+
+
+def test_tileset_rewritten_to_new_content(tightex, tmp_path):
+    from tightex.b3dm import B3dm, build_b3dm
+    root = tmp_path / "in"
+    for i, count in enumerate((20, 30, 25)):
+        make_boxes(root / "tiles" / f"t{i}", count, i + 1)
+    # A b3dm whose embedded model tightex cannot read: failed, copied unchanged.
+    (root / "tiles" / "x.b3dm").write_bytes(build_b3dm(B3dm(b'{"BATCH_LENGTH":0}', b"", b"", b"", b"glTF" + bytes(16))))
+    box = {"box": [0, 0, 0, 100, 0, 0, 0, 100, 0, 0, 0, 10]}
+    sub = {"asset": {"version": "1.0"}, "geometricError": 10,
+           "root": {"boundingVolume": box, "geometricError": 0, "content": {"uri": "../tiles/t2/boxes.obj"}}}
+    (root / "sub").mkdir()
+    (root / "sub" / "tileset.json").write_text(json.dumps(sub))
+    children = [{"boundingVolume": box, "geometricError": 0, "content": {"uri": f"tiles/t{i}/boxes.obj"}} for i in range(2)]
+    children += [{"boundingVolume": box, "geometricError": 0, "content": {"uri": "tiles/x.b3dm"}},
+                 {"boundingVolume": box, "geometricError": 5, "content": {"uri": "sub/tileset.json"}}]
+    tileset = {"asset": {"version": "1.0"}, "geometricError": 100, "root": {"boundingVolume": box, "geometricError": 50,
+                                                                         "refine": "ADD", "children": children}}
+    write_tileset(root, tileset)
+    out = tmp_path / "out"
+    rc, err = run_tiles(root / "tileset.json", out, "--workers", "2")
+    assert rc == 1, err
+    with open(out / "summary.json") as f:
+        summary = json.load(f)
+    assert (summary["done"], summary["failed"]) == (3, 1)
+    for path in (out / "tileset.json", out / "sub" / "tileset.json"):
+        with open(path) as f:
+            written = json.load(f)
+        with open(root / os.path.relpath(path, out)) as f:
+            original = json.load(f)
+        uris = []
+        for new, old in zip(walk(written["root"]), walk(original["root"])):
+            assert new["boundingVolume"] == old["boundingVolume"]
+            if "content" in old:
+                uris.append(new["content"].pop("uri"))
+                old["content"].pop("uri")
+        assert written == original  # nothing but the URIs changed
+        for uri in uris:
+            assert os.path.isfile(os.path.join(os.path.dirname(path), uri)), uri
+    assert (out / "tiles" / "x.b3dm").read_bytes() == (root / "tiles" / "x.b3dm").read_bytes()
+    with open(out / "tileset.json") as f:
+        assert json.load(f)["root"]["children"][0]["content"]["uri"] == "tiles/t0/boxes/boxes.obj"
+
+
+def walk(tile):
+    yield tile
+    for child in tile.get("children", []):
+        yield from walk(child)
+
+
+def test_killed_worker_tile_is_retried(tightex, tmp_path):
+    from distributed import Client, LocalCluster
+    for i in range(4):
+        make_boxes(tmp_path / "in" / f"t{i}", 300, i + 1)
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, resources={"memory": 2**34}, dashboard_address=None,
+                      silence_logs=50) as cluster, Client(cluster) as client:
+        command = [sys.executable, "-m", "tightex.tiles", tmp_path / "in", tmp_path / "out", "--scheduler", cluster.scheduler_address]
+        proc = subprocess.Popen(list(map(str, command)), stderr=subprocess.PIPE, text=True)
+        busy = {}
+        deadline = time.monotonic() + 60
+        while not busy and time.monotonic() < deadline and proc.poll() is None:
+            busy = {w: keys for w, keys in client.processing().items() if keys}
+            time.sleep(0.02)
+        assert busy, "no tile ever ran"
+        victim = next(iter(busy))
+        pid = client.run(os.getpid, workers=[victim])[victim]
+        os.kill(pid, signal.SIGKILL)
+        _, err = proc.communicate(timeout=240)
+        assert victim not in client.scheduler_info()["workers"]
+    assert proc.returncode == 0, err
+    with open(tmp_path / "out" / "summary.json") as f:
+        summary = json.load(f)
+    assert summary["done"] == 4
+    for record in summary["per_tile"]:
+        check_done_tile(record)
+    assert not no_temporaries(tmp_path / "out")
