@@ -46,6 +46,7 @@ import sys
 import time
 import urllib.parse
 import uuid
+from concurrent.futures import ThreadPoolExecutor
 
 MODEL_EXTENSIONS = (".obj", ".ply", ".glb")
 CONTENT_EXTENSIONS = MODEL_EXTENSIONS + (".b3dm",)
@@ -210,7 +211,10 @@ def _referenced_files(path):
 
 
 def input_hash(path):
-    """SHA-256 over a tile's model file and the files it names (names and contents)."""
+    """SHA-256 over a tile's model file and the files it names (names and contents); "missing" for a
+    model file that is not there (its run reports it)."""
+    if not os.path.isfile(path):
+        return "missing"
     h = hashlib.sha256()
     for p in [path] + sorted(set(_referenced_files(path))):
         h.update(os.path.basename(p).encode() + b"\0")
@@ -410,7 +414,18 @@ def _estimate(tile, args):
             return _tightex.estimate_memory(tile["input"], list(args))
         except Error:
             pass
-    return 16.0 * os.path.getsize(tile["input"])
+    return 16.0 * os.path.getsize(tile["input"]) if os.path.isfile(tile["input"]) else 0.0
+
+
+def _prepare(tile, manifest, args):
+    """Hashes the tile's input; returns its record if an earlier run settled it (is_done), else None
+    with tile["estimate"] set."""
+    tile["hash"] = input_hash(tile["input"])
+    if is_done(tile, manifest, tile["hash"], args):
+        earlier = manifest[tile["id"]]["record"]
+        return dict(earlier, status="skipped" if earlier["status"] == "done" else "failed", skipped=True)
+    tile["estimate"] = _estimate(tile, args)
+    return None
 
 
 def _duration(seconds):
@@ -465,9 +480,11 @@ def run_tiles(client, tiles, args, output_root, use_resources, skipped=0):
     done = failed = 0
     while pending:
         try:
-            finished, pending = wait(pending, timeout=0.5, return_when="FIRST_COMPLETED")
+            wait(pending, timeout=0.5, return_when="FIRST_COMPLETED")
         except Exception:  # the timeout: nothing finished in the last half second
-            finished = set()
+            pass
+        finished = {f for f in pending if f.done()}
+        pending -= finished
         for future in finished:
             tile = futures[future]
             try:
@@ -548,14 +565,12 @@ def main(argv=None):
     os.makedirs(output_root, exist_ok=True)
     manifest = {} if opts.force else read_manifest(output_root)
     records, todo = {}, []
-    for tile in tiles:
-        tile["hash"] = input_hash(tile["input"])
-        if is_done(tile, manifest, tile["hash"], args):
-            earlier = manifest[tile["id"]]["record"]
-            records[tile["id"]] = dict(earlier, status="skipped" if earlier["status"] == "done" else "failed", skipped=True)
-        else:
-            tile["estimate"] = _estimate(tile, args)
-            todo.append(tile)
+    with ThreadPoolExecutor(os.cpu_count() or 1) as pool:  # hashing and tightex's estimate release the GIL
+        for tile, settled in zip(tiles, pool.map(lambda t: _prepare(t, manifest, args), tiles)):
+            if settled:
+                records[tile["id"]] = settled
+            else:
+                todo.append(tile)
     print(f"tightex.tiles: {len(tiles)} tiles, {len(tiles) - len(todo)} settled by an earlier run (skipped), {len(todo)} to do", file=sys.stderr)
     workers = 0
     if todo:

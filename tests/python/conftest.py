@@ -1,6 +1,7 @@
 """Fixtures of the Python module's tests: generated models (tools/make_boxes.py: N boxes, one chart
 per box face, one texture) and a bad one. The tests skip when the module was not built."""
 import os
+import shutil
 import subprocess
 import sys
 
@@ -20,6 +21,21 @@ def make_boxes(folder, count, seed):
     subprocess.run([sys.executable, os.path.join(REPO, "tools", "make_boxes.py"), str(count), str(folder), "--seed", str(seed)],
                    check=True, stdout=subprocess.DEVNULL)
     return os.path.join(folder, "boxes.obj")
+
+
+def make_two_pages(folder, count, seed):
+    """A boxes model whose second half of faces uses a second texture page (a copy of the first)."""
+    model = make_boxes(folder, count, seed)
+    shutil.copyfile(os.path.join(folder, "boxes.png"), os.path.join(folder, "page2.png"))
+    with open(os.path.join(folder, "boxes.mtl"), "a") as f:
+        f.write("newmtl b\nmap_Kd page2.png\n")
+    with open(model) as f:
+        lines = f.read().splitlines()
+    faces = [i for i, line in enumerate(lines) if line.startswith("f ")]
+    lines.insert(faces[len(faces) // 2], "usemtl b")
+    with open(model, "w") as f:
+        f.write("\n".join(lines) + "\n")
+    return model
 
 
 def make_bad_obj(path):

@@ -9,7 +9,7 @@ import time
 
 import pytest
 
-from conftest import make_bad_obj, make_boxes
+from conftest import make_bad_obj, make_boxes, make_two_pages
 
 pytest.importorskip("distributed")
 
@@ -21,9 +21,10 @@ def run_tiles(*args):
 
 
 def tile_folder(root, boxes=(30, 60, 45)):
-    """ROOT/a/t0, a/t1, b/t2 (boxes models, as many components as boxes) and b/bad.obj."""
+    """ROOT/a/t0, a/t1, b/t2 (boxes models, as many components as boxes; b/t2 on two texture pages)
+    and b/bad.obj."""
     for i, count in enumerate(boxes):
-        make_boxes(os.path.join(root, "a" if i < 2 else "b", f"t{i}"), count, i + 1)
+        (make_two_pages if i == 2 else make_boxes)(os.path.join(root, "a" if i < 2 else "b", f"t{i}"), count, i + 1)
     make_bad_obj(os.path.join(root, "b", "bad.obj"))
 
 
@@ -51,6 +52,8 @@ def test_folder_bad_tile_and_rerun(tightex, tmp_path):
     records = {r["tile"]: r for r in summary["per_tile"]}
     for tile in ("a/t0/boxes.obj", "a/t1/boxes.obj", "b/t2/boxes.obj"):
         check_done_tile(records[tile])
+    with open(os.path.join(os.path.dirname(records["b/t2/boxes.obj"]["content"]), "report.json")) as f:
+        assert len(json.load(f)["metrics"]["input"]["image_utilization"]) == 2  # both pages read
     bad = records["b/bad.obj"]
     assert bad["status"] == "failed" and bad["error"].startswith("InputError: ") and "bad.obj:" in bad["error"]
     assert "\n" not in bad["error"] and "b/bad.obj: InputError" in err
