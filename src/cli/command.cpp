@@ -451,6 +451,8 @@ CommandLine parse_arguments(const std::vector<std::string>& args) {
   try {
     std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 takes them last first
     app.parse(reversed);
+  } catch (const CLI::CallForHelp&) {
+    fail_input("options: --help: the options are those `tightex --help` lists");
   } catch (const CLI::ParseError& e) {
     fail_input("options: {}", e.what());
   }
