@@ -27,7 +27,7 @@ import json
 from . import _tightex
 from ._tightex import Cancelled, Error, InputError, InternalError
 
-__all__ = ["optimize", "optimize_arrays", "estimate_memory", "options_to_args", "Error", "InputError", "InternalError", "Cancelled"]
+__all__ = ["optimize", "optimize_arrays", "estimate_memory", "options_to_args", "set_max_threads", "Error", "InputError", "InternalError", "Cancelled"]
 
 
 def options_to_args(**options):
@@ -93,3 +93,9 @@ def optimize_arrays(positions, faces, uvs, images, material_ids=None, face_uvs=N
                                               options_to_args(**options), progress)
     arrays["report"] = json.loads(report)
     return arrays
+
+
+def set_max_threads(n):
+    """At most ``n`` threads for tightex's parallel work in this process from now on (0: one per core,
+    the default). A process sharing the machine with others (a Dask worker) takes its share."""
+    _tightex.set_max_threads(int(n))

@@ -142,13 +142,16 @@ def _figures(report):
 
 
 def run_tile(tile, args):
-    """Optimizes one tile (a dict: "id", "input", "out_dir", "kind" "model" or "b3dm") with the
+    """Optimizes one tile (a dict: "id", "input", "out_dir", "kind" "model" or "b3dm", "threads" for
+    tightex's parallel work, None: all cores) with the
     command's arguments ``args``, into a temporary folder renamed to tile["out_dir"] when complete.
     Returns its summary record; a tightex error or a file system error is the record's "error" (one
     line), anything else (a bug) is raised. Removes what an earlier attempt at the tile left (its
     worker killed mid-tile) first."""
-    from . import Error
+    from . import Error, _tightex
     start = time.monotonic()
+    if tile.get("threads"):
+        _tightex.set_max_threads(tile["threads"])
     _reset_peak_memory()
     final = tile["out_dir"]
     parent = os.path.dirname(final)
@@ -571,6 +574,10 @@ def main(argv=None):
                 records[tile["id"]] = settled
             else:
                 todo.append(tile)
+    # Local workers share this machine's cores; an external cluster's workers use their own machine's.
+    threads = None if opts.scheduler else max(1, (os.cpu_count() or 1) // (opts.workers or os.cpu_count() or 1))
+    for tile in todo:
+        tile["threads"] = threads
     print(f"tightex.tiles: {len(tiles)} tiles, {len(tiles) - len(todo)} settled by an earlier run (skipped), {len(todo)} to do", file=sys.stderr)
     workers = 0
     if todo:

@@ -5,9 +5,11 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+#include <tbb/global_control.h>
 
 #include <cstring>
 #include <exception>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -87,6 +89,14 @@ double estimate_memory(const std::string& input, const std::vector<std::string>&
   const cli::CommandLine line = command_line(input, "-", args);
   py::gil_scoped_release release;
   return cli::estimate_memory_bytes(line);
+}
+
+/// tightex.set_max_threads: at most `n` threads for tightex's parallel work in this process from now
+/// on (0: as many as cores). A Dask worker sharing a machine with others takes its share of the cores.
+void set_max_threads(int n) {
+  static std::unique_ptr<tbb::global_control> limit;
+  limit.reset();
+  if (n > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(n));
 }
 
 /// tightex.tiles: checks the command's options once, before any tile is sent out.
@@ -256,6 +266,7 @@ PYBIND11_MODULE(_tightex, m) {
     }
   });
   m.def("optimize_file", &optimize_file, py::arg("input"), py::arg("outdir"), py::arg("args"), py::arg("progress"));
+  m.def("set_max_threads", &set_max_threads, py::arg("n"));
   m.def("check_arguments", &check_arguments, py::arg("args"));
   m.def("estimate_memory", &estimate_memory, py::arg("input"), py::arg("args"));
   m.def("optimize_arrays", &optimize_arrays, py::arg("positions"), py::arg("faces"), py::arg("uvs"), py::arg("images"),
