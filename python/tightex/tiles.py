@@ -173,6 +173,8 @@ def run_tile(tile, args):
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     record["seconds"] = time.monotonic() - start
+    record["finished"] = time.time()
+    record["started"] = record["finished"] - record["seconds"]
     record["peak_mib"] = _peak_memory_mib()
     return record
 
@@ -389,16 +391,18 @@ def _total_memory():
 
 def _start_client(opts):
     """The Dask client: the cluster at --scheduler, or a LocalCluster of --workers processes, each
-    offering its share of this machine's memory as the resource "memory". Returns (client, cluster)."""
+    offering its share of this machine's memory (or --memory-per-worker) as the resource "memory".
+    Returns (client, cluster)."""
     from distributed import Client, LocalCluster
     if opts.scheduler:
         return Client(opts.scheduler), None
     workers = opts.workers or os.cpu_count() or 1
     threads = opts.threads_per_worker or max(1, (os.cpu_count() or 1) // workers)
     share = _total_memory() // workers
+    offered = int(opts.memory_per_worker * 2**20) if opts.memory_per_worker else share
     dashboard = ":8787" if importlib.util.find_spec("bokeh") else None
     cluster = LocalCluster(n_workers=workers, threads_per_worker=threads, processes=True, memory_limit=share,
-                           resources={"memory": share}, dashboard_address=dashboard, silence_logs=logging.ERROR)
+                           resources={"memory": offered}, dashboard_address=dashboard, silence_logs=logging.ERROR)
     return Client(cluster), cluster
 
 
@@ -529,6 +533,8 @@ def parse_command_line(argv):
     ap.add_argument("--scheduler", help="address of a running Dask scheduler (default: a LocalCluster here)")
     ap.add_argument("--workers", type=int, help="LocalCluster worker processes (default: one per core)")
     ap.add_argument("--threads-per-worker", type=int, help="LocalCluster threads per worker (default: cores / workers)")
+    ap.add_argument("--memory-per-worker", type=float, metavar="MiB",
+                    help="LocalCluster: the memory each worker offers tiles (default: this machine's / workers)")
     ap.add_argument("--force", action="store_true", help="redo tiles an earlier run completed")
     ap.add_argument("--allow-large-size", action="store_true", help="tightex's own --force (a --size above 16384)")
     opts, tightex_args = ap.parse_known_args(argv)

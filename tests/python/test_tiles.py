@@ -154,3 +154,17 @@ def test_killed_worker_tile_is_retried(tightex, tmp_path):
     for record in summary["per_tile"]:
         check_done_tile(record)
     assert not no_temporaries(tmp_path / "out")
+
+
+def test_memory_resource_keeps_big_tiles_apart(tightex, tmp_path):
+    for i in range(4):
+        make_boxes(tmp_path / "in" / f"t{i}", 40, i + 1)
+    estimate = max(tightex.estimate_memory(tmp_path / "in" / f"t{i}" / "boxes.obj") for i in range(4))
+    # One worker with two threads, offering 1.5 tiles' memory: never two tiles at once.
+    rc, err = run_tiles(tmp_path / "in", tmp_path / "out", "--workers", "1", "--threads-per-worker", "2",
+                        "--memory-per-worker", 1.5 * estimate / 2**20)
+    assert rc == 0, err
+    with open(tmp_path / "out" / "summary.json") as f:
+        spans = sorted((r["started"], r["finished"]) for r in json.load(f)["per_tile"])
+    assert len(spans) == 4
+    assert all(later[0] >= earlier[1] for earlier, later in zip(spans, spans[1:]))
