@@ -89,7 +89,11 @@ def optimize_arrays(positions, faces, uvs, images, material_ids=None, face_uvs=N
 
     if isinstance(images, np.ndarray):
         images = [images]
-    arrays, report = _tightex.optimize_arrays(positions, faces, uvs, list(images), material_ids, face_uvs,
+    images = [np.asarray(image) for image in images]
+    for i, image in enumerate(images):
+        if image.dtype != np.uint8:
+            raise InputError(f"arrays: images[{i}] is {image.dtype}, not uint8 (0..255 per channel)")
+    arrays, report = _tightex.optimize_arrays(positions, faces, uvs, images, material_ids, face_uvs,
                                               options_to_args(**options), progress)
     arrays["report"] = json.loads(report)
     return arrays

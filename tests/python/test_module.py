@@ -125,6 +125,8 @@ def test_arrays_bad_input(tightex):
         tightex.optimize_arrays(positions, faces, uvs, image, material_ids=np.full(len(faces), 1))
     with pytest.raises(tightex.InputError, match="images"):
         tightex.optimize_arrays(positions, faces, uvs, [image[:, :, 0]])
+    with pytest.raises(tightex.InputError, match="not uint8"):
+        tightex.optimize_arrays(positions, faces, uvs, [image / 255.0])
     with pytest.raises(tightex.Cancelled):
         tightex.optimize_arrays(positions, faces, uvs, image, progress=lambda s, f: False)
 
