@@ -400,10 +400,15 @@ def _start_client(opts):
     threads = opts.threads_per_worker or max(1, (os.cpu_count() or 1) // workers)
     share = _total_memory() // workers
     offered = int(opts.memory_per_worker * 2**20) if opts.memory_per_worker else share
-    dashboard = ":8787" if importlib.util.find_spec("bokeh") else None
+    dashboard = ":8787" if _has_bokeh() else None
     cluster = LocalCluster(n_workers=workers, threads_per_worker=threads, processes=True, memory_limit=share,
                            resources={"memory": offered}, dashboard_address=dashboard, silence_logs=logging.ERROR)
     return Client(cluster), cluster
+
+
+def _has_bokeh():
+    """Whether this process can serve Dask's dashboard (it needs bokeh); run on the scheduler."""
+    return importlib.util.find_spec("bokeh") is not None
 
 
 def _memory_offered(client):
@@ -590,9 +595,9 @@ def main(argv=None):
         client, cluster = _start_client(opts)
         try:
             workers = len(client.scheduler_info().get("workers", {}))
-            dashboard = client.dashboard_link if importlib.util.find_spec("bokeh") or opts.scheduler else None
+            dashboard = client.dashboard_link if client.run_on_scheduler(_has_bokeh) else None
             print(f"tightex.tiles: {workers} workers; dashboard: "
-                  f"{dashboard or 'unavailable (needs bokeh, which Debian 12 does not package)'}", file=sys.stderr)
+                  f"{dashboard or 'unavailable (the scheduler runs none: it needs bokeh, which Debian 12 does not package)'}", file=sys.stderr)
             offered = _memory_offered(client)
             if not offered:
                 print("tightex.tiles: note: no worker declares the resource \"memory\": tiles run without the memory check",
