@@ -40,6 +40,7 @@ def make_two_pages(folder, count, seed):
 
 def make_bad_obj(path):
     """An OBJ whose face names a vertex that does not exist."""
+    os.makedirs(os.path.dirname(str(path)), exist_ok=True)
     with open(path, "w") as f:
         f.write("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 7/3\n")
     return str(path)

@@ -168,3 +168,12 @@ def test_memory_resource_keeps_big_tiles_apart(tightex, tmp_path):
         spans = sorted((r["started"], r["finished"]) for r in json.load(f)["per_tile"])
     assert len(spans) == 4
     assert all(later[0] >= earlier[1] for earlier, later in zip(spans, spans[1:]))
+
+
+def test_bad_command_line_is_refused_before_any_work(tightex, tmp_path):
+    tile_folder(tmp_path / "in", boxes=(10,))
+    for args, message in ((["--size", "3"], "--size"), (["--report", "r.json"], "--report"), ([], "outside the input")):
+        out = tmp_path / "in" / "out" if not args else tmp_path / "out"
+        rc, err = run_tiles(tmp_path / "in", out, *args)
+        assert rc == 2 and message in err, err
+        assert not out.exists()
