@@ -336,31 +336,53 @@
       ' Scale: one screen pixel is ' + formatNumber(1 / scale, 1) + ' texels.');
   }
 
+  // Fills the pixels whose centres lie in triangle (x0, y0) (x1, y1) (x2, y2) with `rgb` (bytes); a
+  // triangle smaller than a pixel colours the pixel under its centroid, so that none disappears.
+  function fillTriangle(image, rgb, x0, y0, x1, y1, x2, y2) {
+    const W = image.width, H = image.height, px = image.data;
+    const area = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0);
+    const s = area < 0 ? -1 : 1;
+    const minX = Math.max(0, Math.ceil(Math.min(x0, x1, x2) - 0.5)), maxX = Math.min(W - 1, Math.floor(Math.max(x0, x1, x2) - 0.5));
+    const minY = Math.max(0, Math.ceil(Math.min(y0, y1, y2) - 0.5)), maxY = Math.min(H - 1, Math.floor(Math.max(y0, y1, y2) - 0.5));
+    let filled = false;
+    const put = (x, y) => {
+      const i = 4 * (y * W + x);
+      px[i] = rgb[0], px[i + 1] = rgb[1], px[i + 2] = rgb[2], px[i + 3] = 255;
+    };
+    for (let y = minY; y <= maxY && area !== 0; ++y) {
+      const py = y + 0.5;
+      for (let x = minX; x <= maxX; ++x) {
+        const qx = x + 0.5;
+        if (s * ((x1 - x0) * (py - y0) - (y1 - y0) * (qx - x0)) < 0) continue;
+        if (s * ((x2 - x1) * (py - y1) - (y2 - y1) * (qx - x1)) < 0) continue;
+        if (s * ((x0 - x2) * (py - y2) - (y0 - y2) * (qx - x2)) < 0) continue;
+        put(x, y);
+        filled = true;
+      }
+    }
+    const cx = Math.floor((x0 + x1 + x2) / 3), cy = Math.floor((y0 + y1 + y2) / 3);
+    if (!filled && cx >= 0 && cy >= 0 && cx < W && cy < H) put(cx, cy);
+  }
+
+  // The output atlas with each triangle coloured by its density, rasterised into the canvas's pixels
+  // (a few milliseconds for 200,000 triangles, where a path per triangle takes seconds).
   function drawHeatmaps(output) {
     const holder = document.getElementById('heatmaps');
+    const colors = Array.from({ length: 257 }, (_, i) => densityColor(((i / 128) - 1) * kDensityRange).map((c) => Math.round(c * 255)));
+    const grey = [128, 128, 128];
     output.textures.forEach((t, page) => {
       const scale = 420 / Math.max(t.width, t.height);
-      const w = Math.round(t.width * scale), h = Math.round(t.height * scale);
-      const { canvas, ctx } = hiDpiCanvas(w, h);
+      const { canvas, ctx } = hiDpiCanvas(Math.round(t.width * scale), Math.round(t.height * scale));
       canvas.id = page === 0 ? 'heatmap' : 'heatmap-' + page;
       canvas.setAttribute('aria-label', 'output texel density heat map');
-      ctx.fillStyle = '#2b2d30';
-      ctx.fillRect(0, 0, w, h);
-      // One path per colour step: a few dozen fills instead of one per triangle.
-      const steps = 48, paths = new Map();
-      forTrianglesOn(output, page, w, h, (tri, x0, y0, x1, y1, x2, y2) => {
+      const image = ctx.createImageData(canvas.width, canvas.height);
+      for (let i = 0; i < image.data.length; i += 4) image.data.set([43, 45, 48, 255], i);
+      forTrianglesOn(output, page, canvas.width, canvas.height, (tri, ...xy) => {
         const d = output.density[tri];
-        const key = Number.isFinite(d) && d > -50 ? Math.round((Math.max(-kDensityRange, Math.min(kDensityRange, d)) / kDensityRange) * steps / 2) : 'none';
-        if (!paths.has(key)) paths.set(key, new Path2D());
-        const p = paths.get(key);
-        p.moveTo(x0, y0); p.lineTo(x1, y1); p.lineTo(x2, y2); p.closePath();
+        const rgb = Number.isFinite(d) && d > -50 ? colors[Math.round((Math.max(-1, Math.min(1, d / kDensityRange)) + 1) * 128)] : grey;
+        fillTriangle(image, rgb, ...xy);
       });
-      ctx.lineWidth = 0.75;
-      for (const [key, p] of paths) {
-        ctx.fillStyle = ctx.strokeStyle = css(key === 'none' ? [0.5, 0.5, 0.5] : densityColor((key * 2 / steps) * kDensityRange));
-        ctx.fill(p);
-        ctx.stroke(p);
-      }
+      ctx.putImageData(image, 0, 0);
       holder.append(el('figure', {}, [canvas, el('figcaption', { text: 'Output' + (output.textures.length > 1 ? ' page ' + (page + 1) : '') +
         ': texel density relative to the mean (log2)' })]));
     });
@@ -478,24 +500,36 @@
     return { scene, renderer, mesh, seams, mats, canvas };
   }
 
-  // The model's box: its centre, radius, and its axes from the longest extent to the shortest.
-  function modelBox(positions) {
+  // The model's box: its centre and radius, and the axes of a three-quarter view: `up` upright,
+  // looking mostly along `across`, a little from the `side`. Unless `upAxis` (0, 1, 2: x, y, z) says
+  // which axis is up, a long or flat model stands on its longest extent and shows its broad face, and
+  // a squat one (a bowl) on the extent that differs from the other two.
+  function modelBox(positions, upAxis) {
     const box = new THREE.Box3().setFromArray(positions);
     const sphere = box.getBoundingSphere(new THREE.Sphere());
-    const size = box.getSize(new THREE.Vector3()).toArray();
-    const axes = [0, 1, 2].sort((a, b) => size[b] - size[a]);
+    // The extents between the 2nd and 98th percentiles: a small floating fragment does not count.
+    const size = [0, 1, 2].map((axis) => {
+      const values = positions.filter((_, i) => i % 3 === axis).sort();
+      return values[Math.floor(0.98 * (values.length - 1))] - values[Math.floor(0.02 * (values.length - 1))];
+    });
+    const [a, b, c] = [0, 1, 2].sort((i, j) => size[j] - size[i]);
+    const squat = size[c] >= 0.5 * size[b] && size[a] - size[b] <= size[b] - size[c];
+    let [up, across, side] = squat ? [c, b, a] : [a, c, b];
+    if (upAxis !== undefined) {
+      const others = [a, b, c].filter((i) => i !== upAxis);
+      [up, across, side] = [upAxis, others[1], others[0]];
+    }
     const unit = (i) => new THREE.Vector3().setComponent(i, 1);
-    return { center: sphere.center, radius: sphere.radius || 1, longest: unit(axes[0]), middle: unit(axes[1]), shortest: unit(axes[2]) };
+    return { center: sphere.center, radius: sphere.radius || 1, up: unit(up), across: unit(across), side: unit(side) };
   }
 
-  // A three-quarter view: the model's longest extent upright, seen from across its shortest one, a
-  // little from above and aside, the whole model in the frame.
+  // The three-quarter view of modelBox, the whole model in the frame.
   function frame(camera, controls, box) {
     controls.target.copy(box.center);
     camera.near = box.radius / 100;
     camera.far = box.radius * 100;
-    const direction = box.shortest.clone().multiplyScalar(0.85).add(box.longest.clone().multiplyScalar(0.35))
-      .add(box.middle.clone().multiplyScalar(0.4)).normalize();
+    const direction = box.across.clone().multiplyScalar(0.85).add(box.up.clone().multiplyScalar(0.35))
+      .add(box.side.clone().multiplyScalar(0.4)).normalize();
     const distance = box.radius / Math.sin((camera.fov / 2) * Math.PI / 180) * 1.02;
     camera.position.copy(box.center).add(direction.multiplyScalar(distance));
     camera.updateProjectionMatrix();
@@ -509,13 +543,21 @@
       buildView(models[1], images[1], checker, 0x00b8ff, document.getElementById('view-output')),
     ];
     const camera = new THREE.PerspectiveCamera(35, 4 / 3, 0.01, 100);
-    const box = modelBox(models[0].positions);
-    camera.up.copy(box.longest);  // before the controls, which orbit about the camera's up
-    // Two controls on one camera and one target: whichever view is dragged, both follow.
-    const controls = views.map((v) => new THREE.OrbitControls(camera, v.canvas));
-    controls[1].target = controls[0].target;
     const render = () => views.forEach((v) => v.renderer.render(v.scene, camera));
-    controls.forEach((c) => c.addEventListener('change', render));
+    // Two controls on one camera and one target: whichever view is dragged, both follow. They orbit
+    // about the camera's up as it is when they are made, so a new up makes new controls.
+    let controls = [];
+    const upSelect = document.getElementById('up-axis');
+    const reset = () => {
+      const box = modelBox(models[0].positions, upSelect.value === 'auto' ? undefined : Number(upSelect.value));
+      controls.forEach((c) => c.dispose());
+      camera.up.copy(box.up);
+      controls = views.map((v) => new THREE.OrbitControls(camera, v.canvas));
+      controls[1].target = controls[0].target;
+      controls.forEach((c) => c.addEventListener('change', render));
+      frame(camera, controls[0], box);
+      render();
+    };
     const resize = () => {
       const w = views[0].canvas.parentElement.clientWidth, h = Math.round(Math.min(560, Math.max(240, w * 0.8)));
       views.forEach((v) => v.renderer.setSize(w, h, true));
@@ -526,8 +568,9 @@
     };
     window.addEventListener('resize', resize);
     resize();
-    frame(camera, controls[0], box);
-    document.getElementById('reset-view').addEventListener('click', () => { frame(camera, controls[0], box); render(); });
+    reset();
+    document.getElementById('reset-view').addEventListener('click', reset);
+    upSelect.addEventListener('change', reset);
     const apply = () => {
       const mode = document.querySelector('input[name="surface"]:checked').value;
       const seams = document.getElementById('show-seams').checked;
