@@ -109,7 +109,7 @@ async function checkPage(browser, htmlPath, jsonPath, screenshotPath) {
   const failures = [];
   const fail = (what) => failures.push(what);
   const report = JSON.parse(readFileSync(jsonPath, 'utf8'));
-  const context = await browser.newContext({ viewport: { width: 1400, height: 1000 }, deviceScaleFactor: 1 });
+  const context = await browser.newContext({ viewport: { width: 1200, height: 900 }, deviceScaleFactor: 1 });
   const page = await context.newPage();
   const requests = [];
   page.on('request', (r) => requests.push(r.url()));

@@ -29,7 +29,7 @@ rm -rf "$work/demo" "$work/meshroom" "$work/network_probe"
 pages="$work/demo/out/report.html $work/demo/out/report.json $work/demo.png"
 scan=$shared/meshroom_esp32cam/texturedMesh.obj
 if [ -f "$scan" ]; then
-  # --aspect 1: the page is under test, not the map; the shape probes would double the run.
+  # --aspect 1 skips the shape probes (most of this scan's run): the page is under test, not the map.
   "$tightex" "$scan" -o "$work/meshroom/out" -q --aspect 1
   pages="$pages $work/meshroom/out/report.html $work/meshroom/out/report.json $work/meshroom.png"
 else
