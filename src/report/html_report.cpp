@@ -79,6 +79,7 @@ uint64_t triangle_hash(const TexturedMesh& mesh, size_t t) {
 /// fraction of the hash range (deterministic, and the same surface triangles in both models).
 std::vector<uint32_t> shown_triangles(const TexturedMesh& mesh, double keep_fraction) {
   std::vector<uint32_t> shown;
+  // 2^11 below the fraction of 2^64, so that the double converts to an integer below 2^64.
   const auto threshold = uint64_t(std::ldexp(std::min(keep_fraction, 1.0), 64) - std::ldexp(1.0, 11));
   for (size_t t = 0; t < mesh.num_triangles(); ++t)
     if (keep_fraction >= 1 || triangle_hash(mesh, t) < threshold) shown.push_back(uint32_t(t));

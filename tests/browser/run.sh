@@ -5,14 +5,14 @@
 # (skipped) when chromium or node is absent. Screenshots: BUILD/browser_test/*.png.
 #   run.sh BUILD_DIR TIGHTEX MAKE_DEMO SHARED_DATA
 set -eu
-here=$(cd "$(dirname "$0")" && pwd)
-build=$1 tightex=$2 make_demo=$3 shared=$4
 skip() { echo "SKIPPED: $*"; exit 77; }
 command -v node >/dev/null 2>&1 || skip "node not found (the browser test needs Node.js >= 18 and npm)"
 command -v npm >/dev/null 2>&1 || skip "npm not found (the browser test installs playwright-core with it)"
 CHROMIUM=${CHROMIUM:-$(command -v chromium || true)}
 [ -n "$CHROMIUM" ] || skip "chromium not found (apt-get install chromium; scripts/setup.sh does)"
 export CHROMIUM
+here=$(cd "$(dirname "$0")" && pwd)
+build=$1 tightex=$2 make_demo=$3 shared=$4
 
 work=$build/browser_test
 mkdir -p "$work"

@@ -69,9 +69,15 @@
   // ------------------------------------------------------------------------------------------------
   // Summary
 
+  // "1024 × 1024", or for several pages "3 × (1024 × 1024), 512 × 512" (equal sizes counted).
   function textureSizes(model) {
     if (!model.textures.length) return 'none';
-    return model.textures.map((t) => t.width + ' \u00d7 ' + t.height).join(', ');
+    const counts = new Map();
+    for (const t of model.textures) {
+      const size = t.width + ' \u00d7 ' + t.height;
+      counts.set(size, (counts.get(size) || 0) + 1);
+    }
+    return Array.from(counts, ([size, n]) => (n > 1 ? n + ' \u00d7 (' + size + ')' : size)).join(', ');
   }
 
   function summaryRows(input, output) {
