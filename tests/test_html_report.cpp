@@ -48,7 +48,7 @@ template <typename T>
 std::vector<T> array_of(const nlohmann::json& model, const char* key) {
   const std::vector<unsigned char> bytes = from_base64(model[key].get<std::string>());
   std::vector<T> values(bytes.size() / sizeof(T));
-  std::memcpy(values.data(), bytes.data(), values.size() * sizeof(T));
+  if (!values.empty()) std::memcpy(values.data(), bytes.data(), values.size() * sizeof(T));
   return values;
 }
 
