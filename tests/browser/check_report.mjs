@@ -114,7 +114,11 @@ async function checkPage(browser, htmlPath, jsonPath, screenshotPath) {
   const requests = [];
   page.on('request', (r) => requests.push(r.url()));
   page.on('websocket', (w) => requests.push(w.url()));
-  page.on('console', (m) => { if (m.type() === 'error') fail(`console error: ${m.text()}`); });
+  page.on('console', (m) => {
+    if (m.type() === 'error') fail(`console error: ${m.text()}`);
+    // three.js warns where it degrades what it was given (a texture shrunk, a deprecated call).
+    if (m.type() === 'warning' && m.text().startsWith('THREE.')) fail(`three.js warning: ${m.text()}`);
+  });
   page.on('pageerror', (e) => fail(`page error: ${e.message}`));
   // Anything but the page itself and data: URIs is refused, and recorded by the 'request' handler.
   await context.route((url) => !/^(file|data):/.test(url.href), (route) => route.abort());

@@ -472,9 +472,21 @@
     return texture;
   }
 
+  // A texture page for WebGL 1, which repeats and mipmaps only power-of-two images: three.js would
+  // shrink any other to the power of two below (a 980-pixel page to 512, blurring the output next to
+  // the input), so it is enlarged to the power of two above here instead.
   function pageTexture(img) {
     if (!img) return null;
-    const texture = new THREE.Texture(img);
+    let source = img;
+    const w = THREE.Math.ceilPowerOfTwo(img.width), h = THREE.Math.ceilPowerOfTwo(img.height);
+    if (w !== img.width || h !== img.height) {
+      source = document.createElement('canvas');
+      source.width = w, source.height = h;
+      const ctx = source.getContext('2d');
+      ctx.imageSmoothingQuality = 'high';
+      ctx.drawImage(img, 0, 0, w, h);
+    }
+    const texture = new THREE.Texture(source);
     texture.wrapS = texture.wrapT = THREE.RepeatWrapping;
     texture.anisotropy = 4;
     texture.needsUpdate = true;
