@@ -24,6 +24,7 @@
 #include "io/model_files.hpp"
 #include "io/obj_reader.hpp"
 #include "io/obj_writer.hpp"
+#include "report/html_report.hpp"
 #include "report/metrics.hpp"
 #include "report/preview.hpp"
 #include "report/report.hpp"
@@ -35,21 +36,29 @@ namespace tightex::cli {
 namespace {
 fs::path temporary_beside(const fs::path& path) { return path.parent_path() / ("." + path.filename().string() + ".tmp"); }
 
-/// Writes `text` to `path` under a temporary name, then renames it into place. Throws InputError
-/// naming the path if it cannot be written or renamed (the temporary file is removed then).
-void write_text_atomically(const fs::path& path, const std::string& text) {
-  const fs::path tmp = temporary_beside(path);
-  {
-    std::ofstream f(tmp, std::ios::binary);
-    if (!f) fail_input("{}: cannot write", path.string());
-    f << text;
-    if (!f) fail_input("{}: write failed", path.string());
-  }
+/// Writes each text to its path under a temporary name, and only once all are written renames them
+/// into place, in order: a reader never sees one file of the set without the others written. Throws
+/// InputError naming the path that cannot be written or renamed (the temporary files are removed then).
+void write_texts_atomically(const std::vector<std::pair<fs::path, std::string>>& files) {
   std::error_code ec;
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    fail_input("{}: cannot rename into place", path.string());
+  auto remove_temporaries = [&] {
+    for (const auto& [path, text] : files) fs::remove(temporary_beside(path), ec);
+  };
+  for (const auto& [path, text] : files) {
+    std::ofstream f(temporary_beside(path), std::ios::binary);
+    if (f) f << text;
+    if (!f) {
+      f.close();
+      remove_temporaries();
+      fail_input("{}: cannot write", path.string());
+    }
+  }
+  for (const auto& [path, text] : files) {
+    fs::rename(temporary_beside(path), path, ec);
+    if (ec) {
+      remove_temporaries();
+      fail_input("{}: cannot rename into place", path.string());
+    }
   }
 }
 
@@ -148,6 +157,9 @@ CLI::Option* define_options(CLI::App& app, CommandLine& line, ChoiceNames& names
       ->check(CLI::IsMember(names_of(kHoleModes)));
   app.add_option("--report", line.report_path, "where to write the JSON report (default OUTDIR/report.json)");
   app.add_option("--preview", line.preview_path, "write a PNG of the input texture(s) beside the output texture");
+  app.add_flag("--no-html", line.no_html,
+               "do not write OUTDIR/report.html (the figures, atlases, components and a 3D before/after viewer in one "
+               "self-contained page)");
   app.add_flag("-q,--quiet", line.quiet, "print nothing but errors");
   app.add_flag("-v,--verbose", line.verbose, "print the report's main figures");
   return size_opt;
@@ -399,6 +411,36 @@ void write_preview(const std::string& preview_path, const TexturedMesh& input, c
   if (ec) fail_input("{}: cannot write preview ({})", preview_path, ec.message());
 }
 
+/// The report page's file name in the output folder.
+constexpr const char* kHtmlName = "report.html";
+
+/// The report page's data (the models' shown triangles, their textures as JPEG), timed: the time goes
+/// into the report's timings, which the page shows.
+std::string timed_html_model_data(const TexturedMesh& input, const TexturedMesh& output, nlohmann::json& report) {
+  const auto t0 = std::chrono::steady_clock::now();
+  std::string data = html_model_data(input, output);
+  report["timings"].push_back(to_json(StageTiming{"report.html data", seconds_since(t0), std::nullopt}));
+  return data;
+}
+
+/// Writes report.json and, unless --no-html, OUTDIR/report.html (its data timed into the report
+/// first, so that the page shows the same report as the file), renamed into place together, the JSON
+/// last. Returns the report a reader opens: the page, or the JSON with --no-html. Throws InputError
+/// naming a file that cannot be written.
+fs::path write_reports(const CommandLine& line, nlohmann::json& report, const TexturedMesh& input, const TexturedMesh& output) {
+  const fs::path json_path = line.report_path.empty() ? fs::path(line.outdir) / "report.json" : fs::path(line.report_path);
+  if (line.no_html) {
+    write_texts_atomically({{json_path, report.dump(2) + "\n"}});
+    return json_path;
+  }
+  const std::string model_data = timed_html_model_data(input, output, report);
+  std::string json_text = report.dump(2) + "\n";
+  std::string page = html_report_page(json_text, model_data);
+  const fs::path html_path = fs::path(line.outdir) / kHtmlName;
+  write_texts_atomically({{html_path, std::move(page)}, {json_path, std::move(json_text)}});
+  return html_path;
+}
+
 /// The one-line summary (and with --verbose the metrics) on stdout.
 void print_summary(const CommandLine& line, const TexturedMesh& output, size_t components, const Metrics& metrics, double wall_seconds) {
   // The new texture's size (the first of several: per-component layout).
@@ -484,11 +526,14 @@ nlohmann::json run_command(const CommandLine& line, const CommandHooks& hooks) {
   const std::string name = fs::path(line.input).stem().string();
   const Metrics metrics = write_and_measure(line, planned.mesh, result.output, name, timings);
   const double wall_seconds = seconds_since(t0);
-  add_cli_figures(result.report, metrics, timings, wall_seconds, read_stats, OutputFiles{line.outdir, output_model_name(line)});
+  add_cli_figures(result.report, metrics, timings, wall_seconds, read_stats,
+                  OutputFiles{line.outdir, output_model_name(line), line.no_html ? "" : kHtmlName});
   if (!line.preview_path.empty()) write_preview(line.preview_path, planned.mesh, result.output);
-  const std::string report_path = line.report_path.empty() ? (fs::path(line.outdir) / "report.json").string() : line.report_path;
-  write_text_atomically(report_path, result.report.dump(2) + "\n");
-  if (printing) print_summary(line, result.output, result.report["preparation"]["components"].get<size_t>(), metrics, wall_seconds);
+  const fs::path report_path = write_reports(line, result.report, planned.mesh, result.output);
+  if (printing) {
+    print_summary(line, result.output, result.report["preparation"]["components"].get<size_t>(), metrics, wall_seconds);
+    fmt::print("tightex: report: {}\n", report_path.string());
+  }
   return result.report;
 }
 

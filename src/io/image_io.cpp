@@ -727,6 +727,22 @@ void save_image(const std::string& path, const Image& image, ImageFormat format,
   out.commit();
 }
 
+std::string encode_jpeg(const Image& image, int quality) {
+  if (image.empty() || image.pixels.size() != size_t(image.width) * size_t(image.height) || quality < 1 || quality > 100)
+    fail_internal("encode_jpeg: a {}x{} image with {} pixels at quality {}", image.width, image.height, image.pixels.size(), quality);
+  char* buffer = nullptr;
+  size_t size = 0;
+  std::FILE* stream = open_memstream(&buffer, &size);
+  if (stream == nullptr) throw std::bad_alloc();
+  JpegEncoder encoder;
+  const bool ok = jpeg_encode_guarded(encoder, stream, image, quality);
+  std::fclose(stream);  // sets buffer and size
+  std::string bytes(buffer != nullptr ? buffer : "", buffer != nullptr ? size : 0);
+  std::free(buffer);
+  if (!ok) fail_internal("encode_jpeg: libjpeg: {}", encoder.err.message);
+  return bytes;
+}
+
 }  // namespace tightex
 
 namespace tightex {

@@ -14,6 +14,10 @@ namespace tightex {
 /// in error messages.
 Image decode_image(const unsigned char* data, size_t size, const std::string& name, size_t max_pixels = size_t(1) << 30);
 
+/// The image as a JPEG file's bytes (RGB, alpha ignored), encoded in memory. Requires a non-empty image
+/// and quality in 1..100 (else InternalError); throws std::bad_alloc where memory runs out.
+std::string encode_jpeg(const Image& image, int quality);
+
 /// Width and height from the file's header alone ({0, 0} when unknown), so memory can be estimated
 /// before any pixel is allocated.
 std::pair<int, int> image_dimensions(const std::string& path);

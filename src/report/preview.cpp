@@ -4,11 +4,9 @@
 
 namespace tightex {
 
-namespace {
-
-/// Box-filtered resize (every source texel counts): a fragmented atlas shrunk by point sampling would
-/// show noise instead of its charts and gaps.
-Image shrink(const Image& src, int height) {
+// Box-filtered (every source texel counts): a fragmented atlas shrunk by point sampling would show
+// noise instead of its charts and gaps.
+Image box_shrink(const Image& src, int height) {
   const int h = std::max(1, std::min(height, src.height));
   const int w = std::max(1, int(double(src.width) * h / src.height + 0.5));
   Image dst(w, h);
@@ -28,14 +26,12 @@ Image shrink(const Image& src, int height) {
   return dst;
 }
 
-}  // namespace
-
 Image make_preview(const TexturedMesh& input, const TexturedMesh& output, int height) {
   std::vector<Image> left, right;
   for (const Texture& t : input.textures)
-    if (!t.image.empty()) left.push_back(shrink(t.image, height));
+    if (!t.image.empty()) left.push_back(box_shrink(t.image, height));
   for (const Texture& t : output.textures)
-    if (!t.image.empty()) right.push_back(shrink(t.image, height));
+    if (!t.image.empty()) right.push_back(box_shrink(t.image, height));
   const int gap = height / 16 + 4;
   int width = gap;
   for (const auto* side : {&left, &right})

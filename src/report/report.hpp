@@ -90,6 +90,7 @@ struct StageTiming {
 struct OutputFiles {
   std::string directory;
   std::string model;  // the model file's name within `directory` (OBJ or PLY)
+  std::string html;   // the report page's name within `directory`; empty: none written (not written)
 };
 
 /// The whole report. Sections that only some callers fill are optional and not written when unset:

@@ -142,7 +142,11 @@ json to_json(const StageTiming& timing) {
   return j;
 }
 
-json to_json(const OutputFiles& files) { return {{"directory", files.directory}, {"model", files.model}}; }
+json to_json(const OutputFiles& files) {
+  json j = {{"directory", files.directory}, {"model", files.model}};
+  if (!files.html.empty()) j["html"] = files.html;
+  return j;
+}
 
 json reader_json(const ObjReadStats& stats) {
   return {{"polygons_triangulated", stats.polygons_triangulated}, {"paths_found", stats.paths_found}};

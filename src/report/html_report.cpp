@@ -1,0 +1,292 @@
+#include "report/html_report.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <numeric>
+#include <string_view>
+#include <tuple>
+#include <vector>
+
+#include "core/error.hpp"
+#include "io/image_io.hpp"
+#include "report/metrics.hpp"
+#include "report/preview.hpp"
+
+namespace tightex {
+
+namespace page_assets {
+// Defined in the source cmake/embed_files.cmake generates from src/report/html/ and libjs-three.
+std::string_view page_html();
+std::string_view page_css();
+std::string_view page_js();
+std::string_view three_js();
+std::string_view orbit_controls_js();
+}  // namespace page_assets
+
+namespace {
+
+using nlohmann::json;
+
+/// Standard base64 (RFC 4648, with padding) of `size` bytes.
+std::string base64(const void* data, size_t size) {
+  static constexpr char kDigits[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  const auto* bytes = static_cast<const unsigned char*>(data);
+  std::string out;
+  out.reserve((size + 2) / 3 * 4);
+  for (size_t i = 0; i < size; i += 3) {
+    const uint32_t b0 = bytes[i], b1 = i + 1 < size ? bytes[i + 1] : 0, b2 = i + 2 < size ? bytes[i + 2] : 0;
+    const uint32_t word = (b0 << 16) | (b1 << 8) | b2;
+    out += kDigits[(word >> 18) & 63];
+    out += kDigits[(word >> 12) & 63];
+    out += i + 1 < size ? kDigits[(word >> 6) & 63] : '=';
+    out += i + 2 < size ? kDigits[word & 63] : '=';
+  }
+  return out;
+}
+
+/// A typed array's bytes as base64 (the page reads them back as the same little-endian type).
+template <typename T>
+std::string base64_array(const std::vector<T>& values) {
+  static_assert(std::endian::native == std::endian::little, "the page reads little-endian arrays");
+  return base64(values.data(), values.size() * sizeof(T));
+}
+
+/// splitmix64's finaliser: a well-mixed 64-bit hash of `x`.
+uint64_t mix(uint64_t x) {
+  x += 0x9e3779b97f4a7c15ULL;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+  return x ^ (x >> 31);
+}
+
+/// A hash of a triangle's three corner positions that does not depend on the corners' order or the
+/// vertices' numbering: the same surface triangle hashes the same in the input and the output.
+uint64_t triangle_hash(const TexturedMesh& mesh, size_t t) {
+  uint64_t sum = 0;
+  for (int k = 0; k < 3; ++k) {
+    const Vec3& p = mesh.positions[mesh.triangles[t][k]];
+    sum += mix(std::bit_cast<uint64_t>(p.x()) ^ mix(std::bit_cast<uint64_t>(p.y()) ^ mix(std::bit_cast<uint64_t>(p.z()))));
+  }
+  return mix(sum);
+}
+
+/// The triangles shown: all of them when `keep_fraction` is 1, else those whose hash falls below that
+/// fraction of the hash range (deterministic, and the same surface triangles in both models).
+std::vector<uint32_t> shown_triangles(const TexturedMesh& mesh, double keep_fraction) {
+  std::vector<uint32_t> shown;
+  // 2^11 below the fraction of 2^64, so that the double converts to an integer below 2^64.
+  const auto threshold = uint64_t(std::ldexp(std::min(keep_fraction, 1.0), 64) - std::ldexp(1.0, 11));
+  for (size_t t = 0; t < mesh.num_triangles(); ++t)
+    if (keep_fraction >= 1 || triangle_hash(mesh, t) < threshold) shown.push_back(uint32_t(t));
+  return shown;
+}
+
+/// Each vertex's lowest-numbered vertex at exactly the same position, so that a model written with
+/// its vertices split along the charts is still seen as one surface.
+std::vector<uint32_t> welded_vertices(const TexturedMesh& mesh) {
+  std::vector<uint32_t> order(mesh.num_vertices());
+  std::iota(order.begin(), order.end(), 0u);
+  auto key = [&](uint32_t v) { return std::tuple(mesh.positions[v].x(), mesh.positions[v].y(), mesh.positions[v].z(), v); };
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
+  std::vector<uint32_t> canonical(mesh.num_vertices());
+  for (size_t i = 0; i < order.size(); ++i) {
+    const bool same = i > 0 && mesh.positions[order[i]] == mesh.positions[order[i - 1]];
+    canonical[order[i]] = same ? canonical[order[i - 1]] : order[i];
+  }
+  return canonical;
+}
+
+/// The texture triangle t samples, or -1.
+int texture_of(const TexturedMesh& mesh, size_t t) {
+  const int32_t m = mesh.face_material[t];
+  return m >= 0 && size_t(m) < mesh.materials.size() ? mesh.materials[size_t(m)].texture : -1;
+}
+
+/// Per triangle, bit k set where edge k (corner k to corner k+1) is a seam as METRICS.md counts charts:
+/// the texture coordinates (or the texture) differ on its two sides, or it has not exactly one
+/// neighbour across it (a border, or a non-manifold edge).
+std::vector<uint8_t> seam_bits(const TexturedMesh& mesh) {
+  const std::vector<uint32_t> canonical = welded_vertices(mesh);
+  std::vector<std::pair<uint64_t, uint32_t>> edges;  // (vertex pair, corner 3t+k)
+  edges.reserve(3 * mesh.num_triangles());
+  for (size_t t = 0; t < mesh.num_triangles(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = canonical[mesh.triangles[t][k]], b = canonical[mesh.triangles[t][(k + 1) % 3]];
+      edges.push_back({(uint64_t(std::min(a, b)) << 32) | std::max(a, b), uint32_t(3 * t + k)});
+    }
+  std::sort(edges.begin(), edges.end());
+  std::vector<uint8_t> bits(mesh.num_triangles(), 0);
+  // The texture coordinate of corner c's triangle at canonical vertex v (one of the edge's two ends).
+  auto uv_at = [&](uint32_t c, uint32_t v) {
+    const size_t t = c / 3;
+    const int k = int(c % 3);
+    return canonical[mesh.triangles[t][k]] == v ? mesh.corner_uv[3 * t + k] : mesh.corner_uv[3 * t + (k + 1) % 3];
+  };
+  for (size_t i = 0; i < edges.size();) {
+    size_t j = i;
+    while (j < edges.size() && edges[j].first == edges[i].first) ++j;
+    bool seam = j - i != 2;
+    if (!seam) {
+      const uint32_t c0 = edges[i].second, c1 = edges[i + 1].second;
+      const auto a = uint32_t(edges[i].first >> 32), b = uint32_t(edges[i].first);
+      seam = texture_of(mesh, c0 / 3) != texture_of(mesh, c1 / 3) || uv_at(c0, a) != uv_at(c1, a) || uv_at(c0, b) != uv_at(c1, b);
+    }
+    if (seam)
+      for (size_t e = i; e < j; ++e) bits[edges[e].second / 3] |= uint8_t(1u << (edges[e].second % 3));
+    i = j;
+  }
+  return bits;
+}
+
+/// Per triangle, log2 of its texel density (texels of its texture per unit of 3D area) over the
+/// model's mean density (all texels over all area), as METRICS.md's density spread; NaN for a triangle
+/// without texture or area.
+std::vector<double> relative_density(const TexturedMesh& mesh) {
+  std::vector<double> density(mesh.num_triangles(), std::numeric_limits<double>::quiet_NaN());
+  double texels = 0, area = 0;
+  for (size_t t = 0; t < mesh.num_triangles(); ++t) {
+    const int tex = texture_of(mesh, t);
+    const Vec3 &p0 = mesh.positions[mesh.triangles[t][0]], &p1 = mesh.positions[mesh.triangles[t][1]],
+               &p2 = mesh.positions[mesh.triangles[t][2]];
+    const double a3 = 0.5 * (p1 - p0).cross(p2 - p0).norm();
+    if (tex < 0 || !(a3 > 0)) continue;
+    const auto [w, h] = texture_size(mesh, tex);
+    const Vec2 e1 = mesh.sampled_uv(t, 1) - mesh.sampled_uv(t, 0), e2 = mesh.sampled_uv(t, 2) - mesh.sampled_uv(t, 0);
+    const double at = 0.5 * std::abs(e1.x() * e2.y() - e1.y() * e2.x()) * double(w) * double(h);
+    density[t] = at / a3;
+    texels += at, area += a3;
+  }
+  const double mean = area > 0 && texels > 0 ? texels / area : 1;
+  for (double& d : density)
+    if (!std::isnan(d)) d = d > 0 ? std::log2(d / mean) : -60.0;
+  return density;
+}
+
+/// The model's textures for display: full size, and the image box-filtered to at most `max_side`
+/// pixels a side, as a data-URI JPEG ("" where the pixels are not loaded).
+json textures_json(const TexturedMesh& mesh, const HtmlReportOptions& options) {
+  json textures = json::array();
+  for (size_t i = 0; i < mesh.textures.size(); ++i) {
+    const auto [w, h] = texture_size(mesh, int(i));
+    const Image& image = mesh.textures[i].image;
+    std::string uri;
+    if (!image.empty()) {
+      const int longer = std::max(image.width, image.height);
+      const int height = longer > options.max_texture_side
+                             ? std::max(1, int(std::lround(double(image.height) * options.max_texture_side / longer)))
+                             : image.height;
+      const std::string jpeg = encode_jpeg(height == image.height ? image : box_shrink(image, height), options.jpeg_quality);
+      uri = "data:image/jpeg;base64," + base64(jpeg.data(), jpeg.size());
+    }
+    textures.push_back({{"width", w}, {"height", h}, {"image", uri}});
+  }
+  return textures;
+}
+
+/// One model's entry of html_model_data.
+json model_json(const TexturedMesh& mesh, const std::string& name, double keep_fraction, const HtmlReportOptions& options) {
+  const std::vector<uint32_t> shown = shown_triangles(mesh, keep_fraction);
+  const std::vector<uint8_t> all_seams = seam_bits(mesh);
+  const std::vector<double> all_density = relative_density(mesh);
+  std::vector<uint32_t> vertex_index(mesh.num_vertices(), kNone), indices;
+  std::vector<float> positions, uv, density;
+  std::vector<int16_t> texture;
+  std::vector<uint8_t> seams;
+  for (uint32_t t : shown) {
+    for (int k = 0; k < 3; ++k) {
+      uint32_t& v = vertex_index[mesh.triangles[t][k]];
+      if (v == kNone) {
+        v = uint32_t(positions.size() / 3);
+        const Vec3& p = mesh.positions[mesh.triangles[t][k]];
+        positions.insert(positions.end(), {float(p.x()), float(p.y()), float(p.z())});
+      }
+      indices.push_back(v);
+      const Vec2 c = mesh.sampled_uv(t, k);
+      uv.insert(uv.end(), {float(c.x()), float(c.y())});
+    }
+    texture.push_back(int16_t(std::clamp(texture_of(mesh, t), -1, int(INT16_MAX))));
+    seams.push_back(all_seams[t]);
+    density.push_back(float(all_density[t]));
+  }
+  return {{"name", name},
+          {"triangles", mesh.num_triangles()},
+          {"shown", shown.size()},
+          {"charts", count_charts(mesh, nullptr)},
+          {"positions", base64_array(positions)},
+          {"indices", base64_array(indices)},
+          {"uv", base64_array(uv)},
+          {"texture", base64_array(texture)},
+          {"seams", base64_array(seams)},
+          {"density", base64_array(density)},
+          {"textures", textures_json(mesh, options)}};
+}
+
+/// `text` with every "<" written as the JSON escape "\u003c", so that no "</script>" in a string can
+/// end the script element that holds it (and the JSON means the same).
+std::string escape_for_script(const std::string& text) {
+  std::string out;
+  out.reserve(text.size());
+  for (char c : text)
+    if (c == '<')
+      out += "\\u003c";
+    else
+      out += c;
+  return out;
+}
+
+/// One marker of the template and what replaces it.
+struct Filling {
+  std::string_view marker, content;
+};
+
+/// `page` with each marker replaced by its content. The markers are all found in the template itself
+/// (never inside a content: a file name in the report could spell one). A marker the template lacks,
+/// or holds twice, is a broken build (InternalError).
+std::string filled(std::string_view page, std::vector<Filling> fillings) {
+  std::vector<std::pair<size_t, const Filling*>> at;
+  for (const Filling& f : fillings) {
+    const size_t pos = page.find(f.marker);
+    if (pos == std::string_view::npos || page.find(f.marker, pos + 1) != std::string_view::npos)
+      throw InternalError("report.html template: not exactly one " + std::string(f.marker));
+    at.push_back({pos, &f});
+  }
+  std::sort(at.begin(), at.end());
+  std::string out;
+  size_t from = 0;
+  for (const auto& [pos, f] : at) {
+    out.append(page.substr(from, pos - from));
+    out.append(f->content);
+    from = pos + f->marker.size();
+  }
+  out.append(page.substr(from));
+  return out;
+}
+
+}  // namespace
+
+std::string html_model_data(const TexturedMesh& input, const TexturedMesh& output, const HtmlReportOptions& options) {
+  // The input's count sets the fraction for both, so that both show the same surface triangles.
+  const double keep_fraction =
+      input.num_triangles() > options.max_triangles ? double(options.max_triangles) / double(input.num_triangles()) : 1.0;
+  json data = {
+      {"max_triangles", options.max_triangles},
+      {"models", json::array({model_json(input, "input", keep_fraction, options), model_json(output, "output", keep_fraction, options)})}};
+  return data.dump();
+}
+
+std::string html_report_page(const std::string& report_json, const std::string& model_data) {
+  const std::string report = escape_for_script(report_json), models = escape_for_script(model_data);
+  return filled(page_assets::page_html(), {{"/*TIGHTEX:STYLE*/", page_assets::page_css()},
+                                           {"TIGHTEX:REPORT_JSON", report},
+                                           {"TIGHTEX:MODEL_DATA", models},
+                                           {"/*TIGHTEX:THREE*/", page_assets::three_js()},
+                                           {"/*TIGHTEX:ORBIT_CONTROLS*/", page_assets::orbit_controls_js()},
+                                           {"/*TIGHTEX:SCRIPT*/", page_assets::page_js()}});
+}
+
+}  // namespace tightex

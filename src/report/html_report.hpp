@@ -1,0 +1,36 @@
+// report.html: one self-contained page that shows a run (the figures of report.json, the atlases before
+// and after, the density, the components, and both models in a 3D viewer). The page's template, style
+// and script live in src/report/html/ and, with the three.js they use (Debian's libjs-three), are
+// embedded in the binary at build time; everything the page shows is packed into it (base64 arrays,
+// data-URI images), so it opens from the file system, offline, and fetches nothing.
+#pragma once
+#include <cstddef>
+#include <string>
+
+#include "core/mesh.hpp"
+
+namespace tightex {
+
+/// How much of the models the page holds.
+struct HtmlReportOptions {
+  /// Triangles of each model in the 3D viewer at most: above it, a deterministic subsample (the same
+  /// surface triangles in both models, chosen by a hash of their corner positions) keeps the page
+  /// responsive; the page says how many it shows.
+  size_t max_triangles = 200000;
+  /// Texture images are box-filtered down to this many pixels on their longer side for display.
+  int max_texture_side = 2048;
+  int jpeg_quality = 85;
+};
+
+/// What the page shows of the two models, as JSON text: per model its triangle count, the shown
+/// triangles' positions, indices, texture coordinates, texture index, seam edges and log2 texel density
+/// relative to the model's mean (base64 of little-endian typed arrays), and its textures as data-URI
+/// JPEGs with their full sizes. Requires two valid meshes (as read_model returns them) with their
+/// pixels; `output` is `input` re-textured. Throws only std::bad_alloc.
+std::string html_model_data(const TexturedMesh& input, const TexturedMesh& output, const HtmlReportOptions& options = {});
+
+/// The page: the embedded template with its style, three.js and script, `report_json` (report.json's
+/// text) and `model_data` (html_model_data's text) packed in. Never throws but for allocation.
+std::string html_report_page(const std::string& report_json, const std::string& model_data);
+
+}  // namespace tightex

@@ -1,0 +1,190 @@
+// report.html: the page's data (subsample, seams, density, textures) and the page itself, and the
+// command line's --no-html. The page in a browser: tests/browser (ctest Browser.ReportPage).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "mesh_catalogue.hpp"
+#include "report/html_report.hpp"
+#include "tightex/tightex.hpp"
+
+namespace tightex {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace tightex::testing;
+
+/// Decodes standard base64 (the page's typed arrays).
+std::vector<unsigned char> from_base64(const std::string& text) {
+  std::vector<unsigned char> out;
+  uint32_t word = 0;
+  int bits = 0;
+  for (char c : text) {
+    const char* digits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    const char* at = c == '=' ? nullptr : std::strchr(digits, c);
+    if (at == nullptr) break;
+    word = (word << 6) | uint32_t(at - digits);
+    bits += 6;
+    if (bits >= 8) {
+      bits -= 8;
+      out.push_back((unsigned char)((word >> bits) & 0xff));
+    }
+  }
+  return out;
+}
+
+/// A typed array of the page's data, read back.
+template <typename T>
+std::vector<T> array_of(const nlohmann::json& model, const char* key) {
+  const std::vector<unsigned char> bytes = from_base64(model[key].get<std::string>());
+  std::vector<T> values(bytes.size() / sizeof(T));
+  if (!values.empty()) std::memcpy(values.data(), bytes.data(), values.size() * sizeof(T));
+  return values;
+}
+
+/// The data html_model_data gives for `input` and `output`, parsed.
+nlohmann::json model_data(const TexturedMesh& input, const TexturedMesh& output, size_t max_triangles) {
+  HtmlReportOptions options;
+  options.max_triangles = max_triangles;
+  return nlohmann::json::parse(html_model_data(input, output, options));
+}
+
+/// Two triangles sharing the edge (1, 2) of a unit square, with texture coordinates `uv` per corner.
+TexturedMesh square(const std::vector<Vec2>& uv) {
+  TexturedMesh m = make_textured("square", {{0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, {1.0, 1.0, 0.0}}, {{0, 1, 2}, {2, 1, 3}});
+  m.corner_uv = uv;
+  return m;
+}
+
+TEST(HtmlReport, SeamsAreWhereTheTextureCoordinatesJump) {
+  // One chart: the shared edge is no seam; every other edge is the border.
+  const TexturedMesh joined = square({{0, 0}, {1, 0}, {0, 1}, {0, 1}, {1, 0}, {1, 1}});
+  const std::vector<uint8_t> seams = array_of<uint8_t>(model_data(joined, joined, 100)["models"][0], "seams");
+  ASSERT_EQ(seams.size(), 2u);
+  EXPECT_EQ(seams[0], 0b101);  // its edge 1 (corner 1 to 2) is the shared one
+  EXPECT_EQ(seams[1], 0b110);
+  // The second triangle moved in texture space: the shared edge is a seam on both sides.
+  const TexturedMesh split = square({{0, 0}, {1, 0}, {0, 1}, {0.5, 1}, {1.5, 0}, {1.5, 1}});
+  const std::vector<uint8_t> split_seams = array_of<uint8_t>(model_data(split, split, 100)["models"][0], "seams");
+  EXPECT_EQ(split_seams[0], 0b111);
+  EXPECT_EQ(split_seams[1], 0b111);
+}
+
+TEST(HtmlReport, DensityIsRelativeToTheMean) {
+  // The second triangle has four times the first's texture area on the same 3D area.
+  const TexturedMesh m = square({{0, 0}, {0.25, 0}, {0, 0.25}, {0, 0.5}, {0.5, 0}, {0.5, 0.5}});
+  const std::vector<float> density = array_of<float>(model_data(m, m, 100)["models"][1], "density");
+  ASSERT_EQ(density.size(), 2u);
+  EXPECT_NEAR(density[1] - density[0], 2.0, 1e-5);                        // log2 of 4
+  EXPECT_NEAR(std::exp2(density[0]) + std::exp2(density[1]), 2.0, 1e-5);  // mean of equal areas is 1
+}
+
+TEST(HtmlReport, SubsampleShowsTheSameSurfaceTrianglesInBothModels) {
+  const TexturedMesh input = sphere();
+  // The output: the same triangles in another order, corners rotated, vertices renumbered.
+  TexturedMesh output = input;
+  const size_t n = input.num_triangles(), nv = input.num_vertices();
+  for (size_t t = 0; t < n; ++t) {
+    const Tri& f = input.triangles[n - 1 - t];
+    output.triangles[t] = {uint32_t(nv - 1 - f[1]), uint32_t(nv - 1 - f[2]), uint32_t(nv - 1 - f[0])};
+  }
+  for (size_t v = 0; v < nv; ++v) output.positions[nv - 1 - v] = input.positions[v];
+  const nlohmann::json data = model_data(input, output, n / 4);
+  const nlohmann::json &in = data["models"][0], &out = data["models"][1];
+  EXPECT_EQ(in["triangles"], n);
+  EXPECT_GT(in["shown"].get<size_t>(), n / 8);
+  EXPECT_LT(in["shown"].get<size_t>(), n / 2);
+  EXPECT_EQ(in["shown"], out["shown"]);
+  // The same set of triangles: compare the sorted corner positions of each shown triangle.
+  auto shown_set = [](const nlohmann::json& model) {
+    const std::vector<float> p = array_of<float>(model, "positions");
+    const std::vector<uint32_t> idx = array_of<uint32_t>(model, "indices");
+    std::vector<std::array<float, 9>> tris;
+    for (size_t t = 0; t < idx.size() / 3; ++t) {
+      std::array<std::array<float, 3>, 3> c;
+      for (int k = 0; k < 3; ++k) c[k] = {p[3 * idx[3 * t + k]], p[3 * idx[3 * t + k] + 1], p[3 * idx[3 * t + k] + 2]};
+      std::sort(c.begin(), c.end());
+      tris.push_back({c[0][0], c[0][1], c[0][2], c[1][0], c[1][1], c[1][2], c[2][0], c[2][1], c[2][2]});
+    }
+    std::sort(tris.begin(), tris.end());
+    return tris;
+  };
+  EXPECT_EQ(shown_set(in), shown_set(out));
+  // Under the cap, everything is shown.
+  EXPECT_EQ(model_data(input, output, n)["models"][1]["shown"], n);
+}
+
+TEST(HtmlReport, PageHoldsEverythingAndNoMarker) {
+  const TexturedMesh m = disk();
+  const std::string report = R"({"input": {"file": "a</script><script>alert(1)</script>.obj"}})";
+  const std::string page = html_report_page(report, html_model_data(m, m));
+  EXPECT_EQ(page.find("TIGHTEX:"), std::string::npos);
+  EXPECT_NE(page.find("REVISION=\"111\""), std::string::npos);  // three.js packed in
+  EXPECT_NE(page.find("OrbitControls"), std::string::npos);
+  EXPECT_NE(page.find("data:image/jpeg;base64,/9j/"), std::string::npos);  // the texture as a JPEG
+  // A file name cannot end the script element that holds the report (the JSON escapes "<").
+  EXPECT_EQ(page.find("a</script>"), std::string::npos);
+  EXPECT_NE(page.find(R"(a\u003c/script>)"), std::string::npos);
+  // Nothing that would make a browser reach out.
+  for (const char* url : {"http://", "https://", "src=\"//"}) {
+    size_t at = page.find(url);
+    // three.js and the licence comment name web sites in strings and comments, never as a source.
+    while (at != std::string::npos) {
+      const std::string before = page.substr(at > 40 ? at - 40 : 0, std::min<size_t>(at, 40));
+      EXPECT_EQ(before.find("src="), std::string::npos) << page.substr(at > 40 ? at - 40 : 0, 80);
+      EXPECT_EQ(before.find("href="), std::string::npos) << page.substr(at > 40 ? at - 40 : 0, 80);
+      at = page.find(url, at + 1);
+    }
+  }
+}
+
+int run_cli(const std::string& args) {
+  const int status = std::system((std::string(TIGHTEX_CLI) + " " + args).c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::string contents(const fs::path& path) {
+  std::ifstream f(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(f)), {});
+}
+
+TEST(HtmlReport, CommandLineWritesThePageUnlessToldNotTo) {
+  const fs::path dir = fs::temp_directory_path() / ("tightex_html_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  write_obj(sphere_with_holes(), (dir / "in").string(), "holey", ImageFormat::kPng);
+  const std::string in = "'" + (dir / "in" / "holey.obj").string() + "' --size 128";
+  ASSERT_EQ(run_cli(in + " -o '" + (dir / "page").string() + "' > '" + (dir / "stdout.txt").string() + "'"), 0);
+  ASSERT_EQ(run_cli(in + " -o '" + (dir / "plain").string() + "' --no-html --quiet"), 0);
+
+  EXPECT_TRUE(fs::exists(dir / "page" / "report.html"));
+  EXPECT_FALSE(fs::exists(dir / "plain" / "report.html"));
+  // The page changes no other output: model, material and texture are byte for byte the same.
+  for (const char* name : {"holey.obj", "holey.mtl", "holey_tightex.png"})
+    EXPECT_EQ(contents(dir / "page" / name), contents(dir / "plain" / name)) << name;
+  const nlohmann::json report = nlohmann::json::parse(contents(dir / "page" / "report.json"));
+  EXPECT_EQ(report["output"]["html"], "report.html");
+  EXPECT_FALSE(nlohmann::json::parse(contents(dir / "plain" / "report.json"))["output"].contains("html"));
+  // The page holds report.json as written (with "<" escaped), and the command names it last.
+  std::string escaped;
+  for (char c : contents(dir / "page" / "report.json")) escaped += c == '<' ? std::string("\\u003c") : std::string(1, c);
+  EXPECT_NE(contents(dir / "page" / "report.html").find(escaped), std::string::npos);
+  const std::string out = contents(dir / "stdout.txt");
+  const std::string last = out.substr(out.rfind('\n', out.size() - 2) + 1);
+  EXPECT_EQ(last, "tightex: report: " + (dir / "page" / "report.html").string() + "\n");
+  // No temporary file is left behind.
+  for (const auto& e : fs::directory_iterator(dir / "page")) EXPECT_NE(e.path().filename().string()[0], '.') << e.path();
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace tightex
