@@ -475,7 +475,8 @@ void run(const CommandLine& line) {
   geometry_only.load_textures = false;
   TexturedMesh geometry = read_model(line.input, geometry_only, &read_stats);
   timings.read_s = seconds_since(t0);
-  for (Texture& t : geometry.textures) std::tie(t.width, t.height) = image_dimensions(t.path);
+  for (Texture& t : geometry.textures)
+    if (t.image.empty()) std::tie(t.width, t.height) = image_dimensions(t.path);  // a vertex-colour texture is made, not read
   check_texture_headers(memory_guard(line), geometry);
   const int size = texture_side(line, geometry);
   const bool show_progress = !line.quiet && isatty(STDERR_FILENO);
