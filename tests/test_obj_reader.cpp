@@ -166,7 +166,8 @@ TEST_F(ObjReaderTest, FaceWithoutAnyTextureCoordinatesNamesItsLine) {
 TEST_F(ObjReaderTest, ModelWithoutTextureCoordinates) {
   const std::string path = write("no_vt.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\n");
   EXPECT_EQ(error_of(path),
-            path + ": model has no texture coordinates (vt); tightex needs the input's UV atlas");
+            path + ": model has neither texture coordinates (vt) nor vertex colours (v x y z r g b); tightex needs the input's UV atlas or "
+                   "its vertex colours");
 }
 
 TEST_F(ObjReaderTest, ForwardReferencesAreResolvedAtTheEnd) {

@@ -358,7 +358,7 @@ std::vector<Hostile> hostile_files() {
       {"no x", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float y\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n", "no property 'x'"},
       {"point cloud", kHead + "end_header\n" + kVerts, "no 'face' element"},
       {"float indices", kHead + "element face 1\nproperty list uchar float vertex_indices\nend_header\n", "list of integers"},
-      {"no texcoords", kHead + "element face 1\nproperty list uchar int vertex_indices\nend_header\n" + kVerts + "3 0 1 2\n", "no texture coordinates"},
+      {"no texcoords", kHead + "element face 1\nproperty list uchar int vertex_indices\nend_header\n" + kVerts + "3 0 1 2\n", "neither texture coordinates"},
       {"TextureFile without name", "ply\nformat ascii 1.0\ncomment TextureFile  \nend_header\n", "without a file name"},
       {"ascii count lie", "ply\nformat ascii 1.0\nelement vertex 3000000000\nproperty float x\nproperty float y\nproperty float z\n" + kFace + kVerts, "more than the"},
       {"binary count lie", binary_header(xyz_float.substr(0, 15) + "100000000\nproperty float x\nproperty float y\nproperty float z\n" + face_list) + std::string(64, '\0'), "more than the"},

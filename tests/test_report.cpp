@@ -116,7 +116,7 @@ TEST(Report, HasEveryKeyOfTheSchema) {
   EXPECT_EQ(keys_of(j), (std::set<std::string>{"input", "options", "aspect", "preparation", "components", "timings", "bake",
                                                 "metrics", "peak_rss_mib", "wall_seconds", "output"}));
   EXPECT_EQ(keys_of(j["input"]), (std::set<std::string>{"file", "vertices", "triangles", "materials", "textures",
-                                                         "polygons_triangulated", "paths_found"}));
+                                                         "polygons_triangulated", "paths_found", "vertex_coloured_triangles"}));
   EXPECT_EQ(keys_of(j["options"]), (std::set<std::string>{"size", "size_grown_from", "layout", "holes", "map", "balance", "fit",
                                                            "fine_fit", "corners", "aspect"}));
   EXPECT_EQ(keys_of(j["aspect"]), (std::set<std::string>{"requested", "chosen", "probed_component", "probes"}));

@@ -23,6 +23,7 @@ struct ObjReadStats {
   /// Files the MTL (a PLY: its TextureFile comments) names that were found only by ignoring case or by a tail of the path as written
   /// ("WRITTEN -> USED"), e.g. a Windows exporter's absolute path.
   std::vector<std::string> paths_found;
+  size_t vertex_coloured_triangles = 0;  // triangles textured from their vertex colours (read_model)
 };
 
 /// Reads an OBJ file and its MTL libraries and textures.
@@ -50,8 +51,20 @@ using ModelReadStats = ObjReadStats;
 /// "FILE: ELEMENT N: problem" for a binary body, for any malformed, lying or unsupported content.
 TexturedMesh read_ply(const std::string& path, const ModelReadOptions& options = {}, ModelReadStats* stats = nullptr);
 
+/// Gives every triangle that has corner colours (TexturedMesh::corner_color) but no texture a texture
+/// holding those colours: one new material "vertex_colours" and one new texture (its path the model's
+/// own with "_colours.png", never read), in which each such triangle has a cell of 2 x 2 texels, its
+/// corners at three texel centres and the fourth texel the colours' linear extrapolation, so that
+/// bilinear sampling anywhere inside the triangle gives the colours' linear interpolation (to 8 bits;
+/// exactly, except where the extrapolated texel leaves [0, 1]). The material's Kd, if it had one,
+/// multiplies the colours. Every later stage then treats the colours as any input texture; the default
+/// budget gives such a triangle kTexelsPerColouredTriangle texels (default_texels, tightex.hpp).
+/// Requires: corner_color empty or 3 per triangle. Returns the number of triangles that took their
+/// colours. Throws InputError when the texture would exceed `max_pixels`.
+size_t texture_vertex_colours(TexturedMesh& mesh, size_t max_pixels = size_t(1) << 30);
+
 /// Reads a model by its file name's extension, without case: .ply with read_ply, anything else with
-/// read_obj. Requires, guarantees and throws as they do.
+/// read_obj, then texture_vertex_colours. Requires, guarantees and throws as they do.
 TexturedMesh read_model(const std::string& path, const ModelReadOptions& options = {}, ModelReadStats* stats = nullptr);
 
 enum class ImageFormat { kPng, kJpeg };

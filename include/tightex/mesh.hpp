@@ -34,6 +34,8 @@ struct Texture {
   /// The size when the pixels are not loaded (yet): read from the file's header by a caller that
   /// decodes later. 0 when unknown. A loaded image's own size always wins (see texture_size).
   int width = 0, height = 0;
+  /// Made from the model's vertex colours (texture_vertex_colours), not read from a file.
+  bool from_vertex_colours = false;
 };
 
 struct TexturedMesh {
@@ -41,6 +43,9 @@ struct TexturedMesh {
   std::vector<Tri> triangles;          // vertex indices, counter-clockwise = front
   std::vector<Vec2> corner_uv;         // 3 per triangle
   std::vector<Vec3> corner_normal;     // 3 per triangle, or empty when the model has none
+  /// 3 per triangle, or empty when the model has none: a vertex-coloured model's colours (red, green,
+  /// blue, alpha), sRGB-encoded in [0, 1] as an 8-bit texture stores them.
+  std::vector<std::array<float, 4>> corner_color;
   std::vector<int32_t> face_material;  // per triangle, index into materials (-1: none)
   std::vector<Material> materials;
   std::vector<Texture> textures;

@@ -463,7 +463,8 @@ TexturedMesh read_geometry(const CommandLine& line, ObjReadStats* read_stats) {
   ObjReadOptions geometry_only;
   geometry_only.load_textures = false;
   TexturedMesh geometry = read_model(line.input, geometry_only, read_stats);
-  for (Texture& t : geometry.textures) std::tie(t.width, t.height) = image_dimensions(t.path);
+  for (Texture& t : geometry.textures)
+    if (t.image.empty()) std::tie(t.width, t.height) = image_dimensions(t.path);  // a vertex-colour texture is made, not read
   check_texture_headers(memory_guard(line), geometry);
   return geometry;
 }

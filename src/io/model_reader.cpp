@@ -8,8 +8,11 @@
 namespace tightex {
 
 TexturedMesh read_model(const std::string& path, const ModelReadOptions& options, ModelReadStats* stats) {
-  if (equals_ignoring_case(std::filesystem::path(path).extension().string(), ".ply")) return read_ply(path, options, stats);
-  return read_obj(path, options, stats);
+  TexturedMesh mesh = equals_ignoring_case(std::filesystem::path(path).extension().string(), ".ply") ? read_ply(path, options, stats)
+                                                                                                     : read_obj(path, options, stats);
+  const size_t coloured = texture_vertex_colours(mesh, options.max_texture_pixels);
+  if (stats != nullptr) stats->vertex_coloured_triangles = coloured;
+  return mesh;
 }
 
 }  // namespace tightex

@@ -255,6 +255,7 @@ class ObjParser {
 
   void parse_line(std::string_view line);
   void parse_vertex(Tokens& tokens);
+  void add_vertex_colour(const double* values, size_t n);
   void parse_texcoord(Tokens& tokens);
   void parse_normal(Tokens& tokens);
   void parse_face(Tokens& tokens);
@@ -268,6 +269,10 @@ class ObjParser {
   void check_coordinate(double value, std::string_view what) const;
 
   void check_forward_refs() const;
+  bool coloured() const;
+  void check_texture_coordinates() const;
+  void assemble_uvs(TexturedMesh& mesh) const;
+  void assemble_colours(TexturedMesh& mesh) const;
   void assemble_materials(TexturedMesh& mesh);
 
   const std::string& path_;
@@ -277,6 +282,9 @@ class ObjParser {
   std::vector<Vec3> positions_;
   std::vector<Vec2> texcoords_;
   std::vector<Vec3> normals_;
+  std::vector<std::array<float, 4>> vertex_colours_;  // per vertex while every vertex so far has r g b
+  bool all_vertices_coloured_ = true;
+  bool colours_above_one_ = false;  // then the file writes colours as 0..255
   std::vector<Tri> triangles_;
   std::vector<uint32_t> corner_vt_;    // 3 per triangle
   std::vector<uint32_t> corner_vn_;    // 3 per triangle while every face so far has normals
@@ -338,17 +346,14 @@ TexturedMesh ObjParser::read(ObjReadStats* stats) {
 
   if (triangles_.empty()) fail_input("{}: no faces", path_);
   check_forward_refs();
-  if (texcoords_.empty()) fail_input("{}: model has no texture coordinates (vt); tightex needs the input's UV atlas", path_);
-  if (first_face_without_vt_ != 0)
-    fail_input("{}:{}: face has no texture coordinates (every face needs v/vt indices)", path_, first_face_without_vt_);
+  check_texture_coordinates();
 
   TexturedMesh mesh;
   mesh.source = path_;
   mesh.positions = std::move(positions_);
+  assemble_uvs(mesh);
+  assemble_colours(mesh);
   mesh.triangles = std::move(triangles_);
-  reserve_prefaulted(mesh.corner_uv, corner_vt_.size());
-  mesh.corner_uv.resize(corner_vt_.size());
-  for (size_t i = 0; i < corner_vt_.size(); ++i) mesh.corner_uv[i] = texcoords_[corner_vt_[i]];
   // Normals are all-or-nothing: a half-filled array would make every consumer check each corner.
   if (all_faces_have_normals_ && normals_finite_ && !normals_.empty()) {
     reserve_prefaulted(mesh.corner_normal, corner_vn_.size());
@@ -364,6 +369,41 @@ TexturedMesh ObjParser::read(ObjReadStats* stats) {
     stats->paths_found = paths_found_;
   }
   return mesh;
+}
+
+bool ObjParser::coloured() const { return all_vertices_coloured_ && !vertex_colours_.empty(); }
+
+/// Every face needs texture coordinates, unless the model is vertex-coloured (every vertex has r g b):
+/// then a face without them takes its texture from the colours.
+void ObjParser::check_texture_coordinates() const {
+  if (coloured()) return;
+  if (texcoords_.empty())
+    fail_input(
+        "{}: model has neither texture coordinates (vt) nor vertex colours (v x y z r g b); tightex needs the input's UV atlas or "
+        "its vertex colours",
+        path_);
+  if (first_face_without_vt_ != 0)
+    fail_input("{}:{}: face has no texture coordinates (every face needs v/vt indices)", path_, first_face_without_vt_);
+}
+
+/// The corners' texture coordinates; (0, 0) where a vertex-coloured model's face has none.
+void ObjParser::assemble_uvs(TexturedMesh& mesh) const {
+  reserve_prefaulted(mesh.corner_uv, corner_vt_.size());
+  mesh.corner_uv.resize(corner_vt_.size());
+  for (size_t i = 0; i < corner_vt_.size(); ++i) mesh.corner_uv[i] = corner_vt_[i] == kNone ? Vec2::Zero() : texcoords_[corner_vt_[i]];
+}
+
+/// Per corner, its vertex's colour, in [0, 1]: a file with any value above 1 writes them as 0..255.
+void ObjParser::assemble_colours(TexturedMesh& mesh) const {
+  if (!coloured()) return;
+  const float scale = colours_above_one_ ? 1.0f / 255.0f : 1.0f;
+  mesh.corner_color.reserve(3 * triangles_.size());
+  for (const Tri& t : triangles_)
+    for (const uint32_t v : t) {
+      std::array<float, 4> c = vertex_colours_[v];
+      for (int k = 0; k < 3; ++k) c[size_t(k)] = std::clamp(c[size_t(k)] * scale, 0.0f, 1.0f);
+      mesh.corner_color.push_back(c);
+    }
 }
 
 void ObjParser::parse_line(std::string_view line) {
@@ -400,14 +440,33 @@ void ObjParser::check_coordinate(double value, std::string_view what) const {
 }
 
 void ObjParser::parse_vertex(Tokens& tokens) {
-  // x y z, then either w or r g b (vertex colours, written by some scanners), possibly followed by
-  // more; only x y z matter here, but the rest must still be numbers.
+  // x y z, then either w or r g b (vertex colours, written by scanners and MeshLab), possibly followed
+  // by more numbers, which are checked and ignored.
   double values[7];
   const size_t n = parse_numbers(tokens, "v", values, 7);
   if (n < 3) fail_here("'v' needs 3 coordinates, got {}", n);
   for (size_t i = 0; i < 3; ++i) check_coordinate(values[i], "coordinate");
   if (positions_.size() >= size_t(kNone) - 1) fail_here("too many vertices");
   positions_.emplace_back(values[0], values[1], values[2]);
+  add_vertex_colour(values, n);
+}
+
+/// `v x y z r g b`: the colour, kept while every vertex so far has one (all-or-nothing, as normals).
+void ObjParser::add_vertex_colour(const double* values, size_t n) {
+  if (!all_vertices_coloured_) return;
+  if (n < 6) {
+    all_vertices_coloured_ = false;
+    vertex_colours_ = {};
+    return;
+  }
+  std::array<float, 4> c{0.0f, 0.0f, 0.0f, 1.0f};
+  for (size_t k = 0; k < 3; ++k) {
+    if (!std::isfinite(values[3 + k]) || values[3 + k] < 0)
+      fail_here("vertex colour {:g} is not a number from 0 to 1 (or 0 to 255)", values[3 + k]);
+    colours_above_one_ = colours_above_one_ || values[3 + k] > 1.0;
+    c[k] = float(values[3 + k]);
+  }
+  vertex_colours_.push_back(c);
 }
 
 void ObjParser::parse_texcoord(Tokens& tokens) {

@@ -185,6 +185,20 @@ void HeaderParser::parse_line(std::string_view line) {
   fail_here("unknown header line '{}'", excerpt(line));
 }
 
+/// Marks red green blue (and alpha, when present) of an element, as MeshLab and scanners write them
+/// (also diffuse_red ...); returns whether all three colours are there. Lists keep the role kSkip.
+bool assign_colour_roles(PlyElement& element) {
+  constexpr std::string_view kNames[4] = {"red", "green", "blue", "alpha"};
+  PlyProperty* found[4] = {nullptr, nullptr, nullptr, nullptr};
+  for (PlyProperty& p : element.properties)
+    for (int c = 0; c < 4; ++c)
+      if (!p.is_list && (p.name == kNames[c] || p.name == fmt::format("diffuse_{}", kNames[c]))) found[c] = &p;
+  if (found[0] == nullptr || found[1] == nullptr || found[2] == nullptr) return false;
+  for (int c = 0; c < 4; ++c)
+    if (found[c] != nullptr) found[c]->role = PlyRole(int(PlyRole::kRed) + c);
+  return true;
+}
+
 /// Marks x y z and the first complete pair of texture coordinates; a header error when x, y or z is
 /// missing or a list.
 void assign_vertex_roles(const std::string& file, PlyElement& vertex, PlyHeader& header) {
@@ -212,6 +226,7 @@ void assign_vertex_roles(const std::string& file, PlyElement& vertex, PlyHeader&
     header.vertex_uv = true;
     break;
   }
+  header.vertex_color = assign_colour_roles(vertex);
 }
 
 /// Marks the vertex index list, texcoord and texnumber; a header error when one has the wrong shape or
@@ -236,6 +251,7 @@ void assign_face_roles(const std::string& file, PlyElement& face, PlyHeader& hea
     }
   }
   if (indices == nullptr) fail_input("{}:{}: element 'face' has no vertex_indices list", file, face.line);
+  header.face_color = assign_colour_roles(face);
 }
 
 /// The fewest bytes one instance of the element can take in the body.

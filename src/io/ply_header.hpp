@@ -21,7 +21,7 @@ bool is_integer(PlyType type);
 const char* type_name(PlyType type);
 
 /// What a property means to tightex; everything else is skipped.
-enum class PlyRole : uint8_t { kSkip, kX, kY, kZ, kU, kV, kVertexIndices, kTexcoord, kTexnumber };
+enum class PlyRole : uint8_t { kSkip, kX, kY, kZ, kU, kV, kVertexIndices, kTexcoord, kTexnumber, kRed, kGreen, kBlue, kAlpha };
 
 struct PlyProperty {
   std::string name;
@@ -55,6 +55,8 @@ struct PlyHeader {
   bool face_texcoord = false;   // the face element has a texcoord list
   bool vertex_uv = false;       // the vertex element has a pair of texture coordinates
   bool texnumber = false;       // the face element has a texnumber
+  bool vertex_color = false;    // the vertex element has red green blue (and maybe alpha)
+  bool face_color = false;      // the face element has red green blue (and maybe alpha)
 };
 
 /// Parses and checks the header at the start of `data`: the format line, element and property lines

@@ -2,6 +2,8 @@
 // (io/ply_header.cpp), then the body is read element by element in the header's order, each value
 // converted to double (exact for every PLY type), with every problem reported on one line naming the
 // file, the element and the entry (and, in ascii, the line).
+#include <algorithm>
+#include <array>
 #include <bit>
 #include <charconv>
 #include <cmath>
@@ -169,7 +171,28 @@ struct FaceEntry {
   std::vector<uint32_t> corners;
   std::vector<double> texcoord;
   int32_t texnumber = 0;
+  std::array<float, 4> colour{0.0f, 0.0f, 0.0f, 1.0f};
 };
+
+/// The largest value of an integer type: colours stored as integers span 0 to it (uchar 255).
+double integer_full_scale(PlyType type) {
+  switch (type) {
+    case PlyType::kInt8:
+      return 127.0;
+    case PlyType::kUint8:
+      return 255.0;
+    case PlyType::kInt16:
+      return 32767.0;
+    case PlyType::kUint16:
+      return 65535.0;
+    case PlyType::kInt32:
+      return 2147483647.0;
+    case PlyType::kUint32:
+      return 4294967295.0;
+    default:
+      return 1.0;
+  }
+}
 
 class PlyReader {
  public:
@@ -183,6 +206,8 @@ class PlyReader {
   void add_face(PlyBody& body, const FaceEntry& face);
   void skip_element(PlyBody& body, const PlyElement& e);
   double coordinate(PlyBody& body, PlyType type, std::string_view what);
+  float colour_value(PlyBody& body, PlyType type);
+  void assemble_colours(TexturedMesh& mesh);
   void assemble_uvs(TexturedMesh& mesh);
   void assemble_materials(TexturedMesh& mesh);
 
@@ -191,7 +216,9 @@ class PlyReader {
   PlyHeader header_;
 
   std::vector<Vec3> positions_;
-  std::vector<Vec2> vertex_uv_;  // per vertex, when the vertex element has a pair
+  std::vector<Vec2> vertex_uv_;                      // per vertex, when the vertex element has a pair
+  std::vector<std::array<float, 4>> vertex_colour_;  // per vertex, when the vertex element has colours
+  std::vector<std::array<float, 4>> face_colour_;    // per triangle, when the face element has colours
   std::vector<Tri> triangles_;
   std::vector<Vec2> corner_uv_;        // 3 per triangle, from the faces' texcoord lists
   std::vector<int32_t> face_texture_;  // per triangle: texnumber, -1 for none
@@ -206,15 +233,25 @@ double PlyReader::coordinate(PlyBody& body, PlyType type, std::string_view what)
   return v;
 }
 
+/// A colour channel in [0, 1]: integers as a fraction of their type's full scale, floats as they are;
+/// out of range values are clamped (some writers round past 1), NaN refused.
+float PlyReader::colour_value(PlyBody& body, PlyType type) {
+  const double v = body.value(type);
+  if (std::isnan(v)) body.fail("NaN colour");
+  return float(std::clamp(is_integer(type) ? v / integer_full_scale(type) : v, 0.0, 1.0));
+}
+
 void PlyReader::read_vertices(PlyBody& body, const PlyElement& e) {
   if (e.count >= uint64_t(kNone)) body.fail("too many vertices ({})", e.count);
   // The header's counts were weighed against the file's size: these fit in memory.
   positions_.reserve(size_t(e.count));
   if (header_.vertex_uv) vertex_uv_.reserve(size_t(e.count));
+  if (header_.vertex_color) vertex_colour_.reserve(size_t(e.count));
   for (uint64_t i = 0; i < e.count; ++i) {
     body.at(e.name, i);
     Vec3 p = Vec3::Zero();
     Vec2 uv = Vec2::Zero();
+    std::array<float, 4> colour{0.0f, 0.0f, 0.0f, 1.0f};
     for (const PlyProperty& prop : e.properties) {
       switch (prop.role) {
         case PlyRole::kX:
@@ -226,17 +263,25 @@ void PlyReader::read_vertices(PlyBody& body, const PlyElement& e) {
         case PlyRole::kV:
           uv[int(prop.role) - int(PlyRole::kU)] = coordinate(body, prop.type, "texture coordinate");
           break;
+        case PlyRole::kRed:
+        case PlyRole::kGreen:
+        case PlyRole::kBlue:
+        case PlyRole::kAlpha:
+          colour[size_t(int(prop.role) - int(PlyRole::kRed))] = colour_value(body, prop.type);
+          break;
         default:
           body.skip(prop);
       }
     }
     positions_.push_back(p);
     if (header_.vertex_uv) vertex_uv_.push_back(uv);
+    if (header_.vertex_color) vertex_colour_.push_back(colour);
   }
 }
 
 void PlyReader::read_face(PlyBody& body, const PlyElement& e, FaceEntry& face) {
   face.texnumber = 0;
+  face.colour = {0.0f, 0.0f, 0.0f, 1.0f};
   const uint64_t vertices = header_.elements[header_.vertex].count;
   for (const PlyProperty& prop : e.properties) {
     if (prop.role == PlyRole::kVertexIndices) {
@@ -257,6 +302,8 @@ void PlyReader::read_face(PlyBody& body, const PlyElement& e, FaceEntry& face) {
       if (t != -1 && !(t >= 0 && t < double(pages) && t == std::floor(t)))
         body.fail("texnumber {} out of range (the header names {} texture file{})", t, pages, pages == 1 ? "" : "s");
       face.texnumber = int32_t(t);
+    } else if (prop.role >= PlyRole::kRed && prop.role <= PlyRole::kAlpha) {
+      face.colour[size_t(int(prop.role) - int(PlyRole::kRed))] = colour_value(body, prop.type);
     } else {
       body.skip(prop);
     }
@@ -273,6 +320,7 @@ void PlyReader::add_face(PlyBody& body, const FaceEntry& face) {
   for (size_t i = 1; i + 1 < n; ++i) {
     triangles_.push_back({face.corners[0], face.corners[i], face.corners[i + 1]});
     face_texture_.push_back(texture);
+    if (header_.face_color) face_colour_.push_back(face.colour);
     if (!header_.face_texcoord) continue;
     for (const size_t k : {size_t(0), i, i + 1}) corner_uv_.emplace_back(face.texcoord[2 * k], face.texcoord[2 * k + 1]);
   }
@@ -304,10 +352,26 @@ void PlyReader::assemble_uvs(TexturedMesh& mesh) {
     mesh.corner_uv = std::move(corner_uv_);
     return;
   }
+  if (!header_.vertex_uv) {  // a vertex-coloured model: its texture comes from the colours
+    mesh.corner_uv.assign(3 * triangles_.size(), Vec2::Zero());
+    return;
+  }
   // Per-vertex coordinates, copied to each corner (read after the vertices, whatever the order).
   mesh.corner_uv.reserve(3 * triangles_.size());
   for (const Tri& t : triangles_)
     for (const uint32_t v : t) mesh.corner_uv.push_back(vertex_uv_[v]);
+}
+
+/// Per corner: the face's colour where faces have one, else the vertex's.
+void PlyReader::assemble_colours(TexturedMesh& mesh) {
+  if (header_.face_color) {
+    mesh.corner_color.reserve(3 * face_colour_.size());
+    for (const std::array<float, 4>& c : face_colour_) mesh.corner_color.insert(mesh.corner_color.end(), 3, c);
+  } else if (header_.vertex_color) {
+    mesh.corner_color.reserve(3 * triangles_.size());
+    for (const Tri& t : triangles_)
+      for (const uint32_t v : t) mesh.corner_color.push_back(vertex_colour_[v]);
+  }
 }
 
 void PlyReader::assemble_materials(TexturedMesh& mesh) {
@@ -336,10 +400,10 @@ TexturedMesh PlyReader::read(ModelReadStats* stats) {
   std::string reason;
   if (!read_whole_file(path_, data, reason)) fail_input("{}: {}", path_, reason);
   header_ = parse_ply_header(path_, data);
-  if (!header_.face_texcoord && !header_.vertex_uv)
+  if (!header_.face_texcoord && !header_.vertex_uv && !header_.vertex_color && !header_.face_color)
     fail_input(
-        "{}: model has no texture coordinates (face texcoord, or vertex s t / u v / texture_u texture_v); tightex needs the input's UV "
-        "atlas",
+        "{}: model has neither texture coordinates (face texcoord, or vertex s t / u v / texture_u texture_v) nor colours (red green "
+        "blue); tightex needs the input's UV atlas or its vertex colours",
         path_);
   PlyBody body(path_, std::string_view(data).substr(header_.body_offset), header_.format, header_.lines);
   for (size_t i = 0; i < header_.elements.size(); ++i) {
@@ -357,6 +421,7 @@ TexturedMesh PlyReader::read(ModelReadStats* stats) {
   mesh.source = path_;
   mesh.positions = std::move(positions_);
   assemble_uvs(mesh);
+  assemble_colours(mesh);
   mesh.triangles = std::move(triangles_);
   mesh.face_material = std::move(face_texture_);
   assemble_materials(mesh);

@@ -40,8 +40,24 @@ int size_for_texels(double texels) {
 
 double input_used_texels(const TexturedMesh& input) { return measure_texture_space(input).used_texels; }
 
+double default_texels(const TexturedMesh& input) {
+  const ModelFigures figures = measure_texture_space(input);
+  double texels = 0;
+  for (size_t i = 0; i < input.textures.size(); ++i) {
+    if (input.textures[i].from_vertex_colours) continue;
+    const auto [w, h] = texture_size(input, int(i));
+    texels += figures.image_utilization[i] * double(w) * double(h);
+  }
+  for (size_t t = 0; t < input.num_triangles(); ++t) {
+    const int32_t m = input.face_material[t];
+    const int tex = m < 0 ? -1 : input.materials[size_t(m)].texture;
+    if (tex >= 0 && input.textures[size_t(tex)].from_vertex_colours) texels += kTexelsPerColouredTriangle;
+  }
+  return texels;
+}
+
 int default_size(const TexturedMesh& input, int max_side) {
-  double texels = std::ceil(input_used_texels(input) / 4.0) * 4.0;
+  double texels = std::ceil(default_texels(input) / 4.0) * 4.0;
   if (!(texels > 0)) texels = 1024.0 * 1024.0;  // no texture of known size: a 1K map
   return std::min(size_for_texels(texels), max_side);
 }

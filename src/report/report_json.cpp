@@ -149,7 +149,9 @@ json to_json(const OutputFiles& files) {
 }
 
 json reader_json(const ObjReadStats& stats) {
-  return {{"polygons_triangulated", stats.polygons_triangulated}, {"paths_found", stats.paths_found}};
+  return {{"polygons_triangulated", stats.polygons_triangulated},
+          {"paths_found", stats.paths_found},
+          {"vertex_coloured_triangles", stats.vertex_coloured_triangles}};
 }
 
 json to_json(const Report& report) {
