@@ -156,6 +156,10 @@ class GltfReader {
   void load_buffers(std::string_view bin);
   void load_images();
   void check_buffer_views() const;
+  void check_document_shape() const;
+  void check_index_member(const json& j, const char* key, const std::string& element) const;
+  template <typename F>
+  void each_object(const json& j, const char* key, const std::string& element, F&& f) const;
   AccessorView accessor(int64_t index, const std::string& element) const;
   AccessorView attribute(const json& primitive, const std::string& name, const std::string& element, bool required) const;
   std::vector<size_t> reached_meshes() const;
@@ -247,6 +251,75 @@ void GltfReader::load_buffers(std::string_view bin) {
     bytes.resize(size_t(length));
     doc_->buffers.push_back(std::move(bytes));
   }
+}
+
+/// Fails unless `j` is an object whose `key`, when present, is an integer (an index).
+void GltfReader::check_index_member(const json& j, const char* key, const std::string& element) const {
+  if (j.contains(key) && !j[key].is_number_integer()) fail(element, "{} is not an integer index", key);
+}
+
+/// Fails unless `j[key]`, when present, is an array of objects; calls f(object, element) on each.
+template <typename F>
+void GltfReader::each_object(const json& j, const char* key, const std::string& element, F&& f) const {
+  if (!j.contains(key)) return;
+  const json& a = j[key];
+  const std::string name = element.empty() ? std::string(key) : element + "." + key;
+  if (!a.is_array()) fail(name, "is not an array");
+  for (size_t i = 0; i < a.size(); ++i) {
+    const std::string e = fmt::format("{}[{}]", name, i);
+    if (!a[i].is_object()) fail(e, "is not an object");
+    f(a[i], e);
+  }
+}
+
+/// The shape of every part of the document the writer walks (also those the reader does not read:
+/// unreached meshes, skins, animations), so that writing back what was read cannot meet a surprise.
+void GltfReader::check_document_shape() const {
+  auto integer_values = [&](const json& o, const std::string& element) {
+    if (!o.is_object()) fail(element, "is not an object");
+    for (const auto& [name, value] : o.items())
+      if (!value.is_number_integer()) fail(element, "{} is not an integer index", name);
+  };
+  const json& doc = doc_->json;
+  each_object(doc, "meshes", "", [&](const json& mesh, const std::string& e) {
+    if (!mesh.contains("primitives")) fail(e, "primitives missing");
+    each_object(mesh, "primitives", e, [&](const json& p, const std::string& pe) {
+      integer_values(p.contains("attributes") ? p["attributes"] : json(), pe + ".attributes");
+      check_index_member(p, "indices", pe), check_index_member(p, "material", pe);
+      each_object(p, "targets", pe, [&](const json& t, const std::string& te) { integer_values(t, te); });
+    });
+  });
+  each_object(doc, "skins", "", [&](const json& skin, const std::string& e) { check_index_member(skin, "inverseBindMatrices", e); });
+  each_object(doc, "animations", "", [&](const json& a, const std::string& e) {
+    each_object(a, "samplers", e, [&](const json& sampler, const std::string& se) {
+      check_index_member(sampler, "input", se), check_index_member(sampler, "output", se);
+    });
+  });
+  each_object(doc, "nodes", "", [&](const json& node, const std::string& e) {
+    if (node.contains("extensions") && node["extensions"].is_object() && node["extensions"].contains("EXT_mesh_gpu_instancing")) {
+      const json& ext = node["extensions"]["EXT_mesh_gpu_instancing"];
+      integer_values(ext.is_object() && ext.contains("attributes") ? ext["attributes"] : json(), e + ".EXT_mesh_gpu_instancing.attributes");
+    }
+  });
+  each_object(doc, "textures", "", [&](const json& t, const std::string& e) {
+    check_index_member(t, "source", e), check_index_member(t, "sampler", e);
+    if (t.contains("extensions") && !t["extensions"].is_object()) fail(e, "extensions is not an object");
+    if (t.contains("extensions"))
+      for (const auto& [name, ext] : t["extensions"].items())
+        if (ext.is_object()) check_index_member(ext, "source", e + ".extensions." + name);
+  });
+  each_object(doc, "accessors", "", [&](const json& a, const std::string& e) {
+    check_index_member(a, "bufferView", e);
+    if (!a.contains("sparse")) return;
+    const json& sparse = a["sparse"];
+    for (const char* part : {"indices", "values"})
+      if (!sparse.is_object() || !sparse.contains(part) || !sparse[part].is_object() || !sparse[part].contains("bufferView") ||
+          !sparse[part]["bufferView"].is_number_integer())
+        fail(e, "sparse.{}.bufferView is not an integer index", part);
+  });
+  each_object(doc, "materials", "", [](const json&, const std::string&) {});
+  each_object(doc, "samplers", "", [](const json&, const std::string&) {});
+  each_object(doc, "scenes", "", [](const json&, const std::string&) {});
 }
 
 /// Every buffer view's buffer and byte range, checked once (the writer copies views that nothing read).
@@ -538,6 +611,7 @@ void GltfReader::read_corner_uvs(const json& primitive, int material, const std:
   std::array<double, 2> offset{0, 0}, scale{1, 1};
   if (info != nullptr && info->contains("extensions") && (*info)["extensions"].contains("KHR_texture_transform")) {
     const json& t = (*info)["extensions"]["KHR_texture_transform"];
+    if (!t.is_object()) fail(element, "its material's KHR_texture_transform is not an object");
     if (t.value("rotation", 0.0) != 0.0) fail(element, "its material's KHR_texture_transform has a rotation, which is not supported");
     offset = pair_of(t, "offset", 0.0), scale = pair_of(t, "scale", 1.0);
     if (t.contains("texCoord")) set = int64_t(unsigned_of(t, "texCoord", 0, element + " KHR_texture_transform"));
@@ -676,6 +750,7 @@ TexturedMesh GltfReader::read(ModelReadStats* stats) {
     for (const json& e : doc_->json["extensionsRequired"])
       if (e != "KHR_texture_transform" && e != "KHR_materials_emissive_strength" && e != "EXT_texture_webp")
         fail("extensionsRequired", "{} is not supported", excerpt(e.dump()));
+  check_document_shape();
   load_buffers(parts.bin);
   check_buffer_views();
   load_images();
@@ -755,8 +830,13 @@ GltfContainerParts split_gltf_container(const std::string& file, std::string_vie
 }
 
 TexturedMesh read_gltf(const std::string& path, const ModelReadOptions& options, ModelReadStats* stats) {
-  TexturedMesh mesh = GltfReader(path, options).read(stats);
-  return mesh;
+  try {
+    return GltfReader(path, options).read(stats);
+  } catch (const json::exception& e) {
+    // A member of another JSON type than glTF gives it (a string where a number belongs) that no check
+    // above names more precisely.
+    fail_input("{}: JSON: a value of the wrong type ({})", path, excerpt(e.what()));
+  }
 }
 
 }  // namespace tightex

@@ -226,7 +226,8 @@ json DocumentBuilder::new_primitive(const json& source, int material, const std:
   for (const uint32_t t : triangles)
     for (int k = 0; k < 3; ++k) {
       const size_t c = 3 * size_t(t) + size_t(k);
-      CornerVertex cv{mesh_.triangles[t][size_t(k)], {float(mesh_.corner_uv[c].x()), float(1.0 - mesh_.corner_uv[c].y())}, {0, 0, 0}};
+      const Vec2 uv = mesh_.sampled_uv(t, k);  // glTF has no place for a material's -s/-o
+      CornerVertex cv{mesh_.triangles[t][size_t(k)], {float(uv.x()), float(1.0 - uv.y())}, {0, 0, 0}};
       if (normals) {
         const Vec3 n = mesh_.corner_normal[c].normalized();
         cv.normal = {float(n.x()), float(n.y()), float(n.z())};
@@ -367,8 +368,12 @@ void for_each_accessor_reference(json& doc, F&& f) {
     }
   for (json& skin : array_of(doc, "skins"))
     if (skin.contains("inverseBindMatrices")) f(skin["inverseBindMatrices"]);
-  for (json& animation : array_of(doc, "animations"))
-    for (json& sampler : animation["samplers"]) f(sampler["input"]), f(sampler["output"]);
+  for (json& animation : array_of(doc, "animations")) {
+    if (!animation.contains("samplers")) continue;
+    for (json& sampler : animation["samplers"])
+      for (const char* key : {"input", "output"})
+        if (sampler.contains(key)) f(sampler[key]);
+  }
   for (json& node : array_of(doc, "nodes"))
     if (node.contains("extensions") && node["extensions"].contains("EXT_mesh_gpu_instancing"))
       for (auto& [name, value] : node["extensions"]["EXT_mesh_gpu_instancing"]["attributes"].items()) f(value);
@@ -498,6 +503,9 @@ json DocumentBuilder::build(std::string& bin, std::vector<std::string>& removed)
   collect_garbage();
   rebuild_buffer(bin);
   update_extensions_used();
+  // glTF's top-level arrays may not be empty: the walks above create those the input did not have.
+  for (const char* name : {"accessors", "animations", "bufferViews", "images", "materials", "samplers", "skins", "textures"})
+    if (doc_.contains(name) && doc_[name].is_array() && doc_[name].empty()) doc_.erase(name);
   removed.assign(removed_.begin(), removed_.end());
   return doc_;
 }
