@@ -251,6 +251,26 @@ TEST(GltfReader, RefusesEveryLieOnOneLineNamingTheFileAndElement) {
   }
 }
 
+TEST(GltfReader, BoundsWhatSharedAccessorsMakeItRead) {
+  // 300 primitives naming the same 2048 triangles: the bytes of the file do not grow with them, so
+  // the corners read are bounded by the bytes (4 per byte, beyond a million) and the file refused.
+  const fs::path dir = scratch("shared");
+  GridGltf g = testing::grid_gltf(32);
+  json& primitives = g.doc["meshes"][0]["primitives"];
+  for (int i = 0; i < 300; ++i) primitives.push_back(primitives[0]);
+  try {
+    read_gltf(grid_glb(dir, g).string());
+    ADD_FAILURE() << "300 primitives sharing one accessor were read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("shared by too many primitives"), std::string::npos) << e.what();
+  }
+  // A few sharing primitives are read, and each only once copies the vertices it uses.
+  primitives.erase(primitives.begin() + 4, primitives.end());
+  const TexturedMesh m = read_gltf(grid_glb(dir, g).string());
+  EXPECT_EQ(m.num_triangles(), 3 * g.triangles);
+  EXPECT_EQ(m.num_vertices(), 3 * 33u * 33u);
+}
+
 TEST(GltfReader, RefusesLyingGlbContainers) {
   const fs::path dir = scratch("container");
   const GridGltf g = testing::grid_gltf();
@@ -326,7 +346,7 @@ TEST(GltfWriter, WritesTheInputDocumentBackWithEachTriangleInItsPrimitive) {
     EXPECT_EQ(points["mode"], 0);
     const json& acc = doc["accessors"][points["attributes"]["POSITION"].get<size_t>()];
     const json& view = doc["bufferViews"][acc["bufferView"].get<size_t>()];
-    const std::string& buffer = back.gltf->buffers[0];
+    const std::string_view buffer = back.gltf->buffers[0];
     EXPECT_EQ(buffer.substr(view["byteOffset"].get<size_t>(), 36), g.bin.substr(g.doc["bufferViews"][4]["byteOffset"].get<size_t>(), 36));
   }
 }

@@ -3,6 +3,7 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
@@ -20,9 +21,12 @@ struct GltfPrimitive {
 };
 
 struct GltfDocument {
-  nlohmann::json json;                       // the document as read
-  std::vector<std::string> buffers;          // each buffer's bytes, exactly byteLength of them
-  std::vector<std::string> images;           // each image's encoded bytes (file, data URI or bufferView)
+  nlohmann::json json;  // the document as read
+  /// The bytes read: the model file, each file a URI names (once, however many URIs name it), each
+  /// data URI decoded. The views below point into them.
+  std::deque<std::string> storage;
+  std::vector<std::string_view> buffers;     // each buffer's bytes, exactly byteLength of them
+  std::vector<std::string_view> images;      // each image's encoded bytes (file, data URI or bufferView)
   std::vector<GltfPrimitive> primitives;     // the triangle primitives read, in reading order
   std::vector<uint32_t> triangle_primitive;  // per triangle of the model read: index into primitives
   /// Per texture of the model read: the glTF image it is.

@@ -3,6 +3,7 @@
 // buffers' real sizes before a byte is read, so a lying file ends in one InputError line naming the
 // file and the element ("FILE: accessors[3]: ...").
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -32,6 +33,9 @@ constexpr int64_t kRepeat = 10497;
 // texel of any texture (exporters write -1e-7 for 0).
 constexpr double kWrapSlack = 1e-4;
 constexpr uint32_t kGlbMagic = 0x46546C67, kChunkJson = 0x4E4F534A, kChunkBin = 0x004E4942;
+// Corners the primitives may read per byte of the model file and the files it names (a triangle strip
+// with byte indices reaches 3), and beyond that budget a fixed allowance for tiny files.
+constexpr uint64_t kCornersPerInputByte = 4, kCornerSlack = uint64_t(1) << 20;
 // As the OBJ reader: beyond this a coordinate is an exporter bug, and squaring it would overflow.
 constexpr double kAbsurdCoordinate = 1e15;
 
@@ -152,7 +156,7 @@ class GltfReader {
   const json& item(const char* array_name, int64_t index, const std::string& referrer) const;
   int64_t index_in(const json& object, const char* key, const char* array_name, const std::string& element) const;
   uint64_t unsigned_of(const json& object, const char* key, uint64_t fallback, const std::string& element) const;
-  std::string bytes_of_uri(const std::string& uri, const std::string& element) const;
+  std::string_view bytes_of_uri(const std::string& uri, const std::string& element);
   void load_buffers(std::string_view bin);
   void load_images();
   void check_buffer_views() const;
@@ -167,7 +171,7 @@ class GltfReader {
   std::vector<Tri> primitive_triangles(const json& primitive, size_t vertices, int64_t mode, const std::string& element) const;
   void check_supported(const json& primitive, const std::string& element) const;
   int32_t material_for(int material, ReadState& state);
-  void read_corner_uvs(const json& primitive, int material, const std::vector<Tri>& tris, uint32_t base, const std::string& element,
+  void read_corner_uvs(const json& primitive, int material, const std::vector<Tri>& tris, size_t n, const std::string& element,
                        ReadState& state);
   void finish_normals(ReadState& state) const;
   std::array<int64_t, 2> sampler_wrap(const json& info) const;
@@ -178,6 +182,9 @@ class GltfReader {
   fs::path folder_;
   std::shared_ptr<GltfDocument> doc_ = std::make_shared<GltfDocument>();
   std::vector<std::string> not_read_;
+  std::map<std::string, std::string_view> files_;  // each file a URI names, read once
+  uint64_t input_bytes_ = 0;                       // the model file and every file it names: the corner budget
+  uint64_t corners_read_ = 0;
 };
 
 const json& GltfReader::array(const char* name) const {
@@ -213,22 +220,28 @@ uint64_t GltfReader::unsigned_of(const json& object, const char* key, uint64_t f
   return it->get<uint64_t>();
 }
 
-/// The bytes a URI names: a base64 data URI, or a file relative to the model's folder.
-std::string GltfReader::bytes_of_uri(const std::string& uri, const std::string& element) const {
+/// The bytes a URI names: a base64 data URI, or a file relative to the model's folder (read once
+/// however many URIs name it, so a document naming one file a thousand times holds it once).
+std::string_view GltfReader::bytes_of_uri(const std::string& uri, const std::string& element) {
   if (uri.rfind("data:", 0) == 0) {
     const size_t comma = uri.find(',');
     if (comma == std::string::npos || uri.substr(0, comma).find(";base64") == std::string::npos)
       fail(element, "data URI is not base64 ('{}')", excerpt(uri));
     std::string bytes;
     if (!decode_base64(std::string_view(uri).substr(comma + 1), bytes)) fail(element, "data URI does not decode (not base64)");
-    return bytes;
+    return doc_->storage.emplace_back(std::move(bytes));
   }
   const std::string written = with_forward_slashes(percent_decoded(uri));
   const std::optional<fs::path> found = find_named_file(folder_, written);
   if (!found) fail(element, "file '{}' not found", excerpt(written));
+  std::error_code ec;
+  const std::string key = fs::weakly_canonical(*found, ec).string();
+  const auto cached = files_.find(key);
+  if (cached != files_.end()) return cached->second;
   std::string bytes, reason;
   if (!read_whole_file(*found, bytes, reason, true)) fail(element, "file '{}' {}", excerpt(written), reason);
-  return bytes;
+  input_bytes_ += bytes.size();
+  return files_[key] = doc_->storage.emplace_back(std::move(bytes));
 }
 
 void GltfReader::load_buffers(std::string_view bin) {
@@ -238,18 +251,17 @@ void GltfReader::load_buffers(std::string_view bin) {
     const json& b = item("buffers", int64_t(i), element);
     const uint64_t length = unsigned_of(b, "byteLength", 0, element);
     if (length == 0) fail(element, "byteLength missing or 0");
-    std::string bytes;
+    std::string_view bytes;
     const auto uri = b.find("uri");
     if (uri == b.end()) {
       if (i != 0 || bin.data() == nullptr) fail(element, "has no uri and the file has no GLB BIN chunk for it");
-      bytes.assign(bin);
+      bytes = bin;
     } else {
       if (!uri->is_string()) fail(element, "uri is not a string");
       bytes = bytes_of_uri(uri->get<std::string>(), element);
     }
     if (bytes.size() < length) fail(element, "byteLength is {} but the data holds {} bytes", length, bytes.size());
-    bytes.resize(size_t(length));
-    doc_->buffers.push_back(std::move(bytes));
+    doc_->buffers.push_back(bytes.substr(0, size_t(length)));
   }
 }
 
@@ -331,7 +343,7 @@ void GltfReader::check_buffer_views() const {
     const int64_t buffer = index_in(view, "buffer", "buffers", element);
     if (buffer < 0) fail(element, "has no buffer");
     const uint64_t offset = unsigned_of(view, "byteOffset", 0, element), length = unsigned_of(view, "byteLength", 0, element);
-    const std::string& data = doc_->buffers[size_t(buffer)];
+    const std::string_view data = doc_->buffers[size_t(buffer)];
     if (length == 0) fail(element, "byteLength missing or 0");
     if (offset > data.size() || length > data.size() - offset)
       fail(element, "bytes {}..{} lie beyond buffer {}'s {} bytes", offset, offset + length, buffer, data.size());
@@ -356,10 +368,10 @@ void GltfReader::load_images() {
     const int64_t buffer = index_in(view, "buffer", "buffers", view_element);
     if (buffer < 0) fail(view_element, "has no buffer");
     const uint64_t offset = unsigned_of(view, "byteOffset", 0, view_element), length = unsigned_of(view, "byteLength", 0, view_element);
-    const std::string& data = doc_->buffers[size_t(buffer)];
+    const std::string_view data = doc_->buffers[size_t(buffer)];
     if (offset > data.size() || length > data.size() - offset)
       fail(view_element, "bytes {}..{} lie beyond buffer {}'s {} bytes", offset, offset + length, buffer, data.size());
-    doc_->images.push_back(data.substr(size_t(offset), size_t(length)));
+    doc_->images.push_back(data.substr(size_t(offset), size_t(length)));  // a view: no copy per image
   }
 }
 
@@ -388,7 +400,7 @@ AccessorView GltfReader::accessor(int64_t index, const std::string& element) con
   if (buffer < 0) fail(view_element, "has no buffer");
   const uint64_t view_offset = unsigned_of(view, "byteOffset", 0, view_element);
   const uint64_t view_length = unsigned_of(view, "byteLength", 0, view_element);
-  const std::string& data = doc_->buffers[size_t(buffer)];
+  const std::string_view data = doc_->buffers[size_t(buffer)];
   if (view_offset > data.size() || view_length > data.size() - view_offset)
     fail(view_element, "bytes {}..{} lie beyond buffer {}'s {} bytes", view_offset, view_offset + view_length, buffer, data.size());
   const uint64_t element_size = component_size * v.components;
@@ -604,8 +616,8 @@ std::array<double, 2> pair_of(const json& t, const char* key, double fallback) {
 /// Corner UVs of the primitive's triangles, in tightex's convention (v up): the UV set the base colour
 /// texture uses, with its KHR_texture_transform (scale and offset) applied, so the corner UVs are what
 /// the renderer samples; TEXCOORD_0 (or zero) without a texture.
-void GltfReader::read_corner_uvs(const json& primitive, int material, const std::vector<Tri>& tris, uint32_t base,
-                                 const std::string& element, ReadState& state) {
+void GltfReader::read_corner_uvs(const json& primitive, int material, const std::vector<Tri>& tris, size_t n, const std::string& element,
+                                 ReadState& state) {
   const json* info = base_color_info(array("materials"), material);
   int64_t set = info != nullptr ? int64_t(unsigned_of(*info, "texCoord", 0, element + " material's baseColorTexture")) : 0;
   std::array<double, 2> offset{0, 0}, scale{1, 1};
@@ -619,7 +631,6 @@ void GltfReader::read_corner_uvs(const json& primitive, int material, const std:
   const std::string name = fmt::format("TEXCOORD_{}", set);
   const AccessorView uv = attribute(primitive, name, element, false);
   if (info != nullptr && uv.data == nullptr) fail(element, "its base colour texture uses {}, which the primitive does not have", name);
-  const size_t n = state.mesh.positions.size() - base;
   if (uv.data != nullptr) {
     if (uv.components != 2 ||
         !(uv.component_type == kFloat || (uv.normalized && (uv.component_type == kUnsignedByte || uv.component_type == kUnsignedShort))))
@@ -654,17 +665,30 @@ void GltfReader::read_primitive(size_t m, size_t p, ReadState& state) {
   check_supported(primitive, element);
   const AccessorView pos = attribute(primitive, "POSITION", element, true);
   if (pos.components != 3 || pos.component_type != kFloat) fail(element, "POSITION is not VEC3 float");
-  const uint32_t base = uint32_t(state.mesh.positions.size());
-  if (pos.count > size_t(UINT32_MAX) - base) fail(element, "too many vertices");
-  for (size_t i = 0; i < pos.count; ++i) {
+  const std::vector<Tri> tris = primitive_triangles(primitive, pos.count, mode, element);
+  // Primitives may share accessors, so what is read is bounded by the bytes read, not by each accessor.
+  corners_read_ += 3 * uint64_t(tris.size());
+  if (corners_read_ > kCornersPerInputByte * input_bytes_ + kCornerSlack)
+    fail(element, "the primitives so far have {} corners from {} bytes of model and buffers (accessors shared by too many primitives)",
+         corners_read_, input_bytes_);
+  // Only the vertices its triangles use, each once (a vertex buffer shared by many primitives is not
+  // copied for each).
+  std::vector<uint32_t> used;
+  used.reserve(3 * tris.size());
+  for (const Tri& t : tris) used.insert(used.end(), t.begin(), t.end());
+  std::sort(used.begin(), used.end());
+  used.erase(std::unique(used.begin(), used.end()), used.end());
+  const size_t base = state.mesh.positions.size();
+  if (used.size() > size_t(UINT32_MAX) - base) fail(element, "too many vertices");
+  for (const uint32_t i : used) {
     const Vec3 x(pos.get(i, 0), pos.get(i, 1), pos.get(i, 2));
     if (!x.allFinite() || x.cwiseAbs().maxCoeff() > kAbsurdCoordinate) fail(element, "POSITION entry {} is not a finite coordinate", i);
     state.mesh.positions.push_back(x);
   }
-  const std::vector<Tri> tris = primitive_triangles(primitive, pos.count, mode, element);
+  auto vertex_of = [&](uint32_t v) { return uint32_t(base + size_t(std::lower_bound(used.begin(), used.end(), v) - used.begin())); };
   const int material = int(index_in(primitive, "material", "materials", element));
   const int32_t tm = material_for(material, state);
-  read_corner_uvs(primitive, material, tris, base, element, state);
+  read_corner_uvs(primitive, material, tris, pos.count, element, state);
   const AccessorView normal = attribute(primitive, "NORMAL", element, false);
   if (normal.data != nullptr && (normal.components != 3 || normal.component_type != kFloat || normal.count != pos.count))
     fail(element, "NORMAL is not VEC3 float with one entry per position");
@@ -677,7 +701,7 @@ void GltfReader::read_primitive(size_t m, size_t p, ReadState& state) {
   const uint32_t prim_index = uint32_t(doc_->primitives.size());
   doc_->primitives.push_back({m, p, material, normal.data != nullptr});
   for (const Tri& t : tris) {
-    state.mesh.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+    state.mesh.triangles.push_back({vertex_of(t[0]), vertex_of(t[1]), vertex_of(t[2])});
     state.mesh.face_material.push_back(tm);
     doc_->triangle_primitive.push_back(prim_index);
     for (const uint32_t v : t) {
@@ -718,7 +742,7 @@ void GltfReader::finish_normals(ReadState& state) const {
 /// The header size of every texture, and with load_textures its pixels.
 void GltfReader::load_textures(TexturedMesh& mesh) {
   for (size_t i = 0; i < mesh.textures.size(); ++i) {
-    const std::string& bytes = doc_->images[size_t(doc_->texture_image[i])];
+    const std::string_view bytes = doc_->images[size_t(doc_->texture_image[i])];
     const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
     const std::string element = fmt::format("images[{}]", doc_->texture_image[i]);
     if (bytes.empty()) fail(element, "is empty");
@@ -733,8 +757,10 @@ void GltfReader::load_textures(TexturedMesh& mesh) {
 }
 
 TexturedMesh GltfReader::read(ModelReadStats* stats) {
-  std::string data, reason;
+  std::string reason;
+  std::string& data = doc_->storage.emplace_back();
   if (!read_whole_file(path_, data, reason)) fail_input("{}: {}", path_, reason);
+  input_bytes_ = data.size();
   const GltfContainerParts parts = split_gltf_container(path_, data);
   try {
     doc_->json = json::parse(parts.json);

@@ -45,7 +45,7 @@ double srgb_to_linear(double c) {
   return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
 }
 
-std::string mime_of(const std::string& bytes) {
+std::string mime_of(std::string_view bytes) {
   if (bytes.size() >= 4 && bytes.compare(0, 4, "\x89PNG") == 0) return "image/png";
   if (bytes.size() >= 2 && uint8_t(bytes[0]) == 0xFF && uint8_t(bytes[1]) == 0xD8) return "image/jpeg";
   if (bytes.size() >= 12 && bytes.compare(0, 4, "RIFF") == 0 && bytes.compare(8, 4, "WEBP") == 0) return "image/webp";
@@ -72,7 +72,7 @@ class DocumentBuilder {
   using GroupKey = std::pair<uint32_t, int>;  // (source primitive or output material, output texture)
   void start_fresh_document();
   std::map<GroupKey, std::vector<uint32_t>> groups() const;
-  int new_view(const std::string& bytes, int64_t target);
+  int new_view(std::string_view bytes, int64_t target);
   int new_accessor(const std::string& bytes, int64_t component_type, size_t count, const char* type, int64_t target,
                    const json& min_max = nullptr);
   json new_primitive(const json& source, int material, const std::vector<uint32_t>& triangles, bool normals);
@@ -129,7 +129,7 @@ std::map<DocumentBuilder::GroupKey, std::vector<uint32_t>> DocumentBuilder::grou
   return g;
 }
 
-int DocumentBuilder::new_view(const std::string& bytes, int64_t target) {
+int DocumentBuilder::new_view(std::string_view bytes, int64_t target) {
   pad_to_4(fresh_bytes_);
   json view = {{"buffer", 0}, {"byteOffset", fresh_bytes_.size()}, {"byteLength", bytes.size()}, {kNewView, true}};
   if (target != 0) view["target"] = target;
@@ -217,7 +217,7 @@ struct CornerVertex {
 };
 
 /// One primitive for `triangles` (output triangles): new POSITION, NORMAL (with `normals`), TEXCOORD_0
-/// and indices; `source`'s name and extras kept.
+/// and indices; `source`'s extras kept.
 json DocumentBuilder::new_primitive(const json& source, int material, const std::vector<uint32_t>& triangles, bool normals) {
   std::map<CornerVertex, uint32_t> index_of;
   std::vector<CornerVertex> vertices;
@@ -250,8 +250,7 @@ json DocumentBuilder::new_primitive(const json& source, int material, const std:
   const bool short_indices = vertices.size() < 65535;  // 65535 is the restart value
   for (const uint32_t i : indices) short_indices ? put(idx, uint16_t(i)) : put(idx, i);
   json p = json::object();
-  for (const char* keep : {"extras", "name"})
-    if (source.is_object() && source.contains(keep)) p[keep] = source[keep];
+  if (source.is_object() && source.contains("extras")) p["extras"] = source["extras"];
   json& attributes = p["attributes"] = json::object();
   attributes["POSITION"] = new_accessor(pos, 5126, vertices.size(), "VEC3", 34962, json::array({lo, hi}));
   if (normals) attributes["NORMAL"] = new_accessor(nor, 5126, vertices.size(), "VEC3", 34962);
@@ -439,7 +438,7 @@ void DocumentBuilder::rebuild_buffer(std::string& bin) {
   bin.clear();
   for (json& view : array_of(doc_, "bufferViews")) {
     const bool fresh = view.contains(kNewView);
-    const std::string& from = fresh ? fresh_bytes_ : source_->buffers[size_t(view["buffer"].get<int64_t>())];
+    const std::string_view from = fresh ? std::string_view(fresh_bytes_) : source_->buffers[size_t(view["buffer"].get<int64_t>())];
     const size_t offset = size_t(view.value("byteOffset", uint64_t(0))), length = size_t(view["byteLength"].get<uint64_t>());
     if (offset > from.size() || length > from.size() - offset) fail_internal("buffer view beyond its buffer after the reader's checks");
     pad_to_4(bin);
@@ -490,13 +489,18 @@ json DocumentBuilder::build(std::string& bin, std::vector<std::string>& removed)
     start_fresh_document();
   } else {
     doc_ = source_->json;
-    // Images held in files or data URIs of the input: embedded, since the output has no such files.
+    // Images held in files or data URIs of the input: embedded, since the output has no such files
+    // (one buffer view for each file however many images name it).
+    std::map<const char*, int> view_of;
     for (size_t i = 0; i < array_of(doc_, "images").size(); ++i) {
       json& image = doc_["images"][i];
       if (!image.contains("uri")) continue;
+      const std::string_view bytes = source_->images[i];
       image.erase("uri");
-      image["mimeType"] = mime_of(source_->images[i]);
-      image["bufferView"] = new_view(source_->images[i], 0);
+      image["mimeType"] = mime_of(bytes);
+      const auto [it, added] = view_of.try_emplace(bytes.data(), 0);
+      if (added) it->second = new_view(bytes, 0);
+      image["bufferView"] = it->second;
     }
   }
   replace_triangle_primitives(groups());

@@ -145,7 +145,9 @@ json to_json(const StageTiming& timing) {
 json to_json(const OutputFiles& files) { return {{"directory", files.directory}, {"model", files.model}}; }
 
 json reader_json(const ObjReadStats& stats) {
-  return {{"polygons_triangulated", stats.polygons_triangulated}, {"paths_found", stats.paths_found}};
+  json j = {{"polygons_triangulated", stats.polygons_triangulated}, {"paths_found", stats.paths_found}};
+  if (!stats.not_read.empty()) j["not_read"] = stats.not_read;  // glTF points and lines, kept as they were
+  return j;
 }
 
 json to_json(const Report& report) {
