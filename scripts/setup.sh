@@ -5,8 +5,10 @@ pkgs=(build-essential cmake ninja-build pkg-config
       libeigen3-dev libsuitesparse-dev libopenblas0-pthread libtbb-dev
       libtinyobjloader-dev libtinygltf-dev nlohmann-json3-dev
       libspng-dev libjpeg62-turbo-dev libwebp-dev libstb-dev zlib1g-dev
-      libcli11-dev libfmt-dev libgtest-dev libgmock-dev libbenchmark-dev
-      nodejs npm)  # tests only: the Khronos glTF-Validator and three.js on written glTF (scripts/gltf-checks.sh)
+      libcli11-dev libfmt-dev libgtest-dev libgmock-dev libbenchmark-dev)
+# Tests only: the Khronos glTF-Validator and three.js on written glTF (scripts/gltf-checks.sh). A node
+# installed otherwise (nodesource, nvm) is used as it is.
+if ! command -v node >/dev/null || ! command -v npm >/dev/null; then pkgs+=(nodejs npm); fi
 missing=()
 for p in "${pkgs[@]}"; do dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p"); done
 if [ ${#missing[@]} -gt 0 ]; then
