@@ -126,7 +126,8 @@ enum class GltfContainer { kGltf, kGlb };
 /// baseColorTexture is the new texture on TEXCOORD_0 (an untextured material gets the texture and a
 /// white base colour factor). The material's other texture slots (normal, occlusion,
 /// metallicRoughness, emissive, textures of material extensions) cannot follow the new texture
-/// coordinates and are removed; so are TANGENT, COLOR_n and other TEXCOORD_n of the triangles, and
+/// coordinates and are removed; so are TANGENT, COLOR_n and other TEXCOORD_n of the triangles and the
+/// extensions of their primitives (KHR_materials_variants: the variants name the old materials), and
 /// every buffer view, accessor, image and texture nothing uses any more. Any other model gets a fresh
 /// document: one node, one mesh, one primitive per material.
 /// Returns one line per kind of thing removed ("materials[0].normalTexture", ...), for a warning.

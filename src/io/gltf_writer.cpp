@@ -291,6 +291,9 @@ void DocumentBuilder::replace_triangle_primitives(const std::map<GroupKey, std::
     const json& old = doc_["meshes"][sp.mesh]["primitives"][sp.primitive];
     for (const auto& [name, value] : old["attributes"].items())
       if (name != "POSITION" && name != "NORMAL" && name != "TEXCOORD_0") dropped_attributes.insert(name);
+    if (old.contains("extensions") && old["extensions"].is_object())
+      for (const auto& [name, value] : old["extensions"].items())
+        removed_.insert(fmt::format("meshes[{}].primitives[{}].extensions.{}", sp.mesh, sp.primitive, name));
     json p = new_primitive(old, material_for(sp.material, key.second), triangles, sp.normals && has_normals(mesh_, triangles));
     replacement[{sp.mesh, sp.primitive}].push_back(std::move(p));
   }
