@@ -20,8 +20,8 @@
 #include "fuzz_common.hpp"
 #include "io/image_io.hpp"
 #include "io/obj_reader.hpp"
-#include "tightex/io.hpp"
 #include "report/metrics.hpp"
+#include "tightex/io.hpp"
 #include "tightex/tightex.hpp"
 
 namespace tightex_fuzz {
@@ -85,8 +85,7 @@ inline void check_mesh(const TexturedMesh& m, bool textures_loaded) {
   }
   for (const Texture& t : m.textures) {
     if (!textures_loaded) continue;
-    require(!t.image.empty() && t.image.pixels.size() == size_t(t.image.width) * size_t(t.image.height),
-            "texture not loaded");
+    require(!t.image.empty() && t.image.pixels.size() == size_t(t.image.width) * size_t(t.image.height), "texture not loaded");
   }
 }
 
@@ -148,6 +147,43 @@ inline Outcome run_ply(const uint8_t* data, size_t size) {
 }
 
 // ---------------------------------------------------------------------------------------------------
+// fuzz_gltf: the glTF reader, and the writer on what it read.
+//
+// Input: a .glb or .gltf file (by content: a GLB starts with "glTF"), written as in.glb into the fuzz_obj
+// folder, whose files a URI can name (t.png, t.jpg, bad.png, "sub%20dir/t%202.png", the folder d/).
+// What is read is written back by write_gltf as a GLB (each triangle its own input triangle), which
+// must read back with as many triangles.
+
+inline Outcome run_gltf(const uint8_t* data, size_t size) {
+  const fs::path& dir = obj_dir();
+  write_file(dir / "in.glb", std::string_view(reinterpret_cast<const char*>(data), size));
+  const std::string path = (dir / "in.glb").string();
+  ModelReadOptions options;
+  options.max_texture_pixels = size_t(1) << 20;
+  options.load_textures = false;
+  try {
+    check_mesh(read_gltf(path, options), false);
+  } catch (const InputError&) {
+    return Outcome::kRefused;
+  }
+  options.load_textures = true;
+  TexturedMesh mesh;
+  try {
+    mesh = read_gltf(path, options);
+    check_mesh(mesh, true);
+  } catch (const InputError&) {
+    return Outcome::kRefused;
+  }
+  mesh.input_triangle.resize(mesh.num_triangles());
+  for (uint32_t t = 0; t < uint32_t(mesh.num_triangles()); ++t) mesh.input_triangle[t] = t;
+  const fs::path out = dir / "out";
+  write_gltf(mesh, out.string(), "out", ImageFormat::kPng, GltfContainer::kGlb);
+  const TexturedMesh back = read_gltf((out / "out.glb").string(), options);
+  require(back.num_triangles() == mesh.num_triangles(), "the written glTF reads back with another triangle count");
+  return Outcome::kAccepted;
+}
+
+// ---------------------------------------------------------------------------------------------------
 // fuzz_image: decode_image on the raw bytes (PNG, JPEG by content; BMP, TGA, PSD, GIF, PNM via stb), and
 // image_dimensions (the header-only size the memory guard uses) on the same bytes as a file.
 
@@ -159,13 +195,12 @@ inline Outcome run_image(const uint8_t* data, size_t size) {
   const auto [w, h] = image_dimensions(file.string());
   try {
     const Image img = decode_image(data, size, "fuzz-image", kImageMaxPixels);
-    require(img.width > 0 && img.height > 0 && size_t(img.width) * size_t(img.height) <= kImageMaxPixels,
-            "decoded image has a bad size");
+    require(img.width > 0 && img.height > 0 && size_t(img.width) * size_t(img.height) <= kImageMaxPixels, "decoded image has a bad size");
     require(img.pixels.size() == size_t(img.width) * size_t(img.height), "pixel count is not width x height");
     // The memory guard trusts the header: it must not give a size other than the one decoded.
-    require((w == 0 && h == 0) || (w == img.width && h == img.height),
-            "image_dimensions " + std::to_string(w) + "x" + std::to_string(h) + " but decoded " +
-                std::to_string(img.width) + "x" + std::to_string(img.height));
+    require((w == 0 && h == 0) || (w == img.width && h == img.height), "image_dimensions " + std::to_string(w) + "x" + std::to_string(h) +
+                                                                           " but decoded " + std::to_string(img.width) + "x" +
+                                                                           std::to_string(img.height));
   } catch (const InputError&) {
     return Outcome::kRefused;
   }

@@ -10,7 +10,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:-600}
 shift || true
 harnesses=("$@")
-[ ${#harnesses[@]} -gt 0 ] || harnesses=(fuzz_obj fuzz_ply fuzz_image fuzz_pipeline)
+[ ${#harnesses[@]} -gt 0 ] || harnesses=(fuzz_obj fuzz_ply fuzz_gltf fuzz_image fuzz_pipeline)
 
 generator=()
 command -v ninja >/dev/null && generator=(-G Ninja)
@@ -29,6 +29,7 @@ max_len() {
   case $1 in
     fuzz_obj) echo 4096 ;;
     fuzz_ply) echo 4096 ;;
+    fuzz_gltf) echo 8192 ;;
     fuzz_image) echo 16384 ;;
     fuzz_pipeline) echo 1024 ;;
   esac

@@ -3,14 +3,15 @@
 set -euo pipefail
 pkgs=(build-essential cmake ninja-build pkg-config
       libeigen3-dev libsuitesparse-dev libopenblas0-pthread libtbb-dev
-      libtinyobjloader-dev libtinygltf-dev nlohmann-json3-dev
+      libtinyobjloader-dev nlohmann-json3-dev
       libspng-dev libjpeg62-turbo-dev libwebp-dev libstb-dev zlib1g-dev
       libcli11-dev libfmt-dev libgtest-dev libgmock-dev libbenchmark-dev
       pybind11-dev python3-dev python3-numpy python3-distributed python3-pytest
-            libjs-three chromium)
+      libjs-three chromium)
 # libjs-three: the three.js that report.html packs (at build time). chromium: the browser test of
-# report.html, which drives it from Node.js (Debian's nodejs and npm where no node is installed).
-command -v node >/dev/null 2>&1 || pkgs+=(nodejs npm)
+# report.html. Tests only: Node.js drives it, and runs the Khronos glTF-Validator and three.js on
+# written glTF (scripts/gltf-checks.sh); a node installed otherwise (nodesource, nvm) is used as it is.
+if ! command -v node >/dev/null || ! command -v npm >/dev/null; then pkgs+=(nodejs npm); fi
 missing=()
 for p in "${pkgs[@]}"; do dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p"); done
 if [ ${#missing[@]} -gt 0 ]; then

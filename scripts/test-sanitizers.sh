@@ -10,6 +10,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
+bash scripts/gltf-checks.sh
 generator=()
 command -v ninja >/dev/null && generator=(-G Ninja)
 [ -f build-asan/CMakeCache.txt ] || cmake --preset asan "${generator[@]}" >/dev/null

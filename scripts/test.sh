@@ -4,4 +4,5 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/build.sh
+bash scripts/gltf-checks.sh
 ctest --test-dir build --output-on-failure --timeout 900 -j "$(nproc)"

@@ -52,6 +52,10 @@ TEST(FuzzCorpus, PlyReaderReadsOrRefuses) {
   replay("fuzz_ply", [](const uint8_t* d, size_t n, const std::string&) { tightex_fuzz::run_ply(d, n); });
 }
 
+TEST(FuzzCorpus, GltfReaderReadsOrRefusesAndWritesBack) {
+  replay("fuzz_gltf", [](const uint8_t* d, size_t n, const std::string&) { tightex_fuzz::run_gltf(d, n); });
+}
+
 TEST(FuzzCorpus, ImageDecoderDecodesOrRefuses) {
   replay("fuzz_image", [](const uint8_t* d, size_t n, const std::string&) { tightex_fuzz::run_image(d, n); });
 }
@@ -66,20 +70,19 @@ TEST(FuzzCorpus, PipelineLosesAndFlipsNothing) {
 
 // The seeds that are valid stay valid: a reader change that starts refusing them shows here.
 TEST(FuzzCorpus, ValidSeedsAreAccepted) {
-  for (const char* name : {"triangles.obj", "quad_normals.obj", "negative_indices.obj", "crlf.obj", "map_options.obj",
-                           "forward_refs.obj", "mtllib_two.obj", "statements.obj", "windows_paths.obj"}) {
+  for (const char* name : {"triangles.obj", "quad_normals.obj", "negative_indices.obj", "crlf.obj", "map_options.obj", "forward_refs.obj",
+                           "mtllib_two.obj", "statements.obj", "windows_paths.obj"}) {
     const std::string data = bytes_of(fs::path(TIGHTEX_FUZZ_CORPUS) / "fuzz_obj" / name);
     EXPECT_EQ(tightex_fuzz::run_obj(reinterpret_cast<const uint8_t*>(data.data()), data.size()), Outcome::kAccepted) << name;
   }
-  for (const char* name :
-       {"ascii_two_pages.ply", "binary_le_vertex_st.ply", "binary_be_quads.ply", "every_type.ply", "windows_path.ply"}) {
+  for (const char* name : {"ascii_two_pages.ply", "binary_le_vertex_st.ply", "binary_be_quads.ply", "every_type.ply", "windows_path.ply"}) {
     const std::string data = bytes_of(fs::path(TIGHTEX_FUZZ_CORPUS) / "fuzz_ply" / name);
     EXPECT_EQ(tightex_fuzz::run_ply(reinterpret_cast<const uint8_t*>(data.data()), data.size()), Outcome::kAccepted) << name;
   }
-  for (const char* name : {"rgb8.png", "rgba8.png", "grey8.png", "greyalpha8.png", "rgb16.png", "rgba16.png", "grey16.png",
-                           "grey1.png", "palette.png", "palette_trns.png", "interlaced.png", "baseline.jpg",
-                           "progressive.jpg", "grey.jpg", "cmyk.jpg", "rgb.bmp", "rgb.tga", "rle.tga", "small.gif",
-                           "rgb.ppm", "grey.pgm", "rgb.psd"}) {
+  for (const char* name :
+       {"rgb8.png",    "rgba8.png",        "grey8.png",      "greyalpha8.png", "rgb16.png",       "rgba16.png", "grey16.png", "grey1.png",
+        "palette.png", "palette_trns.png", "interlaced.png", "baseline.jpg",   "progressive.jpg", "grey.jpg",   "cmyk.jpg",   "rgb.bmp",
+        "rgb.tga",     "rle.tga",          "small.gif",      "rgb.ppm",        "grey.pgm",        "rgb.psd"}) {
     const std::string data = bytes_of(fs::path(TIGHTEX_FUZZ_CORPUS) / "fuzz_image" / name);
     EXPECT_EQ(tightex_fuzz::run_image(reinterpret_cast<const uint8_t*>(data.data()), data.size()), Outcome::kAccepted) << name;
   }

@@ -10,10 +10,12 @@
 #include <jpeglib.h>
 // clang-format on
 #include <spng.h>
+#include <webp/encode.h>
 
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -83,8 +85,7 @@ double psnr_rgb(const Image& a, const Image& b) {
   EXPECT_EQ(a.height, b.height);
   double sum = 0;
   for (size_t i = 0; i < a.pixels.size(); ++i) {
-    const double dr = a.pixels[i].r - b.pixels[i].r, dg = a.pixels[i].g - b.pixels[i].g,
-                 db = a.pixels[i].b - b.pixels[i].b;
+    const double dr = a.pixels[i].r - b.pixels[i].r, dg = a.pixels[i].g - b.pixels[i].g, db = a.pixels[i].b - b.pixels[i].b;
     sum += dr * dr + dg * dg + db * db;
   }
   const double mse = sum / (3.0 * double(a.pixels.size()));
@@ -165,7 +166,7 @@ Bytes encode_bmp(const Image& image) {
   auto put16 = [&](uint32_t v) { bmp.push_back(uint8_t(v)), bmp.push_back(uint8_t(v >> 8)); };
   auto put32 = [&](uint32_t v) { put16(v & 0xffff), put16(v >> 16); };
   bmp.push_back('B'), bmp.push_back('M');
-  put32(54 + data_size), put32(0), put32(54);                         // file header
+  put32(54 + data_size), put32(0), put32(54);                              // file header
   put32(40), put32(uint32_t(image.width)), put32(uint32_t(image.height));  // BITMAPINFOHEADER
   put16(1), put16(24), put32(0), put32(data_size), put32(2835), put32(2835), put32(0), put32(0);
   for (int y = image.height - 1; y >= 0; --y) {
@@ -194,7 +195,7 @@ Bytes png_header_only(uint32_t width, uint32_t height) {
   for (uint32_t v : {width, height}) {
     for (int shift : {24, 16, 8, 0}) png.push_back(uint8_t(v >> shift));
   }
-  png.insert(png.end(), {8, 2, 0, 0, 0});          // 8-bit RGB, deflate, no interlace
+  png.insert(png.end(), {8, 2, 0, 0, 0});             // 8-bit RGB, deflate, no interlace
   const uint32_t crc = png_crc(png.data() + 12, 17);  // over chunk type and data
   for (int shift : {24, 16, 8, 0}) png.push_back(uint8_t(crc >> shift));
   return png;
@@ -316,8 +317,7 @@ TEST_F(ImageIoTest, DecodesLowBitDepthGreyPng) {
 
 TEST_F(ImageIoTest, DecodesGreyAlphaPng) {
   const Bytes grey_alpha = {10, 255, 200, 0, 90, 128, 255, 7};
-  const Bytes png =
-      encode_png(make_ihdr(2, 2, 8, SPNG_COLOR_TYPE_GRAYSCALE_ALPHA), grey_alpha.data(), grey_alpha.size());
+  const Bytes png = encode_png(make_ihdr(2, 2, 8, SPNG_COLOR_TYPE_GRAYSCALE_ALPHA), grey_alpha.data(), grey_alpha.size());
   const Image image = decode_image(png.data(), png.size(), "ga.png");
   ASSERT_EQ(image.width, 2);
   for (size_t i = 0; i < 4; ++i) {
@@ -329,24 +329,21 @@ TEST_F(ImageIoTest, DecodesGreyAlphaPng) {
 TEST_F(ImageIoTest, Decodes16BitPngs) {
   // 16-bit samples are reduced to their high byte (0x1234 -> 0x12); spng rounds, so allow +-1.
   const std::vector<uint16_t> rgba16 = {0x0000, 0x1234, 0xffff, 0x8000, 0xfedc, 0x0101, 0x7f80, 0x4000};
-  const Bytes png = encode_png(make_ihdr(2, 1, 16, SPNG_COLOR_TYPE_TRUECOLOR_ALPHA), rgba16.data(),
-                               rgba16.size() * sizeof(uint16_t));
+  const Bytes png = encode_png(make_ihdr(2, 1, 16, SPNG_COLOR_TYPE_TRUECOLOR_ALPHA), rgba16.data(), rgba16.size() * sizeof(uint16_t));
   const Image image = decode_image(png.data(), png.size(), "rgba16.png");
   ASSERT_EQ(image.width, 2);
   const uint8_t* bytes = &image.pixels[0].r;
   for (size_t i = 0; i < rgba16.size(); ++i) EXPECT_NEAR(bytes[i], rgba16[i] / 257.0, 1.0) << i;
 
   const std::vector<uint16_t> grey16 = {0x0000, 0xffff, 0x8080};
-  const Bytes grey_png =
-      encode_png(make_ihdr(3, 1, 16, SPNG_COLOR_TYPE_GRAYSCALE), grey16.data(), grey16.size() * sizeof(uint16_t));
+  const Bytes grey_png = encode_png(make_ihdr(3, 1, 16, SPNG_COLOR_TYPE_GRAYSCALE), grey16.data(), grey16.size() * sizeof(uint16_t));
   const Image grey = decode_image(grey_png.data(), grey_png.size(), "grey16.png");
   EXPECT_EQ(grey.at(0, 0), (Rgba8{0, 0, 0, 255}));
   EXPECT_EQ(grey.at(1, 0), (Rgba8{255, 255, 255, 255}));
   EXPECT_EQ(grey.at(2, 0), (Rgba8{128, 128, 128, 255}));
 
   const std::vector<uint16_t> rgb16 = {0xffff, 0x0000, 0x8080};
-  const Bytes rgb_png =
-      encode_png(make_ihdr(1, 1, 16, SPNG_COLOR_TYPE_TRUECOLOR), rgb16.data(), rgb16.size() * sizeof(uint16_t));
+  const Bytes rgb_png = encode_png(make_ihdr(1, 1, 16, SPNG_COLOR_TYPE_TRUECOLOR), rgb16.data(), rgb16.size() * sizeof(uint16_t));
   EXPECT_EQ(decode_image(rgb_png.data(), rgb_png.size(), "rgb16.png").at(0, 0), (Rgba8{255, 0, 128, 255}));
 }
 
@@ -361,8 +358,7 @@ TEST_F(ImageIoTest, DecodesPalettePngWithTransparency) {
   trns.type3_alpha[0] = 0;
   trns.type3_alpha[1] = 100;
   const Bytes indices = {0, 1, 2, 2};
-  const Bytes png =
-      encode_png(make_ihdr(4, 1, 8, SPNG_COLOR_TYPE_INDEXED), indices.data(), indices.size(), &plte, &trns);
+  const Bytes png = encode_png(make_ihdr(4, 1, 8, SPNG_COLOR_TYPE_INDEXED), indices.data(), indices.size(), &plte, &trns);
   const Image image = decode_image(png.data(), png.size(), "palette.png");
   ASSERT_EQ(image.width, 4);
   EXPECT_EQ(image.at(0, 0), (Rgba8{255, 0, 0, 0}));
@@ -572,9 +568,9 @@ Bytes raw_psd(int w, int h, const std::vector<Bytes>& planes) {
   Bytes b = {'8', 'B', 'P', 'S', 0, 1, 0, 0, 0, 0, 0, 0, 0, uint8_t(planes.size())};
   for (uint32_t v : {uint32_t(h), uint32_t(w)})
     for (int s = 24; s >= 0; s -= 8) b.push_back(uint8_t(v >> s));
-  b.insert(b.end(), {0, 8, 0, 3});          // 8 bits, RGB mode
-  b.insert(b.end(), 12, 0);                 // no colour mode data, image resources or layers
-  b.insert(b.end(), {0, 0});                // raw
+  b.insert(b.end(), {0, 8, 0, 3});  // 8 bits, RGB mode
+  b.insert(b.end(), 12, 0);         // no colour mode data, image resources or layers
+  b.insert(b.end(), {0, 0});        // raw
   for (const Bytes& p : planes) b.insert(b.end(), p.begin(), p.end());
   return b;
 }
@@ -690,6 +686,27 @@ TEST_F(ImageIoTest, LoadsRealTexture) {
   EXPECT_EQ(image.height, 4096);
 }
 #endif
+
+// WebP (glTF scans carry it through EXT_texture_webp): a lossless one decodes to its exact pixels,
+// its header gives the size, and a truncated one is refused on one line.
+TEST(ImageIo, DecodesWebp) {
+  const int w = 7, h = 5;
+  std::vector<uint8_t> rgba(size_t(w * h * 4));
+  for (size_t i = 0; i < rgba.size(); ++i) rgba[i] = uint8_t(i * 37 % 256);
+  for (size_t i = 3; i < rgba.size(); i += 4) rgba[i] = 255;
+  uint8_t* encoded = nullptr;
+  const size_t size = WebPEncodeLosslessRGBA(rgba.data(), w, h, w * 4, &encoded);
+  ASSERT_GT(size, 0u);
+  const std::vector<uint8_t> bytes(encoded, encoded + size);
+  WebPFree(encoded);
+  const Image img = decode_image(bytes.data(), bytes.size(), "t.webp");
+  ASSERT_EQ(img.width, w);
+  ASSERT_EQ(img.height, h);
+  EXPECT_EQ(std::memcmp(img.pixels.data(), rgba.data(), rgba.size()), 0);
+  EXPECT_EQ(image_dimensions(bytes.data(), bytes.size()), std::make_pair(w, h));
+  EXPECT_THROW(decode_image(bytes.data(), bytes.size() / 2, "t.webp"), InputError);
+  EXPECT_THROW(decode_image(bytes.data(), bytes.size(), "t.webp", 10), InputError);  // more pixels than allowed
+}
 
 }  // namespace
 }  // namespace tightex

@@ -1,5 +1,5 @@
-// Reading and writing models and texture images: Wavefront OBJ + MTL and PLY with the textures
-// they name; PNG and JPEG (and, for reading, what stb_image understands). Every reader refuses bad input with an
+// Reading and writing models and texture images: Wavefront OBJ + MTL, PLY and glTF 2.0 (.gltf, .glb)
+// with the textures they name; PNG and JPEG (and, for reading, WebP and what stb_image understands). Every reader refuses bad input with an
 // InputError naming the file, the element and the problem.
 #pragma once
 #include <cstddef>
@@ -24,6 +24,10 @@ struct ObjReadStats {
   /// ("WRITTEN -> USED"), e.g. a Windows exporter's absolute path.
   std::vector<std::string> paths_found;
   size_t vertex_coloured_triangles = 0;  // triangles textured from their vertex colours (read_model)
+  /// What the model holds that the reader left as it was, one entry each (a glTF points or lines
+  /// primitive, "meshes[0].primitives[1] (points)"): write_gltf writes it back as it came, the other
+  /// writers cannot.
+  std::vector<std::string> not_read;
 };
 
 /// Reads an OBJ file and its MTL libraries and textures.
@@ -63,8 +67,30 @@ TexturedMesh read_ply(const std::string& path, const ModelReadOptions& options =
 /// colours. Throws InputError when the texture would exceed `max_pixels`.
 size_t texture_vertex_colours(TexturedMesh& mesh, size_t max_pixels = size_t(1) << 30);
 
-/// Reads a model by its file name's extension, without case: .ply with read_ply, anything else with
-/// read_obj, then texture_vertex_colours. Requires, guarantees and throws as they do.
+/// Reads a glTF 2.0 model: a .glb, or a .gltf with its buffers and images in files beside it (found as
+/// read_obj finds an MTL's files) or in base64 data URIs. Every triangle primitive (mode 4, 5 or 6,
+/// indexed or not) of every mesh the scene reaches (the default scene, else scene 0, else every root
+/// node) is read, each mesh once and in its own local space: node transforms are never applied, so a
+/// mesh that two nodes use is one set of triangles, and the texel budget is shared by local-space area.
+/// Read: POSITION (exactly as stored), NORMAL, the TEXCOORD_n its material's baseColorTexture uses
+/// (with KHR_texture_transform's offset and scale applied: the corner UVs are what a renderer samples;
+/// a rotation is refused), COLOR_0 (into corner_color, converted from linear to sRGB), the base colour
+/// texture (PNG, JPEG, WebP; one Texture per glTF image) and baseColorFactor (Material::kd, as sRGB).
+/// A sampler other than REPEAT is accepted while the texture coordinates stay in [0,1]. Points and
+/// lines primitives are left as they are (stats->not_read). The document itself is kept in
+/// TexturedMesh::gltf for write_gltf.
+/// Requires: a readable glTF 2.0 file with at least one triangle primitive reached from its scene.
+/// Guarantees: those of read_obj (texture coordinates of an untextured primitive without TEXCOORD_0 are
+/// 0); every index, offset, count and stride checked against the document and the buffers' real sizes
+/// before any byte is read; no allocation sized by a count before it is checked against a buffer.
+/// Throws InputError "FILE: ELEMENT: problem" (the element as the JSON names it, "accessors[3]",
+/// "GLB header") for malformed, lying or unsupported content: sparse accessors, skins, morph targets,
+/// Draco or meshopt compression, a texture whose UV set the primitive lacks.
+TexturedMesh read_gltf(const std::string& path, const ModelReadOptions& options = {}, ModelReadStats* stats = nullptr);
+
+/// Reads a model by its file name's extension, without case: .ply with read_ply, .gltf and .glb with
+/// read_gltf, anything else with read_obj; then texture_vertex_colours. Requires, guarantees and throws
+/// as they do.
 TexturedMesh read_model(const std::string& path, const ModelReadOptions& options = {}, ModelReadStats* stats = nullptr);
 
 enum class ImageFormat { kPng, kJpeg };
@@ -99,5 +125,29 @@ void write_obj(const TexturedMesh& mesh, const std::string& outdir, const std::s
 /// Requires: a mesh as read_model guarantees it, with fewer than 2^31 vertices.
 /// Throws InputError naming the path on failure (too many vertices, cannot create, write or rename).
 void write_ply(const TexturedMesh& mesh, const std::string& outdir, const std::string& name, ImageFormat format);
+
+/// The two containers of glTF: JSON text with a .bin buffer and image files beside it, or one .glb.
+enum class GltfContainer { kGltf, kGlb };
+
+/// Writes OUTDIR/<name>.glb, or <name>.gltf with <name>.bin and the texture files (named as write_obj
+/// names them), atomically as write_obj does (the model last). For a model read by read_gltf
+/// (mesh.gltf set, mesh.input_triangle naming each triangle's input triangle) the input's document is
+/// written back: scenes, nodes (transforms as they were), meshes' names, extras, materials' factors,
+/// alphaMode, alphaCutoff, doubleSided, extensions that do not refer to textures, points and lines
+/// primitives and what only they use; each triangle goes back to its own primitive, which gets new
+/// accessors (POSITION bit-identical, NORMAL where it had one, TEXCOORD_0, indices; vertices split at
+/// the new seams; one primitive per new texture it spans) and a copy of its material whose
+/// baseColorTexture is the new texture on TEXCOORD_0 (an untextured material gets the texture and a
+/// white base colour factor). The material's other texture slots (normal, occlusion,
+/// metallicRoughness, emissive, textures of material extensions) cannot follow the new texture
+/// coordinates and are removed; so are TANGENT, COLOR_n and other TEXCOORD_n of the triangles and the
+/// extensions of their primitives (KHR_materials_variants: the variants name the old materials), and
+/// every buffer view, accessor, image and texture nothing uses any more. Any other model gets a fresh
+/// document: one node, one mesh, one primitive per material.
+/// Returns one line per kind of thing removed ("materials[0].normalTexture", ...), for a warning.
+/// Requires: a mesh as the pipeline's output guarantees it, fewer than 2^32 vertices per primitive.
+/// Throws InputError naming the path on failure.
+std::vector<std::string> write_gltf(const TexturedMesh& mesh, const std::string& outdir, const std::string& name, ImageFormat format,
+                                    GltfContainer container);
 
 }  // namespace tightex

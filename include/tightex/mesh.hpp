@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -38,6 +39,10 @@ struct Texture {
   bool from_vertex_colours = false;
 };
 
+/// A glTF model's own document (scenes, nodes, materials, buffers), kept by read_gltf for write_gltf so
+/// that what tightex does not change is written back as it came. Opaque: defined in src/io.
+struct GltfDocument;
+
 struct TexturedMesh {
   std::vector<Vec3> positions;         // per vertex
   std::vector<Tri> triangles;          // vertex indices, counter-clockwise = front
@@ -50,6 +55,12 @@ struct TexturedMesh {
   std::vector<Material> materials;
   std::vector<Texture> textures;
   std::string source;  // file it was read from, for messages
+  /// Per triangle of an output model: the input triangle it is (build_output_model fills it; empty in a
+  /// model read from a file). write_gltf uses it to put each triangle back into its own glTF primitive.
+  std::vector<uint32_t> input_triangle;
+  /// The glTF document the model was read from (read_gltf), passed on to the output model; null for
+  /// every other reader.
+  std::shared_ptr<const GltfDocument> gltf;
 
   size_t num_vertices() const { return positions.size(); }
   size_t num_triangles() const { return triangles.size(); }

@@ -6,6 +6,8 @@
 
 #include <tbb/parallel_invoke.h>
 
+#include <fmt/ranges.h>
+
 #include <CLI/CLI.hpp>
 #include <array>
 #include <chrono>
@@ -60,6 +62,17 @@ void write_texts_atomically(const std::vector<std::pair<fs::path, std::string>>&
       fail_input("{}: cannot rename into place", path.string());
     }
   }
+}
+
+/// The --output-format names, in ModelFormat's order, each also its file extension.
+constexpr std::array<const char*, 4> kModelFormatNames{"obj", "ply", "gltf", "glb"};
+
+/// The model format a file's extension names (without case): .ply, .gltf, .glb, else OBJ.
+ModelFormat model_format_of(const std::string& path) {
+  const std::string extension = fs::path(path).extension().string();
+  for (size_t i = 1; i < kModelFormatNames.size(); ++i)
+    if (equals_ignoring_case(extension, std::string(".") + kModelFormatNames[i])) return ModelFormat(i);
+  return ModelFormat::kObj;
 }
 
 /// Seconds from t0 to now.
@@ -150,9 +163,9 @@ CLI::Option* define_options(CLI::App& app, CommandLine& line, ChoiceNames& names
       ->check(CLI::IsMember(names_of(kLayouts)));
   app.add_option("--format", names.format, "texture file format")->check(CLI::IsMember({"png", "jpg"}));
   app.add_option("--output-format", names.output_format,
-                 "model file format: obj (OBJ + MTL) or ply (binary PLY, textures named by comment TextureFile). "
-                 "Default: the input's kind (a .ply input gives a .ply, anything else an .obj)")
-      ->check(CLI::IsMember({"obj", "ply"}));
+                 "model file format: obj (OBJ + MTL), ply (binary PLY, textures named by comment TextureFile), gltf (.gltf + .bin "
+                 "+ texture files) or glb. Default: the input's kind (.ply, .gltf or .glb as the input, anything else .obj)")
+      ->check(CLI::IsMember({"obj", "ply", "gltf", "glb"}));
   app.add_option("--holes", names.holes, "fill: cap holes with scaffolding (paper §4.1); cut: open them into the seam")
       ->check(CLI::IsMember(names_of(kHoleModes)));
   app.add_option("--report", line.report_path, "where to write the JSON report (default OUTDIR/report.json)");
@@ -178,15 +191,15 @@ void finish_command_line(CommandLine& line, const ChoiceNames& names, const CLI:
   line.map = parsed(kMapKinds, names.map);
   line.corners = parsed(kCornerRules, names.corners);
   line.format = names.format == "png" ? ImageFormat::kPng : ImageFormat::kJpeg;
-  const bool ply_input = equals_ignoring_case(fs::path(line.input).extension().string(), ".ply");
-  const std::string output_format = names.output_format.empty() ? (ply_input ? "ply" : "obj") : names.output_format;
-  line.output_format = output_format == "ply" ? ModelFormat::kPly : ModelFormat::kObj;
+  line.output_format = model_format_of(line.input);
+  for (size_t i = 0; i < kModelFormatNames.size(); ++i)
+    if (names.output_format == kModelFormatNames[i]) line.output_format = ModelFormat(i);
 }
 
 /// The output model's file name inside the output folder: the input's stem and the output format's
 /// extension.
 std::string output_model_name(const CommandLine& line) {
-  return fs::path(line.input).stem().string() + (line.output_format == ModelFormat::kPly ? ".ply" : ".obj");
+  return fs::path(line.input).stem().string() + "." + kModelFormatNames[size_t(line.output_format)];
 }
 
 /// Refuses an input that is a folder, and an output folder that is the input's own: the outputs are
@@ -363,18 +376,33 @@ struct CliTimings {
   double read_s = 0, textures_s = 0, write_s = 0, measure_s = 0;
 };
 
+/// Writes the output model in the command line's format. Returns what the glTF writer removed.
+std::vector<std::string> write_model(const CommandLine& line, const TexturedMesh& output, const std::string& name) {
+  switch (line.output_format) {
+    case ModelFormat::kPly:
+      write_ply(output, line.outdir, name, line.format);
+      return {};
+    case ModelFormat::kGltf:
+      return write_gltf(output, line.outdir, name, line.format, GltfContainer::kGltf);
+    case ModelFormat::kGlb:
+      return write_gltf(output, line.outdir, name, line.format, GltfContainer::kGlb);
+    case ModelFormat::kObj:
+      break;
+  }
+  write_obj(output, line.outdir, name, line.format);
+  return {};
+}
+
 /// Writes the output model and measures it, side by side (PNG compression and measuring are
-/// independent). Returns the metrics; the times go to `timings`.
+/// independent). Returns the metrics; the times go to `timings`, what the glTF writer removed to
+/// `removed`.
 Metrics write_and_measure(const CommandLine& line, const TexturedMesh& input, const TexturedMesh& output, const std::string& name,
-                          CliTimings& timings) {
+                          CliTimings& timings, std::vector<std::string>& removed) {
   const auto tw = std::chrono::steady_clock::now();
   Metrics metrics;
   tbb::parallel_invoke(
       [&] {
-        if (line.output_format == ModelFormat::kPly)
-          write_ply(output, line.outdir, name, line.format);
-        else
-          write_obj(output, line.outdir, name, line.format);
+        removed = write_model(line, output, name);
         timings.write_s = seconds_since(tw);
       },
       [&] {
@@ -409,6 +437,21 @@ void write_preview(const std::string& preview_path, const TexturedMesh& input, c
   std::error_code ec;
   fs::rename(tmp, p, ec);
   if (ec) fail_input("{}: cannot write preview ({})", preview_path, ec.message());
+}
+
+/// One warning line each for what the output does not carry: the input's parts the reader left as they
+/// were (written back only to glTF), and what the glTF writer removed (texture slots that cannot follow
+/// the new texture coordinates).
+void print_not_carried(const CommandLine& line, const ObjReadStats& read_stats, const std::vector<std::string>& removed) {
+  const bool gltf = line.output_format == ModelFormat::kGltf || line.output_format == ModelFormat::kGlb;
+  if (!gltf && !read_stats.not_read.empty())
+    fmt::print(
+        stderr, "tightex: warning: {} {} of the input {} not written ({} has no place for them; --output-format glb keeps them): {}\n",
+        read_stats.not_read.size(), read_stats.not_read.size() == 1 ? "part" : "parts", read_stats.not_read.size() == 1 ? "is" : "are",
+        kModelFormatNames[size_t(line.output_format)], fmt::join(read_stats.not_read, ", "));
+  if (!removed.empty())
+    fmt::print(stderr, "tightex: warning: removed from the output, as they cannot follow the new texture coordinates: {}\n",
+               fmt::join(removed, ", "));
 }
 
 /// The report page's file name in the output folder.
@@ -464,7 +507,8 @@ TexturedMesh read_geometry(const CommandLine& line, ObjReadStats* read_stats) {
   geometry_only.load_textures = false;
   TexturedMesh geometry = read_model(line.input, geometry_only, read_stats);
   for (Texture& t : geometry.textures)
-    if (t.image.empty()) std::tie(t.width, t.height) = image_dimensions(t.path);  // a vertex-colour texture is made, not read
+    if (t.image.empty() && t.width == 0)  // a vertex-colour texture is made, a glTF's embedded image sized by its reader
+      std::tie(t.width, t.height) = image_dimensions(t.path);
   check_texture_headers(memory_guard(line), geometry);
   return geometry;
 }
@@ -525,7 +569,9 @@ nlohmann::json run_command(const CommandLine& line, const CommandHooks& hooks) {
   if (printing) print_notes(planned.plan, planned.plan.report());
 
   const std::string name = fs::path(line.input).stem().string();
-  const Metrics metrics = write_and_measure(line, planned.mesh, result.output, name, timings);
+  std::vector<std::string> removed;
+  const Metrics metrics = write_and_measure(line, planned.mesh, result.output, name, timings, removed);
+  if (printing) print_not_carried(line, read_stats, removed);
   const double wall_seconds = seconds_since(t0);
   add_cli_figures(result.report, metrics, timings, wall_seconds, read_stats,
                   OutputFiles{line.outdir, output_model_name(line), line.no_html ? "" : kHtmlName});

@@ -12,7 +12,7 @@
 namespace tightex::cli {
 
 /// The kinds of model the command writes.
-enum class ModelFormat { kObj, kPly };
+enum class ModelFormat { kObj, kPly, kGltf, kGlb };
 
 /// What the command line asks for.
 struct CommandLine {

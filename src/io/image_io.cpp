@@ -24,6 +24,7 @@
 #include <jerror.h>
 // clang-format on
 #include <spng.h>
+#include <webp/decode.h>
 #include <zlib.h>
 
 #include "core/error.hpp"
@@ -104,6 +105,11 @@ bool is_png(const unsigned char* data, size_t size) {
 bool is_jpeg(const unsigned char* data, size_t size) {
   static constexpr unsigned char kMagic[] = {0xff, 0xd8, 0xff};
   return starts_with(data, size, kMagic, sizeof(kMagic));
+}
+
+/// "RIFF", a size, "WEBP": the container of every WebP file (lossy, lossless, extended).
+bool is_webp(const unsigned char* data, size_t size) {
+  return size >= 12 && std::memcmp(data, "RIFF", 4) == 0 && std::memcmp(data + 8, "WEBP", 4) == 0;
 }
 
 // Rejects empty images and images larger than the caller's limit, before any pixel memory is allocated.
@@ -690,6 +696,19 @@ Image decode_with_stb(const unsigned char* data, size_t size, const std::string&
   return image;
 }
 
+/// WebP through libwebp: the header's size is checked before any pixel is allocated, then the image is
+/// decoded straight into the RGBA pixels (animated WebP: libwebp's simple decoder refuses it).
+Image decode_webp(const unsigned char* data, size_t size, const std::string& name, size_t max_pixels) {
+  int width = 0, height = 0;
+  if (!WebPGetInfo(data, size, &width, &height)) fail_input("{}: corrupt or unsupported WebP image (header)", name);
+  check_dimensions(name, "WebP", uint64_t(std::max(width, 0)), uint64_t(std::max(height, 0)), max_pixels);
+  Image image(width, height);
+  const size_t stride = size_t(width) * sizeof(Rgba8);
+  if (WebPDecodeRGBAInto(data, size, reinterpret_cast<uint8_t*>(image.pixels.data()), stride * size_t(height), int(stride)) == nullptr)
+    fail_input("{}: corrupt or unsupported WebP image (an animated WebP is not a texture)", name);
+  return image;
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------------
@@ -704,6 +723,7 @@ Image decode_image(const unsigned char* data, size_t size, const std::string& na
   // Detected by content, not by extension: textures named .png that hold JPEG data are common.
   if (is_png(data, size)) return decode_png(data, size, name, max_pixels);
   if (is_jpeg(data, size)) return decode_jpeg(data, size, name, max_pixels);
+  if (is_webp(data, size)) return decode_webp(data, size, name, max_pixels);
   if (is_psd(data, size)) return decode_psd(data, size, name, max_pixels);
   return decode_with_stb(data, size, name, max_pixels);
 }
@@ -754,12 +774,15 @@ std::pair<int, int> image_dimensions(const std::string& path) {
   std::vector<unsigned char> head(64 * 1024);
   f.read(reinterpret_cast<char*>(head.data()), std::streamsize(head.size()));
   head.resize(size_t(f.gcount()));
-  const size_t n = head.size();
+  return image_dimensions(head.data(), head.size());
+}
+
+std::pair<int, int> image_dimensions(const unsigned char* head, size_t n) {
   auto be32 = [&](size_t i) {
     return (uint32_t(head[i]) << 24) | (uint32_t(head[i + 1]) << 16) | (uint32_t(head[i + 2]) << 8) | head[i + 3];
   };
   static const unsigned char kPng[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-  if (n >= 24 && std::equal(kPng, kPng + 8, head.begin())) {
+  if (n >= 24 && std::equal(kPng, kPng + 8, head)) {
     const uint32_t w = be32(16), h = be32(20);
     return {int(std::min<uint32_t>(w, INT_MAX)), int(std::min<uint32_t>(h, INT_MAX))};
   }
@@ -776,8 +799,10 @@ std::pair<int, int> image_dimensions(const std::string& path) {
     return {0, 0};
   }
   int w = 0, h = 0, c = 0;
-  if (pnm_header_number_too_long(head.data(), n)) return {0, 0};
-  if (stbi_info_from_memory(head.data(), int(n), &w, &h, &c)) return {w, h};
+  if (is_webp(head, n)) return WebPGetInfo(head, n, &w, &h) ? std::pair<int, int>{w, h} : std::pair<int, int>{0, 0};
+  n = std::min<size_t>(n, INT_MAX);
+  if (pnm_header_number_too_long(head, n)) return {0, 0};
+  if (stbi_info_from_memory(head, int(n), &w, &h, &c)) return {w, h};
   return {0, 0};
 }
 

@@ -1,4 +1,4 @@
-// Reading and writing texture images. PNG through libspng, JPEG through libjpeg-turbo, anything else
+// Reading and writing texture images. PNG through libspng, JPEG through libjpeg-turbo, WebP (reading) through libwebp, anything else
 // stb_image understands (BMP, TGA, ...) through stb_image as a fallback. Every image is converted to
 // 8-bit RGBA on load: grey, grey+alpha, palette, RGB, RGBA, 8 and 16 bits per channel.
 #pragma once
@@ -21,5 +21,8 @@ std::string encode_jpeg(const Image& image, int quality);
 /// Width and height from the file's header alone ({0, 0} when unknown), so memory can be estimated
 /// before any pixel is allocated.
 std::pair<int, int> image_dimensions(const std::string& path);
+
+/// The same from the first `size` bytes of an image held in memory (an image embedded in a glTF).
+std::pair<int, int> image_dimensions(const unsigned char* data, size_t size);
 
 }  // namespace tightex

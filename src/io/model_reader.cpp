@@ -8,8 +8,10 @@
 namespace tightex {
 
 TexturedMesh read_model(const std::string& path, const ModelReadOptions& options, ModelReadStats* stats) {
-  TexturedMesh mesh = equals_ignoring_case(std::filesystem::path(path).extension().string(), ".ply") ? read_ply(path, options, stats)
-                                                                                                     : read_obj(path, options, stats);
+  const std::string extension = std::filesystem::path(path).extension().string();
+  TexturedMesh mesh = equals_ignoring_case(extension, ".ply")                                                  ? read_ply(path, options, stats)
+                      : equals_ignoring_case(extension, ".gltf") || equals_ignoring_case(extension, ".glb") ? read_gltf(path, options, stats)
+                                                                                                             : read_obj(path, options, stats);
   const size_t coloured = texture_vertex_colours(mesh, options.max_texture_pixels);
   if (stats != nullptr) stats->vertex_coloured_triangles = coloured;
   return mesh;

@@ -56,6 +56,7 @@ std::vector<int> renumber_images(const Plan::State& plan, int* new_images) {
 void add_input_triangle(const TexturedMesh& input, uint32_t t, const uint8_t* corner, TexturedMesh& out) {
   const Tri& it = input.triangles[t];
   out.triangles.push_back(Tri{it[corner[0]], it[corner[1]], it[corner[2]]});
+  out.input_triangle.push_back(t);
   if (!input.corner_normal.empty())
     for (int k = 0; k < 3; ++k) out.corner_normal.push_back(input.corner_normal[3 * t + corner[k]]);
 }
@@ -155,6 +156,7 @@ OutputModel build_output_model(const Plan::State& plan, const TexturedMesh& inpu
   OutputModel om;
   om.mesh.source = input.source;
   om.mesh.positions = input.positions;
+  om.mesh.gltf = input.gltf;
   om.bake_triangles.reserve(input.num_triangles());
   const std::vector<int> image_index = renumber_images(plan, &om.new_images);
   add_mapped_triangles(plan, input, image_index, om);

@@ -123,7 +123,8 @@ nlohmann::json to_json(const StageTiming& timing);
 /// "output" as JSON.
 nlohmann::json to_json(const OutputFiles& files);
 
-/// The reader's figures that "input" holds ("polygons_triangulated", "paths_found").
+/// The reader's figures that "input" holds ("polygons_triangulated", "paths_found", and "not_read"
+/// where the reader left parts of the model as they were).
 nlohmann::json reader_json(const ObjReadStats& stats);
 
 }  // namespace tightex

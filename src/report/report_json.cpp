@@ -149,9 +149,11 @@ json to_json(const OutputFiles& files) {
 }
 
 json reader_json(const ObjReadStats& stats) {
-  return {{"polygons_triangulated", stats.polygons_triangulated},
-          {"paths_found", stats.paths_found},
-          {"vertex_coloured_triangles", stats.vertex_coloured_triangles}};
+  json j = {{"polygons_triangulated", stats.polygons_triangulated},
+            {"paths_found", stats.paths_found},
+            {"vertex_coloured_triangles", stats.vertex_coloured_triangles}};
+  if (!stats.not_read.empty()) j["not_read"] = stats.not_read;  // glTF points and lines, kept as they were
+  return j;
 }
 
 json to_json(const Report& report) {

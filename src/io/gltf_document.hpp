@@ -1,0 +1,53 @@
+// The glTF document read_gltf keeps for write_gltf (TexturedMesh::gltf), and the parts of glTF both use:
+// the container (GLB or JSON text) and the checked view of an accessor's bytes.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "tightex/mesh.hpp"
+
+namespace tightex {
+
+/// A triangle primitive that read_gltf read (mode 4, 5 or 6): where it is in the document.
+struct GltfPrimitive {
+  size_t mesh = 0, primitive = 0;
+  int material = -1;     // the glTF material, -1: the default material
+  bool normals = false;  // it has NORMAL (written back only then)
+};
+
+struct GltfDocument {
+  nlohmann::json json;  // the document as read
+  /// The bytes read: the model file, each file a URI names (once, however many URIs name it), each
+  /// data URI decoded. The views below point into them.
+  std::deque<std::string> storage;
+  std::vector<std::string_view> buffers;     // each buffer's bytes, exactly byteLength of them
+  std::vector<std::string_view> images;      // each image's encoded bytes (file, data URI or bufferView)
+  std::vector<GltfPrimitive> primitives;     // the triangle primitives read, in reading order
+  std::vector<uint32_t> triangle_primitive;  // per triangle of the model read: index into primitives
+  /// Per texture of the model read: the glTF image it is.
+  std::vector<int> texture_image;
+};
+
+/// The JSON text and the BIN chunk of a .glb, or the whole text of a .gltf.
+struct GltfContainerParts {
+  std::string_view json;
+  std::string_view bin;  // empty when there is none
+  bool binary = false;
+};
+
+/// Splits `data` (a whole .glb or .gltf file) into its JSON and BIN. Throws InputError "FILE: GLB
+/// header: problem" for a GLB whose header or chunk lengths lie.
+GltfContainerParts split_gltf_container(const std::string& file, std::string_view data);
+
+/// The sizes of glTF's component types (5120..5126), 0 for any other value.
+size_t gltf_component_size(int64_t component_type);
+
+/// The number of components of an accessor type ("SCALAR" 1 ... "MAT4" 16), 0 for any other.
+size_t gltf_type_components(const std::string& type);
+
+}  // namespace tightex

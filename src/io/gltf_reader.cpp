@@ -1,0 +1,868 @@
+// glTF 2.0 reader (.gltf with external or data-URI buffers and images, .glb). The JSON is parsed with
+// nlohmann::json and every index, offset, count and stride is checked against the document and the
+// buffers' real sizes before a byte is read, so a lying file ends in one InputError line naming the
+// file and the element ("FILE: accessors[3]: ...").
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/error.hpp"
+#include "io/gltf_document.hpp"
+#include "io/image_io.hpp"
+#include "io/model_files.hpp"
+#include "tightex/io.hpp"
+
+namespace tightex {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+constexpr int64_t kFloat = 5126, kUnsignedByte = 5121, kUnsignedShort = 5123, kUnsignedInt = 5125;
+constexpr int64_t kRepeat = 10497;
+// A texture coordinate this far outside [0,1] reads the same under every wrap mode to well within a
+// texel of any texture (exporters write -1e-7 for 0).
+constexpr double kWrapSlack = 1e-4;
+constexpr uint32_t kGlbMagic = 0x46546C67, kChunkJson = 0x4E4F534A, kChunkBin = 0x004E4942;
+// Corners the primitives may read per byte of the model file and the files it names (a triangle strip
+// with byte indices reaches 3), and beyond that budget a fixed allowance for tiny files.
+constexpr uint64_t kCornersPerInputByte = 4, kCornerSlack = uint64_t(1) << 20;
+// As the OBJ reader: beyond this a coordinate is an exporter bug, and squaring it would overflow.
+constexpr double kAbsurdCoordinate = 1e15;
+
+uint32_t le32(const char* p) {
+  uint32_t v;
+  std::memcpy(&v, p, 4);
+  if constexpr (std::endian::native == std::endian::big) v = __builtin_bswap32(v);
+  return v;
+}
+
+/// A value of T stored little-endian at p.
+template <typename T>
+T load_le(const unsigned char* p) {
+  unsigned char bytes[sizeof(T)];
+  std::memcpy(bytes, p, sizeof(T));
+  if constexpr (std::endian::native == std::endian::big)
+    for (size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(bytes[i], bytes[sizeof(T) - 1 - i]);
+  T v;
+  std::memcpy(&v, bytes, sizeof(T));
+  return v;
+}
+
+/// Decodes standard base64 (padding optional). False on any other character.
+bool decode_base64(std::string_view in, std::string& out) {
+  static const auto table = [] {
+    std::array<int8_t, 256> t{};
+    t.fill(-1);
+    const char* chars = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    for (int i = 0; i < 64; ++i) t[size_t(uint8_t(chars[i]))] = int8_t(i);
+    return t;
+  }();
+  while (!in.empty() && in.back() == '=') in.remove_suffix(1);
+  out.clear();
+  out.reserve(in.size() / 4 * 3 + 3);
+  uint32_t acc = 0;
+  int bits = 0;
+  for (const char ch : in) {
+    const int8_t v = table[size_t(uint8_t(ch))];
+    if (v < 0) return false;
+    acc = (acc << 6) | uint32_t(v);
+    bits += 6;
+    if (bits >= 8) {
+      bits -= 8;
+      out.push_back(char((acc >> bits) & 0xFF));
+    }
+  }
+  return true;
+}
+
+/// A URI's %XX escapes decoded (a file name with spaces is written "a%20b.png").
+std::string percent_decoded(std::string_view uri) {
+  std::string out;
+  for (size_t i = 0; i < uri.size(); ++i) {
+    if (uri[i] == '%' && i + 2 < uri.size() && std::isxdigit(uint8_t(uri[i + 1])) && std::isxdigit(uint8_t(uri[i + 2]))) {
+      out.push_back(char(std::stoi(std::string(uri.substr(i + 1, 2)), nullptr, 16)));
+      i += 2;
+    } else {
+      out.push_back(uri[i]);
+    }
+  }
+  return out;
+}
+
+/// glTF colours and factors are linear; an 8-bit texture stores sRGB.
+double linear_to_srgb(double c) {
+  c = std::clamp(c, 0.0, 1.0);
+  return c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055;
+}
+
+/// The bytes of one accessor, checked: `count` elements of `components` values each, `stride` apart.
+struct AccessorView {
+  const unsigned char* data = nullptr;
+  size_t count = 0, stride = 0, components = 0;
+  int64_t component_type = 0;
+  bool normalized = false;
+
+  /// Component k of element i as a double (normalized integers mapped to [0,1] or [-1,1]).
+  double get(size_t i, size_t k) const {
+    const unsigned char* p = data + i * stride + k * gltf_component_size(component_type);
+    switch (component_type) {
+      case kFloat:
+        return double(load_le<float>(p));
+      case kUnsignedByte:
+        return normalized ? p[0] / 255.0 : double(p[0]);
+      case kUnsignedShort:
+        return normalized ? load_le<uint16_t>(p) / 65535.0 : double(load_le<uint16_t>(p));
+      case kUnsignedInt:
+        return double(load_le<uint32_t>(p));
+      case 5120:
+        return normalized ? std::max(int8_t(p[0]) / 127.0, -1.0) : double(int8_t(p[0]));
+      default:
+        return normalized ? std::max(load_le<int16_t>(p) / 32767.0, -1.0) : double(load_le<int16_t>(p));
+    }
+  }
+};
+
+/// What the reader collects while it walks the scene.
+struct ReadState {
+  TexturedMesh mesh;
+  std::map<int, int32_t> material_of;  // glTF material (-1: default) -> TexturedMesh material
+  std::map<int, int> texture_of;       // glTF image -> TexturedMesh texture
+  bool any_normals = false, any_colors = false;
+  std::vector<uint8_t> corner_has_normal;  // per corner, while normals are partial
+};
+
+class GltfReader {
+ public:
+  GltfReader(const std::string& path, const ModelReadOptions& options)
+      : path_(path), options_(options), folder_(fs::path(path).parent_path()) {}
+  TexturedMesh read(ModelReadStats* stats);
+
+ private:
+  template <typename... Args>
+  [[noreturn]] void fail(const std::string& element, fmt::format_string<Args...> f, Args&&... args) const {
+    fail_input("{}: {}: {}", path_, element, fmt::format(f, std::forward<Args>(args)...));
+  }
+  const json& array(const char* name) const;
+  const json& item(const char* array_name, int64_t index, const std::string& referrer) const;
+  int64_t index_in(const json& object, const char* key, const char* array_name, const std::string& element) const;
+  uint64_t unsigned_of(const json& object, const char* key, uint64_t fallback, const std::string& element) const;
+  std::string_view bytes_of_uri(const std::string& uri, const std::string& element);
+  void load_buffers(std::string_view bin);
+  void load_images();
+  void check_buffer_views() const;
+  void check_document_shape() const;
+  void check_index_member(const json& j, const char* key, const std::string& element) const;
+  template <typename F>
+  void each_object(const json& j, const char* key, const std::string& element, F&& f) const;
+  AccessorView accessor(int64_t index, const std::string& element) const;
+  AccessorView attribute(const json& primitive, const std::string& name, const std::string& element, bool required) const;
+  std::vector<size_t> reached_meshes() const;
+  void read_primitive(size_t m, size_t p, ReadState& state);
+  std::vector<Tri> primitive_triangles(const json& primitive, size_t vertices, int64_t mode, const std::string& element) const;
+  void check_supported(const json& primitive, const std::string& element) const;
+  int32_t material_for(int material, ReadState& state);
+  void read_corner_uvs(const json& primitive, int material, const std::vector<Tri>& tris, size_t n, const std::string& element,
+                       ReadState& state);
+  void finish_normals(ReadState& state) const;
+  std::array<int64_t, 2> sampler_wrap(const json& info) const;
+  void load_textures(TexturedMesh& mesh);
+
+  std::string path_;
+  ModelReadOptions options_;
+  fs::path folder_;
+  std::shared_ptr<GltfDocument> doc_ = std::make_shared<GltfDocument>();
+  std::vector<std::string> not_read_;
+  std::map<std::string, std::string_view> files_;  // each file a URI names, read once
+  uint64_t input_bytes_ = 0;                       // the model file and every file it names: the corner budget
+  uint64_t corners_read_ = 0;
+};
+
+const json& GltfReader::array(const char* name) const {
+  static const json empty = json::array();
+  const auto it = doc_->json.find(name);
+  if (it == doc_->json.end()) return empty;
+  if (!it->is_array()) fail(name, "is not an array");
+  return *it;
+}
+
+const json& GltfReader::item(const char* array_name, int64_t index, const std::string& referrer) const {
+  const json& a = array(array_name);
+  if (index < 0 || size_t(index) >= a.size())
+    fail(referrer, "refers to {}[{}], but the file has {} {}", array_name, index, a.size(), array_name);
+  const json& v = a[size_t(index)];
+  if (!v.is_object()) fail(fmt::format("{}[{}]", array_name, index), "is not an object");
+  return v;
+}
+
+int64_t GltfReader::index_in(const json& object, const char* key, const char* array_name, const std::string& element) const {
+  const auto it = object.find(key);
+  if (it == object.end()) return -1;
+  if (!it->is_number_integer()) fail(element, "{} is not an integer index", key);
+  const int64_t index = it->get<int64_t>();
+  item(array_name, index, fmt::format("{}.{}", element, key));
+  return index;
+}
+
+uint64_t GltfReader::unsigned_of(const json& object, const char* key, uint64_t fallback, const std::string& element) const {
+  const auto it = object.find(key);
+  if (it == object.end()) return fallback;
+  if (!it->is_number_integer() || it->get<int64_t>() < 0) fail(element, "{} is not a non-negative integer", key);
+  return it->get<uint64_t>();
+}
+
+/// The bytes a URI names: a base64 data URI, or a file relative to the model's folder (read once
+/// however many URIs name it, so a document naming one file a thousand times holds it once).
+std::string_view GltfReader::bytes_of_uri(const std::string& uri, const std::string& element) {
+  if (uri.rfind("data:", 0) == 0) {
+    const size_t comma = uri.find(',');
+    if (comma == std::string::npos || uri.substr(0, comma).find(";base64") == std::string::npos)
+      fail(element, "data URI is not base64 ('{}')", excerpt(uri));
+    std::string bytes;
+    if (!decode_base64(std::string_view(uri).substr(comma + 1), bytes)) fail(element, "data URI does not decode (not base64)");
+    return doc_->storage.emplace_back(std::move(bytes));
+  }
+  const std::string written = with_forward_slashes(percent_decoded(uri));
+  const std::optional<fs::path> found = find_named_file(folder_, written);
+  if (!found) fail(element, "file '{}' not found", excerpt(written));
+  std::error_code ec;
+  const std::string key = fs::weakly_canonical(*found, ec).string();
+  const auto cached = files_.find(key);
+  if (cached != files_.end()) return cached->second;
+  std::string bytes, reason;
+  if (!read_whole_file(*found, bytes, reason, true)) fail(element, "file '{}' {}", excerpt(written), reason);
+  input_bytes_ += bytes.size();
+  return files_[key] = doc_->storage.emplace_back(std::move(bytes));
+}
+
+void GltfReader::load_buffers(std::string_view bin) {
+  const json& buffers = array("buffers");
+  for (size_t i = 0; i < buffers.size(); ++i) {
+    const std::string element = fmt::format("buffers[{}]", i);
+    const json& b = item("buffers", int64_t(i), element);
+    const uint64_t length = unsigned_of(b, "byteLength", 0, element);
+    if (length == 0) fail(element, "byteLength missing or 0");
+    std::string_view bytes;
+    const auto uri = b.find("uri");
+    if (uri == b.end()) {
+      if (i != 0 || bin.data() == nullptr) fail(element, "has no uri and the file has no GLB BIN chunk for it");
+      bytes = bin;
+    } else {
+      if (!uri->is_string()) fail(element, "uri is not a string");
+      bytes = bytes_of_uri(uri->get<std::string>(), element);
+    }
+    if (bytes.size() < length) fail(element, "byteLength is {} but the data holds {} bytes", length, bytes.size());
+    doc_->buffers.push_back(bytes.substr(0, size_t(length)));
+  }
+}
+
+/// Fails unless `j` is an object whose `key`, when present, is an integer (an index).
+void GltfReader::check_index_member(const json& j, const char* key, const std::string& element) const {
+  if (j.contains(key) && !j[key].is_number_integer()) fail(element, "{} is not an integer index", key);
+}
+
+/// Fails unless `j[key]`, when present, is an array of objects; calls f(object, element) on each.
+template <typename F>
+void GltfReader::each_object(const json& j, const char* key, const std::string& element, F&& f) const {
+  if (!j.contains(key)) return;
+  const json& a = j[key];
+  const std::string name = element.empty() ? std::string(key) : element + "." + key;
+  if (!a.is_array()) fail(name, "is not an array");
+  for (size_t i = 0; i < a.size(); ++i) {
+    const std::string e = fmt::format("{}[{}]", name, i);
+    if (!a[i].is_object()) fail(e, "is not an object");
+    f(a[i], e);
+  }
+}
+
+/// The shape of every part of the document the writer walks (also those the reader does not read:
+/// unreached meshes, skins, animations), so that writing back what was read cannot meet a surprise.
+void GltfReader::check_document_shape() const {
+  auto integer_values = [&](const json& o, const std::string& element) {
+    if (!o.is_object()) fail(element, "is not an object");
+    for (const auto& [name, value] : o.items())
+      if (!value.is_number_integer()) fail(element, "{} is not an integer index", name);
+  };
+  const json& doc = doc_->json;
+  each_object(doc, "meshes", "", [&](const json& mesh, const std::string& e) {
+    if (!mesh.contains("primitives")) fail(e, "primitives missing");
+    each_object(mesh, "primitives", e, [&](const json& p, const std::string& pe) {
+      integer_values(p.contains("attributes") ? p["attributes"] : json(), pe + ".attributes");
+      check_index_member(p, "indices", pe), check_index_member(p, "material", pe);
+      each_object(p, "targets", pe, [&](const json& t, const std::string& te) { integer_values(t, te); });
+    });
+  });
+  each_object(doc, "skins", "", [&](const json& skin, const std::string& e) { check_index_member(skin, "inverseBindMatrices", e); });
+  each_object(doc, "animations", "", [&](const json& a, const std::string& e) {
+    each_object(a, "samplers", e, [&](const json& sampler, const std::string& se) {
+      check_index_member(sampler, "input", se), check_index_member(sampler, "output", se);
+    });
+  });
+  each_object(doc, "nodes", "", [&](const json& node, const std::string& e) {
+    if (node.contains("extensions") && node["extensions"].is_object() && node["extensions"].contains("EXT_mesh_gpu_instancing")) {
+      const json& ext = node["extensions"]["EXT_mesh_gpu_instancing"];
+      integer_values(ext.is_object() && ext.contains("attributes") ? ext["attributes"] : json(), e + ".EXT_mesh_gpu_instancing.attributes");
+    }
+  });
+  each_object(doc, "textures", "", [&](const json& t, const std::string& e) {
+    check_index_member(t, "source", e), check_index_member(t, "sampler", e);
+    if (t.contains("extensions") && !t["extensions"].is_object()) fail(e, "extensions is not an object");
+    if (t.contains("extensions"))
+      for (const auto& [name, ext] : t["extensions"].items())
+        if (ext.is_object()) check_index_member(ext, "source", e + ".extensions." + name);
+  });
+  each_object(doc, "accessors", "", [&](const json& a, const std::string& e) {
+    check_index_member(a, "bufferView", e);
+    if (!a.contains("sparse")) return;
+    const json& sparse = a["sparse"];
+    for (const char* part : {"indices", "values"})
+      if (!sparse.is_object() || !sparse.contains(part) || !sparse[part].is_object() || !sparse[part].contains("bufferView") ||
+          !sparse[part]["bufferView"].is_number_integer())
+        fail(e, "sparse.{}.bufferView is not an integer index", part);
+  });
+  each_object(doc, "materials", "", [](const json&, const std::string&) {});
+  each_object(doc, "samplers", "", [](const json&, const std::string&) {});
+  each_object(doc, "scenes", "", [](const json&, const std::string&) {});
+}
+
+/// Every buffer view's buffer and byte range, checked once (the writer copies views that nothing read).
+void GltfReader::check_buffer_views() const {
+  const json& views = array("bufferViews");
+  for (size_t i = 0; i < views.size(); ++i) {
+    const std::string element = fmt::format("bufferViews[{}]", i);
+    const json& view = item("bufferViews", int64_t(i), element);
+    const int64_t buffer = index_in(view, "buffer", "buffers", element);
+    if (buffer < 0) fail(element, "has no buffer");
+    const uint64_t offset = unsigned_of(view, "byteOffset", 0, element), length = unsigned_of(view, "byteLength", 0, element);
+    const std::string_view data = doc_->buffers[size_t(buffer)];
+    if (length == 0) fail(element, "byteLength missing or 0");
+    if (offset > data.size() || length > data.size() - offset)
+      fail(element, "bytes {}..{} lie beyond buffer {}'s {} bytes", offset, offset + length, buffer, data.size());
+  }
+}
+
+void GltfReader::load_images() {
+  const json& images = array("images");
+  for (size_t i = 0; i < images.size(); ++i) {
+    const std::string element = fmt::format("images[{}]", i);
+    const json& image = item("images", int64_t(i), element);
+    const auto uri = image.find("uri");
+    if (uri != image.end()) {
+      if (!uri->is_string()) fail(element, "uri is not a string");
+      doc_->images.push_back(bytes_of_uri(uri->get<std::string>(), element));
+      continue;
+    }
+    const int64_t v = index_in(image, "bufferView", "bufferViews", element);
+    if (v < 0) fail(element, "has neither uri nor bufferView");
+    const json& view = item("bufferViews", v, element);
+    const std::string view_element = fmt::format("bufferViews[{}]", v);
+    const int64_t buffer = index_in(view, "buffer", "buffers", view_element);
+    if (buffer < 0) fail(view_element, "has no buffer");
+    const uint64_t offset = unsigned_of(view, "byteOffset", 0, view_element), length = unsigned_of(view, "byteLength", 0, view_element);
+    const std::string_view data = doc_->buffers[size_t(buffer)];
+    if (offset > data.size() || length > data.size() - offset)
+      fail(view_element, "bytes {}..{} lie beyond buffer {}'s {} bytes", offset, offset + length, buffer, data.size());
+    doc_->images.push_back(data.substr(size_t(offset), size_t(length)));  // a view: no copy per image
+  }
+}
+
+AccessorView GltfReader::accessor(int64_t index, const std::string& element) const {
+  const std::string a_element = fmt::format("accessors[{}]", index);
+  const json& a = item("accessors", index, element);
+  if (a.contains("sparse")) fail(a_element, "sparse accessors are not supported");
+  AccessorView v;
+  const auto type = a.find("type");
+  v.components = type != a.end() && type->is_string() ? gltf_type_components(type->get<std::string>()) : 0;
+  if (v.components == 0) fail(a_element, "type missing or not SCALAR, VEC2, VEC3, VEC4, MAT2, MAT3 or MAT4");
+  const auto ct = a.find("componentType");
+  v.component_type = ct != a.end() && ct->is_number_integer() ? ct->get<int64_t>() : 0;
+  const size_t component_size = gltf_component_size(v.component_type);
+  if (component_size == 0) fail(a_element, "componentType missing or not one of 5120..5126 (except 5124)");
+  v.normalized = a.value("normalized", false);
+  v.count = size_t(unsigned_of(a, "count", 0, a_element));
+  if (v.count == 0) fail(a_element, "count missing or 0");
+  const int64_t view_index = index_in(a, "bufferView", "bufferViews", a_element);
+  if (view_index < 0) fail(a_element, "has no bufferView (an all-zero accessor is not supported)");
+  const std::string view_element = fmt::format("bufferViews[{}]", view_index);
+  const json& view = item("bufferViews", view_index, a_element);
+  if (view.contains("extensions") && view["extensions"].contains("EXT_meshopt_compression"))
+    fail(view_element, "EXT_meshopt_compression is not supported");
+  const int64_t buffer = index_in(view, "buffer", "buffers", view_element);
+  if (buffer < 0) fail(view_element, "has no buffer");
+  const uint64_t view_offset = unsigned_of(view, "byteOffset", 0, view_element);
+  const uint64_t view_length = unsigned_of(view, "byteLength", 0, view_element);
+  const std::string_view data = doc_->buffers[size_t(buffer)];
+  if (view_offset > data.size() || view_length > data.size() - view_offset)
+    fail(view_element, "bytes {}..{} lie beyond buffer {}'s {} bytes", view_offset, view_offset + view_length, buffer, data.size());
+  const uint64_t element_size = component_size * v.components;
+  const uint64_t stride = unsigned_of(view, "byteStride", element_size, view_element);
+  if (stride < element_size || stride > 252) fail(view_element, "byteStride {} is not in {}..252 for {}", stride, element_size, a_element);
+  const uint64_t offset = unsigned_of(a, "byteOffset", 0, a_element);
+  // count <= 2^64 / stride is checked first, so the product cannot wrap.
+  if (offset > view_length || uint64_t(v.count - 1) > (view_length - offset) / stride ||
+      offset + uint64_t(v.count - 1) * stride + element_size > view_length)
+    fail(a_element, "{} elements of {} bytes, {} apart from byte {}, do not fit bufferView {}'s {} bytes", v.count, element_size, stride,
+         offset, view_index, view_length);
+  v.stride = size_t(stride);
+  v.data = reinterpret_cast<const unsigned char*>(data.data()) + view_offset + offset;
+  return v;
+}
+
+AccessorView GltfReader::attribute(const json& primitive, const std::string& name, const std::string& element, bool required) const {
+  const json& attributes = primitive.at("attributes");
+  const auto it = attributes.find(name);
+  if (it == attributes.end()) {
+    if (required) fail(element, "has no {} attribute", name);
+    return {};
+  }
+  if (!it->is_number_integer()) fail(element, "attribute {} is not an accessor index", name);
+  return accessor(it->get<int64_t>(), fmt::format("{}.attributes.{}", element, name));
+}
+
+/// The meshes the scene reaches, each once, in the order its node tree first reaches them: the default
+/// scene, else scene 0, else every root node.
+std::vector<size_t> GltfReader::reached_meshes() const {
+  const json& nodes = array("nodes");
+  std::vector<int64_t> roots;
+  const json& scenes = array("scenes");
+  int64_t scene = -1;
+  if (doc_->json.contains("scene"))
+    scene = index_in(doc_->json, "scene", "scenes", "scene");
+  else if (!scenes.empty())
+    scene = 0;
+  if (scene >= 0) {
+    const json& s = item("scenes", scene, "scene");
+    const std::string element = fmt::format("scenes[{}]", scene);
+    if (s.contains("nodes"))
+      for (const json& n : s["nodes"]) {
+        if (!n.is_number_integer()) fail(element, "nodes holds a non-integer");
+        roots.push_back(n.get<int64_t>());
+      }
+  } else {
+    std::vector<bool> is_child(nodes.size(), false);
+    for (const json& n : nodes)
+      if (n.is_object() && n.contains("children") && n["children"].is_array())
+        for (const json& c : n["children"])
+          if (c.is_number_integer() && c.get<int64_t>() >= 0 && size_t(c.get<int64_t>()) < nodes.size())
+            is_child[size_t(c.get<int64_t>())] = true;
+    for (size_t i = 0; i < nodes.size(); ++i)
+      if (!is_child[i]) roots.push_back(int64_t(i));
+  }
+  std::vector<bool> visited(nodes.size(), false), mesh_seen(array("meshes").size(), false);
+  std::vector<size_t> meshes;
+  std::vector<int64_t> stack(roots.rbegin(), roots.rend());
+  while (!stack.empty()) {
+    const int64_t n = stack.back();
+    stack.pop_back();
+    const json& node = item("nodes", n, "scene's node tree");
+    if (visited[size_t(n)]) fail(fmt::format("nodes[{}]", n), "is reached twice (a node has one parent, the tree no cycle)");
+    visited[size_t(n)] = true;
+    const std::string element = fmt::format("nodes[{}]", n);
+    const int64_t m = index_in(node, "mesh", "meshes", element);
+    if (m >= 0 && !mesh_seen[size_t(m)]) {
+      mesh_seen[size_t(m)] = true;
+      meshes.push_back(size_t(m));
+    }
+    if (node.contains("children")) {
+      if (!node["children"].is_array()) fail(element, "children is not an array");
+      const json& children = node["children"];
+      for (auto it = children.rbegin(); it != children.rend(); ++it) {
+        if (!it->is_number_integer()) fail(element, "children holds a non-integer");
+        stack.push_back(it->get<int64_t>());
+      }
+    }
+  }
+  return meshes;
+}
+
+/// Refuses what a triangle primitive carries that cannot follow new vertices.
+void GltfReader::check_supported(const json& primitive, const std::string& element) const {
+  if (primitive.contains("extensions")) {
+    const json& ext = primitive["extensions"];
+    if (ext.contains("KHR_draco_mesh_compression")) fail(element, "KHR_draco_mesh_compression is not supported");
+  }
+  if (primitive.contains("targets") && !primitive["targets"].empty())
+    fail(element, "has morph targets, which cannot follow the vertices tightex splits at the new seams (not supported)");
+  if (!primitive.contains("attributes") || !primitive["attributes"].is_object()) fail(element, "attributes missing");
+  for (const auto& [name, value] : primitive["attributes"].items())
+    if (name.rfind("JOINTS_", 0) == 0 || name.rfind("WEIGHTS_", 0) == 0)
+      fail(element, "is skinned ({}), which tightex does not carry over (not supported)", name);
+}
+
+/// The primitive's triangles as vertex indices into its own attributes: a list, strip or fan.
+std::vector<Tri> GltfReader::primitive_triangles(const json& primitive, size_t vertices, int64_t mode, const std::string& element) const {
+  std::vector<uint32_t> index;
+  if (primitive.contains("indices")) {
+    if (!primitive["indices"].is_number_integer()) fail(element, "indices is not an accessor index");
+    const AccessorView v = accessor(primitive["indices"].get<int64_t>(), element + ".indices");
+    if (v.components != 1 || v.normalized ||
+        (v.component_type != kUnsignedByte && v.component_type != kUnsignedShort && v.component_type != kUnsignedInt))
+      fail(element, "indices are not SCALAR unsigned byte, short or int");
+    index.resize(v.count);
+    for (size_t i = 0; i < v.count; ++i) {
+      const double x = v.get(i, 0);
+      if (x >= double(vertices)) fail(element, "index {} (entry {}) is out of range ({} vertices)", x, i, vertices);
+      index[i] = uint32_t(x);
+    }
+  } else {
+    if (vertices > UINT32_MAX) fail(element, "too many vertices");
+    index.resize(vertices);
+    for (size_t i = 0; i < vertices; ++i) index[i] = uint32_t(i);
+  }
+  std::vector<Tri> tris;
+  if (mode == 4) {
+    if (index.size() % 3 != 0) fail(element, "{} indices are not a whole number of triangles", index.size());
+    for (size_t i = 0; i + 2 < index.size(); i += 3) tris.push_back({index[i], index[i + 1], index[i + 2]});
+  } else if (mode == 5) {  // strip: every other triangle reversed, so all keep the first one's winding
+    for (size_t i = 0; i + 2 < index.size(); ++i)
+      tris.push_back(i % 2 == 0 ? Tri{index[i], index[i + 1], index[i + 2]} : Tri{index[i + 1], index[i], index[i + 2]});
+  } else {  // fan
+    for (size_t i = 1; i + 1 < index.size(); ++i) tris.push_back({index[i], index[i + 1], index[0]});
+  }
+  if (tris.empty()) fail(element, "has no triangle");
+  return tris;
+}
+
+/// The TexturedMesh material of glTF material `material` (-1: the default one), made on first use with
+/// its base colour texture and factor.
+int32_t GltfReader::material_for(int material, ReadState& state) {
+  const auto found = state.material_of.find(material);
+  if (found != state.material_of.end()) return found->second;
+  Material m;
+  m.name = fmt::format("material_{}", material);
+  if (material >= 0) {
+    const json& g = array("materials")[size_t(material)];
+    if (g.contains("name") && g["name"].is_string()) m.name = g["name"].get<std::string>();
+    const std::string element = fmt::format("materials[{}]", material);
+    const json pbr = g.value("pbrMetallicRoughness", json::object());
+    if (pbr.contains("baseColorFactor")) {
+      const json& f = pbr["baseColorFactor"];
+      if (!f.is_array() || f.size() != 4) fail(element, "baseColorFactor is not 4 numbers");
+      for (int k = 0; k < 3; ++k) {
+        if (!f[size_t(k)].is_number()) fail(element, "baseColorFactor is not 4 numbers");
+        m.kd[size_t(k)] = linear_to_srgb(f[size_t(k)].get<double>());
+      }
+    }
+    if (pbr.contains("baseColorTexture")) {
+      const std::string t_element = element + ".pbrMetallicRoughness.baseColorTexture";
+      const json& info = pbr["baseColorTexture"];
+      if (!info.is_object()) fail(t_element, "is not an object");
+      const int64_t tex = index_in(info, "index", "textures", t_element);
+      if (tex < 0) fail(t_element, "has no index");
+      const json& texture = array("textures")[size_t(tex)];
+      int64_t image = index_in(texture, "source", "images", fmt::format("textures[{}]", tex));
+      if (texture.contains("extensions"))
+        for (const char* ext : {"EXT_texture_webp", "KHR_texture_basisu", "MSFT_texture_dds"})
+          if (texture["extensions"].contains(ext) && texture["extensions"][ext].is_object() && image < 0)
+            image = index_in(texture["extensions"][ext], "source", "images", fmt::format("textures[{}].extensions.{}", tex, ext));
+      if (image < 0) fail(fmt::format("textures[{}]", tex), "has no image source tightex can read");
+      auto [it, inserted] = state.texture_of.try_emplace(int(image), int(state.mesh.textures.size()));
+      if (inserted) {
+        const json& img = array("images")[size_t(image)];
+        Texture t;
+        t.path = img.contains("uri") && img["uri"].is_string() && img["uri"].get<std::string>().rfind("data:", 0) != 0
+                     ? (folder_ / with_forward_slashes(percent_decoded(img["uri"].get<std::string>()))).lexically_normal().string()
+                     : fmt::format("{}_image{}", fs::path(path_).stem().string(), image);
+        state.mesh.textures.push_back(std::move(t));
+        doc_->texture_image.push_back(int(image));
+      }
+      m.texture = it->second;
+    }
+  }
+  const int32_t index = int32_t(state.mesh.materials.size());
+  state.mesh.materials.push_back(std::move(m));
+  state.material_of[material] = index;
+  return index;
+}
+
+/// The texture info of a material's base colour, or null.
+const json* base_color_info(const json& materials, int material) {
+  if (material < 0) return nullptr;
+  const json& g = materials[size_t(material)];
+  const auto pbr = g.find("pbrMetallicRoughness");
+  if (pbr == g.end() || !pbr->is_object() || !pbr->contains("baseColorTexture")) return nullptr;
+  return &(*pbr)["baseColorTexture"];
+}
+
+/// The base colour texture's sampler wrapS and wrapT (REPEAT when it has none).
+std::array<int64_t, 2> GltfReader::sampler_wrap(const json& info) const {
+  std::array<int64_t, 2> wrap{kRepeat, kRepeat};
+  const json& texture = array("textures")[size_t(info["index"].get<int64_t>())];
+  const int64_t sampler = index_in(texture, "sampler", "samplers", "texture");
+  if (sampler < 0) return wrap;
+  const json& s = array("samplers")[size_t(sampler)];
+  wrap[0] = int64_t(unsigned_of(s, "wrapS", kRepeat, fmt::format("samplers[{}]", sampler)));
+  wrap[1] = int64_t(unsigned_of(s, "wrapT", kRepeat, fmt::format("samplers[{}]", sampler)));
+  return wrap;
+}
+
+/// Reads a 2-number array of KHR_texture_transform (offset, scale), or the default.
+std::array<double, 2> pair_of(const json& t, const char* key, double fallback) {
+  std::array<double, 2> v{fallback, fallback};
+  if (t.contains(key) && t[key].is_array() && t[key].size() == 2 && t[key][0].is_number() && t[key][1].is_number())
+    v = {t[key][0].get<double>(), t[key][1].get<double>()};
+  return v;
+}
+
+/// Corner UVs of the primitive's triangles, in tightex's convention (v up): the UV set the base colour
+/// texture uses, with its KHR_texture_transform (scale and offset) applied, so the corner UVs are what
+/// the renderer samples; TEXCOORD_0 (or zero) without a texture.
+void GltfReader::read_corner_uvs(const json& primitive, int material, const std::vector<Tri>& tris, size_t n, const std::string& element,
+                                 ReadState& state) {
+  const json* info = base_color_info(array("materials"), material);
+  int64_t set = info != nullptr ? int64_t(unsigned_of(*info, "texCoord", 0, element + " material's baseColorTexture")) : 0;
+  std::array<double, 2> offset{0, 0}, scale{1, 1};
+  if (info != nullptr && info->contains("extensions") && (*info)["extensions"].contains("KHR_texture_transform")) {
+    const json& t = (*info)["extensions"]["KHR_texture_transform"];
+    if (!t.is_object()) fail(element, "its material's KHR_texture_transform is not an object");
+    if (t.value("rotation", 0.0) != 0.0) fail(element, "its material's KHR_texture_transform has a rotation, which is not supported");
+    offset = pair_of(t, "offset", 0.0), scale = pair_of(t, "scale", 1.0);
+    if (t.contains("texCoord")) set = int64_t(unsigned_of(t, "texCoord", 0, element + " KHR_texture_transform"));
+  }
+  const std::string name = fmt::format("TEXCOORD_{}", set);
+  const AccessorView uv = attribute(primitive, name, element, false);
+  if (info != nullptr && uv.data == nullptr) fail(element, "its base colour texture uses {}, which the primitive does not have", name);
+  if (uv.data != nullptr) {
+    if (uv.components != 2 ||
+        !(uv.component_type == kFloat || (uv.normalized && (uv.component_type == kUnsignedByte || uv.component_type == kUnsignedShort))))
+      fail(element, "{} is not VEC2 float or normalized unsigned byte/short", name);
+    if (uv.count != n) fail(element, "{} has {} entries for {} positions", name, uv.count, n);
+  }
+  const std::array<int64_t, 2> wrap = info != nullptr ? sampler_wrap(*info) : std::array<int64_t, 2>{kRepeat, kRepeat};
+  for (const Tri& t : tris)
+    for (const uint32_t v : t) {
+      Vec2 g(0, 0);
+      if (uv.data != nullptr) g = Vec2(offset[0] + scale[0] * uv.get(v, 0), offset[1] + scale[1] * uv.get(v, 1));
+      if (!std::isfinite(g.x()) || !std::isfinite(g.y())) fail(element, "{} entry {} is not finite", name, v);
+      for (int k = 0; k < 2; ++k)
+        if (wrap[size_t(k)] != kRepeat && (g[k] < -kWrapSlack || g[k] > 1 + kWrapSlack))
+          fail(element,
+               "{} entry {} ({}) lies outside [0,1] under its sampler's wrap mode {}, which tightex does not bake (it reads as REPEAT)",
+               name, v, g[k], wrap[size_t(k)]);
+      state.mesh.corner_uv.push_back(Vec2(g.x(), 1.0 - g.y()));
+    }
+}
+
+void GltfReader::read_primitive(size_t m, size_t p, ReadState& state) {
+  const std::string element = fmt::format("meshes[{}].primitives[{}]", m, p);
+  const json& primitive = array("meshes")[m]["primitives"][p];
+  if (!primitive.is_object()) fail(element, "is not an object");
+  const int64_t mode = int64_t(unsigned_of(primitive, "mode", 4, element));
+  if (mode > 6) fail(element, "mode {} is not a glTF primitive mode", mode);
+  if (mode < 4) {  // points and lines: written back as they are
+    not_read_.push_back(fmt::format("{} ({})", element, mode == 0 ? "points" : "lines"));
+    return;
+  }
+  check_supported(primitive, element);
+  const AccessorView pos = attribute(primitive, "POSITION", element, true);
+  if (pos.components != 3 || pos.component_type != kFloat) fail(element, "POSITION is not VEC3 float");
+  const std::vector<Tri> tris = primitive_triangles(primitive, pos.count, mode, element);
+  // Primitives may share accessors, so what is read is bounded by the bytes read, not by each accessor.
+  corners_read_ += 3 * uint64_t(tris.size());
+  if (corners_read_ > kCornersPerInputByte * input_bytes_ + kCornerSlack)
+    fail(element, "the primitives so far have {} corners from {} bytes of model and buffers (accessors shared by too many primitives)",
+         corners_read_, input_bytes_);
+  // Only the vertices its triangles use, each once (a vertex buffer shared by many primitives is not
+  // copied for each).
+  std::vector<uint32_t> used;
+  used.reserve(3 * tris.size());
+  for (const Tri& t : tris) used.insert(used.end(), t.begin(), t.end());
+  std::sort(used.begin(), used.end());
+  used.erase(std::unique(used.begin(), used.end()), used.end());
+  const size_t base = state.mesh.positions.size();
+  if (used.size() > size_t(UINT32_MAX) - base) fail(element, "too many vertices");
+  for (const uint32_t i : used) {
+    const Vec3 x(pos.get(i, 0), pos.get(i, 1), pos.get(i, 2));
+    if (!x.allFinite() || x.cwiseAbs().maxCoeff() > kAbsurdCoordinate) fail(element, "POSITION entry {} is not a finite coordinate", i);
+    state.mesh.positions.push_back(x);
+  }
+  auto vertex_of = [&](uint32_t v) { return uint32_t(base + size_t(std::lower_bound(used.begin(), used.end(), v) - used.begin())); };
+  const int material = int(index_in(primitive, "material", "materials", element));
+  const int32_t tm = material_for(material, state);
+  read_corner_uvs(primitive, material, tris, pos.count, element, state);
+  const AccessorView normal = attribute(primitive, "NORMAL", element, false);
+  if (normal.data != nullptr && (normal.components != 3 || normal.component_type != kFloat || normal.count != pos.count))
+    fail(element, "NORMAL is not VEC3 float with one entry per position");
+  const AccessorView color = attribute(primitive, "COLOR_0", element, false);
+  if (color.data != nullptr && ((color.components != 3 && color.components != 4) || color.count != pos.count ||
+                                !(color.component_type == kFloat || color.normalized)))
+    fail(element, "COLOR_0 is not VEC3/VEC4 float or normalized unsigned byte/short with one entry per position");
+  state.any_normals |= normal.data != nullptr;
+  state.any_colors |= color.data != nullptr;
+  const uint32_t prim_index = uint32_t(doc_->primitives.size());
+  doc_->primitives.push_back({m, p, material, normal.data != nullptr});
+  for (const Tri& t : tris) {
+    state.mesh.triangles.push_back({vertex_of(t[0]), vertex_of(t[1]), vertex_of(t[2])});
+    state.mesh.face_material.push_back(tm);
+    doc_->triangle_primitive.push_back(prim_index);
+    for (const uint32_t v : t) {
+      Vec3 n(0, 0, 0);
+      if (normal.data != nullptr) n = Vec3(normal.get(v, 0), normal.get(v, 1), normal.get(v, 2));
+      if (!n.allFinite()) fail(element, "NORMAL entry {} is not finite", v);
+      state.mesh.corner_normal.push_back(n);
+      state.corner_has_normal.push_back(normal.data != nullptr);
+      std::array<float, 4> c{1, 1, 1, 1};
+      if (color.data != nullptr)
+        for (size_t k = 0; k < color.components; ++k) {
+          const double x = color.get(v, k);
+          if (!std::isfinite(x)) fail(element, "COLOR_0 entry {} is not finite", v);
+          c[k] = float(k < 3 ? linear_to_srgb(x) : std::clamp(x, 0.0, 1.0));
+        }
+      state.mesh.corner_color.push_back(c);
+    }
+  }
+}
+
+/// Corners without a normal (a primitive without NORMAL beside one with) get their face's normal, as a
+/// renderer shades them; none at all: no normals.
+void GltfReader::finish_normals(ReadState& state) const {
+  TexturedMesh& mesh = state.mesh;
+  if (!state.any_normals) {
+    mesh.corner_normal.clear();
+    return;
+  }
+  for (size_t t = 0; t < mesh.num_triangles(); ++t) {
+    const Tri& tri = mesh.triangles[t];
+    Vec3 n = (mesh.positions[tri[1]] - mesh.positions[tri[0]]).cross(mesh.positions[tri[2]] - mesh.positions[tri[0]]);
+    n = n.norm() > 0 ? Vec3(n.normalized()) : Vec3(0, 0, 1);
+    for (size_t k = 0; k < 3; ++k)
+      if (!state.corner_has_normal[3 * t + k]) mesh.corner_normal[3 * t + k] = n;
+  }
+}
+
+/// The header size of every texture, and with load_textures its pixels.
+void GltfReader::load_textures(TexturedMesh& mesh) {
+  for (size_t i = 0; i < mesh.textures.size(); ++i) {
+    const std::string_view bytes = doc_->images[size_t(doc_->texture_image[i])];
+    const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
+    const std::string element = fmt::format("images[{}]", doc_->texture_image[i]);
+    if (bytes.empty()) fail(element, "is empty");
+    std::tie(mesh.textures[i].width, mesh.textures[i].height) = image_dimensions(data, bytes.size());
+    if (!options_.load_textures) continue;
+    try {
+      mesh.textures[i].image = decode_image(data, bytes.size(), element, options_.max_texture_pixels);
+    } catch (const InputError& e) {
+      fail_input("{}: {}", path_, e.what());
+    }
+  }
+}
+
+TexturedMesh GltfReader::read(ModelReadStats* stats) {
+  std::string reason;
+  std::string& data = doc_->storage.emplace_back();
+  if (!read_whole_file(path_, data, reason)) fail_input("{}: {}", path_, reason);
+  input_bytes_ = data.size();
+  const GltfContainerParts parts = split_gltf_container(path_, data);
+  try {
+    doc_->json = json::parse(parts.json);
+  } catch (const json::exception& e) {
+    fail_input("{}: JSON: {}", path_, excerpt(e.what()));
+  }
+  if (!doc_->json.is_object()) fail("JSON", "the document is not an object");
+  const json asset = doc_->json.value("asset", json::object());
+  if (!asset.is_object() || !asset.contains("version") || !asset["version"].is_string() ||
+      asset["version"].get<std::string>().rfind("2.", 0) != 0)
+    fail("asset", "version is not 2.x (tightex reads glTF 2.0)");
+  if (doc_->json.contains("extensionsRequired") && doc_->json["extensionsRequired"].is_array())
+    for (const json& e : doc_->json["extensionsRequired"])
+      if (e != "KHR_texture_transform" && e != "KHR_materials_emissive_strength" && e != "EXT_texture_webp")
+        fail("extensionsRequired", "{} is not supported", excerpt(e.dump()));
+  check_document_shape();
+  load_buffers(parts.bin);
+  check_buffer_views();
+  load_images();
+  ReadState state;
+  for (const size_t m : reached_meshes()) {
+    const json& mesh = array("meshes")[m];
+    if (!mesh.contains("primitives") || !mesh["primitives"].is_array()) fail(fmt::format("meshes[{}]", m), "primitives missing");
+    for (size_t p = 0; p < mesh["primitives"].size(); ++p) read_primitive(m, p, state);
+  }
+  if (state.mesh.triangles.empty()) fail_input("{}: no triangle primitive is reached from the scene's nodes", path_);
+  finish_normals(state);
+  if (!state.any_colors) state.mesh.corner_color.clear();
+  TexturedMesh mesh = std::move(state.mesh);
+  mesh.source = path_;
+  load_textures(mesh);
+  mesh.gltf = doc_;
+  if (stats != nullptr) {
+    *stats = ModelReadStats{};
+    stats->not_read = not_read_;
+  }
+  return mesh;
+}
+
+}  // namespace
+
+size_t gltf_component_size(int64_t component_type) {
+  switch (component_type) {
+    case 5120:
+    case kUnsignedByte:
+      return 1;
+    case 5122:
+    case kUnsignedShort:
+      return 2;
+    case kUnsignedInt:
+    case kFloat:
+      return 4;
+    default:
+      return 0;
+  }
+}
+
+size_t gltf_type_components(const std::string& type) {
+  static const std::map<std::string, size_t> kComponents{{"SCALAR", 1}, {"VEC2", 2}, {"VEC3", 3}, {"VEC4", 4},
+                                                         {"MAT2", 4},   {"MAT3", 9}, {"MAT4", 16}};
+  const auto it = kComponents.find(type);
+  return it == kComponents.end() ? 0 : it->second;
+}
+
+GltfContainerParts split_gltf_container(const std::string& file, std::string_view data) {
+  GltfContainerParts parts;
+  if (data.size() < 4 || le32(data.data()) != kGlbMagic) {
+    parts.json = data;
+    return parts;
+  }
+  parts.binary = true;
+  auto bad = [&](const std::string& problem) { fail_input("{}: GLB header: {}", file, problem); };
+  if (data.size() < 20) bad(fmt::format("the file is {} bytes, shorter than a GLB header and its first chunk header (20)", data.size()));
+  const uint32_t version = le32(data.data() + 4), length = le32(data.data() + 8);
+  if (version != 2) bad(fmt::format("version {} is not 2", version));
+  if (length > data.size() || length < 20) bad(fmt::format("length {} is not in 20..{} (the file's size)", length, data.size()));
+  const uint32_t json_length = le32(data.data() + 12), json_type = le32(data.data() + 16);
+  if (json_type != kChunkJson) bad(fmt::format("the first chunk is not JSON"));
+  if (uint64_t(json_length) > uint64_t(length) - 20)
+    bad(fmt::format("JSON chunk length {} runs past the GLB length {}", json_length, length));
+  parts.json = data.substr(20, json_length);
+  uint64_t at = 20 + uint64_t(json_length);
+  at = (at + 3) & ~uint64_t(3);
+  if (at + 8 <= length) {
+    const uint32_t bin_length = le32(data.data() + at), bin_type = le32(data.data() + at + 4);
+    if (bin_type == kChunkBin) {
+      if (uint64_t(bin_length) > uint64_t(length) - at - 8)
+        bad(fmt::format("BIN chunk length {} runs past the GLB length {}", bin_length, length));
+      parts.bin = data.substr(size_t(at + 8), bin_length);
+    }
+  }
+  return parts;
+}
+
+TexturedMesh read_gltf(const std::string& path, const ModelReadOptions& options, ModelReadStats* stats) {
+  try {
+    return GltfReader(path, options).read(stats);
+  } catch (const json::exception& e) {
+    // A member of another JSON type than glTF gives it (a string where a number belongs) that no check
+    // above names more precisely.
+    fail_input("{}: JSON: a value of the wrong type ({})", path, excerpt(e.what()));
+  }
+}
+
+}  // namespace tightex

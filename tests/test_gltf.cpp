@@ -1,0 +1,492 @@
+// Tests for glTF in and out: read_gltf on a hand-built GLB (and the same as .gltf with a .bin file or
+// a data URI), what it refuses (a catalogue of lying documents, each one line naming the file and the
+// element), write_gltf read back (positions bit for bit, the document's nodes, materials and points
+// kept), the command line on the Khronos models and on an OBJ scan converted to GLB here, and every
+// written file through the Khronos glTF-Validator and three.js's GLTFLoader (tests/gltf, when node is
+// installed).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iterator>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <string>
+
+#include "core/error.hpp"
+#include "gltf_builder.hpp"
+#include "io/gltf_document.hpp"
+#include "mesh_catalogue.hpp"
+#include "report/metrics.hpp"
+#include "tightex/io.hpp"
+#include "tightex/tightex.hpp"
+
+namespace tightex {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using testing::GridGltf;
+
+fs::path scratch(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("tightex_gltf_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+void write_file(const fs::path& p, const std::string& bytes) { std::ofstream(p, std::ios::binary) << bytes; }
+
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+int run_cli(const std::string& args) {
+  const int status = std::system((std::string(TIGHTEX_CLI) + " " + args).c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+double linear_to_srgb(double c) { return c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055; }
+
+/// The grid written as a GLB into `dir`.
+fs::path grid_glb(const fs::path& dir, const GridGltf& g = testing::grid_gltf()) {
+  const fs::path p = dir / "grid.glb";
+  write_file(p, testing::make_glb(g.doc, g.bin));
+  return p;
+}
+
+TEST(GltfReader, ReadsTheHandBuiltGlbOnceInLocalSpace) {
+  const fs::path dir = scratch("read");
+  const GridGltf g = testing::grid_gltf();
+  ModelReadStats stats;
+  const TexturedMesh m = read_gltf(grid_glb(dir, g).string(), {}, &stats);
+  // Two nodes use the mesh: its triangles are read once, untransformed.
+  ASSERT_EQ(m.num_triangles(), g.triangles);
+  ASSERT_EQ(m.num_vertices(), 25u);
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(m.positions[size_t(i)].x(), double(float(i / 3.0f + 0.1f)));
+  EXPECT_EQ(m.positions[5].y(), double(float(1 / 7.0f)));
+  // Corner UVs in tightex's convention (v up): 1 - the glTF v.
+  EXPECT_FLOAT_EQ(float(m.corner_uv[0].x()), 0.1f);
+  EXPECT_FLOAT_EQ(float(m.corner_uv[0].y()), 1.0f - 0.1f);
+  ASSERT_EQ(m.corner_normal.size(), 3 * m.num_triangles());
+  EXPECT_EQ(m.corner_normal[0], Vec3(0, 0, 1));
+  EXPECT_TRUE(m.corner_color.empty());
+  ASSERT_EQ(m.materials.size(), 1u);
+  EXPECT_EQ(m.materials[0].name, "grid material");
+  EXPECT_NEAR(m.materials[0].kd[0], linear_to_srgb(0.5), 1e-12);
+  ASSERT_EQ(m.textures.size(), 1u);  // the normal map is not the base colour
+  EXPECT_EQ(m.textures[0].image.width, 16);
+  ASSERT_EQ(stats.not_read.size(), 1u);
+  EXPECT_NE(stats.not_read[0].find("meshes[0].primitives[1] (points)"), std::string::npos);
+  ASSERT_NE(m.gltf, nullptr);
+}
+
+TEST(GltfReader, ReadsGltfWithABinFileOrADataUriAsTheGlb) {
+  const fs::path dir = scratch("text");
+  GridGltf g = testing::grid_gltf();
+  const TexturedMesh glb = read_gltf(grid_glb(dir, g).string());
+  g.doc["buffers"][0]["uri"] = "grid data.bin";
+  write_file(dir / "grid data.bin", g.bin);
+  write_file(dir / "file.gltf", g.doc.dump());
+  static const char* kBase64 = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string b64;
+  for (size_t i = 0; i < g.bin.size(); i += 3) {
+    uint32_t n = uint32_t(uint8_t(g.bin[i])) << 16;
+    if (i + 1 < g.bin.size()) n |= uint32_t(uint8_t(g.bin[i + 1])) << 8;
+    if (i + 2 < g.bin.size()) n |= uint8_t(g.bin[i + 2]);
+    b64 += kBase64[(n >> 18) & 63], b64 += kBase64[(n >> 12) & 63];
+    b64 += i + 1 < g.bin.size() ? kBase64[(n >> 6) & 63] : '=';
+    b64 += i + 2 < g.bin.size() ? kBase64[n & 63] : '=';
+  }
+  g.doc["buffers"][0]["uri"] = "data:application/octet-stream;base64," + b64;
+  write_file(dir / "uri.gltf", g.doc.dump());
+  for (const char* name : {"file.gltf", "uri.gltf"}) {
+    const TexturedMesh m = read_gltf((dir / name).string());
+    EXPECT_EQ(m.positions, glb.positions) << name;
+    EXPECT_EQ(m.triangles, glb.triangles) << name;
+    EXPECT_EQ(m.corner_uv, glb.corner_uv) << name;
+    EXPECT_EQ(m.textures[0].image.pixels, glb.textures[0].image.pixels) << name;
+  }
+}
+
+TEST(GltfReader, AppliesTextureTransformAndRefusesItsRotation) {
+  const fs::path dir = scratch("transform");
+  GridGltf g = testing::grid_gltf();
+  json& info = g.doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"];
+  info["extensions"]["KHR_texture_transform"] = {{"offset", {0.25, 0.0}}, {"scale", {0.5, 2.0}}};
+  const TexturedMesh m = read_gltf(grid_glb(dir, g).string());
+  EXPECT_NEAR(m.corner_uv[0].x(), 0.25 + 0.5 * double(0.1f), 1e-12);
+  EXPECT_NEAR(m.corner_uv[0].y(), 1.0 - 2.0 * double(0.1f), 1e-12);
+  info["extensions"]["KHR_texture_transform"]["rotation"] = 0.5;
+  try {
+    read_gltf(grid_glb(dir, g).string());
+    ADD_FAILURE() << "a rotated texture transform was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("rotation"), std::string::npos) << e.what();
+  }
+}
+
+TEST(GltfReader, ReadsStripsAndFansWithTheirWinding) {
+  const fs::path dir = scratch("strip");
+  GridGltf g = testing::grid_gltf();
+  json& p = g.doc["meshes"][0]["primitives"][0];
+  p.erase("indices");
+  p["mode"] = 5;  // strip over the first 25 vertices: 23 triangles
+  const TexturedMesh strip = read_gltf(grid_glb(dir, g).string());
+  ASSERT_EQ(strip.num_triangles(), 23u);
+  EXPECT_EQ(strip.triangles[0], (Tri{0, 1, 2}));
+  EXPECT_EQ(strip.triangles[1], (Tri{2, 1, 3}));
+  p["mode"] = 6;
+  const TexturedMesh fan = read_gltf(grid_glb(dir, g).string());
+  ASSERT_EQ(fan.num_triangles(), 23u);
+  EXPECT_EQ(fan.triangles[0], (Tri{1, 2, 0}));
+}
+
+TEST(GltfReader, ReadsVertexColoursAsSrgb) {
+  const fs::path dir = scratch("colour");
+  GridGltf g = testing::grid_gltf();
+  std::string colours;
+  for (int i = 0; i < 25; ++i)
+    for (const uint8_t c : {uint8_t(0), uint8_t(255), uint8_t(i), uint8_t(128)}) colours.push_back(char(c));
+  while (g.bin.size() % 4 != 0) g.bin.push_back('\0');
+  g.doc["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", g.bin.size()}, {"byteLength", colours.size()}});
+  g.bin += colours;
+  g.doc["buffers"][0]["byteLength"] = g.bin.size();
+  g.doc["accessors"].push_back(
+      {{"bufferView", g.doc["bufferViews"].size() - 1}, {"componentType", 5121}, {"normalized", true}, {"count", 25}, {"type", "VEC4"}});
+  g.doc["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = g.doc["accessors"].size() - 1;
+  const TexturedMesh m = read_gltf(grid_glb(dir, g).string());
+  ASSERT_EQ(m.corner_color.size(), 3 * m.num_triangles());
+  const uint32_t v = m.triangles[0][0];
+  EXPECT_EQ(m.corner_color[0][0], 0.0f);
+  EXPECT_EQ(m.corner_color[0][1], 1.0f);
+  EXPECT_NEAR(m.corner_color[0][2], linear_to_srgb(v / 255.0), 1e-6);
+  EXPECT_NEAR(m.corner_color[0][3], 128 / 255.0, 1e-6);  // alpha is not a colour
+}
+
+/// One lying document: a change to the grid, and a word the message must hold.
+struct Lie {
+  const char* name;
+  std::function<void(GridGltf&)> change;
+  const char* element;
+};
+
+void set_u32(std::string& bytes, size_t at, uint32_t v) { std::memcpy(&bytes[at], &v, 4); }
+
+std::vector<Lie> lies() {
+  return {
+      {"count beyond the view", [](GridGltf& g) { g.doc["accessors"][0]["count"] = 1000000000; }, "accessors[0]"},
+      {"view beyond the buffer", [](GridGltf& g) { g.doc["bufferViews"][1]["byteOffset"] = 1u << 30; }, "bufferViews[1]"},
+      {"stride below the element", [](GridGltf& g) { g.doc["bufferViews"][0]["byteStride"] = 4; }, "bufferViews[0]"},
+      {"component type", [](GridGltf& g) { g.doc["accessors"][0]["componentType"] = 5124; }, "accessors[0]"},
+      {"accessor type", [](GridGltf& g) { g.doc["accessors"][0]["type"] = "VEC7"; }, "accessors[0]"},
+      {"position not float", [](GridGltf& g) { g.doc["accessors"][0]["componentType"] = 5121; }, "POSITION"},
+      {"accessor index", [](GridGltf& g) { g.doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = 99; }, "accessors[99]"},
+      {"index out of range", [](GridGltf& g) { set_u32(g.bin, size_t(g.doc["bufferViews"][3]["byteOffset"]), 999); }, "out of range"},
+      {"non-finite position", [](GridGltf& g) { set_u32(g.bin, 0, 0x7fc00000u); }, "POSITION entry 0"},
+      {"missing image",
+       [](GridGltf& g) {
+         g.doc["images"][0] = {{"uri", "missing.png"}};
+       },
+       "images[0]"},
+      {"undecodable data URI",
+       [](GridGltf& g) {
+         g.doc["images"][1] = {{"uri", "data:image/png;base64,@@@@"}};
+       },
+       "images[1]"},
+      {"corrupt image",
+       [](GridGltf& g) {
+         g.doc["images"][0] = {{"uri", "data:image/png;base64,iVBORw0KGgoAAAA="}};
+       },
+       "images[0]"},
+      {"buffer longer than BIN", [](GridGltf& g) { g.doc["buffers"][0]["byteLength"] = g.bin.size() + 100; }, "buffers[0]"},
+      {"sparse accessor",
+       [](GridGltf& g) {
+         g.doc["accessors"][0]["sparse"] = {{"count", 1}};
+       },
+       "sparse"},
+      {"skinned", [](GridGltf& g) { g.doc["meshes"][0]["primitives"][0]["attributes"]["JOINTS_0"] = 0; }, "JOINTS_0"},
+      {"morph targets",
+       [](GridGltf& g) {
+         g.doc["meshes"][0]["primitives"][0]["targets"] = {{{"POSITION", 0}}};
+       },
+       "morph"},
+      {"draco", [](GridGltf& g) { g.doc["meshes"][0]["primitives"][0]["extensions"]["KHR_draco_mesh_compression"] = json::object(); },
+       "draco"},
+      {"missing UV set", [](GridGltf& g) { g.doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["texCoord"] = 1; },
+       "TEXCOORD_1"},
+      {"node cycle", [](GridGltf& g) { g.doc["nodes"][1]["children"] = {0}; }, "nodes[0]"},
+      {"mode", [](GridGltf& g) { g.doc["meshes"][0]["primitives"][0]["mode"] = 9; }, "mode 9"},
+      {"version", [](GridGltf& g) { g.doc["asset"]["version"] = "1.0"; }, "asset"},
+      {"clamped UVs outside",
+       [](GridGltf& g) {
+         g.doc["samplers"] = {{{"wrapS", 33071}}};
+         g.doc["textures"][0]["sampler"] = 0;
+         g.doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"]["KHR_texture_transform"] = {{"offset", {0.9, 0}}};
+       },
+       "wrap mode"},
+  };
+}
+
+TEST(GltfReader, RefusesEveryLieOnOneLineNamingTheFileAndElement) {
+  const fs::path dir = scratch("lies");
+  for (const Lie& lie : lies()) {
+    GridGltf g = testing::grid_gltf();
+    lie.change(g);
+    const fs::path p = grid_glb(dir, g);
+    try {
+      read_gltf(p.string());
+      ADD_FAILURE() << lie.name << ": read";
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      EXPECT_EQ(what.rfind(p.string() + ": ", 0), 0u) << lie.name << ": " << what;
+      EXPECT_NE(what.find(lie.element), std::string::npos) << lie.name << ": " << what;
+      EXPECT_EQ(what.find('\n'), std::string::npos) << lie.name << ": " << what;
+    }
+  }
+}
+
+TEST(GltfReader, BoundsWhatSharedAccessorsMakeItRead) {
+  // 300 primitives naming the same 2048 triangles: the bytes of the file do not grow with them, so
+  // the corners read are bounded by the bytes (4 per byte, beyond a million) and the file refused.
+  const fs::path dir = scratch("shared");
+  GridGltf g = testing::grid_gltf(32);
+  json& primitives = g.doc["meshes"][0]["primitives"];
+  for (int i = 0; i < 300; ++i) primitives.push_back(primitives[0]);
+  try {
+    read_gltf(grid_glb(dir, g).string());
+    ADD_FAILURE() << "300 primitives sharing one accessor were read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("shared by too many primitives"), std::string::npos) << e.what();
+  }
+  // A few sharing primitives are read, and each only once copies the vertices it uses.
+  primitives.erase(primitives.begin() + 4, primitives.end());
+  const TexturedMesh m = read_gltf(grid_glb(dir, g).string());
+  EXPECT_EQ(m.num_triangles(), 3 * g.triangles);
+  EXPECT_EQ(m.num_vertices(), 3 * 33u * 33u);
+}
+
+TEST(GltfReader, RefusesLyingGlbContainers) {
+  const fs::path dir = scratch("container");
+  const GridGltf g = testing::grid_gltf();
+  const std::string good = testing::make_glb(g.doc, g.bin);
+  std::vector<std::pair<const char*, std::string>> cases;
+  std::string s = good;
+  set_u32(s, 8, uint32_t(good.size() + 1));
+  cases.push_back({"length beyond the file", s});
+  s = good;
+  set_u32(s, 12, uint32_t(good.size()));
+  cases.push_back({"JSON chunk beyond the length", s});
+  s = good;
+  set_u32(s, 4, 1);
+  cases.push_back({"version 1", s});
+  const size_t bin_header = 20 + size_t(*reinterpret_cast<const uint32_t*>(&good[12]));
+  s = good;
+  set_u32(s, bin_header, uint32_t(good.size()));
+  cases.push_back({"BIN chunk beyond the length", s});
+  cases.push_back({"truncated", good.substr(0, 16)});
+  s = testing::make_glb(json::object(), "");
+  s[21] = ']';
+  cases.push_back({"not JSON", s});
+  for (const auto& [name, bytes] : cases) {
+    write_file(dir / "c.glb", bytes);
+    EXPECT_THROW(read_gltf((dir / "c.glb").string()), InputError) << name;
+  }
+}
+
+/// The grid through the whole method at a small size.
+Result optimized(const TexturedMesh& in) {
+  Options opt;
+  opt.size = 64;
+  opt.map = MapKind::kArea;
+  opt.aspect = 1.0;
+  return optimize(in, opt);
+}
+
+TEST(GltfWriter, WritesTheInputDocumentBackWithEachTriangleInItsPrimitive) {
+  const fs::path dir = scratch("roundtrip");
+  const GridGltf g = testing::grid_gltf();
+  const TexturedMesh in = read_gltf(grid_glb(dir, g).string());
+  const Result r = optimized(in);
+  for (const GltfContainer container : {GltfContainer::kGlb, GltfContainer::kGltf}) {
+    const fs::path out = dir / (container == GltfContainer::kGlb ? "glb" : "gltf");
+    const std::vector<std::string> removed = write_gltf(r.output, out.string(), "grid", ImageFormat::kPng, container);
+    EXPECT_NE(std::find(removed.begin(), removed.end(), "materials[0].normalTexture"), removed.end());
+    const fs::path file = out / (container == GltfContainer::kGlb ? "grid.glb" : "grid.gltf");
+    if (container == GltfContainer::kGltf) {
+      EXPECT_TRUE(fs::exists(out / "grid.bin"));
+      EXPECT_TRUE(fs::exists(out / "grid_tightex.png"));
+    }
+    ModelReadStats stats;
+    const TexturedMesh back = read_gltf(file.string(), {}, &stats);
+    const Metrics m = measure(in, back, 20000);
+    EXPECT_EQ(m.lost_triangles, 0u);  // every triangle at its own positions, bit for bit
+    EXPECT_EQ(m.flipped, 0u);
+    EXPECT_EQ(back.num_triangles(), in.num_triangles());
+    EXPECT_GT(m.surface_psnr, 30.0);
+    const json& doc = back.gltf->json;
+    EXPECT_EQ(doc["nodes"], g.doc["nodes"]);  // transforms and names as they were
+    EXPECT_EQ(doc["scenes"], g.doc["scenes"]);
+    EXPECT_EQ(doc["meshes"][0]["extras"], g.doc["meshes"][0]["extras"]);
+    ASSERT_EQ(doc["materials"].size(), 1u);
+    const json& mat = doc["materials"][0];
+    for (const char* key : {"name", "doubleSided", "alphaMode", "alphaCutoff", "extras"})
+      EXPECT_EQ(mat[key], g.doc["materials"][0][key]) << key;
+    EXPECT_EQ(mat["pbrMetallicRoughness"]["baseColorFactor"], g.doc["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"]);
+    EXPECT_FALSE(mat.contains("normalTexture"));
+    EXPECT_EQ(doc["images"].size(), 1u);  // the old base colour and normal images are gone
+    // The points primitive, as it came.
+    ASSERT_EQ(stats.not_read.size(), 1u);
+    const json& points = doc["meshes"][0]["primitives"][1];
+    EXPECT_EQ(points["mode"], 0);
+    const json& acc = doc["accessors"][points["attributes"]["POSITION"].get<size_t>()];
+    const json& view = doc["bufferViews"][acc["bufferView"].get<size_t>()];
+    const std::string_view buffer = back.gltf->buffers[0];
+    EXPECT_EQ(buffer.substr(view["byteOffset"].get<size_t>(), 36), g.bin.substr(g.doc["bufferViews"][4]["byteOffset"].get<size_t>(), 36));
+  }
+}
+
+TEST(GltfWriter, WritesAFreshDocumentForAnotherModel) {
+  const fs::path dir = scratch("fresh");
+  TexturedMesh m = testing::multi_component();
+  for (Vec3& p : m.positions) p = p.cast<float>().cast<double>();  // glTF positions are float
+  write_gltf(m, dir.string(), "cat", ImageFormat::kPng, GltfContainer::kGlb);
+  const TexturedMesh back = read_gltf((dir / "cat.glb").string());
+  EXPECT_EQ(back.num_triangles(), m.num_triangles());
+  const Metrics met = measure(m, back, 20000);
+  EXPECT_EQ(met.lost_triangles, 0u);
+  EXPECT_EQ(met.flipped, measure(m, m, 20000).flipped);  // the texture coordinates as they were
+  EXPECT_EQ(back.materials.size(), m.materials.size());
+  for (size_t t = 0; t < m.num_triangles(); t += 97)
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR((back.corner_uv[3 * t + size_t(k)] - m.sampled_uv(t, k)).norm(), 0.0, 1e-6);
+}
+
+// ---------------------------------------------------------------------------------------------------
+// The command line, and the written files in the Khronos glTF-Validator and three.js (tests/gltf).
+
+/// True when `node` exists and tests/gltf's packages are installed (scripts/gltf-checks.sh: npm ci,
+/// pinned by the lockfile; the test scripts run it before the tests).
+bool node_checks_ready() {
+  static const bool ready = [] {
+    const fs::path modules = fs::path(TIGHTEX_GLTF_CHECKS) / "node_modules";
+    return std::system("command -v node >/dev/null 2>&1") == 0 && fs::exists(modules / "gltf-validator") && fs::exists(modules / "three");
+  }();
+  return ready;
+}
+
+/// Runs tests/gltf/check_gltf.mjs on `file`: its JSON line (errors, warnings, meshes, triangles).
+json node_check(const fs::path& file) {
+  const fs::path out = file.parent_path() / "check.json";
+  std::system(
+      ("node '" + std::string(TIGHTEX_GLTF_CHECKS) + "/check_gltf.mjs' '" + file.string() + "' > '" + out.string() + "' 2>&1").c_str());
+  try {
+    return json::parse(read_file(out));
+  } catch (const json::exception&) {
+    return {{"unparsed", read_file(out)}};
+  }
+}
+
+void expect_valid_and_loading(const fs::path& file, size_t triangles) {
+  if (!node_checks_ready()) {
+    std::cout << "[  SKIPPED ] glTF-Validator and three.js: node or tests/gltf/node_modules is missing (bash scripts/gltf-checks.sh)\n";
+    return;
+  }
+  const json r = node_check(file);
+  EXPECT_EQ(r.value("errors", -1), 0) << r.dump();
+  EXPECT_EQ(r.value("warnings", -1), 0) << r.dump();
+  EXPECT_FALSE(r.contains("load_error")) << r.dump();
+  EXPECT_EQ(r.value("triangles", 0.0), double(triangles)) << r.dump();
+}
+
+TEST(GltfValidator, WrittenFilesHaveNoErrorNorWarningAndLoadInThree) {
+  const fs::path dir = scratch("validator");
+  const TexturedMesh in = read_gltf(grid_glb(dir).string());
+  const Result r = optimized(in);
+  write_gltf(r.output, (dir / "glb").string(), "grid", ImageFormat::kPng, GltfContainer::kGlb);
+  write_gltf(r.output, (dir / "gltf").string(), "grid", ImageFormat::kJpeg, GltfContainer::kGltf);
+  write_gltf(testing::multi_component(), (dir / "fresh").string(), "cat", ImageFormat::kPng, GltfContainer::kGlb);
+  // Two nodes show the grid's mesh: three.js counts its triangles twice.
+  expect_valid_and_loading(dir / "glb" / "grid.glb", 2 * in.num_triangles());
+  expect_valid_and_loading(dir / "gltf" / "grid.gltf", 2 * in.num_triangles());
+  expect_valid_and_loading(dir / "fresh" / "cat.glb", testing::multi_component().num_triangles());
+}
+
+/// The CLI on `input` (glTF out by default): its report, after checking lost 0, flipped 0 and one chart
+/// per component, and the written file in the validator.
+json run_and_check(const fs::path& input, const fs::path& out, const std::string& options = "") {
+  const int rc = run_cli("'" + input.string() + "' -o '" + out.string() + "' --quiet " + options);
+  EXPECT_EQ(rc, 0);
+  const json report = json::parse(read_file(out / "report.json"));
+  EXPECT_EQ(report["metrics"]["lost_triangles"], 0);
+  EXPECT_EQ(report["metrics"]["flipped"], 0);
+  EXPECT_EQ(report["metrics"]["charts"], report["preparation"]["components"]);
+  return report;
+}
+
+TEST(GltfRealData, KhronosGlbModelsGiveGlbs) {
+  for (const char* model : {"khronos_avocado/Avocado.glb", "khronos_waterbottle/WaterBottle.glb"}) {
+    const fs::path input = fs::path(TIGHTEX_SHARED_DATA) / model;
+    if (!fs::exists(input)) GTEST_SKIP() << input << " is absent";
+    const fs::path out = scratch(input.stem().string());
+    const json report = run_and_check(input, out);
+    ASSERT_TRUE(fs::exists(out / (input.stem().string() + ".glb")));
+    const TexturedMesh in = read_gltf(input.string()), back = read_gltf((out / (input.stem().string() + ".glb")).string());
+    const Metrics m = measure(in, back, 20000);
+    EXPECT_EQ(m.lost_triangles, 0u) << model;  // read back from the file: positions bit for bit
+    EXPECT_GE(m.output.utilization, 0.99) << model;
+    EXPECT_EQ(back.gltf->json["nodes"], in.gltf->json["nodes"]) << model;
+    expect_valid_and_loading(out / (input.stem().string() + ".glb"), in.num_triangles());
+  }
+}
+
+TEST(GltfCli, AnObjScanConvertedToGlbGoesThrough) {
+  const fs::path obj = fs::path(TIGHTEX_SHARED_DATA) / "fuze" / "fuze.obj";
+  if (!fs::exists(obj)) GTEST_SKIP() << obj << " is absent";
+  const fs::path dir = scratch("fuze");
+  TexturedMesh scan = read_obj(obj.string());
+  for (Vec3& p : scan.positions) p = p.cast<float>().cast<double>();
+  write_gltf(scan, (dir / "in").string(), "fuze", ImageFormat::kJpeg, GltfContainer::kGlb);
+  const json report = run_and_check(dir / "in" / "fuze.glb", dir / "out", "--size 256");
+  EXPECT_EQ(report["input"]["triangles"], scan.num_triangles());
+  expect_valid_and_loading(dir / "out" / "fuze.glb", scan.num_triangles());
+  // And --output-format obj from a glTF input: an OBJ beside nothing else.
+  EXPECT_EQ(
+      run_cli("'" + (dir / "in" / "fuze.glb").string() + "' -o '" + (dir / "obj").string() + "' --quiet --size 64 --output-format obj"), 0);
+  EXPECT_TRUE(fs::exists(dir / "obj" / "fuze.obj"));
+}
+
+TEST(GltfCli, RefusesHostileFilesWithExitOneAndNothingWritten) {
+  const fs::path dir = scratch("hostile");
+  std::vector<std::pair<std::string, std::string>> files;
+  for (const Lie& lie : lies()) {
+    GridGltf g = testing::grid_gltf();
+    lie.change(g);
+    files.push_back({lie.name, testing::make_glb(g.doc, g.bin)});
+  }
+  // A PNG whose header declares 200000 x 200000 pixels: refused from its header by --max-memory.
+  GridGltf huge = testing::grid_gltf();
+  std::string png = testing::gradient_png();
+  const uint32_t side = __builtin_bswap32(200000u);
+  std::memcpy(&png[16], &side, 4), std::memcpy(&png[20], &side, 4);
+  huge.doc["images"][0] = {{"uri", "big.png"}};
+  write_file(dir / "big.png", png);
+  files.push_back({"huge texture header", testing::make_glb(huge.doc, huge.bin)});
+  for (const auto& [name, bytes] : files) {
+    const fs::path input = dir / "in.glb", out = dir / "out", err = dir / "err.txt";
+    write_file(input, bytes);
+    fs::remove_all(out);
+    EXPECT_EQ(run_cli("'" + input.string() + "' -o '" + out.string() + "' --quiet --max-memory 4096 2> '" + err.string() + "'"), 1) << name;
+    const std::string message = read_file(err);
+    EXPECT_EQ(std::count(message.begin(), message.end(), '\n'), 1) << name << ": " << message;
+    EXPECT_NE(message.find(input.string()), std::string::npos) << name << ": " << message;
+    EXPECT_FALSE(fs::exists(out / "in.glb")) << name;
+  }
+}
+
+}  // namespace
+}  // namespace tightex
