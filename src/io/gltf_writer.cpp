@@ -13,6 +13,7 @@
 
 #include "core/error.hpp"
 #include "io/gltf_document.hpp"
+#include "io/little_endian.hpp"
 #include "io/model_files.hpp"
 #include "io/output_files.hpp"
 #include "tightex/io.hpp"
@@ -25,16 +26,6 @@ using nlohmann::json;
 namespace {
 
 constexpr const char* kNewView = "__tightex_new_view";
-
-/// Appends the bytes of `value` in little-endian order.
-template <typename T>
-void put(std::string& out, T value) {
-  char bytes[sizeof(T)];
-  std::memcpy(bytes, &value, sizeof(T));
-  if constexpr (std::endian::native == std::endian::big)
-    for (size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(bytes[i], bytes[sizeof(T) - 1 - i]);
-  out.append(bytes, sizeof(T));
-}
 
 void pad_to_4(std::string& s, char fill = '\0') {
   while (s.size() % 4 != 0) s.push_back(fill);

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "io/little_endian.hpp"
 #include "io/output_files.hpp"
 #include "tightex/io.hpp"
 
@@ -17,16 +18,6 @@ namespace tightex {
 namespace fs = std::filesystem;
 
 namespace {
-
-/// Appends the bytes of `value` in little-endian order.
-template <typename T>
-void put(std::string& out, T value) {
-  char bytes[sizeof(T)];
-  std::memcpy(bytes, &value, sizeof(T));
-  if constexpr (std::endian::native == std::endian::big)
-    for (size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(bytes[i], bytes[sizeof(T) - 1 - i]);
-  out.append(bytes, sizeof(T));
-}
 
 /// True when every coordinate reads back bit-identical from a float.
 bool positions_fit_float(const TexturedMesh& mesh) {
