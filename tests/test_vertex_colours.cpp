@@ -216,6 +216,30 @@ nlohmann::json run_cli(const fs::path& input, const fs::path& out, const std::st
   return f ? nlohmann::json::parse(f) : nlohmann::json::object();
 }
 
+/// Per corner of `result` (the output of the command line on `coloured`, its triangles in the same
+/// order), the output texture read bilinearly at the corner's UV against the corner's vertex colour as
+/// written to the file (8 bits): the mean of the red, green and blue errors, in 1/255, ascending.
+std::vector<double> corner_colour_errors(const TexturedMesh& coloured, const TexturedMesh& result) {
+  std::vector<double> errors;
+  EXPECT_EQ(result.num_triangles(), coloured.num_triangles());
+  for (size_t t = 0; t < std::min(result.num_triangles(), coloured.num_triangles()); ++t) {
+    const Image& image = result.textures[size_t(result.materials[size_t(result.face_material[t])].texture)].image;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 moved = result.positions[result.triangles[t][size_t(k)]] - coloured.positions[coloured.triangles[t][size_t(k)]];
+      EXPECT_LT(moved.norm(), 1e-5) << "triangle " << t << " is not where the input has it";
+      if (moved.norm() >= 1e-5) return {};
+      const Vec2 uv = result.sampled_uv(t, k);
+      const std::array<float, 4> got = sample_bilinear(image, uv.x(), uv.y());
+      const std::array<float, 4>& want = coloured.corner_color[3 * t + size_t(k)];
+      double e = 0;
+      for (size_t ch = 0; ch < 3; ++ch) e += std::abs(got[ch] - double(cat::colour_byte(want[ch])));
+      errors.push_back(e / 3);
+    }
+  }
+  std::sort(errors.begin(), errors.end());
+  return errors;
+}
+
 /// The command line on a vertex-coloured PLY and OBJ made from `textured`: a textured model of the same
 /// kind comes out, one fold-free chart per component, every triangle kept, its texture reproducing the
 /// colours (measured against the model as read_model reads it) above `min_psnr`.
@@ -237,6 +261,11 @@ void expect_vertex_colours_baked(const TexturedMesh& textured, const fs::path& d
     EXPECT_EQ(m.flipped, 0u) << kind;
     EXPECT_EQ(m.charts, report["preparation"]["components"].get<size_t>()) << kind;
     EXPECT_GT(m.surface_psnr, min_psnr) << kind;
+    // The vertex colours come back at the vertices (issue 24's check): mean within 1/255, P99 within 4.
+    const std::vector<double> errors = corner_colour_errors(coloured, result);
+    ASSERT_FALSE(errors.empty());
+    EXPECT_LE(std::accumulate(errors.begin(), errors.end(), 0.0) / double(errors.size()), 1.0) << kind;
+    EXPECT_LE(errors[size_t(0.99 * double(errors.size()))], 4.0) << kind;
   }
 }
 

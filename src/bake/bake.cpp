@@ -54,14 +54,18 @@ std::vector<TriangleSampler> make_samplers(const TexturedMesh& input, const std:
     const BakeTriangle& tri = triangles[t];
     const Image* src = nullptr;
     Rgba8 flat{255, 255, 255, 255};
+    bool from_vertex_colours = false;
     if (tri.material >= 0) {
       const Material& mat = input.materials[size_t(tri.material)];
-      if (mat.texture >= 0 && !input.textures[size_t(mat.texture)].image.empty())
+      if (mat.texture >= 0 && !input.textures[size_t(mat.texture)].image.empty()) {
         src = &input.textures[size_t(mat.texture)].image;
-      else
+        from_vertex_colours = input.textures[size_t(mat.texture)].from_vertex_colours;
+      } else {
         flat = flat_colour[size_t(tri.material)];
+      }
     }
     samplers[t].init(tri, src, flat);
+    samplers[t].corner_samples = from_vertex_colours;
   });
   return samplers;
 }
@@ -223,11 +227,14 @@ void dilate_uncovered(const std::vector<Rect>& rects, const std::vector<size_t>&
 }
 
 /// Whether a tile's fit can change anything: some textured triangle does not magnify the input by 2 or
-/// more (where all do, the bilinear bake is already right).
+/// more (where all do, the bilinear bake is already right), or samples its corners (the bilinear
+/// bake flattens the peaks of a vertex-coloured input's colours at its vertices).
 bool worth_fitting(const std::vector<uint32_t>& bin, const std::vector<TriangleSampler>& samplers) {
   bool worth = false;
-  for (uint32_t t : bin)
-    worth = worth || (samplers[t].src && samplers[t].valid && std::max(samplers[t].footprint_x, samplers[t].footprint_y) > 0.5);
+  for (uint32_t t : bin) {
+    const TriangleSampler& smp = samplers[t];
+    worth = worth || (smp.src && smp.valid && (smp.corner_samples || std::max(smp.footprint_x, smp.footprint_y) > 0.5));
+  }
   return worth;
 }
 

@@ -59,14 +59,48 @@ SampleGrid sample_grid(const FitTileInput& input, const BakeOptions& options) {
   return g;
 }
 
+/// A sample at a triangle's corner (TriangleSampler::corner_samples): its four bilinear taps (region
+/// indices, in the order x0y0, x1y0, x0y1, x1y1, and their weights), its target colour and weight.
+struct CornerSample {
+  std::array<size_t, 4> tap;
+  std::array<float, 4> tap_weight;
+  std::array<float, 3> target;
+  float weight = 0;
+};
+
+/// The weight of a corner sample relative to one grid sample of the same triangle. A vertex is the
+/// corner of about six triangles, so its colour weighs as much as some 36 grid samples: the bilinear
+/// read-back at the vertex gives its colour back within a few 1/255, for a little of the surface
+/// PSNR between the vertices. Chosen by measurement (docs/decisions.md).
+constexpr double kCornerSampleWeight = 6.0;
+
 /// The fit's samples: per class k and texel i (index k * n + i), the target colour and its weight
-/// (0: no sample).
+/// (0: no sample); and the corner samples.
 struct FitSamples {
   std::vector<std::array<float, 3>> target;
   std::vector<float> weight;
   double weight_sum = 0;
   size_t count = 0;
+  std::vector<CornerSample> corners;
 };
+
+/// Appends triangle `smp`'s corner samples whose four taps lie inside the region: the input's colour
+/// at each corner (point-sampled: a vertex-coloured input is exact there), at `weight`.
+void add_corner_samples(const TriangleSampler& smp, const BakeTriangle& tri, const FitRegion& region, float weight,
+                        std::vector<CornerSample>& corners) {
+  for (int k = 0; k < 3; ++k) {
+    const double fx = tri.target_px[size_t(k)].x() - 0.5, fy = tri.target_px[size_t(k)].y() - 0.5;
+    const double x0 = std::floor(fx), y0 = std::floor(fy);
+    if (!(x0 >= region.x0 && x0 + 1 < region.x1 && y0 >= region.y0 && y0 + 1 < region.y1)) continue;
+    const size_t i = region.index(int(x0), int(y0));
+    const float tx = float(fx - x0), ty = float(fy - y0);
+    const auto c = sample_bilinear(*smp.src, smp.corner_uv[size_t(k)].x(), smp.corner_uv[size_t(k)].y());
+    corners.push_back({{i, i + 1, i + size_t(region.w), i + size_t(region.w) + 1},
+                       {(1 - tx) * (1 - ty), tx * (1 - ty), (1 - tx) * ty, tx * ty},
+                       {c[0], c[1], c[2]},
+                       weight});
+  }
+}
 
 /// Samples every class point of every texel whose taps stay inside the region (its centre at least one
 /// texel from the region's border) and that lies inside a nearby triangle; the first triangle in
@@ -101,6 +135,7 @@ FitSamples collect_samples(const FitTileInput& input, const SampleGrid& grid, co
                       ++s.count;
                     });
     }
+    if (smp.corner_samples) add_corner_samples(smp, tri, region, float(kCornerSampleWeight * smp_weight), s.corners);
   }
   return s;
 }
@@ -124,6 +159,17 @@ void for_each_bilinear_tap(const std::array<double, 2>& offset, int w, size_t i,
 using Stencil = std::vector<std::array<float, 9>>;
 /// Colours of the region's texels, row-major.
 using TexelColours = std::vector<std::array<float, 3>>;
+
+/// Adds the corner samples' terms to A (their four taps form a 2x2 block, as a grid sample's do).
+void add_corner_samples_to_normal_matrix(const std::vector<CornerSample>& corners, Stencil& stencil) {
+  constexpr int kPosX[4] = {0, 1, 0, 1}, kPosY[4] = {0, 0, 1, 1};
+  for (const CornerSample& cs : corners)
+    for (int a = 0; a < 4; ++a) {
+      auto& st = stencil[cs.tap[size_t(a)]];
+      const float wa = cs.weight * cs.tap_weight[size_t(a)];
+      for (int b = 0; b < 4; ++b) st[size_t((kPosY[b] - kPosY[a] + 1) * 3 + (kPosX[b] - kPosX[a] + 1))] += wa * cs.tap_weight[size_t(b)];
+    }
+}
 
 /// Assembles A: every sample's 4 taps lie in a 2x2 block. A class's taps (offsets, weights) are the
 /// same for all its samples, and so is the stencil slot of tap b seen from tap a: tabulated once per
@@ -153,6 +199,7 @@ Stencil assemble_normal_matrix(const SampleGrid& grid, const FitSamples& samples
       }
     }
   }
+  add_corner_samples_to_normal_matrix(samples.corners, stencil);
   return stencil;
 }
 
@@ -181,6 +228,9 @@ TexelColours assemble_right_hand_side(const TexelColours& base, float lambda, co
         for (int c = 0; c < 3; ++c) rhs[j][size_t(c)] += w * tw * tg[size_t(c)];
       });
     }
+  for (const CornerSample& cs : samples.corners)
+    for (size_t a = 0; a < 4; ++a)
+      for (size_t c = 0; c < 3; ++c) rhs[cs.tap[a]][c] += cs.weight * cs.tap_weight[a] * cs.target[c];
   return rhs;
 }
 

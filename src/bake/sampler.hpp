@@ -27,6 +27,9 @@ struct TriangleSampler {
   double footprint_x = 0, footprint_y = 0;  // input pixels spanned by one output texel along x and y
   double weight = 0;                        // 3D area per output texel (least-squares fit)
   bool valid = false;                       // false for a degenerate target triangle or a non-finite weight
+  /// The input's colours are defined at the triangle's corners (a texture made from vertex colours):
+  /// the fit also samples the corners, so that the output reproduces each vertex's colour there.
+  bool corner_samples = false;
   std::array<Vec2, 3> corner_uv;
 
   /// Requires: `source` outlives the sampler (or is nullptr). Guarantees: `valid` says whether the
