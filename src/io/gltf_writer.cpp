@@ -262,6 +262,16 @@ bool has_normals(const TexturedMesh& mesh, const std::vector<uint32_t>& triangle
   return true;
 }
 
+/// Whether `primitive`'s material has a base colour texture (without one, the reader takes its colour
+/// from COLOR_0, and the new texture holds those colours).
+bool has_base_colour_texture(const json& doc, const json& primitive) {
+  if (!primitive.contains("material") || !primitive["material"].is_number_unsigned()) return false;
+  const size_t m = primitive["material"].get<size_t>();
+  if (!doc.contains("materials") || m >= doc["materials"].size()) return false;
+  const json& material = doc["materials"][m];
+  return material.contains("pbrMetallicRoughness") && material["pbrMetallicRoughness"].contains("baseColorTexture");
+}
+
 /// Every mesh's triangle primitives replaced by their groups' new primitives, in place and in order;
 /// points and lines primitives stay as they were.
 void DocumentBuilder::replace_triangle_primitives(const std::map<GroupKey, std::vector<uint32_t>>& groups) {
@@ -280,8 +290,10 @@ void DocumentBuilder::replace_triangle_primitives(const std::map<GroupKey, std::
     }
     const GltfPrimitive& sp = source_->primitives[key.first];
     const json& old = doc_["meshes"][sp.mesh]["primitives"][sp.primitive];
+    const bool colours_baked = !has_base_colour_texture(source_->json, old);  // read_gltf baked its COLOR_0 into the texture
     for (const auto& [name, value] : old["attributes"].items())
-      if (name != "POSITION" && name != "NORMAL" && name != "TEXCOORD_0") dropped_attributes.insert(name);
+      if (name != "POSITION" && name != "NORMAL" && name != "TEXCOORD_0" && !(name == "COLOR_0" && colours_baked))
+        dropped_attributes.insert(name);
     if (old.contains("extensions") && old["extensions"].is_object())
       for (const auto& [name, value] : old["extensions"].items())
         removed_.insert(fmt::format("meshes[{}].primitives[{}].extensions.{}", sp.mesh, sp.primitive, name));

@@ -182,12 +182,23 @@ struct CornerKeyHash {
   }
 };
 
-/// The key of triangle t of m; `order` (optional) gets its corners in key order.
-CornerKey corner_key(const TexturedMesh& m, size_t t, std::array<int, 3>* order) {
+/// Whether every coordinate of m is a float32 value (a model read from glTF, which stores no other).
+bool has_float32_positions(const TexturedMesh& m) {
+  for (const Vec3& p : m.positions)
+    for (int i = 0; i < 3; ++i)
+      if (double(float(p[i])) != p[i] && std::isfinite(p[i])) return false;
+  return true;
+}
+
+/// The key of triangle t of m; `order` (optional) gets its corners in key order. With `as_float32`
+/// the positions are rounded to float32 first: a model written to a format that stores float32 (glTF)
+/// keeps its positions as exactly as that format can.
+CornerKey corner_key(const TexturedMesh& m, size_t t, bool as_float32, std::array<int, 3>* order) {
   std::array<int, 3> o{0, 1, 2};
   auto position_bits = [&](int k) {
     const Vec3& p = m.positions[m.triangles[t][k]];
-    return std::array<uint64_t, 3>{bits(p.x()), bits(p.y()), bits(p.z())};
+    auto coordinate = [&](int i) { return as_float32 ? double(float(p[i])) : p[i]; };
+    return std::array<uint64_t, 3>{bits(coordinate(0)), bits(coordinate(1)), bits(coordinate(2))};
   };
   std::sort(o.begin(), o.end(), [&](int a, int b) { return position_bits(a) < position_bits(b); });
   CornerKey k;
@@ -208,10 +219,13 @@ struct Correspondence {
   size_t lost_triangles = 0;                   // input triangles of non-zero area without a match
 };
 
+/// Positions compare exactly; where one model stores float32 (glTF) and the other does not, both are
+/// rounded to float32 first.
 Correspondence match_triangles(const TexturedMesh& in, const TexturedMesh& out) {
+  const bool as_float32 = has_float32_positions(in) != has_float32_positions(out);
   std::unordered_multimap<CornerKey, uint32_t, CornerKeyHash> out_index;
   out_index.reserve(out.num_triangles());
-  for (uint32_t t = 0; t < out.num_triangles(); ++t) out_index.emplace(corner_key(out, t, nullptr), t);
+  for (uint32_t t = 0; t < out.num_triangles(); ++t) out_index.emplace(corner_key(out, t, as_float32, nullptr), t);
   Correspondence c;
   c.match.assign(in.num_triangles(), kNone);
   c.corner_map.resize(in.num_triangles());
@@ -219,7 +233,7 @@ Correspondence match_triangles(const TexturedMesh& in, const TexturedMesh& out) 
   for (uint32_t t = 0; t < in.num_triangles(); ++t) {
     c.area3[t] = triangle_area(in.positions, in.triangles[t]);
     std::array<int, 3> oi;
-    const CornerKey k = corner_key(in, t, &oi);
+    const CornerKey k = corner_key(in, t, as_float32, &oi);
     auto it = out_index.find(k);
     if (it == out_index.end()) {
       c.lost_triangles += c.area3[t] > 0;
@@ -227,7 +241,7 @@ Correspondence match_triangles(const TexturedMesh& in, const TexturedMesh& out) 
     }
     const uint32_t o = it->second;
     std::array<int, 3> oo;
-    corner_key(out, o, &oo);
+    corner_key(out, o, as_float32, &oo);
     c.match[t] = o;
     for (int i = 0; i < 3; ++i) c.corner_map[t][size_t(oi[size_t(i)])] = oo[size_t(i)];
   }
