@@ -220,6 +220,17 @@ std::vector<Lie> lies() {
        "draco"},
       {"missing UV set", [](GridGltf& g) { g.doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["texCoord"] = 1; },
        "TEXCOORD_1"},
+      {"carried attribute too short",
+       [](GridGltf& g) {
+         g.doc["meshes"][0]["primitives"][0]["attributes"]["_BATCHID"] = 4;  // the points' 3 positions
+       },
+       "_BATCHID has 3 elements"},
+      {"carried attribute beyond its view",
+       [](GridGltf& g) {
+         g.doc["accessors"].push_back({{"bufferView", 2}, {"componentType", 5126}, {"count", 25}, {"type", "MAT4"}});
+         g.doc["meshes"][0]["primitives"][0]["attributes"]["_FEATURE_ID_0"] = g.doc["accessors"].size() - 1;
+       },
+       "accessors[5]: 25 elements"},
       {"node cycle", [](GridGltf& g) { g.doc["nodes"][1]["children"] = {0}; }, "nodes[0]"},
       {"mode", [](GridGltf& g) { g.doc["meshes"][0]["primitives"][0]["mode"] = 9; }, "mode 9"},
       {"version", [](GridGltf& g) { g.doc["asset"]["version"] = "1.0"; }, "asset"},
@@ -349,6 +360,73 @@ TEST(GltfWriter, WritesTheInputDocumentBackWithEachTriangleInItsPrimitive) {
     const std::string_view buffer = back.gltf->buffers[0];
     EXPECT_EQ(buffer.substr(view["byteOffset"].get<size_t>(), 36), g.bin.substr(g.doc["bufferViews"][4]["byteOffset"].get<size_t>(), 36));
   }
+}
+
+void expect_valid_and_loading(const fs::path& file, size_t triangles);
+
+/// Element `i` of accessor `a` of a document read by read_gltf, as raw bytes.
+std::string accessor_element(const GltfDocument& doc, size_t a, size_t i) {
+  const json& accessor = doc.json["accessors"][a];
+  const size_t size =
+      gltf_component_size(accessor["componentType"].get<int64_t>()) * gltf_type_components(accessor["type"].get<std::string>());
+  if (!accessor.contains("bufferView")) return std::string(size, '\0');
+  const json& view = doc.json["bufferViews"][accessor["bufferView"].get<size_t>()];
+  const size_t stride = view.value("byteStride", size);
+  const size_t offset = view.value("byteOffset", size_t(0)) + accessor.value("byteOffset", size_t(0)) + i * stride;
+  return std::string(doc.buffers[view["buffer"].get<size_t>()].substr(offset, size));
+}
+
+TEST(GltfWriter, CarriesTheVertexAttributesItDoesNotChange) {
+  // A 3D Tiles tile's _BATCHID (ushort: 2-byte elements, which need a byteStride of 4), a second UV set
+  // and an all-zero accessor without a bufferView: each output vertex gets its input vertex's element.
+  const fs::path dir = scratch("carried");
+  testing::GridGltf g = testing::grid_gltf(6);
+  const size_t count = g.doc["accessors"][0]["count"].get<size_t>();
+  std::string batch, uv1;
+  for (size_t v = 0; v < count; ++v)
+    testing::append_bytes(batch, uint16_t(v % 7)), testing::append_bytes(uv1, float(v)), testing::append_bytes(uv1, 0.5f);
+  auto add = [&](const std::string& bytes, int type, const char* kind) {
+    while (g.bin.size() % 4 != 0) g.bin.push_back('\0');
+    g.doc["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", g.bin.size()}, {"byteLength", bytes.size()}});
+    g.bin += bytes;
+    g.doc["accessors"].push_back(
+        {{"bufferView", g.doc["bufferViews"].size() - 1}, {"componentType", type}, {"count", count}, {"type", kind}});
+    return g.doc["accessors"].size() - 1;
+  };
+  json& attributes = g.doc["meshes"][0]["primitives"][0]["attributes"];
+  attributes["_BATCHID"] = add(batch, 5123, "SCALAR");
+  attributes["TEXCOORD_1"] = add(uv1, 5126, "VEC2");
+  g.doc["accessors"].push_back({{"componentType", 5126}, {"count", count}, {"type", "SCALAR"}});
+  attributes["_ZERO"] = g.doc["accessors"].size() - 1;
+  g.doc["buffers"][0]["byteLength"] = g.bin.size();
+  const TexturedMesh in = read_gltf(grid_glb(dir, g).string());
+  const std::vector<std::string> removed = write_gltf(optimized(in).output, dir.string(), "out", ImageFormat::kPng, GltfContainer::kGlb);
+  for (const std::string& r : removed) EXPECT_EQ(r.find("attribute"), std::string::npos) << r;
+  const TexturedMesh back = read_gltf((dir / "out.glb").string());
+  const GltfDocument& doc = *back.gltf;
+  size_t checked = 0;
+  for (const json& p : doc.json["meshes"][0]["primitives"]) {
+    if (p.value("mode", 4) != 4) continue;
+    const json& a = p["attributes"];
+    ASSERT_TRUE(a.contains("_BATCHID") && a.contains("TEXCOORD_1") && a.contains("_ZERO")) << a.dump();
+    const size_t n = doc.json["accessors"][a["POSITION"].get<size_t>()]["count"].get<size_t>();
+    for (size_t v = 0; v < n; ++v) {
+      // The input vertex at this position: the grid's x and y give its column and row.
+      float x, y, u;
+      uint16_t id;
+      std::memcpy(&x, accessor_element(doc, a["POSITION"].get<size_t>(), v).data(), 4);
+      std::memcpy(&y, accessor_element(doc, a["POSITION"].get<size_t>(), v).data() + 4, 4);
+      const size_t input_vertex = size_t(std::lround(y * 7.0f)) * 7 + size_t(std::lround((x - 0.1f) * 3.0f));
+      std::memcpy(&id, accessor_element(doc, a["_BATCHID"].get<size_t>(), v).data(), 2);
+      std::memcpy(&u, accessor_element(doc, a["TEXCOORD_1"].get<size_t>(), v).data(), 4);
+      EXPECT_EQ(id, input_vertex % 7) << v;
+      EXPECT_EQ(u, float(input_vertex)) << v;
+      EXPECT_EQ(accessor_element(doc, a["_ZERO"].get<size_t>(), v), std::string(4, '\0'));
+      ++checked;
+    }
+  }
+  EXPECT_GE(checked, count);                                          // every input vertex, some twice (split along the cut)
+  expect_valid_and_loading(dir / "out.glb", 2 * in.num_triangles());  // two nodes show the mesh
 }
 
 TEST(GltfWriter, WritesAFreshDocumentForAnotherModel) {

@@ -13,11 +13,24 @@
 
 namespace tightex {
 
+/// A vertex attribute that tightex does not change (an application's `_BATCHID` or `_FEATURE_ID_0`, a
+/// second UV set, COLOR_0 beside a texture): write_gltf copies each output vertex's element from the
+/// input vertex it is. Checked by read_gltf: one element per position, all inside its buffer.
+struct GltfVertexAttribute {
+  std::string name;
+  const unsigned char* data = nullptr;  // element i at data + i * stride; nullptr: all zeros (no bufferView)
+  size_t stride = 0, element_size = 0;
+  int64_t component_type = 0;
+  std::string type;  // "SCALAR", "VEC2", ...
+  bool normalized = false;
+};
+
 /// A triangle primitive that read_gltf read (mode 4, 5 or 6): where it is in the document.
 struct GltfPrimitive {
   size_t mesh = 0, primitive = 0;
-  int material = -1;     // the glTF material, -1: the default material
-  bool normals = false;  // it has NORMAL (written back only then)
+  int material = -1;                         // the glTF material, -1: the default material
+  bool normals = false;                      // it has NORMAL (written back only then)
+  std::vector<GltfVertexAttribute> carried;  // attributes written back unchanged, per vertex
 };
 
 struct GltfDocument {
@@ -29,6 +42,7 @@ struct GltfDocument {
   std::vector<std::string_view> images;      // each image's encoded bytes (file, data URI or bufferView)
   std::vector<GltfPrimitive> primitives;     // the triangle primitives read, in reading order
   std::vector<uint32_t> triangle_primitive;  // per triangle of the model read: index into primitives
+  std::vector<uint32_t> vertex_source;       // per vertex of the model read: its index in its primitive's accessors
   /// Per texture of the model read: the glTF image it is.
   std::vector<int> texture_image;
 };

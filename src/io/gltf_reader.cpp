@@ -171,8 +171,10 @@ class GltfReader {
   std::vector<Tri> primitive_triangles(const json& primitive, size_t vertices, int64_t mode, const std::string& element) const;
   void check_supported(const json& primitive, const std::string& element) const;
   int32_t material_for(int material, ReadState& state);
-  void read_corner_uvs(const json& primitive, int material, const std::vector<Tri>& tris, size_t n, const std::string& element,
-                       ReadState& state);
+  std::vector<GltfVertexAttribute> carried_attributes(const json& primitive, const std::string& uv_set, bool colours_baked, size_t n,
+                                                      const std::string& element) const;
+  std::string read_corner_uvs(const json& primitive, int material, const std::vector<Tri>& tris, size_t n, const std::string& element,
+                              ReadState& state);
   void finish_normals(ReadState& state) const;
   std::array<int64_t, 2> sampler_wrap(const json& info) const;
   void load_textures(TexturedMesh& mesh);
@@ -615,9 +617,9 @@ std::array<double, 2> pair_of(const json& t, const char* key, double fallback) {
 
 /// Corner UVs of the primitive's triangles, in tightex's convention (v up): the UV set the base colour
 /// texture uses, with its KHR_texture_transform (scale and offset) applied, so the corner UVs are what
-/// the renderer samples; TEXCOORD_0 (or zero) without a texture.
-void GltfReader::read_corner_uvs(const json& primitive, int material, const std::vector<Tri>& tris, size_t n, const std::string& element,
-                                 ReadState& state) {
+/// the renderer samples; TEXCOORD_0 (or zero) without a texture. Returns the name of the set read.
+std::string GltfReader::read_corner_uvs(const json& primitive, int material, const std::vector<Tri>& tris, size_t n,
+                                        const std::string& element, ReadState& state) {
   const json* info = base_color_info(array("materials"), material);
   int64_t set = info != nullptr ? int64_t(unsigned_of(*info, "texCoord", 0, element + " material's baseColorTexture")) : 0;
   std::array<double, 2> offset{0, 0}, scale{1, 1};
@@ -650,6 +652,43 @@ void GltfReader::read_corner_uvs(const json& primitive, int material, const std:
                name, v, g[k], wrap[size_t(k)]);
       state.mesh.corner_uv.push_back(Vec2(g.x(), 1.0 - g.y()));
     }
+  return name;
+}
+
+/// The primitive's attributes that write_gltf copies unchanged: all but POSITION, NORMAL, TANGENT
+/// (written anew), TEXCOORD_0 and `uv_set` (the new coordinates take TEXCOORD_0), and COLOR_0 where
+/// `colours_baked` (the new texture holds it). Each must have `n` elements; one without a bufferView
+/// is all zeros.
+std::vector<GltfVertexAttribute> GltfReader::carried_attributes(const json& primitive, const std::string& uv_set, bool colours_baked,
+                                                                size_t n, const std::string& element) const {
+  std::vector<GltfVertexAttribute> carried;
+  for (const auto& [name, value] : primitive.at("attributes").items()) {
+    if (name == "POSITION" || name == "NORMAL" || name == "TANGENT" || name == "TEXCOORD_0" || name == uv_set ||
+        (name == "COLOR_0" && colours_baked))
+      continue;
+    const std::string a_element = fmt::format("{}.attributes.{}", element, name);
+    if (!value.is_number_integer()) fail(element, "attribute {} is not an accessor index", name);
+    const json& a = item("accessors", value.get<int64_t>(), a_element);
+    GltfVertexAttribute attribute;
+    attribute.name = name;
+    AccessorView view;
+    if (a.contains("bufferView")) {
+      view = accessor(value.get<int64_t>(), a_element);
+    } else {  // all zeros: type and component type still checked
+      view.components = a.contains("type") && a["type"].is_string() ? gltf_type_components(a["type"].get<std::string>()) : 0;
+      view.component_type = a.contains("componentType") && a["componentType"].is_number_integer() ? a["componentType"].get<int64_t>() : 0;
+      view.count = size_t(unsigned_of(a, "count", 0, a_element));
+      if (view.components == 0 || gltf_component_size(view.component_type) == 0) fail(a_element, "type or componentType is not glTF's");
+    }
+    if (view.count != n) fail(element, "attribute {} has {} elements for {} positions", name, view.count, n);
+    attribute.data = view.data, attribute.stride = view.stride;
+    attribute.element_size = view.components * gltf_component_size(view.component_type);
+    attribute.component_type = view.component_type;
+    attribute.type = a["type"].get<std::string>();
+    attribute.normalized = a.value("normalized", false);
+    carried.push_back(std::move(attribute));
+  }
+  return carried;
 }
 
 void GltfReader::read_primitive(size_t m, size_t p, ReadState& state) {
@@ -684,11 +723,12 @@ void GltfReader::read_primitive(size_t m, size_t p, ReadState& state) {
     const Vec3 x(pos.get(i, 0), pos.get(i, 1), pos.get(i, 2));
     if (!x.allFinite() || x.cwiseAbs().maxCoeff() > kAbsurdCoordinate) fail(element, "POSITION entry {} is not a finite coordinate", i);
     state.mesh.positions.push_back(x);
+    doc_->vertex_source.push_back(i);
   }
   auto vertex_of = [&](uint32_t v) { return uint32_t(base + size_t(std::lower_bound(used.begin(), used.end(), v) - used.begin())); };
   const int material = int(index_in(primitive, "material", "materials", element));
   const int32_t tm = material_for(material, state);
-  read_corner_uvs(primitive, material, tris, pos.count, element, state);
+  const std::string uv_set = read_corner_uvs(primitive, material, tris, pos.count, element, state);
   const AccessorView normal = attribute(primitive, "NORMAL", element, false);
   if (normal.data != nullptr && (normal.components != 3 || normal.component_type != kFloat || normal.count != pos.count))
     fail(element, "NORMAL is not VEC3 float with one entry per position");
@@ -699,7 +739,9 @@ void GltfReader::read_primitive(size_t m, size_t p, ReadState& state) {
   state.any_normals |= normal.data != nullptr;
   state.any_colors |= color.data != nullptr;
   const uint32_t prim_index = uint32_t(doc_->primitives.size());
-  doc_->primitives.push_back({m, p, material, normal.data != nullptr});
+  const bool colours_baked = base_color_info(array("materials"), material) == nullptr;  // texture_vertex_colours bakes them
+  doc_->primitives.push_back(
+      {m, p, material, normal.data != nullptr, carried_attributes(primitive, uv_set, colours_baked, pos.count, element)});
   for (const Tri& t : tris) {
     state.mesh.triangles.push_back({vertex_of(t[0]), vertex_of(t[1]), vertex_of(t[2])});
     state.mesh.face_material.push_back(tm);

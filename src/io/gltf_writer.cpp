@@ -2,6 +2,7 @@
 // a copy of its material pointing at the new texture), or a fresh document for an OBJ or PLY input.
 // Whatever no longer has a user afterwards (old accessors, buffer views, images, textures) is removed,
 // and one buffer holds every byte the document still refers to.
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -66,7 +67,9 @@ class DocumentBuilder {
   int new_view(std::string_view bytes, int64_t target);
   int new_accessor(const std::string& bytes, int64_t component_type, size_t count, const char* type, int64_t target,
                    const json& min_max = nullptr);
-  json new_primitive(const json& source, int material, const std::vector<uint32_t>& triangles, bool normals);
+  json new_primitive(const json& source, int material, const std::vector<uint32_t>& triangles, bool normals,
+                     const std::vector<GltfVertexAttribute>* carried = nullptr);
+  int carried_accessor(const GltfVertexAttribute& attribute, const std::vector<uint32_t>& vertices);
   int texture_index(int texture);
   int material_for(int source_material, int texture);
   void replace_triangle_primitives(const std::map<GroupKey, std::vector<uint32_t>>& groups);
@@ -199,6 +202,23 @@ int DocumentBuilder::material_for(int source_material, int texture) {
   return material_of_[{source_material, texture}] = int(materials.size() - 1);
 }
 
+/// An accessor of `attribute`'s elements for the given vertices of the model read (in order), each
+/// element copied from the input vertex it is; vertex attributes start every element on 4 bytes, as
+/// glTF requires, so an element of 1, 2 or 3 bytes gets a byteStride of 4.
+int DocumentBuilder::carried_accessor(const GltfVertexAttribute& attribute, const std::vector<uint32_t>& vertices) {
+  const size_t stride = (attribute.element_size + 3) / 4 * 4;
+  std::string bytes(stride * vertices.size(), '\0');
+  if (attribute.data != nullptr)
+    for (size_t i = 0; i < vertices.size(); ++i)
+      std::memcpy(bytes.data() + i * stride, attribute.data + size_t(source_->vertex_source[vertices[i]]) * attribute.stride,
+                  attribute.element_size);
+  const int accessor = new_accessor(bytes, attribute.component_type, vertices.size(), attribute.type.c_str(), 34962);
+  json& a = doc_["accessors"][size_t(accessor)];
+  if (attribute.normalized) a["normalized"] = true;
+  if (stride != attribute.element_size) doc_["bufferViews"][a["bufferView"].get<size_t>()]["byteStride"] = stride;
+  return accessor;
+}
+
 /// The vertex a corner becomes: its input vertex, texture coordinate and normal, each distinct one once.
 struct CornerVertex {
   uint32_t vertex;
@@ -209,7 +229,8 @@ struct CornerVertex {
 
 /// One primitive for `triangles` (output triangles): new POSITION, NORMAL (with `normals`), TEXCOORD_0
 /// and indices; `source`'s extras kept.
-json DocumentBuilder::new_primitive(const json& source, int material, const std::vector<uint32_t>& triangles, bool normals) {
+json DocumentBuilder::new_primitive(const json& source, int material, const std::vector<uint32_t>& triangles, bool normals,
+                                    const std::vector<GltfVertexAttribute>* carried) {
   std::map<CornerVertex, uint32_t> index_of;
   std::vector<CornerVertex> vertices;
   std::vector<uint32_t> indices;
@@ -246,6 +267,11 @@ json DocumentBuilder::new_primitive(const json& source, int material, const std:
   attributes["POSITION"] = new_accessor(pos, 5126, vertices.size(), "VEC3", 34962, json::array({lo, hi}));
   if (normals) attributes["NORMAL"] = new_accessor(nor, 5126, vertices.size(), "VEC3", 34962);
   attributes["TEXCOORD_0"] = new_accessor(uv, 5126, vertices.size(), "VEC2", 34962);
+  if (carried != nullptr && !carried->empty()) {
+    std::vector<uint32_t> input_vertex(vertices.size());
+    for (size_t i = 0; i < vertices.size(); ++i) input_vertex[i] = vertices[i].vertex;
+    for (const GltfVertexAttribute& attribute : *carried) attributes[attribute.name] = carried_accessor(attribute, input_vertex);
+  }
   p["indices"] = new_accessor(idx, short_indices ? 5123 : 5125, indices.size(), "SCALAR", 34963);
   p["material"] = material;
   return p;
@@ -272,6 +298,10 @@ bool has_base_colour_texture(const json& doc, const json& primitive) {
   return material.contains("pbrMetallicRoughness") && material["pbrMetallicRoughness"].contains("baseColorTexture");
 }
 
+bool is_carried(const GltfPrimitive& primitive, const std::string& name) {
+  return std::any_of(primitive.carried.begin(), primitive.carried.end(), [&](const GltfVertexAttribute& a) { return a.name == name; });
+}
+
 /// Every mesh's triangle primitives replaced by their groups' new primitives, in place and in order;
 /// points and lines primitives stay as they were.
 void DocumentBuilder::replace_triangle_primitives(const std::map<GroupKey, std::vector<uint32_t>>& groups) {
@@ -290,14 +320,14 @@ void DocumentBuilder::replace_triangle_primitives(const std::map<GroupKey, std::
     }
     const GltfPrimitive& sp = source_->primitives[key.first];
     const json& old = doc_["meshes"][sp.mesh]["primitives"][sp.primitive];
-    const bool colours_baked = !has_base_colour_texture(source_->json, old);  // read_gltf baked its COLOR_0 into the texture
     for (const auto& [name, value] : old["attributes"].items())
-      if (name != "POSITION" && name != "NORMAL" && name != "TEXCOORD_0" && !(name == "COLOR_0" && colours_baked))
+      if (name == "TANGENT" || (name != "POSITION" && name != "NORMAL" && name != "TEXCOORD_0" && !is_carried(sp, name) &&
+                                !(name == "COLOR_0" && !has_base_colour_texture(source_->json, old))))  // COLOR_0 baked
         dropped_attributes.insert(name);
     if (old.contains("extensions") && old["extensions"].is_object())
       for (const auto& [name, value] : old["extensions"].items())
         removed_.insert(fmt::format("meshes[{}].primitives[{}].extensions.{}", sp.mesh, sp.primitive, name));
-    json p = new_primitive(old, material_for(sp.material, key.second), triangles, sp.normals && has_normals(mesh_, triangles));
+    json p = new_primitive(old, material_for(sp.material, key.second), triangles, sp.normals && has_normals(mesh_, triangles), &sp.carried);
     replacement[{sp.mesh, sp.primitive}].push_back(std::move(p));
   }
   for (const std::string& a : dropped_attributes) removed_.insert("attribute " + a + " of the triangles");
@@ -491,6 +521,8 @@ json DocumentBuilder::build(std::string& bin, std::vector<std::string>& removed)
   source_ = mesh_.gltf.get();
   if (source_ != nullptr && mesh_.input_triangle.size() != mesh_.num_triangles())
     fail_internal("write_gltf: a glTF model's output needs input_triangle for each of its {} triangles", mesh_.num_triangles());
+  if (source_ != nullptr && source_->vertex_source.size() != mesh_.num_vertices())
+    fail_internal("write_gltf: {} vertices, but the glTF read had {}", mesh_.num_vertices(), source_->vertex_source.size());
   if (source_ == nullptr) {
     start_fresh_document();
   } else {
