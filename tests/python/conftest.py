@@ -1,7 +1,9 @@
 """Fixtures of the Python module's tests: generated models (tools/make_boxes.py: N boxes, one chart
 per box face, one texture) and a bad one. The tests skip when the module was not built."""
+import json
 import os
 import shutil
+import struct
 import subprocess
 import sys
 
@@ -49,3 +51,66 @@ def make_bad_obj(path):
 @pytest.fixture(scope="session")
 def boxes_model(tmp_path_factory):
     return make_boxes(tmp_path_factory.mktemp("boxes"), 12, 5)
+
+
+def _glb_parts(glb):
+    """The JSON document and the BIN chunk of a GLB's bytes."""
+    json_length = struct.unpack_from("<I", glb, 12)[0]
+    bin_start = 20 + json_length + 8
+    return json.loads(glb[20:20 + json_length]), bytearray(glb[bin_start:bin_start + struct.unpack_from("<I", glb, bin_start - 8)[0]])
+
+
+def _triangle_primitives(doc):
+    return [p for mesh in doc["meshes"] for p in mesh["primitives"] if p.get("mode", 4) == 4]
+
+
+def _positions(doc, binary, primitive):
+    accessor = doc["accessors"][primitive["attributes"]["POSITION"]]
+    view = doc["bufferViews"][accessor["bufferView"]]
+    start, stride = view.get("byteOffset", 0) + accessor.get("byteOffset", 0), view.get("byteStride", 12)
+    return [struct.unpack_from("<3f", binary, start + i * stride) for i in range(accessor["count"])]
+
+
+def batch_of(position, batches):
+    """The batch a test tile puts a vertex in: a function of its position, so that vertices at the same
+    place (split along seams) share it."""
+    return int(abs(position[0] * 7 + position[1] * 3 + position[2] * 5) * 10) % batches
+
+
+def glb_with_batch_ids(glb, batches):
+    """``glb`` (bytes of a GLB with one buffer, the BIN chunk) with a 3D Tiles ``_BATCHID`` on every
+    triangle primitive: an unsigned short per vertex, ``batch_of`` its position (a stride of 4, as glTF
+    aligns vertex attributes)."""
+    doc, binary = _glb_parts(glb)
+    for primitive in _triangle_primitives(doc):
+        ids = [batch_of(p, batches) for p in _positions(doc, binary, primitive)]
+        binary += b"\0" * (-len(binary) % 4)
+        doc["bufferViews"].append({"buffer": 0, "byteOffset": len(binary), "byteLength": 4 * len(ids), "byteStride": 4, "target": 34962})
+        binary += b"".join(struct.pack("<HH", i, 0) for i in ids)
+        doc["accessors"].append({"bufferView": len(doc["bufferViews"]) - 1, "componentType": 5123, "count": len(ids), "type": "SCALAR"})
+        primitive["attributes"]["_BATCHID"] = len(doc["accessors"]) - 1
+    binary += b"\0" * (-len(binary) % 4)
+    doc["buffers"][0]["byteLength"] = len(binary)
+    text = json.dumps(doc).encode()
+    text += b" " * (-len(text) % 4)
+    return (struct.pack("<III", 0x46546C67, 2, 12 + 8 + len(text) + 8 + len(binary)) + struct.pack("<II", len(text), 0x4E4F534A) + text +
+            struct.pack("<II", len(binary), 0x004E4942) + bytes(binary))
+
+
+def batch_id_errors(glb, batches):
+    """The vertices of ``glb``'s triangle primitives whose _BATCHID is not ``batch_of`` their position
+    (a primitive without _BATCHID counts all its vertices), and the vertices checked."""
+    doc, binary = _glb_parts(glb)
+    wrong = checked = 0
+    for primitive in _triangle_primitives(doc):
+        positions = _positions(doc, binary, primitive)
+        checked += len(positions)
+        if "_BATCHID" not in primitive["attributes"]:
+            wrong += len(positions)
+            continue
+        accessor = doc["accessors"][primitive["attributes"]["_BATCHID"]]
+        view = doc["bufferViews"][accessor["bufferView"]]
+        start, stride = view.get("byteOffset", 0) + accessor.get("byteOffset", 0), view.get("byteStride", 2)
+        for i, p in enumerate(positions):
+            wrong += struct.unpack_from("<H", binary, start + i * stride)[0] != batch_of(p, batches)
+    return wrong, checked

@@ -3,13 +3,14 @@ tileset.json, one bad tile among them, a worker killed mid-run, a re-run that sk
 import json
 import os
 import signal
+import struct
 import subprocess
 import sys
 import time
 
 import pytest
 
-from conftest import make_bad_obj, make_boxes, make_two_pages
+from conftest import batch_id_errors, glb_with_batch_ids, make_bad_obj, make_boxes, make_two_pages
 
 pytest.importorskip("distributed")
 
@@ -20,11 +21,13 @@ def run_tiles(*args):
     return p.returncode, p.stderr
 
 
-def tile_folder(root, boxes=(30, 60, 45)):
-    """ROOT/a/t0, a/t1, b/t2 (boxes models, as many components as boxes; b/t2 on two texture pages)
-    and b/bad.obj."""
+def tile_folder(root, boxes=(30, 60, 45), small=0):
+    """ROOT/a/t0, a/t1, b/t2 (boxes models, as many components as boxes; b/t2 on two texture pages),
+    `small` more tiles c/s<i> of 2 to 9 boxes, and b/bad.obj."""
     for i, count in enumerate(boxes):
         (make_two_pages if i == 2 else make_boxes)(os.path.join(root, "a" if i < 2 else "b", f"t{i}"), count, i + 1)
+    for i in range(small):
+        make_boxes(os.path.join(root, "c", f"s{i}"), 2 + i % 8, 100 + i)
     make_bad_obj(os.path.join(root, "b", "bad.obj"))
 
 
@@ -43,22 +46,23 @@ def no_temporaries(root):
 
 
 def test_folder_bad_tile_and_rerun(tightex, tmp_path):
-    tile_folder(tmp_path / "in")
+    tile_folder(tmp_path / "in", small=36)  # 40 tiles
     rc, err = run_tiles(tmp_path / "in", tmp_path / "out", "--workers", "2", "--size", "128")
     assert rc == 1, err
     with open(tmp_path / "out" / "summary.json") as f:
         summary = json.load(f)
-    assert (summary["done"], summary["failed"], summary["workers"]) == (3, 1, 2)
+    assert (summary["done"], summary["failed"], summary["workers"]) == (39, 1, 2)
     records = {r["tile"]: r for r in summary["per_tile"]}
-    for tile in ("a/t0/boxes.obj", "a/t1/boxes.obj", "b/t2/boxes.obj"):
-        check_done_tile(records[tile])
+    for tile, record in records.items():
+        if tile != "b/bad.obj":
+            check_done_tile(record)
     with open(os.path.join(os.path.dirname(records["b/t2/boxes.obj"]["content"]), "report.json")) as f:
         assert len(json.load(f)["metrics"]["input"]["image_utilization"]) == 2  # both pages read
     bad = records["b/bad.obj"]
     assert bad["status"] == "failed" and bad["error"].startswith("InputError: ") and "bad.obj:" in bad["error"]
     assert "\n" not in bad["error"] and "b/bad.obj: InputError" in err
     with open(tmp_path / "out" / "summary.csv") as f:
-        assert len(f.read().splitlines()) == 5
+        assert len(f.read().splitlines()) == 41
     assert not no_temporaries(tmp_path / "out")
 
     # A re-run settles every tile from the manifest: nothing runs, no output is touched.
@@ -67,11 +71,11 @@ def test_folder_bad_tile_and_rerun(tightex, tmp_path):
     assert rc == 1 and "0 to do" in err, err
     with open(tmp_path / "out" / "summary.json") as f:
         again = json.load(f)
-    assert (again["skipped"], again["failed"], again["workers"]) == (3, 1, 0)
+    assert (again["skipped"], again["failed"], again["workers"]) == (39, 1, 0)
     assert all(os.stat(records[t]["content"]).st_mtime_ns == m for t, m in mtimes.items())
     # Changed options redo the tiles.
     rc, err = run_tiles(tmp_path / "in", tmp_path / "out", "--workers", "2", "--size", "64")
-    assert rc == 1 and "4 to do" in err, err
+    assert rc == 1 and "40 to do" in err, err
 
 
 def write_tileset(root, tileset):
@@ -120,6 +124,59 @@ def test_tileset_rewritten_to_new_content(tightex, tmp_path):
     assert (out / "tiles" / "x.b3dm").read_bytes() == (root / "tiles" / "x.b3dm").read_bytes()
     with open(out / "tileset.json") as f:
         assert json.load(f)["root"]["children"][0]["content"]["uri"] == "tiles/t0/boxes/boxes.obj"
+
+
+def test_glb_and_b3dm_tileset(tightex, tmp_path):
+    """A 3D Tiles set of 40 tiles: 1.0 b3dm (feature and batch tables, _BATCHID per vertex) and 1.1 GLB
+    content, one corrupt GLB. Every good tile comes out optimized in its own kind, the b3dm tables byte
+    for byte, every vertex still in its batch."""
+    from tightex.b3dm import B3dm, build_b3dm, parse_b3dm
+    root = tmp_path / "in"
+    (root / "tiles").mkdir(parents=True)
+    box = {"box": [0, 0, 0, 100, 0, 0, 0, 100, 0, 0, 0, 10]}
+    children, tables = [], {}
+    for i in range(39):
+        obj = make_boxes(tmp_path / "src" / f"t{i}", 3 + i % 9, 200 + i)
+        tightex.optimize(obj, tmp_path / "glb" / f"t{i}", output_format="glb", size=64, no_html=True)
+        glb = glb_with_batch_ids((tmp_path / "glb" / f"t{i}" / "boxes.glb").read_bytes(), 5)
+        if i % 2 == 0:
+            tables[f"t{i}.b3dm"] = (b'{"BATCH_LENGTH":5}', b"", b'{"name":["a","b","c","d","e"]}', b"")
+            (root / "tiles" / f"t{i}.b3dm").write_bytes(build_b3dm(B3dm(*tables[f"t{i}.b3dm"], glb)))
+        else:
+            (root / "tiles" / f"t{i}.glb").write_bytes(glb)
+        children.append({"boundingVolume": box, "geometricError": 0, "content": {"uri": f"tiles/t{i}.{'b3dm' if i % 2 == 0 else 'glb'}"}})
+    (root / "tiles" / "bad.glb").write_bytes(b"glTF" + struct.pack("<II", 2, 4000) + bytes(40))
+    children.append({"boundingVolume": box, "geometricError": 0, "content": {"uri": "tiles/bad.glb"}})
+    write_tileset(root, {"asset": {"version": "1.1"}, "geometricError": 100,
+                         "root": {"boundingVolume": box, "geometricError": 50, "refine": "ADD", "children": children}})
+    out = tmp_path / "out"
+    rc, err = run_tiles(root / "tileset.json", out, "--workers", "2")
+    assert rc == 1, err
+    with open(out / "summary.json") as f:
+        summary = json.load(f)
+    assert (summary["done"], summary["failed"]) == (39, 1), err
+    for record in summary["per_tile"]:
+        if record["tile"].endswith("bad.glb"):
+            assert record["status"] == "failed" and "bad.glb" in record["error"] and "\n" not in record["error"]
+            continue
+        check_done_tile(record)
+        content = record["content"]
+        data = open(content, "rb").read()
+        if content.endswith(".b3dm"):
+            tile = parse_b3dm(data, content)
+            original = tables[os.path.basename(record["tile"])]
+            assert (tile.feature_table_json.rstrip(b" "), tile.feature_table_binary, tile.batch_table_json.rstrip(b" "),
+                    tile.batch_table_binary) == original
+            data = tile.glb
+        else:
+            assert content.endswith(".glb")
+        wrong, checked = batch_id_errors(data, 5)
+        assert checked > 0 and wrong == 0, (content, wrong, checked)
+    with open(out / "tileset.json") as f:
+        written = json.load(f)
+    for child in written["root"]["children"]:
+        assert os.path.isfile(out / child["content"]["uri"]), child
+    assert not no_temporaries(out)
 
 
 def walk(tile):
