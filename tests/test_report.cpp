@@ -113,13 +113,14 @@ Report filled_report() {
 
 TEST(Report, HasEveryKeyOfTheSchema) {
   const nlohmann::json j = to_json(filled_report());
-  EXPECT_EQ(keys_of(j), (std::set<std::string>{"input", "options", "aspect", "preparation", "components", "timings", "bake",
+  EXPECT_EQ(keys_of(j), (std::set<std::string>{"input", "options", "aspect", "pages", "preparation", "components", "timings", "bake",
                                                 "metrics", "peak_rss_mib", "wall_seconds", "output"}));
   EXPECT_EQ(keys_of(j["input"]), (std::set<std::string>{"file", "vertices", "triangles", "materials", "textures",
                                                          "polygons_triangulated", "paths_found", "vertex_coloured_triangles"}));
   EXPECT_EQ(keys_of(j["options"]), (std::set<std::string>{"size", "size_grown_from", "layout", "holes", "map", "balance", "fit",
                                                            "fine_fit", "corners", "aspect"}));
   EXPECT_EQ(keys_of(j["aspect"]), (std::set<std::string>{"requested", "chosen", "probed_component", "probes"}));
+  EXPECT_EQ(keys_of(j["pages"]), (std::set<std::string>{"max_side", "count", "components_split", "pieces", "reason"}));
   EXPECT_EQ(keys_of(j["aspect"]["probes"][0]), (std::set<std::string>{"aspect", "width", "height", "estimated_psnr_db"}));
   EXPECT_EQ(keys_of(j["preparation"]),
             (std::set<std::string>{"input_vertices", "welded_vertices", "zero_area_dropped", "duplicates_dropped",
@@ -220,7 +221,7 @@ TEST(Report, LeavesOutWhatWasNotFilled) {
   r.aspect.requested = 1.5;
   r.options.size_grown_from = 256;
   const nlohmann::json j = to_json(r);
-  EXPECT_EQ(keys_of(j), (std::set<std::string>{"input", "options", "aspect", "preparation", "components", "timings"}));
+  EXPECT_EQ(keys_of(j), (std::set<std::string>{"input", "options", "aspect", "pages", "preparation", "components", "timings"}));
   EXPECT_FALSE(j["input"].contains("paths_found"));
   EXPECT_EQ(j["options"]["aspect"], 1.5);
   EXPECT_EQ(j["options"]["size_grown_from"], 256);

@@ -97,6 +97,9 @@ constexpr std::optional<Enum> from_string(const std::array<Enum, N>& values, std
 using ProgressCallback = std::function<bool(std::string_view stage, double fraction)>;
 
 /// What a caller chooses. Every default is the CLI's; 0 means "choose for this model".
+/// Options::max_page_side's default.
+constexpr int kDefaultMaxPageSide = 8192;
+
 struct Options {
   /// Atlas: the texture's side; per-component: the largest texture's side. 0 (default): default_size,
   /// as many texels as the input uses, so the output keeps the input's information.
@@ -115,6 +118,11 @@ struct Options {
   /// (report "aspect"; not probed beyond 100k triangles). Otherwise 1, the paper's square.
   double aspect = 0;
   Layout layout = Layout::kAtlas;
+  /// Atlas: the largest side of one texture page; 0: no cap. A budget whose texture would be wider or
+  /// taller goes on several pages of at most max_page_side^2 texels, each component whole on one page;
+  /// a component whose share alone is more than a page holds is first split into pieces that fit, each
+  /// its own chart (report "pages"). 8192: what WebGL and most engines accept.
+  int max_page_side = kDefaultMaxPageSide;
   HoleMode holes = HoleMode::kFill;
   /// Default kDetail: the highest surface PSNR of the four maps on every model of ../shared/data at
   /// the input's budget (BENCHMARKS.md, "Quality per map").

@@ -144,6 +144,11 @@ CLI::Option* define_options(CLI::App& app, CommandLine& line, ChoiceNames& names
                  "texels keep the most of the input is chosen (the square unless another is clearly better); a number "
                  "(e.g. 2) fixes it. With --size the default is 1, a square of that side")
       ->check(check_aspect);
+  app.add_option("--max-size", line.max_size,
+                 "atlas: the largest side of a texture page (default 8192, what WebGL and most engines accept; Cesium ion's cap is "
+                 "16384; 0: no cap). A budget that does not fit one page goes on several, each component whole on one page; a "
+                 "component too large for a page is split into pieces that fit, each its own chart (report: \"pages\")")
+      ->check(CLI::Range(0, 65536));
   app.add_option("--balance", line.balance,
                  "area/texel/detail maps: 1 = target density exactly, 0 = the harmonic map's density (least angle "
                  "distortion); between: a geometric blend")
@@ -300,6 +305,7 @@ Options library_options(const CommandLine& line, int size, ProgressCallback prog
   // --size promises a side: a square, unless a shape is asked for.
   opt.aspect = line.aspect.empty() ? (line.size_given ? 1.0 : 0.0) : line.aspect == "auto" ? 0.0 : std::stod(line.aspect);
   opt.corners = line.corners;
+  opt.max_page_side = line.max_size;
   opt.fit = !line.no_fit;
   opt.fine_fit = line.fine_fit;
   opt.measure = false;

@@ -17,12 +17,13 @@ enum class ModelFormat { kObj, kPly, kGltf, kGlb };
 /// What the command line asks for.
 struct CommandLine {
   std::string input, outdir;
-  std::string report_path;   // empty: OUTDIR/report.json
-  std::string preview_path;  // empty: no preview
-  int size = 0;              // 0: from --texels or the input's used texels
-  bool size_given = false;   // --size was given (a promise of a side: a square unless --aspect)
-  double texels = 0;         // 0: not given
-  std::string aspect;        // empty, "auto" or a number
+  std::string report_path;             // empty: OUTDIR/report.json
+  std::string preview_path;            // empty: no preview
+  int size = 0;                        // 0: from --texels or the input's used texels
+  bool size_given = false;             // --size was given (a promise of a side: a square unless --aspect)
+  double texels = 0;                   // 0: not given
+  std::string aspect;                  // empty, "auto" or a number
+  int max_size = kDefaultMaxPageSide;  // --max-size: the largest side of a texture page (0: no cap)
   double balance = 1.0;
   Layout layout = Layout::kAtlas;
   HoleMode holes = HoleMode::kFill;

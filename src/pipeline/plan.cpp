@@ -2,7 +2,9 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
+#include <numeric>
 
 #include "core/error.hpp"
 #include "core/progress.hpp"
@@ -12,11 +14,19 @@
 #include "pipeline/plan_state.hpp"
 #include "pipeline/stage_clock.hpp"
 #include "pipeline/validate.hpp"
+#include "prepare/components.hpp"
 #include "prepare/repair.hpp"
 
 namespace tightex {
 
 namespace {
+
+/// The share of a page that one component may take before it is split for pages: room for the
+/// page's other components and for rounding the rectangles.
+constexpr double kPageFill = 0.8;
+
+/// The fewest triangles a piece of a component split for pages has on average (split_oversized_components).
+constexpr size_t kMinPieceFaces = 64;
 
 /// The texture side asked for, checked.
 int requested_size(const TexturedMesh& input, const Options& options) {
@@ -58,13 +68,112 @@ bool have_pixels(const TexturedMesh& input) {
   return false;
 }
 
-/// The rectangles and texture sizes: one atlas of the chosen shape, or a texture per component.
+/// Splits every component whose share of the size^2 budget is more than kPageFill of a page
+/// (Options::max_page_side) into pieces that fit (split_into_parts, by area). Returns whether any was.
+bool split_oversized_components(const Options& options, int size, const std::vector<double>& shares, std::vector<Surface>& components,
+                                Pages& pages) {
+  const double page = kPageFill * double(options.max_page_side) * double(options.max_page_side);
+  const double budget = double(size) * double(size), total = std::accumulate(shares.begin(), shares.end(), 0.0);
+  if (options.layout != Layout::kAtlas || options.max_page_side <= 0 || budget <= page || !(total > 0)) return false;
+  std::vector<Surface> split;
+  bool any = false;
+  for (size_t c = 0; c < components.size(); ++c) {
+    const double texels = shares[c] / total * budget;
+    if (texels <= page) {
+      split.push_back(std::move(components[c]));
+      continue;
+    }
+    // Not below kMinPieceFaces triangles a piece: a piece of a few triangles cannot fill its square
+    // (one triangle covers half of it); such a piece keeps a capped page instead (assign_pages).
+    const size_t most = std::max<size_t>(1, components[c].num_faces() / kMinPieceFaces);
+    const int parts = int(std::min<double>(double(most), std::ceil(texels / page)));
+    if (parts < 2) {
+      split.push_back(std::move(components[c]));
+      continue;
+    }
+    std::vector<Surface> pieces = split_into_parts(components[c], parts);
+    ++pages.components_split, pages.pieces += pieces.size() - 1, any = true;
+    for (Surface& piece : pieces) split.push_back(std::move(piece));
+  }
+  components = std::move(split);
+  return any;
+}
+
+/// Groups of components, one per page: the fewest pages, from ceil(W x H / max^2) up, where each
+/// page's share of the W x H budget (largest component first, each to the page with the least so far)
+/// fits a max x max page in the atlas's shape and the atlas layout holds its components; per page, its
+/// components and its size.
+struct PageAssignment {
+  std::vector<std::vector<size_t>> components;
+  std::vector<std::pair<int, int>> size;
+};
+PageAssignment assign_pages(const std::vector<double>& shares, int W, int H, double aspect, int max_side, AtlasShares mode) {
+  const double total = std::max(std::accumulate(shares.begin(), shares.end(), 0.0), 1e-300);
+  std::vector<size_t> order(shares.size());
+  std::iota(order.begin(), order.end(), size_t(0));
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return shares[a] > shares[b]; });
+  const double max_texels = double(max_side) * double(max_side);
+  // At most a page a component: beyond that a page would be empty.
+  for (size_t pages = std::min(shares.size(), size_t(std::ceil(double(W) * double(H) / max_texels)));; ++pages) {
+    PageAssignment a;
+    a.components.resize(pages);
+    std::vector<double> load(pages, 0.0);
+    for (size_t c : order) {
+      const size_t p = size_t(std::min_element(load.begin(), load.end()) - load.begin());
+      a.components[p].push_back(c), load[p] += shares[c];
+    }
+    bool fits = true;
+    for (size_t p = 0; p < pages && fits; ++p) {
+      const double texels = load[p] / total * double(W) * double(H);
+      auto [w, h] = atlas_size(std::max(8, int(std::ceil(std::sqrt(texels) / 4)) * 4), aspect);
+      if (pages >= shares.size()) w = std::min(w, max_side), h = std::min(h, max_side);  // a page a component: capped
+      std::vector<double> page_shares;
+      for (size_t c : a.components[p]) page_shares.push_back(shares[c]);
+      fits = w <= max_side && h <= max_side && try_layout_atlas(page_shares, w, h, 4, mode).has_value();
+      a.size.push_back({w, h});
+    }
+    if (fits || pages >= shares.size()) return a;
+  }
+}
+
+/// The atlas on several pages (assign_pages), each laid out by layout_atlas.
+void lay_out_pages(const std::vector<double>& shares, int W, int H, double aspect, int max_side, AtlasShares mode, Plan::State& plan) {
+  const PageAssignment a = assign_pages(shares, W, H, aspect, max_side, mode);
+  plan.rects.assign(shares.size(), Rect{});
+  for (size_t p = 0; p < a.components.size(); ++p) {
+    std::vector<double> page_shares;
+    for (size_t c : a.components[p]) page_shares.push_back(shares[c]);
+    const std::vector<Rect> rects = layout_atlas(page_shares, a.size[p].first, a.size[p].second, 4, mode);
+    for (size_t i = 0; i < rects.size(); ++i) {
+      plan.rects[a.components[p][i]] = rects[i];
+      plan.rects[a.components[p][i]].image = int(p);
+    }
+    plan.image_size.push_back(a.size[p]);
+  }
+}
+
+/// The rectangles and texture sizes: one atlas of the chosen shape (on several pages where it is wider
+/// or taller than Options::max_page_side), or a texture per component.
 void lay_out(const Options& options, const std::vector<double>& shares, int size, double aspect, Plan::State& plan) {
   const bool default_budget = options.size == 0 || options.default_budget;
   if (options.layout == Layout::kAtlas) {
     const auto [W, H] = atlas_size(size, aspect);
-    plan.rects = layout_atlas(shares, W, H, 4, options.map == MapKind::kArea ? AtlasShares::kExact : AtlasShares::kLeastError);
-    plan.image_size.push_back({W, H});
+    const AtlasShares mode = options.map == MapKind::kArea ? AtlasShares::kExact : AtlasShares::kLeastError;
+    const int max_side = options.max_page_side;
+    if (max_side > 0 && (W > max_side || H > max_side)) {
+      lay_out_pages(shares, W, H, aspect, max_side, mode, plan);
+      std::string& reason = plan.report.pages.reason;
+      reason = fmt::format("the budget's {} x {} texture is larger than --max-size {} allows a page", W, H, max_side);
+      double written = 0;
+      for (const auto& [w, h] : plan.image_size) written += double(w) * double(h);
+      if (written < 0.95 * double(W) * double(H))
+        reason += fmt::format("; the pages hold {:.0f} of its {} texels: a component is not split into pieces of fewer than {} triangles",
+                              written, long(W) * long(H), kMinPieceFaces);
+    } else {
+      plan.rects = layout_atlas(shares, W, H, 4, mode);
+      plan.image_size.push_back({W, H});
+    }
+    plan.report.pages.count = plan.image_size.size();
     return;
   }
   const int side = default_budget ? per_component_side(shares, size) : size;
@@ -140,13 +249,19 @@ Plan plan_charts(const TexturedMesh& input, const Options& options, const PlanHo
   // 2. Connected components, the budget they need, and where the texels go on them.
   progress("components", 0);
   plan->components = split_components(surface);
-  const std::vector<double> areas = component_areas(plan->components);
+  std::vector<double> areas = component_areas(plan->components);
   if (options.layout == Layout::kAtlas && (options.size == 0 || options.default_budget)) {
     const int side = atlas_side_holding(areas, size);
     if (side != size) rep.options.size_grown_from = size, size = side;
   }
   std::vector<ComponentDensity> density;
-  const std::vector<double> shares = plan_density(input, options, plan->components, areas, size, density);
+  std::vector<double> shares = plan_density(input, options, plan->components, areas, size, density);
+  rep.pages.max_side = options.layout == Layout::kAtlas ? options.max_page_side : 0;
+  // Pieces split by area can still hold more than a page where the density is uneven: split again.
+  for (int round = 0; round < 3 && split_oversized_components(options, size, shares, plan->components, rep.pages); ++round) {
+    areas = component_areas(plan->components);
+    shares = plan_density(input, options, plan->components, areas, size, density);
+  }
 
   // 3. The texture's shape (auto: probed on the component that dominates the texture), then 4. each
   //    component cut to a disk and mapped onto its rectangle (§4.2).

@@ -15,4 +15,17 @@ namespace tightex {
 /// Throws: nothing.
 std::vector<Surface> split_components(const Surface& s);
 
+/// Splits a component into `parts` pieces, each a connected surface of its own (so each becomes a
+/// chart): geodesic Voronoi regions of seeds spread by farthest-point sampling (compact, about equal
+/// where the surface is even), their borders smoothed so that no face has two edges on one (it would be
+/// an ear squeezed flat on the square's side), islands joined to the neighbour they share most edges
+/// with; vertices on a border get one copy per piece. For a page cap (Options::max_page_side) that one
+/// component's texels exceed.
+/// Requires: `component` manifold and connected with `opposite` built (an element of split_components);
+/// parts >= 1.
+/// Guarantees: every triangle of `component` is in exactly one piece; at most `parts` pieces;
+/// face_parent / vertex_parent map into `component`; the input map is inherited.
+/// Throws: nothing but std::bad_alloc.
+std::vector<Surface> split_into_parts(const Surface& component, int parts);
+
 }  // namespace tightex

@@ -57,6 +57,15 @@ struct AspectChoice {
   std::vector<AspectProbe> probes;  // in probe order; empty unless probed
 };
 
+/// "pages": the texture pages of the atlas and why there is more than one.
+struct Pages {
+  int max_side = 0;             // Options::max_page_side (0: no cap, null)
+  size_t count = 1;             // texture pages written
+  size_t components_split = 0;  // components split into pieces because one alone was more than a page holds
+  size_t pieces = 0;            // the pieces they became
+  std::string reason;           // why more than one page; empty for one
+};
+
 /// "preparation": the repair's counts and totals over all components (the listed ones are a subset).
 struct Preparation {
   RepairStats repair;  // written under the keys of the report (e.g. "zero_area_dropped", "vertices_sliced")
@@ -99,6 +108,7 @@ struct Report {
   InputSummary input;
   OptionsUsed options;
   AspectChoice aspect;
+  Pages pages;
   Preparation preparation;
   std::vector<ComponentEntry> components;  // the listed ones, in plan order
   std::vector<StageTiming> timings;        // in the order the stages ran

@@ -161,6 +161,12 @@ json to_json(const Report& report) {
   j["input"] = input_json(report.input);
   j["options"] = options_json(report.options);
   j["aspect"] = aspect_choice_json(report.aspect);
+  const Pages& pages = report.pages;
+  j["pages"] = {{"max_side", pages.max_side > 0 ? json(pages.max_side) : json(nullptr)},
+                {"count", pages.count},
+                {"components_split", pages.components_split},
+                {"pieces", pages.pieces},
+                {"reason", pages.reason.empty() ? json(nullptr) : json(pages.reason)}};
   j["preparation"] = preparation_json(report.preparation, report.components.size());
   json components = json::array();
   for (const ComponentEntry& e : report.components) {
