@@ -542,9 +542,14 @@ def parse_command_line(argv):
                     help="LocalCluster: the memory each worker offers tiles (default: this machine's / workers)")
     ap.add_argument("--force", action="store_true", help="redo tiles an earlier run completed")
     ap.add_argument("--allow-large-size", action="store_true", help="tightex's own --force (a --size above 16384)")
+    ap.add_argument("--html", action="store_true",
+                    help="write each tile's report.html too (off by default: a page of several MB per tile; summary.json "
+                         "and each tile's report.json hold the figures)")
     opts, tightex_args = ap.parse_known_args(argv)
     if opts.allow_large_size:
         tightex_args.append("--force")
+    if not opts.html and "--no-html" not in tightex_args:
+        tightex_args.append("--no-html")
     for a in tightex_args:
         if re.fullmatch(r"-o|--output|--report|--preview|-q|--quiet|-v|--verbose", a.split("=")[0]):
             ap.error(f"{a}: the tiles command sets where each tile's files go and prints its own progress")

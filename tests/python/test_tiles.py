@@ -64,6 +64,7 @@ def test_folder_bad_tile_and_rerun(tightex, tmp_path):
     with open(tmp_path / "out" / "summary.csv") as f:
         assert len(f.read().splitlines()) == 41
     assert not no_temporaries(tmp_path / "out")
+    assert not [n for d, _, files in os.walk(tmp_path / "out") for n in files if n == "report.html"], "no page per tile without --html"
 
     # A re-run settles every tile from the manifest: nothing runs, no output is touched.
     mtimes = {t: os.stat(records[t]["content"]).st_mtime_ns for t in records if records[t]["status"] == "done"}
