@@ -429,6 +429,53 @@ TEST(GltfWriter, CarriesTheVertexAttributesItDoesNotChange) {
   expect_valid_and_loading(dir / "out.glb", 2 * in.num_triangles());  // two nodes show the mesh
 }
 
+TEST(GltfReader, ReadsQuantizedPositionsAndNormals) {
+  // KHR_mesh_quantization as gltfpack writes it: int16 positions (a stride of 8), normalized int8
+  // normals (a stride of 4); the node's scale brings them to metres. Written back as floats, the same
+  // values, with the extension still declared (points and carried attributes may use it).
+  const fs::path dir = scratch("quantized");
+  testing::GridGltf g = testing::grid_gltf(4);
+  const size_t count = g.doc["accessors"][0]["count"].get<size_t>();
+  std::string pos, nor;
+  for (size_t v = 0; v < count; ++v) {
+    for (int16_t x : {int16_t(300 * (v % 5)), int16_t(700 * (v / 5)), int16_t(v % 2), int16_t(0)}) testing::append_bytes(pos, x);
+    for (int8_t x : {int8_t(0), int8_t(0), int8_t(127), int8_t(0)}) testing::append_bytes(nor, x);
+  }
+  auto add = [&](const std::string& bytes, int stride, json accessor) {
+    while (g.bin.size() % 4 != 0) g.bin.push_back('\0');
+    g.doc["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", g.bin.size()}, {"byteLength", bytes.size()}, {"byteStride", stride}});
+    g.bin += bytes;
+    accessor["bufferView"] = g.doc["bufferViews"].size() - 1;
+    accessor["count"] = count;
+    g.doc["accessors"].push_back(accessor);
+    return g.doc["accessors"].size() - 1;
+  };
+  json& attributes = g.doc["meshes"][0]["primitives"][0]["attributes"];
+  attributes["POSITION"] = add(pos, 8, {{"componentType", 5122}, {"type", "VEC3"}, {"min", {0, 0, 0}}, {"max", {1200, 2800, 1}}});
+  attributes["NORMAL"] = add(nor, 4, {{"componentType", 5120}, {"normalized", true}, {"type", "VEC3"}});
+  g.doc["buffers"][0]["byteLength"] = g.bin.size();
+  g.doc["extensionsUsed"] = {"KHR_mesh_quantization"};
+  g.doc["extensionsRequired"] = {"KHR_mesh_quantization"};
+  const TexturedMesh in = read_gltf(grid_glb(dir, g).string());
+  ASSERT_EQ(in.num_triangles(), g.triangles);
+  EXPECT_EQ(in.positions[1], Vec3(300, 0, 1));
+  EXPECT_NEAR(in.corner_normal[0].z(), 1.0, 1e-12);
+  write_gltf(optimized(in).output, dir.string(), "out", ImageFormat::kPng, GltfContainer::kGlb);
+  const TexturedMesh back = read_gltf((dir / "out.glb").string());
+  EXPECT_EQ(measure(in, back, 20000).lost_triangles, 0u);
+  EXPECT_EQ(back.gltf->json["extensionsRequired"], json({"KHR_mesh_quantization"}));
+  expect_valid_and_loading(dir / "out.glb", 2 * in.num_triangles());
+  // Without the extension declared, integer positions are refused on one line that names it.
+  g.doc.erase("extensionsUsed"), g.doc.erase("extensionsRequired");
+  const fs::path plain = grid_glb(dir, g);
+  try {
+    read_gltf(plain.string());
+    ADD_FAILURE() << "read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("KHR_mesh_quantization"), std::string::npos) << e.what();
+  }
+}
+
 TEST(GltfWriter, WritesAFreshDocumentForAnotherModel) {
   const fs::path dir = scratch("fresh");
   TexturedMesh m = testing::multi_component();

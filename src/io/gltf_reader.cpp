@@ -187,7 +187,21 @@ class GltfReader {
   std::map<std::string, std::string_view> files_;  // each file a URI names, read once
   uint64_t input_bytes_ = 0;                       // the model file and every file it names: the corner budget
   uint64_t corners_read_ = 0;
+  bool quantized_ = false;  // extensionsUsed names KHR_mesh_quantization: integer positions, normals, UVs
 };
+
+/// Whether an accessor of `type` may hold a vertex attribute under KHR_mesh_quantization's rules (or
+/// glTF's own without it): POSITION float, or any 8/16-bit integer type; NORMAL float, or normalized
+/// signed 8/16-bit; TEXCOORD float, normalized unsigned 8/16-bit, and with quantization any 8/16-bit
+/// integer type, normalized or not.
+bool attribute_type_allowed(const std::string& attribute, int64_t type, bool normalized, bool quantized) {
+  const bool small_integer = type >= 5120 && type <= 5123;
+  if (type == kFloat) return true;
+  if (attribute == "POSITION") return quantized && small_integer;
+  if (attribute == "NORMAL") return quantized && normalized && (type == 5120 || type == 5122);
+  // TEXCOORD_n
+  return (normalized && (type == kUnsignedByte || type == kUnsignedShort)) || (quantized && small_integer);
+}
 
 const json& GltfReader::array(const char* name) const {
   static const json empty = json::array();
@@ -634,9 +648,9 @@ std::string GltfReader::read_corner_uvs(const json& primitive, int material, con
   const AccessorView uv = attribute(primitive, name, element, false);
   if (info != nullptr && uv.data == nullptr) fail(element, "its base colour texture uses {}, which the primitive does not have", name);
   if (uv.data != nullptr) {
-    if (uv.components != 2 ||
-        !(uv.component_type == kFloat || (uv.normalized && (uv.component_type == kUnsignedByte || uv.component_type == kUnsignedShort))))
-      fail(element, "{} is not VEC2 float or normalized unsigned byte/short", name);
+    if (uv.components != 2 || !attribute_type_allowed("TEXCOORD", uv.component_type, uv.normalized, quantized_))
+      fail(element, "{} is not VEC2 float or normalized unsigned byte/short{}", name,
+           quantized_ ? " or an 8/16-bit integer type (KHR_mesh_quantization)" : "");
     if (uv.count != n) fail(element, "{} has {} entries for {} positions", name, uv.count, n);
   }
   const std::array<int64_t, 2> wrap = info != nullptr ? sampler_wrap(*info) : std::array<int64_t, 2>{kRepeat, kRepeat};
@@ -703,7 +717,9 @@ void GltfReader::read_primitive(size_t m, size_t p, ReadState& state) {
   }
   check_supported(primitive, element);
   const AccessorView pos = attribute(primitive, "POSITION", element, true);
-  if (pos.components != 3 || pos.component_type != kFloat) fail(element, "POSITION is not VEC3 float");
+  if (pos.components != 3 || !attribute_type_allowed("POSITION", pos.component_type, pos.normalized, quantized_))
+    fail(element, "POSITION is not VEC3 float{}",
+         quantized_ ? " or an 8/16-bit integer type (KHR_mesh_quantization)" : " (integer positions need KHR_mesh_quantization)");
   const std::vector<Tri> tris = primitive_triangles(primitive, pos.count, mode, element);
   // Primitives may share accessors, so what is read is bounded by the bytes read, not by each accessor.
   corners_read_ += 3 * uint64_t(tris.size());
@@ -730,8 +746,9 @@ void GltfReader::read_primitive(size_t m, size_t p, ReadState& state) {
   const int32_t tm = material_for(material, state);
   const std::string uv_set = read_corner_uvs(primitive, material, tris, pos.count, element, state);
   const AccessorView normal = attribute(primitive, "NORMAL", element, false);
-  if (normal.data != nullptr && (normal.components != 3 || normal.component_type != kFloat || normal.count != pos.count))
-    fail(element, "NORMAL is not VEC3 float with one entry per position");
+  if (normal.data != nullptr && (normal.components != 3 || normal.count != pos.count ||
+                                 !attribute_type_allowed("NORMAL", normal.component_type, normal.normalized, quantized_)))
+    fail(element, "NORMAL is not VEC3 float{} with one entry per position", quantized_ ? " or normalized byte/short" : "");
   const AccessorView color = attribute(primitive, "COLOR_0", element, false);
   if (color.data != nullptr && ((color.components != 3 && color.components != 4) || color.count != pos.count ||
                                 !(color.component_type == kFloat || color.normalized)))
@@ -816,8 +833,10 @@ TexturedMesh GltfReader::read(ModelReadStats* stats) {
     fail("asset", "version is not 2.x (tightex reads glTF 2.0)");
   if (doc_->json.contains("extensionsRequired") && doc_->json["extensionsRequired"].is_array())
     for (const json& e : doc_->json["extensionsRequired"])
-      if (e != "KHR_texture_transform" && e != "KHR_materials_emissive_strength" && e != "EXT_texture_webp")
+      if (e != "KHR_texture_transform" && e != "KHR_materials_emissive_strength" && e != "EXT_texture_webp" && e != "KHR_mesh_quantization")
         fail("extensionsRequired", "{} is not supported", excerpt(e.dump()));
+  if (doc_->json.contains("extensionsUsed") && doc_->json["extensionsUsed"].is_array())
+    for (const json& e : doc_->json["extensionsUsed"]) quantized_ = quantized_ || e == "KHR_mesh_quantization";
   check_document_shape();
   load_buffers(parts.bin);
   check_buffer_views();

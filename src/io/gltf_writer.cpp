@@ -507,6 +507,11 @@ void collect_extensions(const json& j, std::set<std::string>& names) {
 void DocumentBuilder::update_extensions_used() {
   std::set<std::string> used;
   collect_extensions(doc_, used);
+  // KHR_mesh_quantization has no JSON of its own: kept where the input used it, since the points, lines
+  // and carried attributes written back as they were may still be quantized.
+  if (doc_.contains("extensionsUsed") && doc_["extensionsUsed"].is_array())
+    for (const json& e : doc_["extensionsUsed"])
+      if (e == "KHR_mesh_quantization") used.insert("KHR_mesh_quantization");
   std::set<std::string> required;
   if (doc_.contains("extensionsRequired") && doc_["extensionsRequired"].is_array())
     for (const json& e : doc_["extensionsRequired"])
