@@ -1,5 +1,6 @@
 #include "io/output_files.hpp"
 
+#include <tbb/parallel_for.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -19,13 +20,11 @@ void write_files_atomically(const std::string& folder, const std::vector<OutputF
   if (!fs::is_directory(folder)) fail_input("{}: cannot create output directory", folder);
   const std::string tag = fmt::format(".tmp{}", ::getpid());
   std::vector<std::pair<fs::path, fs::path>> pending;  // temporary -> final, in rename order
+  for (const OutputFile& file : files) pending.push_back({fs::path(folder) / ("." + file.name + tag), fs::path(folder) / file.name});
   try {
-    for (const OutputFile& file : files) {
-      const fs::path final_path = fs::path(folder) / file.name;
-      const fs::path tmp = fs::path(folder) / ("." + file.name + tag);
-      pending.push_back({tmp, final_path});
-      file.write(tmp);
-    }
+    // The files are independent (a model and its texture pages): written in parallel. A failure
+    // anywhere is rethrown here once every write has stopped.
+    tbb::parallel_for(size_t(0), files.size(), [&](size_t i) { files[i].write(pending[i].first); });
     for (auto& [tmp, final_path] : pending) {
       fs::rename(tmp, final_path, ec);
       if (ec) fail_input("{}: cannot rename into place ({})", final_path.string(), ec.message());

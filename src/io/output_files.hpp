@@ -19,8 +19,8 @@ struct OutputFile {
 
 /// Creates `folder` if needed, writes every file under a hidden temporary name beside its final one
 /// (".NAME.tmpPID", so a rename never crosses file systems and a reader never sees half a file), in
-/// order, and only once all are complete renames them into place in the same order (the model last, so
-/// a model file that exists is complete with its textures). On any failure the temporary files are
+/// parallel (each `write` is called once, from any thread), and only once all are complete renames them
+/// into place in order (the model last, so a model file that exists is complete with its textures). On any failure the temporary files are
 /// removed and the exception is rethrown, so a failed run leaves no model behind.
 /// Throws InputError naming the folder or file that cannot be created, written or renamed.
 void write_files_atomically(const std::string& folder, const std::vector<OutputFile>& files);
