@@ -82,7 +82,9 @@ class Collapser {
   void push(uint32_t v) {
     if (!vertex_alive_[v] || locked_[v]) return;
     double shortest = INFINITY;
-    for (uint32_t w : neighbours(v)) shortest = std::min(shortest, dist(v, w));
+    for (uint32_t f : faces_[v])
+      for (uint32_t w : tri_[f])
+        if (w != v) shortest = std::min(shortest, dist(v, w));
     queue_.emplace(shortest, v, ++stamp_[v]);
   }
 
