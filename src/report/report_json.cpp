@@ -100,30 +100,34 @@ json cut_json(const ComponentEntry& e) {
           {"seam_on_input_seams", cs.seam_on_input_seams}};
 }
 
+/// A multilevel map's figures (all 0 for a map at full resolution).
+json multilevel_json(const SquareMapStats& ms) {
+  return {{"coarse_vertices", ms.coarse_vertices}, {"fine_reweighting", ms.fine_reweighting}, {"fine_steps", ms.fine_steps}};
+}
+
 /// The map's half of a component entry (SquareMapStats) and its rectangle.
 json map_json(const ComponentEntry& e) {
   const SquareMapStats& ms = e.map;
   const Rect& r = e.rect;
-  return {
-      {"weights", ms.weights},
-      {"negative_cotangent_weights", ms.negative_weights},
-      {"bumped_boundary_vertices", ms.bumped_vertices},
-      {"flipped_in_map", ms.flipped},
-      {"folds_per_weighting", ms.folds_per_attempt},
-      {"density_iterations", ms.iterations},
-      {"density_stopped", ms.stopped},
-      {"density_correction_rounds", ms.correction_rounds},
-      {"density_error_log2_before", json::array({ms.spread_before_p5, ms.spread_before_p95})},
-      {"density_error_log2", json::array({ms.spread_p5, ms.spread_p95})},
-      {"refine_iterations", ms.refine_iterations},
-      {"flow_steps", ms.flow_steps},
-      {"flow_lead_steps", ms.flow_lead_steps},
-      {"flow_shape_steps", ms.flow_shape_steps},
-      {"flow_stopped", ms.flow_stopped},
-      {"refine_energy", json::array({ms.refine_energy_before, ms.refine_energy})},
-      {"refine_stopped", ms.refine_stopped},
-      {"multilevel", {{"coarse_vertices", ms.coarse_vertices}, {"fine_reweighting", ms.fine_reweighting}, {"fine_steps", ms.fine_steps}}},
-      {"rect", {{"image", r.image}, {"x", r.x}, {"y", r.y}, {"w", r.w}, {"h", r.h}}}};
+  return {{"weights", ms.weights},
+          {"negative_cotangent_weights", ms.negative_weights},
+          {"bumped_boundary_vertices", ms.bumped_vertices},
+          {"flipped_in_map", ms.flipped},
+          {"folds_per_weighting", ms.folds_per_attempt},
+          {"density_iterations", ms.iterations},
+          {"density_stopped", ms.stopped},
+          {"density_correction_rounds", ms.correction_rounds},
+          {"density_error_log2_before", json::array({ms.spread_before_p5, ms.spread_before_p95})},
+          {"density_error_log2", json::array({ms.spread_p5, ms.spread_p95})},
+          {"refine_iterations", ms.refine_iterations},
+          {"flow_steps", ms.flow_steps},
+          {"flow_lead_steps", ms.flow_lead_steps},
+          {"flow_shape_steps", ms.flow_shape_steps},
+          {"flow_stopped", ms.flow_stopped},
+          {"refine_energy", json::array({ms.refine_energy_before, ms.refine_energy})},
+          {"refine_stopped", ms.refine_stopped},
+          {"multilevel", multilevel_json(ms)},
+          {"rect", {{"image", r.image}, {"x", r.x}, {"y", r.y}, {"w", r.w}, {"h", r.h}}}};
 }
 
 json bake_json(const BakeStats& bs) {
