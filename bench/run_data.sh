@@ -12,7 +12,8 @@ out=$(mktemp -d)
 printf "| model | triangles | size | in util | out util | charts | PSNR dB | density P5/P50/P95 | angle mean/P95 | detail loss | seam in->out | flipped | wall s (median of %s) | peak MiB |\n" "$runs"
 echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 for dir in "$data"/*/; do
-  obj=$(ls "$dir"*.obj | head -1); name=$(basename "$dir")
+  obj=$(ls "$dir"*.obj 2>/dev/null | head -1); name=$(basename "$dir")
+  [ -n "$obj" ] || continue  # a glTF-only model
   times=()
   for i in $(seq "$runs"); do
     /usr/bin/time -f "%e %M" -o "$out/time" "$bin" "$obj" -o "$out/$name" --quiet "$@"

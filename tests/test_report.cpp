@@ -133,10 +133,12 @@ TEST(Report, HasEveryKeyOfTheSchema) {
       "kept_reason", "handle_loops", "cut_edges", "cut_length", "seam_length", "seam_on_input_seams", "weights",
       "negative_cotangent_weights", "bumped_boundary_vertices", "flipped_in_map", "folds_per_weighting", "density_iterations",
       "density_stopped", "density_correction_rounds", "density_error_log2_before", "density_error_log2", "refine_iterations",
-      "flow_steps", "flow_lead_steps", "flow_shape_steps", "flow_stopped", "refine_energy", "refine_stopped", "rect"};
+      "flow_steps", "flow_lead_steps", "flow_shape_steps", "flow_stopped", "refine_energy", "refine_stopped", "multilevel",
+      "rect"};
   ASSERT_EQ(j["components"].size(), 2u);
   for (const auto& c : j["components"]) EXPECT_EQ(keys_of(c), component_keys);
   EXPECT_EQ(keys_of(j["components"][0]["rect"]), (std::set<std::string>{"image", "x", "y", "w", "h"}));
+  EXPECT_EQ(keys_of(j["components"][0]["multilevel"]), (std::set<std::string>{"coarse_vertices", "fine_reweighting", "fine_steps"}));
   EXPECT_EQ(keys_of(j["timings"][0]), (std::set<std::string>{"stage", "seconds", "peak_rss_mib"}));
   EXPECT_EQ(keys_of(j["timings"][1]), (std::set<std::string>{"stage", "seconds"}));
   EXPECT_EQ(keys_of(j["bake"]), (std::set<std::string>{"texels_filled", "texels_dilated", "texels_footprint_filtered", "tiles_fitted", "tiles"}));

@@ -179,6 +179,10 @@ DensityConstraints density_constraints(const Disk& disk, const SquareBoundary& b
   return {disk.mesh, options, map_aspect(options), side_constraints([&](size_t i) { return held[i] != 0; }), side_constraints(is_corner)};
 }
 
+void measure_density_spread(const Surface& mesh, const std::vector<Vec2>& uv, SquareMapStats& stats) {
+  measure_density_error(mesh, uv, stats);
+}
+
 void flow_towards_targets(const DensityConstraints& c, std::vector<Vec2>& uv, SquareMapStats& st) {
   if (!c.options.density_flow || c.mesh.num_faces() < kFlowMinFaces ||
       !(worst_error(st.spread_p5, st.spread_p95) > c.options.tolerance_log2))

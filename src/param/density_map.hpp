@@ -28,6 +28,11 @@ struct DensityConstraints {
 /// order, so none passes a bump).
 DensityConstraints density_constraints(const Disk& disk, const SquareBoundary& boundary, const SquareMapOptions& options);
 
+/// The density error of uv against stats.blended_target (scaled to the map's area) into
+/// stats.spread_p5 and stats.spread_p95 (P5 / P95 of log2(area / target), weighted by target).
+/// Requires stats.blended_target set, one per face.
+void measure_density_spread(const Surface& mesh, const std::vector<Vec2>& uv, SquareMapStats& stats);
+
 /// Where the reweighting stalled short of the targets (options.density_flow; the density error in
 /// stats above options.tolerance_log2; at least kFlowMinFaces faces), the density-equalising flow
 /// (flow_density) moves the whole map on towards stats.blended_target, in rounds from a coarser to a

@@ -6,11 +6,20 @@
 #include "param/density_reweighting.hpp"
 #include "param/folds.hpp"
 #include "param/harmonic.hpp"
+#include "param/multilevel.hpp"
 
 namespace tightex {
 
 std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& options, SquareMapStats* stats) {
   SquareMapStats st;
+  std::optional<std::vector<Vec2>> multilevel = multilevel_map(disk, options, st);
+  std::vector<Vec2> uv = multilevel ? std::move(*multilevel) : map_disk(disk, options, st);
+  if (stats) *stats = st;
+  return uv;
+}
+
+std::vector<Vec2> map_disk(const Disk& disk, const SquareMapOptions& options, SquareMapStats& st, SquareBoundary* placed) {
+  st = SquareMapStats{};
   const Surface& m = disk.mesh;
   const auto& bnd = disk.boundary;
   if (bnd.size() < 3) fail_internal("map_to_square: boundary has {} vertices", bnd.size());
@@ -20,6 +29,7 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
 
   // Alg. 1: the boundary onto the square's sides.
   const SquareBoundary boundary = map_boundary_to_square(disk, options);
+  if (placed) *placed = boundary;
   for (int k = 0; k < 4; ++k) st.corners[k] = bnd[boundary.corner[k]];
   st.bumped_vertices = boundary.bumped_vertices;
 
@@ -45,7 +55,7 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
   }
 
   // Beyond the paper: the texel density towards the face targets.
-  if (density && st.flipped == 0 && st.crowded_vertex == kNone) {
+  if (density && st.flipped == 0 && (st.crowded_vertex == kNone || options.density_despite_crowding)) {
     std::vector<double> positive = harmonic.positive_weights;
     if (positive.empty()) positive = edge_weights(m, EdgeWeights::kClamped);
     reweight_towards_density(m, bnd, options, options.slide_boundary ? &boundary : nullptr, std::move(positive), solver, uv, st);
@@ -54,7 +64,6 @@ std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& option
     refine_towards_targets(constraints, uv, st);
     st.blended_target.clear();
   }
-  if (stats) *stats = st;
   return uv;
 }
 

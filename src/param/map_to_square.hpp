@@ -3,6 +3,7 @@
 #pragma once
 #include <vector>
 
+#include "param/boundary.hpp"
 #include "param/square_map_options.hpp"
 
 namespace tightex {
@@ -21,10 +22,16 @@ namespace tightex {
 ///    weights (reweight_towards_density), moved by the density-equalising flow where that stalled
 ///    (flow_towards_targets, options.density_flow) and refined by symmetric Dirichlet steps
 ///    (refine_towards_targets). Each keeps the map fold-free.
+/// 4. A large disk with a density target (options.multilevel_from) is mapped by multilevel_map: steps
+///    1-3 on a coarse copy, then carried to the full mesh; where that cannot be done fold-free, as above.
 /// Requires a disk (one boundary loop of at least 3 vertices) and, if given, one face target per face.
 /// Guarantees one UV per disk vertex; stats->flipped counts the triangles that fold (0 unless every
 /// weighting folded). Throws InternalError if the requirements do not hold or no weighting could be
 /// solved (a factorisation failed for each).
 std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& options, SquareMapStats* stats);
+
+/// Steps 1-3 of map_to_square on the disk itself (never multilevel). `placed` (optional) gets the
+/// boundary's placement on the square (step 1). Same requirements, guarantees and throws.
+std::vector<Vec2> map_disk(const Disk& disk, const SquareMapOptions& options, SquareMapStats& stats, SquareBoundary* placed = nullptr);
 
 }  // namespace tightex

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "param/boundary.hpp"
+#include "param/coarsen.hpp"
 #include "param/corners.hpp"
 #include "param/density_flow.hpp"
 #include "param/density_map.hpp"
@@ -10,5 +11,6 @@
 #include "param/folds.hpp"
 #include "param/harmonic.hpp"
 #include "param/map_to_square.hpp"
+#include "param/multilevel.hpp"
 #include "param/slim.hpp"
 #include "param/square_map_options.hpp"

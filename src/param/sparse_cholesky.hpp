@@ -15,6 +15,13 @@ namespace tightex {
 /// threaded BLAS uses every core within the call.
 std::mutex& blas_mutex();
 
+/// Makes the dense kernels under CHOLMOD run on the calling thread only: OpenBLAS's thread pool and
+/// libgomp's teams (for the process, once; libgomp's default team size also for this thread). The components and shape probes are mapped in
+/// parallel already, and the BLAS calls are serialised (blas_mutex), so the kernels' own threads mostly
+/// spin and yield in the kernel (BENCHMARKS.md, "Where the default run's time goes"). Looked up by name:
+/// a no-op with a BLAS or OpenMP runtime that lacks these functions.
+void use_serial_dense_kernels();
+
 /// Eigen's CHOLMOD wrapper, simplicial or supernodal by the system's size (chosen at analyzePattern;
 /// kSupernodalFrom).
 class SparseCholesky {
@@ -25,12 +32,14 @@ class SparseCholesky {
   /// and handled by the caller (a retry, the fallback), and `tightex -q` prints nothing but errors.
   explicit SparseCholesky(long supernodal_from = kSupernodalFrom) : supernodal_from_(supernodal_from) { solver_.cholmod().print = 0; }
   void analyzePattern(const Matrix& a) {
+    use_serial_dense_kernels();
     supernodal_ = a.rows() >= supernodal_from_;
     solver_.setMode(supernodal_ ? Eigen::CholmodSupernodalLLt : Eigen::CholmodSimplicialLLt);
     solver_.analyzePattern(a);
   }
   /// False if CHOLMOD failed (a not positive definite, numerically).
   bool factorize(const Matrix& a) {
+    use_serial_dense_kernels();
     std::unique_lock<std::mutex> lock(blas_mutex(), std::defer_lock);
     if (supernodal_) lock.lock();
     solver_.factorize(a);

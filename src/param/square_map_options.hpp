@@ -60,6 +60,17 @@ struct SquareMapOptions {
   /// Linear systems of this many unknowns or more are factorised supernodally, smaller ones
   /// simplicially (see kSupernodalFrom). Tests set it low to run the supernodal path on small meshes.
   long supernodal_from = kSupernodalFrom;
+  /// A disk of more than this many vertices with a density target (and balance 1) is mapped multilevel
+  /// (multilevel_map): the reweighting, flow and refinement on a copy of at most coarse_vertices
+  /// vertices, carried to the full mesh, then up to fine_reweighting reweighting steps and fine_steps
+  /// symmetric Dirichlet steps there. Chosen by measurement: BENCHMARKS.md, "Scale".
+  size_t multilevel_from = 100000;
+  size_t coarse_vertices = 30000;
+  int fine_reweighting = 8, fine_steps = 4;
+  /// The density steps start from whichever weighting gave a fold-free harmonic map, even where the
+  /// clamped cotangent weights crowded a region (which otherwise stops the map there, for the caller
+  /// to slit): multilevel_map's coarse copy, whose crowding is no reason to re-cut the full mesh.
+  bool density_despite_crowding = false;
   /// Optional: called from the mapping thread with an estimate of the fraction of this map done (the
   /// density reweighting up to 0.4, the symmetric Dirichlet steps from there; each step counts as if
   /// the reweighting took 20 and the steps 15, so the estimate may jump to 1 at the end).
@@ -89,6 +100,10 @@ struct SquareMapStats {
   int flow_lead_steps = 0;   // symmetric Dirichlet steps before the flow (fewer than asked if they converged)
   int flow_shape_steps = 0;  // symmetric Dirichlet steps towards the flowed shapes (0: each flowed map was kept as it was)
   std::string flow_stopped;  // FlowStats::stopped, ", reverted" added if it was undone; empty if not run
+  /// Multilevel maps: the coarse copy's vertices (0: mapped at full resolution) and the reweighting and
+  /// symmetric Dirichlet steps on the full mesh (iterations and refine_iterations count the coarse copy's).
+  size_t coarse_vertices = 0;
+  int fine_reweighting = 0, fine_steps = 0;
 };
 
 /// The width/height of the texel rectangle the map is computed for (texel spacing the same both ways):

@@ -43,6 +43,7 @@ ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const std::vec
   const size_t n = std::size(kAspectProbes);
   std::vector<std::optional<Mapped>> probe(n);
   std::vector<double> mse(n, -1);
+  std::vector<Rect> rect(n);
   const std::optional<CutInputs> shared = shared_cut_inputs(ctx, dominant);
   auto run_probe = [&](size_t i, CapChoice choice) {
     const auto [W, H] = atlas_size(size, kAspectProbes[i]);
@@ -50,7 +51,8 @@ ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const std::vec
     if (kAspectProbes[i] != 1.0 && W == H) return;                 // too small a texture to take another shape
     const auto rects = try_layout_atlas(shares, W, H, 4, mode);
     if (!rects) return;  // this shape cannot hold every component: not probed
-    probe[i] = map_component(ctx, dominant, (*rects)[dominant], shared ? &*shared : nullptr, choice);
+    rect[i] = (*rects)[dominant];
+    probe[i] = map_component(ctx, dominant, rect[i], shared ? &*shared : nullptr, choice, true);
     if (probe[i]->kept.empty()) mse[i] = estimate_mse(ctx.input, *probe[i]);
   };
   if (shared && small_longest_hole(ctx, dominant, *shared)) {
@@ -79,6 +81,15 @@ ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const std::vec
     choice.probes.push_back({kAspectProbes[i], W, H, mse[i]});
   }
   choice.dominant_map = std::move(probe[chosen]);
+  if (choice.dominant_map && choice.dominant_map->map.coarse_vertices > 0) {
+    // A probe's multilevel map chose the shape; the component gets its own map for it, with the cut the
+    // probe kept (the estimates of a small hole's two cuts stay in the report).
+    const CutStats& cut = choice.dominant_map->cut;
+    const CapChoice kept = cut.longest_loop_capped && !cut.compared_mse.empty() ? CapChoice::kCap : CapChoice::kKeep;
+    const std::vector<double> compared = cut.compared_mse;
+    choice.dominant_map = map_component(ctx, dominant, rect[chosen], shared ? &*shared : nullptr, kept);
+    if (choice.dominant_map->cut.compared_mse.empty()) choice.dominant_map->cut.compared_mse = compared;
+  }
   return choice;
 }
 

@@ -223,10 +223,11 @@ bool small_longest_hole(const MapContext& ctx, size_t c, const CutInputs& ci) {
   return cut_to_disk_capped(ctx.components[c], full_cut_options(ctx, ci, kCapBudget), &st) && st.longest_loop_edges < kSmallKeptLoop;
 }
 
-Mapped map_component(const MapContext& ctx, size_t c, const Rect& rect, const CutInputs* pre, CapChoice choice) {
+Mapped map_component(const MapContext& ctx, size_t c, const Rect& rect, const CutInputs* pre, CapChoice choice, bool probe) {
   Mapped out;
   out.rect = rect;
   SquareMapOptions mo = map_options(ctx, rect);
+  if (probe) mo.multilevel_from = std::min(mo.multilevel_from, kProbeMultilevelFrom), mo.coarse_vertices = kProbeCoarseVertices;
   const double faces = double(ctx.components[c].num_faces());
   double reported = 0;  // fraction of this map already added to the progress
   mo.progress = [&](double f) {

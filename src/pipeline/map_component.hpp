@@ -58,10 +58,15 @@ struct MapContext {
   const PlanHooks& hooks;
 };
 
-/// Cuts and maps component c for `rect` (see the file comment). `pre`: cut_inputs(c) if known. Never
-/// throws InternalError: a component whose full method and fallback both fail is returned with
-/// Mapped::kept saying why.
-Mapped map_component(const MapContext& ctx, size_t c, const Rect& rect, const CutInputs* pre, CapChoice choice);
+/// A shape probe (`probe` in map_component) maps its disk multilevel from this many vertices, on a coarse
+/// copy of at most kProbeCoarseVertices: the probes compare shapes, and the shape chosen is mapped again
+/// as any component is. Chosen by measurement: BENCHMARKS.md.
+constexpr size_t kProbeMultilevelFrom = 16000, kProbeCoarseVertices = 8000;
+
+/// Cuts and maps component c for `rect` (see the file comment). `pre`: cut_inputs(c) if known. `probe`:
+/// a shape probe's map (multilevel from kProbeMultilevelFrom vertices). Never throws InternalError: a
+/// component whose full method and fallback both fail is returned with Mapped::kept saying why.
+Mapped map_component(const MapContext& ctx, size_t c, const Rect& rect, const CutInputs* pre, CapChoice choice, bool probe = false);
 
 /// Whether component c is also to be mapped with its longest hole capped: that hole has fewer than
 /// kSmallKeptLoop edges and its cap fits the budget; not for the paper's map, which keeps the paper's

@@ -100,6 +100,11 @@ json cut_json(const ComponentEntry& e) {
           {"seam_on_input_seams", cs.seam_on_input_seams}};
 }
 
+/// A multilevel map's figures (all 0 for a map at full resolution).
+json multilevel_json(const SquareMapStats& ms) {
+  return {{"coarse_vertices", ms.coarse_vertices}, {"fine_reweighting", ms.fine_reweighting}, {"fine_steps", ms.fine_steps}};
+}
+
 /// The map's half of a component entry (SquareMapStats) and its rectangle.
 json map_json(const ComponentEntry& e) {
   const SquareMapStats& ms = e.map;
@@ -121,6 +126,7 @@ json map_json(const ComponentEntry& e) {
           {"flow_stopped", ms.flow_stopped},
           {"refine_energy", json::array({ms.refine_energy_before, ms.refine_energy})},
           {"refine_stopped", ms.refine_stopped},
+          {"multilevel", multilevel_json(ms)},
           {"rect", {{"image", r.image}, {"x", r.x}, {"y", r.y}, {"w", r.w}, {"h", r.h}}}};
 }
 

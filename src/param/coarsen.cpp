@@ -1,0 +1,182 @@
+#include "param/coarsen.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <queue>
+#include <tuple>
+
+#include "param/harmonic.hpp"
+
+namespace tightex {
+
+namespace {
+
+/// A changed face keeps its orientation: its normal within this angle's cosine of the old one.
+constexpr double kMinNormalCosine = 0.7;
+/// A changed face keeps a fair shape: 4 sqrt(3) area / sum of squared edges (1: equilateral) at least
+/// this, or at least its old shape's.
+constexpr double kMinQuality = 0.3;
+
+double quality(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const double l2 = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
+  return l2 > 0 ? 2 * std::sqrt(3.0) * (b - a).cross(c - a).norm() / l2 : 0.0;
+}
+
+/// The fine mesh under half-edge collapses: faces stay in place (dead ones flagged), each vertex keeps
+/// the list of its live faces.
+class Collapser {
+ public:
+  Collapser(const Disk& fine, const std::vector<double>& face_target)
+      : m_(fine.mesh),
+        tri_(fine.mesh.triangles),
+        mass_(face_target),
+        face_alive_(tri_.size(), 1),
+        vertex_alive_(m_.num_vertices(), 1),
+        locked_(boundary_mask(m_.num_vertices(), fine.boundary)),
+        on_boundary_(locked_),
+        stamp_(m_.num_vertices(), 0),
+        faces_(m_.num_vertices()) {
+    for (uint32_t f = 0; f < tri_.size(); ++f)
+      for (uint32_t v : tri_[f]) {
+        faces_[v].push_back(f);
+        if (m_.face_parent[f] == kNone) locked_[v] = 1;
+      }
+    alive_ = m_.num_vertices();
+  }
+
+  /// Collapses until at most max_vertices are left or nothing more may collapse.
+  void run(size_t max_vertices) {
+    for (uint32_t v = 0; v < m_.num_vertices(); ++v) push(v);
+    while (alive_ > max_vertices && !queue_.empty()) {
+      const auto [len, v, stamp] = queue_.top();
+      queue_.pop();
+      if (!vertex_alive_[v] || stamp != stamp_[v]) continue;
+      std::vector<uint32_t> ring = neighbours(v);
+      std::sort(ring.begin(), ring.end(), [&](uint32_t a, uint32_t b) { return dist(v, a) < dist(v, b); });
+      for (uint32_t u : ring)
+        if (allowed(v, u)) {
+          collapse(v, u);
+          ++stamp_[v];
+          push(u);
+          for (uint32_t w : neighbours(u)) push(w);
+          break;
+        }
+    }
+  }
+
+  CoarseDisk result(const Disk& fine) const;
+
+ private:
+  double dist(uint32_t a, uint32_t b) const { return (m_.positions[a] - m_.positions[b]).norm(); }
+
+  std::vector<uint32_t> neighbours(uint32_t v) const {
+    std::vector<uint32_t> r;
+    for (uint32_t f : faces_[v])
+      for (uint32_t w : tri_[f])
+        if (w != v) r.push_back(w);
+    std::sort(r.begin(), r.end());
+    r.erase(std::unique(r.begin(), r.end()), r.end());
+    return r;
+  }
+
+  void push(uint32_t v) {
+    if (!vertex_alive_[v] || locked_[v]) return;
+    double shortest = INFINITY;
+    for (uint32_t f : faces_[v])
+      for (uint32_t w : tri_[f])
+        if (w != v) shortest = std::min(shortest, dist(v, w));
+    queue_.emplace(shortest, v, ++stamp_[v]);
+  }
+
+  /// Whether v may move onto its neighbour u (see coarsen_disk).
+  bool allowed(uint32_t v, uint32_t u) const {
+    std::vector<uint32_t> apex;
+    for (uint32_t f : faces_[v])
+      if (std::find(tri_[f].begin(), tri_[f].end(), u) != tri_[f].end())
+        for (uint32_t w : tri_[f])
+          if (w != u && w != v) apex.push_back(w);
+    if (apex.size() != 2 || apex[0] == apex[1]) return false;
+    const std::vector<uint32_t> nv = neighbours(v), nu = neighbours(u);
+    std::vector<uint32_t> common;
+    std::set_intersection(nv.begin(), nv.end(), nu.begin(), nu.end(), std::back_inserter(common));
+    std::sort(apex.begin(), apex.end());
+    if (common != apex) return false;  // the link condition
+    if (on_boundary_[u])
+      for (uint32_t w : nv)
+        if (w != u && on_boundary_[w] && w != apex[0] && w != apex[1]) return false;  // a new chord
+    for (uint32_t f : faces_[v]) {
+      const Tri& t = tri_[f];
+      if (std::find(t.begin(), t.end(), u) != t.end()) continue;
+      Vec3 p[3], q[3];
+      for (int k = 0; k < 3; ++k) p[k] = q[k] = m_.positions[t[k]];
+      for (int k = 0; k < 3; ++k)
+        if (t[k] == v) q[k] = m_.positions[u];
+      const Vec3 n0 = (p[1] - p[0]).cross(p[2] - p[0]), n1 = (q[1] - q[0]).cross(q[2] - q[0]);
+      if (!(n0.dot(n1) > kMinNormalCosine * n0.norm() * n1.norm())) return false;
+      if (quality(q[0], q[1], q[2]) < std::min(kMinQuality, quality(p[0], p[1], p[2]))) return false;
+    }
+    return true;
+  }
+
+  void collapse(uint32_t v, uint32_t u) {
+    std::vector<uint32_t> removed, kept;
+    for (uint32_t f : faces_[v]) (std::find(tri_[f].begin(), tri_[f].end(), u) != tri_[f].end() ? removed : kept).push_back(f);
+    double spare = 0;
+    for (uint32_t f : removed) {
+      face_alive_[f] = 0;
+      spare += mass_[f];
+      for (uint32_t w : tri_[f])
+        if (w != v) std::erase(faces_[w], f);
+    }
+    for (uint32_t f : kept) {
+      for (uint32_t& w : tri_[f])
+        if (w == v) w = u;
+      mass_[f] += spare / double(kept.size());
+      faces_[u].push_back(f);
+    }
+    faces_[v].clear();
+    vertex_alive_[v] = 0;
+    --alive_;
+  }
+
+  const Surface& m_;
+  std::vector<Tri> tri_;
+  std::vector<double> mass_;
+  std::vector<char> face_alive_, vertex_alive_, locked_, on_boundary_;
+  std::vector<uint32_t> stamp_;
+  std::vector<std::vector<uint32_t>> faces_;
+  size_t alive_ = 0;
+  std::priority_queue<std::tuple<double, uint32_t, uint32_t>, std::vector<std::tuple<double, uint32_t, uint32_t>>, std::greater<>> queue_;
+};
+
+CoarseDisk Collapser::result(const Disk& fine) const {
+  CoarseDisk c;
+  std::vector<uint32_t> index(m_.num_vertices(), kNone);
+  Surface& s = c.disk.mesh;
+  for (uint32_t v = 0; v < m_.num_vertices(); ++v)
+    if (vertex_alive_[v]) {
+      index[v] = uint32_t(c.fine_vertex.size());
+      c.fine_vertex.push_back(v);
+      s.positions.push_back(m_.positions[v]);
+      s.vertex_parent.push_back(m_.vertex_parent[v]);
+    }
+  for (uint32_t f = 0; f < tri_.size(); ++f)
+    if (face_alive_[f]) {
+      s.triangles.push_back({index[tri_[f][0]], index[tri_[f][1]], index[tri_[f][2]]});
+      s.face_parent.push_back(m_.face_parent[f]);
+      c.face_target.push_back(mass_[f]);
+    }
+  build_opposite(s);
+  for (uint32_t v : fine.boundary) c.disk.boundary.push_back(index[v]);
+  return c;
+}
+
+}  // namespace
+
+CoarseDisk coarsen_disk(const Disk& fine, const std::vector<double>& face_target, size_t max_vertices) {
+  Collapser collapser(fine, face_target);
+  collapser.run(max_vertices);
+  return collapser.result(fine);
+}
+
+}  // namespace tightex

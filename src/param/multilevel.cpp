@@ -1,0 +1,112 @@
+#include "param/multilevel.hpp"
+
+#include <cmath>
+
+#include "param/coarsen.hpp"
+#include "param/density_map.hpp"
+#include "param/density_reweighting.hpp"
+#include "param/folds.hpp"
+#include "param/harmonic.hpp"
+#include "param/map_to_square.hpp"
+
+namespace tightex {
+
+namespace {
+
+/// The harmonic map between the coarse vertices (held where coarse_uv puts them): a target close to the
+/// coarse map, with its own detail between the coarse vertices, but which may fold where the held
+/// vertices enclose a concave patch.
+std::vector<Vec2> harmonic_between(const Disk& disk, const CoarseDisk& coarse, const std::vector<Vec2>& coarse_uv, long supernodal_from) {
+  const Surface& m = disk.mesh;
+  std::vector<Vec2> uv(m.num_vertices(), Vec2::Zero());
+  std::vector<char> held(m.num_vertices(), 0);
+  for (size_t c = 0; c < coarse.fine_vertex.size(); ++c) uv[coarse.fine_vertex[c]] = coarse_uv[c], held[coarse.fine_vertex[c]] = 1;
+  DirichletSolver solver(supernodal_from);
+  if (!solver.solve(m, edge_weights(m, EdgeWeights::kClamped), held, uv)) return {};
+  return uv;
+}
+
+/// Per edge (at its lower halfedge, as edge_weights gives them) the cotangent weight of the target map's
+/// own triangles, clamped positive: a planar triangulation is harmonic for its own cotangent weights, so
+/// the Tutte map with these reproduces the target wherever its triangles are unfolded and not obtuse.
+/// A folded target triangle adds nothing.
+std::vector<double> target_cotangent_weights(const Surface& m, const std::vector<Vec2>& target) {
+  const size_t nh = m.opposite.size();
+  std::vector<double> half_cot(nh, 0.0);
+  for (uint32_t h = 0; h < nh; ++h) {
+    const Vec2 &a = target[m.from(h)], &b = target[m.to(h)], &c = target[m.triangles[h / 3][(h % 3 + 2) % 3]];
+    const Vec2 u = a - c, v = b - c;
+    const double cross = u.x() * v.y() - u.y() * v.x();
+    half_cot[h] = cross > 0 ? 0.5 * u.dot(v) / cross : 0.0;
+  }
+  std::vector<double> w(nh, 0.0);
+  double mean_abs = 0;
+  size_t count = 0;
+  for (uint32_t h = 0; h < nh; ++h) {
+    const uint32_t o = m.opposite[h];
+    if (o != kNone && o < h) continue;
+    w[h] = half_cot[h] + (o == kNone ? 0.0 : half_cot[o]);
+    if (!std::isfinite(w[h])) w[h] = 0;
+    mean_abs += std::abs(w[h]), ++count;
+  }
+  mean_abs = count && mean_abs > 0 ? mean_abs / double(count) : 1.0;
+  for (uint32_t h = 0; h < nh; ++h) w[h] = std::max(w[h], 1e-3 * mean_abs);
+  return w;
+}
+
+/// Step 2 of multilevel_map: the Tutte map (only the boundary held) with the weights of the harmonic
+/// target between the coarse vertices (target_cotangent_weights), which `weights` gets; `solver` has
+/// its pattern. Empty if a solve fails or the result folds numerically.
+std::vector<Vec2> fill_between(const Disk& disk, const CoarseDisk& coarse, const std::vector<Vec2>& coarse_uv, long supernodal_from,
+                               DirichletSolver& solver, std::vector<double>& weights) {
+  const Surface& m = disk.mesh;
+  const std::vector<Vec2> target = harmonic_between(disk, coarse, coarse_uv, supernodal_from);
+  if (target.empty()) return {};
+  std::vector<Vec2> uv = target;
+  weights = target_cotangent_weights(m, target);
+  if (!solver.solve(m, weights, boundary_mask(m.num_vertices(), disk.boundary), uv)) return {};
+  if (count_folds(m, uv) > 0) return {};
+  return uv;
+}
+
+}  // namespace
+
+std::optional<std::vector<Vec2>> multilevel_map(const Disk& disk, const SquareMapOptions& options, SquareMapStats& stats) {
+  const Surface& m = disk.mesh;
+  if (options.face_target.empty() || options.balance != 1.0 || m.num_vertices() <= options.multilevel_from) return std::nullopt;
+  const CoarseDisk coarse = coarsen_disk(disk, options.face_target, options.coarse_vertices);
+  if (coarse.fine_vertex.size() > options.multilevel_from) return std::nullopt;  // it could not be coarsened enough
+  SquareMapOptions coarse_options = options;
+  coarse_options.face_target = coarse.face_target;
+  coarse_options.density_despite_crowding = true;
+  SquareMapStats st;
+  SquareBoundary placed;
+  const std::vector<Vec2> coarse_uv = map_disk(coarse.disk, coarse_options, st, &placed);
+  if (st.flipped > 0) return std::nullopt;
+  st.crowded_vertex = kNone;
+  for (uint32_t& corner : st.corners) corner = coarse.fine_vertex[corner];
+  st.coarse_vertices = coarse.fine_vertex.size();
+  DirichletSolver solver(options.supernodal_from);
+  std::vector<double> weights;
+  std::vector<Vec2> uv = fill_between(disk, coarse, coarse_uv, options.supernodal_from, solver, weights);
+  if (uv.empty()) return std::nullopt;
+  // The density on the full mesh (the coarse map's holds only on average over each coarse triangle).
+  SquareMapOptions fine_options = options;
+  fine_options.max_iterations = options.fine_reweighting;
+  fine_options.progress = nullptr;
+  SquareMapStats fine;
+  reweight_towards_density(m, disk.boundary, fine_options, nullptr, weights, solver, uv, fine);
+  // The symmetric Dirichlet steps, in the constraints the coarse boundary had (its vertices are the fine
+  // boundary's, in the same order).
+  fine_options.refine_iterations = options.fine_steps;
+  fine_options.correction_rounds = 0;
+  const DensityConstraints constraints = density_constraints(disk, placed, fine_options);
+  refine_towards_targets(constraints, uv, fine);
+  st.fine_reweighting = fine.iterations;
+  st.fine_steps = fine.refine_iterations;
+  st.spread_p5 = fine.spread_p5, st.spread_p95 = fine.spread_p95;
+  stats = st;
+  return uv;
+}
+
+}  // namespace tightex

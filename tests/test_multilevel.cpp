@@ -1,0 +1,103 @@
+// The multilevel density map (param/multilevel.hpp) and the coarse copy it maps (param/coarsen.hpp), on
+// a torus cut to a disk, with thresholds lowered so that a small mesh takes the multilevel path.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numeric>
+#include <set>
+
+#include "cut/cut.hpp"
+#include "mesh_catalogue.hpp"
+#include "param/param.hpp"
+#include "prepare/components.hpp"
+#include "prepare/repair.hpp"
+
+namespace tightex {
+namespace {
+
+namespace cat = testing;
+
+/// A torus of 4608 vertices cut to a disk (its boundary is the cut: two loops around it).
+Disk torus_disk() {
+  auto g = cat::torus_geometry(96, 48);
+  const TexturedMesh mesh = cat::make_textured("torus", g.positions, g.triangles);
+  const std::vector<Surface> parts = split_components(prepare_surface(mesh, nullptr));
+  return cut_to_disk(parts.at(0), CutOptions{}, nullptr);
+}
+
+/// Targets that vary over the surface (8x between the densest and the sparsest region), as the detail
+/// map's do.
+std::vector<double> varying_targets(const Surface& m) {
+  std::vector<double> t(m.num_faces());
+  for (size_t f = 0; f < m.num_faces(); ++f) {
+    const Vec3 &a = m.positions[m.triangles[f][0]], &b = m.positions[m.triangles[f][1]], &c = m.positions[m.triangles[f][2]];
+    const Vec3 centre = (a + b + c) / 3;
+    t[f] = triangle_area(a, b, c) * std::exp2(1.5 * std::sin(3 * std::atan2(centre.y(), centre.x())) + 1.5 * centre.z() / 0.4);
+  }
+  return t;
+}
+
+TEST(Multilevel, CoarseDiskKeepsTheBoundaryTopologyAndTargets) {
+  const Disk fine = torus_disk();
+  const std::vector<double> target = varying_targets(fine.mesh);
+  const CoarseDisk coarse = coarsen_disk(fine, target, 1000);
+  const Surface& cm = coarse.disk.mesh;
+  EXPECT_LE(cm.num_vertices(), 1000u);
+  EXPECT_GE(cm.num_vertices(), fine.boundary.size());
+  ASSERT_EQ(coarse.fine_vertex.size(), cm.num_vertices());
+  for (size_t c = 0; c + 1 < coarse.fine_vertex.size(); ++c) EXPECT_LT(coarse.fine_vertex[c], coarse.fine_vertex[c + 1]);
+  for (size_t c = 0; c < cm.num_vertices(); ++c) EXPECT_EQ(cm.positions[c], fine.mesh.positions[coarse.fine_vertex[c]]);
+  // The same boundary, vertex for vertex, and still a disk.
+  ASSERT_EQ(coarse.disk.boundary.size(), fine.boundary.size());
+  for (size_t i = 0; i < fine.boundary.size(); ++i) EXPECT_EQ(coarse.fine_vertex[coarse.disk.boundary[i]], fine.boundary[i]);
+  const Topology t = topology_of(cm);
+  EXPECT_EQ(t.boundary_loops, 1u);
+  EXPECT_EQ(t.euler(), 1);
+  // No new chord: an edge between two boundary vertices is one the fine disk has.
+  const std::vector<char> fine_on_boundary = boundary_mask(fine.mesh.num_vertices(), fine.boundary);
+  std::set<std::pair<uint32_t, uint32_t>> fine_edges;
+  for (const Tri& f : fine.mesh.triangles)
+    for (int k = 0; k < 3; ++k) fine_edges.insert(std::minmax(f[k], f[(k + 1) % 3]));
+  for (const Tri& f : cm.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = coarse.fine_vertex[f[k]], b = coarse.fine_vertex[f[(k + 1) % 3]];
+      if (fine_on_boundary[a] && fine_on_boundary[b]) EXPECT_TRUE(fine_edges.count(std::minmax(a, b))) << a << "-" << b;
+    }
+  // The targets are handed on, not lost; every coarse face keeps an area.
+  ASSERT_EQ(coarse.face_target.size(), cm.num_faces());
+  const double fine_sum = std::accumulate(target.begin(), target.end(), 0.0);
+  EXPECT_NEAR(std::accumulate(coarse.face_target.begin(), coarse.face_target.end(), 0.0), fine_sum, 1e-9 * fine_sum);
+  for (const Tri& f : cm.triangles) EXPECT_GT(triangle_area(cm.positions[f[0]], cm.positions[f[1]], cm.positions[f[2]]), 0);
+}
+
+TEST(Multilevel, MapIsFoldFreeOnTheSquareAndNearTheFullMapsDensity) {
+  const Disk disk = torus_disk();
+  SquareMapOptions options;
+  options.face_target = varying_targets(disk.mesh);
+  options.refine_keeps_density = false;
+  options.refine_iterations = 30;
+  options.multilevel_from = size_t(-1);
+  SquareMapStats full;
+  map_to_square(disk, options, &full);
+  ASSERT_EQ(full.coarse_vertices, 0u);
+  options.multilevel_from = 2000;
+  options.coarse_vertices = 1000;
+  SquareMapStats st;
+  const std::vector<Vec2> uv = map_to_square(disk, options, &st);
+  ASSERT_GT(st.coarse_vertices, 0u) << "the multilevel path was taken";
+  EXPECT_LE(st.coarse_vertices, 1000u);
+  EXPECT_EQ(st.flipped, 0u);
+  EXPECT_EQ(count_folds(disk.mesh, uv), 0u);
+  for (size_t k = 0; k < 4; ++k) EXPECT_EQ(uv[st.corners[k]], kSquareCorners[k]);
+  const double bump = 1.0 / 1024;  // a bump lies at most bump_texels outside its side
+  for (const Vec2& p : uv) {
+    EXPECT_GE(p.minCoeff(), -bump);
+    EXPECT_LE(p.maxCoeff(), 1 + bump);
+  }
+  // The density follows the targets about as well as the full-resolution map's.
+  EXPECT_GT(st.spread_p5, full.spread_p5 - 0.5);
+  EXPECT_LT(st.spread_p95, full.spread_p95 + 0.5);
+}
+
+}  // namespace
+}  // namespace tightex
