@@ -79,8 +79,10 @@ TEST(GltfReader, ReadsTheHandBuiltGlbOnceInLocalSpace) {
   ASSERT_EQ(m.materials.size(), 1u);
   EXPECT_EQ(m.materials[0].name, "grid material");
   EXPECT_NEAR(m.materials[0].kd[0], linear_to_srgb(0.5), 1e-12);
-  ASSERT_EQ(m.textures.size(), 1u);  // the normal map is not the base colour
+  ASSERT_EQ(m.textures.size(), 2u);  // the base colour, then the normal map (another slot)
   EXPECT_EQ(m.textures[0].image.width, 16);
+  EXPECT_EQ(m.materials[0].texture, 0);
+  EXPECT_EQ(m.materials[0].maps[size_t(MapSlot::kNormal)], 1);
   ASSERT_EQ(stats.not_read.size(), 1u);
   EXPECT_NE(stats.not_read[0].find("meshes[0].primitives[1] (points)"), std::string::npos);
   ASSERT_NE(m.gltf, nullptr);
@@ -316,7 +318,8 @@ TEST(GltfWriter, WritesTheInputDocumentBackWithEachTriangleInItsPrimitive) {
   for (const GltfContainer container : {GltfContainer::kGlb, GltfContainer::kGltf}) {
     const fs::path out = dir / (container == GltfContainer::kGlb ? "glb" : "gltf");
     const std::vector<std::string> removed = write_gltf(r.output, out.string(), "grid", ImageFormat::kPng, container);
-    EXPECT_NE(std::find(removed.begin(), removed.end(), "materials[0].normalTexture"), removed.end());
+    // The normal map reads the base colour's coordinates: re-baked, not removed (issue 30).
+    EXPECT_EQ(std::find(removed.begin(), removed.end(), "materials[0].normalTexture"), removed.end());
     const fs::path file = out / (container == GltfContainer::kGlb ? "grid.glb" : "grid.gltf");
     if (container == GltfContainer::kGltf) {
       EXPECT_TRUE(fs::exists(out / "grid.bin"));
@@ -338,8 +341,10 @@ TEST(GltfWriter, WritesTheInputDocumentBackWithEachTriangleInItsPrimitive) {
     for (const char* key : {"name", "doubleSided", "alphaMode", "alphaCutoff", "extras"})
       EXPECT_EQ(mat[key], g.doc["materials"][0][key]) << key;
     EXPECT_EQ(mat["pbrMetallicRoughness"]["baseColorFactor"], g.doc["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"]);
-    EXPECT_FALSE(mat.contains("normalTexture"));
-    EXPECT_EQ(doc["images"].size(), 1u);  // the old base colour and normal images are gone
+    ASSERT_TRUE(mat.contains("normalTexture"));
+    EXPECT_EQ(mat["normalTexture"].value("texCoord", 0), 0);
+    EXPECT_EQ(doc["images"].size(), 2u);  // the new base colour and normal map; the old images are gone
+    EXPECT_TRUE(doc["meshes"][0]["primitives"][0]["attributes"].contains("TANGENT"));
     // The points primitive, as it came.
     ASSERT_EQ(stats.not_read.size(), 1u);
     const json& points = doc["meshes"][0]["primitives"][1];
