@@ -138,6 +138,7 @@ int make_scan(const std::string& demo_obj, const std::string& outdir) {
   const int W = colour.width, H = colour.height;
   Image mr(W, H, Rgba8{255, 128, 0, 255}), normal(W, H, Rgba8{128, 128, 255, 255});
   const std::vector<Eigen::Vector4d> tg = compute_corner_tangents(m);
+  std::vector<uint8_t> covered(size_t(W) * size_t(H), 0);
   for (size_t t = 0; t < m.num_triangles(); ++t) {
     Vec2 px[3];
     for (int k = 0; k < 3; ++k) px[k] = Vec2(m.sampled_uv(t, k).x() * W, (1 - m.sampled_uv(t, k).y()) * H);
@@ -155,7 +156,24 @@ int make_scan(const std::string& demo_obj, const std::string& outdir) {
       const Vec3 e = frame.fullPivLu().solve(n).normalized();
       auto q = [](double c) { return uint8_t(std::clamp(std::lround((c + 1) * 127.5), 0l, 255l)); };
       normal.at(int(x), int(y)) = {q(e.x()), q(e.y()), q(e.z()), 255};
+      covered[size_t(y) * size_t(W) + size_t(x)] = 1;
     });
+  }
+  // Gutters grown 4 texels from the charts, as a scan's texturing tool pads them.
+  for (int pass = 0; pass < 4; ++pass) {
+    std::vector<uint8_t> next = covered;
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x) {
+        if (covered[size_t(y) * size_t(W) + size_t(x)]) continue;
+        for (const auto [dx, dy] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
+          const int nx = x + dx, ny = y + dy;
+          if (nx < 0 || ny < 0 || nx >= W || ny >= H || !covered[size_t(ny) * size_t(W) + size_t(nx)]) continue;
+          mr.at(x, y) = mr.at(nx, ny), normal.at(x, y) = normal.at(nx, ny);
+          next[size_t(y) * size_t(W) + size_t(x)] = 1;
+          break;
+        }
+      }
+    covered = std::move(next);
   }
   for (Material& mat : m.materials) {
     mat.maps[size_t(MapSlot::kMetallicRoughness)] = int(m.textures.size());

@@ -1,7 +1,6 @@
 // Sampling the original texture through one output triangle's original UVs (paper §4.3), with
 // footprint filtering where the input is minified. Shared by the bake and its least-squares fit.
 #pragma once
-#include <Eigen/LU>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -102,9 +101,12 @@ struct TriangleSampler {
   std::array<float, 4> encode_normal(const Vec3& n, const std::array<double, 3>& b) const {
     Vec3 tangent = Vec3::Zero(), normal = Vec3::Zero();
     for (size_t k = 0; k < 3; ++k) tangent += b[k] * frames->output[k].tangent, normal += b[k] * frames->output[k].normal;
-    Eigen::Matrix3d frame;
-    frame.col(0) = tangent, frame.col(1) = frames->output[0].sign * normal.cross(tangent), frame.col(2) = normal;
-    Vec3 t = frame.fullPivLu().solve(n);
+    // The frame's inverse by its adjugate: rows (B x N, N x T, T x B) / det (the scale does not matter,
+    // t is normalised; the sign of det does).
+    const Vec3 bitangent = frames->output[0].sign * normal.cross(tangent);
+    const double det = tangent.dot(bitangent.cross(normal));
+    Vec3 t(bitangent.cross(normal).dot(n), normal.cross(tangent).dot(n), tangent.cross(bitangent).dot(n));
+    t = det < 0 ? Vec3(-t) : t;
     t = t.allFinite() && t.norm() > 0 ? Vec3(t.normalized()) : Vec3(0, 0, 1);
     return {float((t.x() + 1) * 127.5), float((t.y() + 1) * 127.5), float((t.z() + 1) * 127.5), 255.f};
   }

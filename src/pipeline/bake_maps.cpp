@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <random>
 
@@ -225,13 +226,19 @@ std::vector<MapEntry> bake_other_maps(const TexturedMesh& input, const Options& 
   if (options.fine_fit) bo.fit_samples = kFineFitSamples, bo.fit_lambda = kFineFitLambda;
   std::vector<MapEntry> entries;
   for (MapGroup& g : groups) {
+    const auto start = std::chrono::steady_clock::now();
     g.source.frames = &frames;
     std::vector<Image> images;
     for (int p = 0; p < om.new_images; ++p) {
       const Image& colour = om.mesh.textures[size_t(p)].image;
       images.emplace_back(colour.width, colour.height, Rgba8{0, 0, 0, 255});
     }
-    bake_map(input, g.source, om.bake_triangles, om.rects, images, nullptr, bo);
+    BakeOptions map_options = bo;
+    // A normal map without the fit: the fit would match encoded texels, which a renderer decodes through
+    // a frame that turns across the texel; without it the angles are about as good, at a fraction of
+    // the time (measured in BENCHMARKS.md, "Every map").
+    if (g.source.encoding == MapEncoding::kTangentNormal) map_options.fit = false;
+    bake_map(input, g.source, om.bake_triangles, om.rects, images, nullptr, map_options);
     unsigned channels = 0;
     for (MapSlot s : g.slots) channels |= map_slot_channels(s);
     MapEntry entry;
@@ -248,6 +255,7 @@ std::vector<MapEntry> bake_other_maps(const TexturedMesh& input, const Options& 
       for (MapSlot s : g.slots) om.mesh.materials[size_t(p)].maps[size_t(s)] = int(om.mesh.textures.size());
       om.mesh.textures.push_back(std::move(tex));
     }
+    entry.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     entries.push_back(std::move(entry));
   }
   return entries;

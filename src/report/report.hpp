@@ -97,6 +97,7 @@ struct MapEntry {
   /// The chosen size's PSNR at the judging points (bake_other_maps): against the input's map (a normal
   /// map: against its full-size bake); 99 when not judged.
   double judged_psnr_db = 99;
+  double seconds = 0;  // its bake and the choice of its size
 };
 
 /// "output": where the CLI wrote the model.

@@ -182,7 +182,8 @@ json to_json(const Report& report) {
                       {"encoding", m.encoding},
                       {"sizes", m.sizes},
                       {"reduction", m.reduction},
-                      {"judged_psnr_db", m.judged_psnr_db}});
+                      {"judged_psnr_db", m.judged_psnr_db},
+                      {"seconds", m.seconds}});
     j["maps"] = std::move(maps);
   }
   if (report.metrics) j["metrics"] = to_json(*report.metrics);
