@@ -113,6 +113,9 @@ void DocumentBuilder::start_fresh_document() {
     if (const int t = m.maps[size_t(MapSlot::kEmissive)]; t >= 0)
       material["emissiveTexture"] = {{"index", texture_index(t)}}, material["emissiveFactor"] = {1.0, 1.0, 1.0};
     if (const int t = m.maps[size_t(MapSlot::kNormal)]; t >= 0) material["normalTexture"] = {{"index", texture_index(t)}};
+    // glTF's core has no slot for OBJ's specular colour, roughness or metallic images alone, or a height map.
+    for (const MapSlot slot : {MapSlot::kSpecular, MapSlot::kRoughness, MapSlot::kMetallic, MapSlot::kBump})
+      if (m.maps[size_t(slot)] >= 0) removed_.insert(fmt::format("material {}: its {} map (no glTF slot)", m.name, map_slot_name(slot)));
     materials.push_back(std::move(material));
   }
 }
