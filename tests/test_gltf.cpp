@@ -445,6 +445,18 @@ TEST(GltfRealData, KhronosGlbModelsGiveGlbs) {
     EXPECT_EQ(m.lost_triangles, 0u) << model;  // read back from the file: positions bit for bit
     EXPECT_GE(m.output.utilization, 0.99) << model;
     EXPECT_EQ(back.gltf->json["nodes"], in.gltf->json["nodes"]) << model;
+    // Every map slot of the input, in the output (issue 30); normals through both TANGENTs.
+    EXPECT_EQ(back.corner_tangent.size(), 3 * back.num_triangles()) << model;
+    size_t normal_maps = 0;
+    for (const MapFigures& f : m.maps) {
+      if (f.slot != MapSlot::kNormal) continue;
+      ++normal_maps;
+      EXPECT_LT(f.angle_median, 2.0) << model;
+      EXPECT_LT(f.angle_p95, 8.0) << model;
+    }
+    EXPECT_EQ(normal_maps, 1u) << model;
+    for (size_t s = 0; s < kMapSlots; ++s)
+      EXPECT_EQ(in.materials[0].maps[s] >= 0, back.materials[0].maps[s] >= 0) << model << " " << map_slot_name(MapSlot(s));
     expect_valid_and_loading(out / (input.stem().string() + ".glb"), in.num_triangles());
   }
 }
