@@ -37,7 +37,7 @@ float srgb_encode_255(float linear) {
     }
     return t;
   }();
-  const float x = std::clamp(linear / 255.0f, 0.0f, 1.0f) * kSteps;
+  const float x = linear > 0 ? std::min(linear / 255.0f, 1.0f) * kSteps : 0.0f;  // NaN reads as 0
   const int i = std::min(int(x), kSteps - 1);
   return table[size_t(i)] + (x - float(i)) * (table[size_t(i) + 1] - table[size_t(i)]);
 }

@@ -221,6 +221,7 @@ std::vector<MapEntry> bake_other_maps(const TexturedMesh& input, const Options& 
     set_output_tangents(input_tangents, om);
     if (normal_map) frames = normal_frames(input, input_tangents, om);
   }
+  if (om.new_images == 0) return {};  // every component kept its input maps (kept_material copies them)
   BakeOptions bo;
   bo.fit = options.fit;
   if (options.fine_fit) bo.fit_samples = kFineFitSamples, bo.fit_lambda = kFineFitLambda;
