@@ -79,8 +79,10 @@ TEST(GltfReader, ReadsTheHandBuiltGlbOnceInLocalSpace) {
   ASSERT_EQ(m.materials.size(), 1u);
   EXPECT_EQ(m.materials[0].name, "grid material");
   EXPECT_NEAR(m.materials[0].kd[0], linear_to_srgb(0.5), 1e-12);
-  ASSERT_EQ(m.textures.size(), 1u);  // the normal map is not the base colour
+  ASSERT_EQ(m.textures.size(), 2u);  // the base colour, then the normal map (another slot)
   EXPECT_EQ(m.textures[0].image.width, 16);
+  EXPECT_EQ(m.materials[0].texture, 0);
+  EXPECT_EQ(m.materials[0].maps[size_t(MapSlot::kNormal)], 1);
   ASSERT_EQ(stats.not_read.size(), 1u);
   EXPECT_NE(stats.not_read[0].find("meshes[0].primitives[1] (points)"), std::string::npos);
   ASSERT_NE(m.gltf, nullptr);
@@ -327,7 +329,8 @@ TEST(GltfWriter, WritesTheInputDocumentBackWithEachTriangleInItsPrimitive) {
   for (const GltfContainer container : {GltfContainer::kGlb, GltfContainer::kGltf}) {
     const fs::path out = dir / (container == GltfContainer::kGlb ? "glb" : "gltf");
     const std::vector<std::string> removed = write_gltf(r.output, out.string(), "grid", ImageFormat::kPng, container);
-    EXPECT_NE(std::find(removed.begin(), removed.end(), "materials[0].normalTexture"), removed.end());
+    // The normal map reads the base colour's coordinates: re-baked, not removed (issue 30).
+    EXPECT_EQ(std::find(removed.begin(), removed.end(), "materials[0].normalTexture"), removed.end());
     const fs::path file = out / (container == GltfContainer::kGlb ? "grid.glb" : "grid.gltf");
     if (container == GltfContainer::kGltf) {
       EXPECT_TRUE(fs::exists(out / "grid.bin"));
@@ -349,8 +352,10 @@ TEST(GltfWriter, WritesTheInputDocumentBackWithEachTriangleInItsPrimitive) {
     for (const char* key : {"name", "doubleSided", "alphaMode", "alphaCutoff", "extras"})
       EXPECT_EQ(mat[key], g.doc["materials"][0][key]) << key;
     EXPECT_EQ(mat["pbrMetallicRoughness"]["baseColorFactor"], g.doc["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"]);
-    EXPECT_FALSE(mat.contains("normalTexture"));
-    EXPECT_EQ(doc["images"].size(), 1u);  // the old base colour and normal images are gone
+    ASSERT_TRUE(mat.contains("normalTexture"));
+    EXPECT_EQ(mat["normalTexture"].value("texCoord", 0), 0);
+    EXPECT_EQ(doc["images"].size(), 2u);  // the new base colour and normal map; the old images are gone
+    EXPECT_TRUE(doc["meshes"][0]["primitives"][0]["attributes"].contains("TANGENT"));
     // The points primitive, as it came.
     ASSERT_EQ(stats.not_read.size(), 1u);
     const json& points = doc["meshes"][0]["primitives"][1];
@@ -568,6 +573,18 @@ TEST(GltfRealData, KhronosGlbModelsGiveGlbs) {
     EXPECT_EQ(m.lost_triangles, 0u) << model;  // read back from the file: positions bit for bit
     EXPECT_GE(m.output.utilization, 0.99) << model;
     EXPECT_EQ(back.gltf->json["nodes"], in.gltf->json["nodes"]) << model;
+    // Every map slot of the input, in the output (issue 30); normals through both TANGENTs.
+    EXPECT_EQ(back.corner_tangent.size(), 3 * back.num_triangles()) << model;
+    size_t normal_maps = 0;
+    for (const MapFigures& f : m.maps) {
+      if (f.slot != MapSlot::kNormal) continue;
+      ++normal_maps;
+      EXPECT_LT(f.angle_median, 2.0) << model;
+      EXPECT_LT(f.angle_p95, 8.0) << model;
+    }
+    EXPECT_EQ(normal_maps, 1u) << model;
+    for (size_t s = 0; s < kMapSlots; ++s)
+      EXPECT_EQ(in.materials[0].maps[s] >= 0, back.materials[0].maps[s] >= 0) << model << " " << map_slot_name(MapSlot(s));
     expect_valid_and_loading(out / (input.stem().string() + ".glb"), in.num_triangles());
   }
 }

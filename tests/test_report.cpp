@@ -118,7 +118,7 @@ TEST(Report, HasEveryKeyOfTheSchema) {
   EXPECT_EQ(keys_of(j["input"]), (std::set<std::string>{"file", "vertices", "triangles", "materials", "textures",
                                                          "polygons_triangulated", "paths_found", "vertex_coloured_triangles"}));
   EXPECT_EQ(keys_of(j["options"]), (std::set<std::string>{"size", "size_grown_from", "layout", "holes", "map", "balance", "fit",
-                                                           "fine_fit", "corners", "aspect"}));
+                                                           "fine_fit", "corners", "aspect", "map_budget_db"}));
   EXPECT_EQ(keys_of(j["aspect"]), (std::set<std::string>{"requested", "chosen", "probed_component", "probes"}));
   EXPECT_EQ(keys_of(j["pages"]), (std::set<std::string>{"max_side", "count", "components_split", "pieces", "reason"}));
   EXPECT_EQ(keys_of(j["aspect"]["probes"][0]), (std::set<std::string>{"aspect", "width", "height", "estimated_psnr_db"}));
@@ -141,7 +141,8 @@ TEST(Report, HasEveryKeyOfTheSchema) {
   EXPECT_EQ(keys_of(j["components"][0]["multilevel"]), (std::set<std::string>{"coarse_vertices", "fine_reweighting", "fine_steps"}));
   EXPECT_EQ(keys_of(j["timings"][0]), (std::set<std::string>{"stage", "seconds", "peak_rss_mib"}));
   EXPECT_EQ(keys_of(j["timings"][1]), (std::set<std::string>{"stage", "seconds"}));
-  EXPECT_EQ(keys_of(j["bake"]), (std::set<std::string>{"texels_filled", "texels_dilated", "texels_footprint_filtered", "tiles_fitted", "tiles"}));
+  EXPECT_EQ(keys_of(j["bake"]),
+            (std::set<std::string>{"texels_filled", "texels_dilated", "texels_footprint_filtered", "tiles_fitted", "tiles"}));
   EXPECT_EQ(j["metrics"], to_json(*filled_report().metrics));
   EXPECT_EQ(keys_of(j["output"]), (std::set<std::string>{"directory", "model"}));
 }

@@ -19,6 +19,25 @@ using Vec3 = Eigen::Vector3d;
 using Tri = std::array<uint32_t, 3>;
 constexpr uint32_t kNone = UINT32_MAX;
 
+/// The texture maps a material may bind besides its base colour (Material::texture), each read through
+/// the same texture coordinates. glTF: metallic-roughness (G roughness, B metallic), occlusion (R),
+/// emissive, normal (tangent space); OBJ: map_Ks, map_Ke, map_Pr, map_Pm, norm (tangent space) and
+/// map_Bump / bump (a height map, baked as data).
+enum class MapSlot : uint8_t { kMetallicRoughness, kOcclusion, kEmissive, kNormal, kSpecular, kRoughness, kMetallic, kBump };
+constexpr size_t kMapSlots = 8;
+
+/// How a map's texels are filtered: colour maps in linear light (sRGB decoded, filtered, re-encoded),
+/// data maps as stored, tangent-space normal maps through the tangent frames (decoded to object space,
+/// filtered there, encoded in the output's frame).
+enum class MapEncoding : uint8_t { kSrgbColour, kData, kTangentNormal };
+
+/// Each slot's encoding, and its name in reports ("metallic_roughness", "occlusion", ...).
+MapEncoding map_encoding(MapSlot slot);
+const char* map_slot_name(MapSlot slot);
+/// The channels a renderer reads from a slot's image: bit 0 red, 1 green, 2 blue (metallic-roughness
+/// green and blue, occlusion and the OBJ scalar maps red, the others all three).
+unsigned map_slot_channels(MapSlot slot);
+
 /// One material: a name, a constant diffuse colour and optionally a diffuse texture image.
 struct Material {
   std::string name;
@@ -26,6 +45,9 @@ struct Material {
   int texture = -1;                           // index into TexturedMesh::textures, -1 = constant colour
   std::array<double, 2> uv_scale{1.0, 1.0};   // map_Kd -s
   std::array<double, 2> uv_offset{0.0, 0.0};  // map_Kd -o
+  /// Per MapSlot: index into TexturedMesh::textures, -1 = not bound. A map is sampled at the same
+  /// (transformed) texture coordinates as `texture`. One image bound to two slots is one texture.
+  std::array<int, kMapSlots> maps{-1, -1, -1, -1, -1, -1, -1, -1};
 };
 
 /// A texture image and the path it came from (or will be written to).
@@ -44,10 +66,15 @@ struct Texture {
 struct GltfDocument;
 
 struct TexturedMesh {
-  std::vector<Vec3> positions;         // per vertex
-  std::vector<Tri> triangles;          // vertex indices, counter-clockwise = front
-  std::vector<Vec2> corner_uv;         // 3 per triangle
-  std::vector<Vec3> corner_normal;     // 3 per triangle, or empty when the model has none
+  std::vector<Vec3> positions;      // per vertex
+  std::vector<Tri> triangles;       // vertex indices, counter-clockwise = front
+  std::vector<Vec2> corner_uv;      // 3 per triangle
+  std::vector<Vec3> corner_normal;  // 3 per triangle, or empty when the model has none
+  /// 3 per triangle, or empty: the tangent frame of a tangent-space normal map at each corner, as glTF's
+  /// TANGENT: xyz the tangent (direction of increasing u), w = +1 or -1 the handedness, the bitangent
+  /// (direction of increasing v) being w * cross(normal, tangent). Read from glTF's TANGENT, computed
+  /// by compute_corner_tangents (core/tangents.hpp) otherwise.
+  std::vector<Eigen::Vector4d> corner_tangent;
   /// 3 per triangle, or empty when the model has none: a vertex-coloured model's colours (red, green,
   /// blue, alpha), sRGB-encoded in [0, 1] as an 8-bit texture stores them.
   std::vector<std::array<float, 4>> corner_color;

@@ -137,6 +137,14 @@ struct Options {
   /// The fit on a 4 x 4 grid of points per texel instead of 2 x 2: a little higher surface PSNR at
   /// about twice the bake time; the texture coordinates do not change. Ignored without `fit`.
   bool fine_fit = false;
+  /// The maps other than the base colour (metallic-roughness, occlusion, emissive, normal, ...): each is
+  /// baked at the base colour's size, then halved (down to 1/16 of the side) while, read back at 50k
+  /// surface points, its PSNR against the input's map (over the channels its slots read) stays at or
+  /// above this, or within 0.25 dB of the full-size bake's; a normal map while its PSNR against its own
+  /// full-size bake stays at or above this. A flat or smooth map costs a fraction of the texels; the
+  /// default keeps a 1 dB margin above 50 dB, beyond which differences are about 0.8 of an 8-bit level.
+  /// 0: every map at the base colour's size (CLI --map-budget).
+  double map_budget_db = 51;
   /// Compute the METRICS.md figures into report["metrics"]. A caller that writes the result can turn
   /// this off and measure beside the write (the CLI does).
   bool measure = true;

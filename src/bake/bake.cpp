@@ -9,6 +9,7 @@
 
 #include "bake/fit.hpp"
 #include "bake/sampler.hpp"
+#include "core/error.hpp"
 #include "core/progress.hpp"
 #include "core/raster.hpp"
 
@@ -66,6 +67,25 @@ std::vector<TriangleSampler> make_samplers(const TexturedMesh& input, const std:
     }
     samplers[t].init(tri, src, flat);
     samplers[t].corner_samples = from_vertex_colours;
+  });
+  return samplers;
+}
+
+/// The sampler of every triangle for `map`: its material's texture for the map where it has one with
+/// pixels, else the map's flat value; with the map's encoding and the triangle's frames.
+std::vector<TriangleSampler> make_map_samplers(const TexturedMesh& input, const MapSource& map,
+                                               const std::vector<BakeTriangle>& triangles) {
+  std::vector<TriangleSampler> samplers(triangles.size());
+  tbb::parallel_for(size_t(0), triangles.size(), [&](size_t t) {
+    const BakeTriangle& tri = triangles[t];
+    const Image* src = nullptr;
+    if (tri.material >= 0 && size_t(tri.material) < map.texture_of_material.size()) {
+      const int tex = map.texture_of_material[size_t(tri.material)];
+      if (tex >= 0 && !input.textures[size_t(tex)].image.empty()) src = &input.textures[size_t(tex)].image;
+    }
+    samplers[t].init(tri, src, map.flat);
+    samplers[t].encoding = map.encoding;
+    if (map.encoding == MapEncoding::kTangentNormal) samplers[t].frames = &(*map.frames)[t];
   });
   return samplers;
 }
@@ -144,7 +164,10 @@ void scan_convert_triangle(const BakeTriangle& tri, const TriangleSampler& smp, 
   scan_triangle(tri.target_px[0], tri.target_px[1], tri.target_px[2], tile.x0, tile.x1, tile.y0, tile.y1, EdgeRule::kInclusive,
                 [&](long x, long y, double w0, double w1, double w2) {
                   Rgba8 c = smp.flat;
-                  if (smp.src) {
+                  if (smp.src && (smp.encoding != MapEncoding::kData || smp.frames)) {
+                    if (smp.valid) c = to_rgba(smp.footprint_colour(double(x) + 0.5, double(y) + 0.5, 1.0, max_samples));
+                    counts.filtered += minified && smp.valid;
+                  } else if (smp.src) {
                     if (minified && smp.valid) {
                       c = to_rgba(smp.footprint_colour(double(x) + 0.5, double(y) + 0.5, 1.0, max_samples));
                       ++counts.filtered;
@@ -269,11 +292,9 @@ void fit_tiles(const BakeContext& ctx, const TileBins& grid, Image& out) {
   });
 }
 
-}  // namespace
-
-void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& triangles, const std::vector<Rect>& rects,
-                  std::vector<Image>& images, BakeStats* stats, const BakeOptions& options) {
-  const std::vector<TriangleSampler> samplers = make_samplers(input, triangles);
+/// The bake of every image through the given samplers (one per triangle).
+void bake_with_samplers(const std::vector<TriangleSampler>& samplers, const std::vector<BakeTriangle>& triangles,
+                        const std::vector<Rect>& rects, std::vector<Image>& images, BakeStats* stats, const BakeOptions& options) {
   BakeCounters counters;
   ProgressCounter progress(options.progress, bake_progress_units(images, options.fit), options.progress_interval_s);
   const BakeContext ctx{triangles, samplers, options, std::max(1, options.max_footprint_samples), counters, progress};
@@ -293,6 +314,20 @@ void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& tr
     stats->tiles_fitted = counters.tiles_fitted;
     stats->tiles = counters.tiles_total;
   }
+}
+
+}  // namespace
+
+void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& triangles, const std::vector<Rect>& rects,
+                  std::vector<Image>& images, BakeStats* stats, const BakeOptions& options) {
+  bake_with_samplers(make_samplers(input, triangles), triangles, rects, images, stats, options);
+}
+
+void bake_map(const TexturedMesh& input, const MapSource& map, const std::vector<BakeTriangle>& triangles, const std::vector<Rect>& rects,
+              std::vector<Image>& images, BakeStats* stats, const BakeOptions& options) {
+  if (map.encoding == MapEncoding::kTangentNormal && (!map.frames || map.frames->size() != triangles.size()))
+    fail_internal("bake_map: a normal map needs one frame per triangle ({} for {})", map.frames ? map.frames->size() : 0, triangles.size());
+  bake_with_samplers(make_map_samplers(input, map, triangles), triangles, rects, images, stats, options);
 }
 
 }  // namespace tightex

@@ -22,6 +22,29 @@ struct BakeTriangle {
   double area3 = 0;       // 3D area: the least-squares fit weighs the surface uniformly, as METRICS.md's PSNR does
 };
 
+/// The tangent frame at one corner of a triangle (see TexturedMesh::corner_tangent): the bitangent is
+/// sign * cross(normal, tangent).
+struct CornerFrame {
+  Vec3 tangent = Vec3::UnitX(), normal = Vec3::UnitZ();
+  double sign = 1;
+};
+
+/// A bake triangle's tangent frames: the input's (through which its normal map was authored) and the
+/// output's (through which a renderer reads the new map), corner k of each at the triangle's corner k.
+struct NormalFrames {
+  std::array<CornerFrame, 3> input, output;
+};
+
+/// Which of the input's maps a bake reads (bake_map): per input material its texture for the map, and
+/// how the texels are filtered (MapEncoding).
+struct MapSource {
+  MapEncoding encoding = MapEncoding::kData;
+  std::vector<int> texture_of_material;  // per input material: index into input.textures, -1: `flat`
+  Rgba8 flat{255, 255, 255, 255};        // the value of a triangle without the map (or without a material)
+  /// kTangentNormal: one per bake triangle (the same order). Required then.
+  const std::vector<NormalFrames>* frames = nullptr;
+};
+
 struct BakeOptions {
   /// Footprint filtering: where a texel covers more than one input pixel (the input is minified), its
   /// colour is the mean of n x m bilinear samples spread over the texel's footprint in the input,
@@ -81,5 +104,17 @@ struct BakeStats {
 /// Throws: nothing but std::bad_alloc (degenerate or non-finite triangles are skipped).
 void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& triangles, const std::vector<Rect>& rects,
                   std::vector<Image>& images, BakeStats* stats, const BakeOptions& options = {});
+
+/// bake_texture for another map than the base colour: the same scan conversion, footprint filtering,
+/// dilation and fit over the same triangles and rectangles, reading `map` instead of the materials'
+/// base colour textures. kSrgbColour maps are filtered in linear light (each bilinear tap decoded from
+/// sRGB, the footprint mean encoded back); kData maps as stored; kTangentNormal maps decode each sample
+/// to object space through the input frame, average there, and encode the mean in the output frame at
+/// the texel (then the fit matches the encoded values for bilinear read-back).
+/// Requires: as bake_texture, and map.texture_of_material has one entry per input material; with
+/// kTangentNormal, map.frames has one entry per triangle.
+/// Guarantees and throws: as bake_texture.
+void bake_map(const TexturedMesh& input, const MapSource& map, const std::vector<BakeTriangle>& triangles, const std::vector<Rect>& rects,
+              std::vector<Image>& images, BakeStats* stats, const BakeOptions& options = {});
 
 }  // namespace tightex

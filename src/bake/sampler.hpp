@@ -31,6 +31,9 @@ struct TriangleSampler {
   /// the fit also samples the corners, so that the output reproduces each vertex's colour there.
   bool corner_samples = false;
   std::array<Vec2, 3> corner_uv;
+  /// How the texels are filtered (bake_map); kData without `frames` is the base colour's plain path.
+  MapEncoding encoding = MapEncoding::kData;
+  const NormalFrames* frames = nullptr;  // kTangentNormal only
 
   /// Requires: `source` outlives the sampler (or is nullptr). Guarantees: `valid` says whether the
   /// affine maps and the weight are usable; `src` and `flat` are set either way.
@@ -74,6 +77,78 @@ struct TriangleSampler {
     return uv;
   }
 
+  /// The barycentric weights at target pixel position (x, y), clamped to the triangle as source_uv_at
+  /// does (the triangle's centre when they all clamp to 0).
+  std::array<double, 3> barycentrics_at(double x, double y) const {
+    std::array<double, 3> w{};
+    double total = 0;
+    for (int k = 0; k < 3; ++k) total += w[size_t(k)] = std::max(0.0, bary_0[k] + bary_x[k] * x + bary_y[k] * y);
+    if (!(total > 0)) return {1.0 / 3, 1.0 / 3, 1.0 / 3};
+    for (double& v : w) v /= total;
+    return w;
+  }
+
+  /// The input's object-space normal at barycentrics b: the normal map's texel (bilinear, decoded as
+  /// glTF does: 2 c / 255 - 1) through the input's interpolated tangent frame, normalised.
+  Vec3 object_normal_at(const std::array<double, 3>& b) const {
+    const Vec2 uv = b[0] * corner_uv[0] + b[1] * corner_uv[1] + b[2] * corner_uv[2];
+    const auto c = sample_bilinear(*src, uv.x(), uv.y());
+    Vec3 tangent = Vec3::Zero(), normal = Vec3::Zero();
+    for (size_t k = 0; k < 3; ++k) tangent += b[k] * frames->input[k].tangent, normal += b[k] * frames->input[k].normal;
+    const Vec3 bitangent = frames->input[0].sign * normal.cross(tangent);
+    const Vec3 n = (c[0] / 127.5 - 1) * tangent + (c[1] / 127.5 - 1) * bitangent + (c[2] / 127.5 - 1) * normal;
+    return n.norm() > 0 ? Vec3(n.normalized()) : Vec3(normal.normalized());
+  }
+
+  /// Object-space normal n encoded in the output's tangent frame at barycentrics b (8-bit scale).
+  std::array<float, 4> encode_normal(const Vec3& n, const std::array<double, 3>& b) const {
+    Vec3 tangent = Vec3::Zero(), normal = Vec3::Zero();
+    for (size_t k = 0; k < 3; ++k) tangent += b[k] * frames->output[k].tangent, normal += b[k] * frames->output[k].normal;
+    // The frame's inverse by its adjugate: rows (B x N, N x T, T x B) / det (the scale does not matter,
+    // t is normalised; the sign of det does).
+    const Vec3 bitangent = frames->output[0].sign * normal.cross(tangent);
+    const double det = tangent.dot(bitangent.cross(normal));
+    Vec3 t(bitangent.cross(normal).dot(n), normal.cross(tangent).dot(n), tangent.cross(bitangent).dot(n));
+    t = det < 0 ? Vec3(-t) : t;
+    t = t.allFinite() && t.norm() > 0 ? Vec3(t.normalized()) : Vec3(0, 0, 1);
+    return {float((t.x() + 1) * 127.5), float((t.y() + 1) * 127.5), float((t.z() + 1) * 127.5), 255.f};
+  }
+
+  /// One sample of the source map at target pixel position (x, y) as the map's encoding filters it:
+  /// linear light for sRGB colour, as stored for data.
+  std::array<float, 4> map_sample(double x, double y) const {
+    const Vec2 uv = source_uv_at(x, y);
+    return encoding == MapEncoding::kSrgbColour ? sample_bilinear_linear_light(*src, uv.x(), uv.y())
+                                                : sample_bilinear(*src, uv.x(), uv.y());
+  }
+
+  /// footprint_colour of a map other than the plain base colour (see bake_map).
+  std::array<float, 4> footprint_map_value(double x, double y, double box, int max_samples) const {
+    auto samples_along = [&](double footprint) {
+      const double n = std::ceil(footprint * box - 1e-9);
+      return n >= max_samples ? max_samples : n >= 1 ? int(n) : 1;
+    };
+    const int nx = samples_along(footprint_x), ny = samples_along(footprint_y);
+    std::array<float, 4> sum{0, 0, 0, 0};
+    Vec3 normal_sum = Vec3::Zero();
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        const double sx = x + box * ((i + 0.5) / nx - 0.5), sy = y + box * ((j + 0.5) / ny - 0.5);
+        if (encoding == MapEncoding::kTangentNormal) {
+          normal_sum += object_normal_at(barycentrics_at(sx, sy));
+          continue;
+        }
+        const auto c = map_sample(sx, sy);
+        for (int ch = 0; ch < 4; ++ch) sum[size_t(ch)] += c[size_t(ch)];
+      }
+    if (encoding == MapEncoding::kTangentNormal) return encode_normal(normal_sum, barycentrics_at(x, y));
+    const float inv = 1.0f / float(nx * ny);
+    for (float& c : sum) c *= inv;
+    if (encoding == MapEncoding::kSrgbColour)
+      for (int ch = 0; ch < 3; ++ch) sum[size_t(ch)] = srgb_encode_255(sum[size_t(ch)]);
+    return sum;
+  }
+
   /// Footprint filtering: the mean colour over a box of side `box` output texels centred at target
   /// pixel position (x, y), from n x m bilinear samples (n, m the box's extent in input pixels along x
   /// and y, at least 1, at most `max_samples`). The sample points are kept inside the triangle, so a
@@ -81,6 +156,7 @@ struct TriangleSampler {
   /// Requires: `valid` when `src` is set. Returns `flat` without a source texture.
   std::array<float, 4> footprint_colour(double x, double y, double box, int max_samples) const {
     if (!src) return {float(flat.r), float(flat.g), float(flat.b), float(flat.a)};
+    if (encoding != MapEncoding::kData || frames) return footprint_map_value(x, y, box, max_samples);
     // Clamped before the conversion to int: a material's -s can make the footprint 1e300, and a NaN
     // footprint takes one sample.
     auto samples_along = [&](double footprint) {

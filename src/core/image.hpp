@@ -12,4 +12,12 @@ namespace tightex {
 /// as floats in [0,255].
 std::array<float, 4> sample_bilinear(const Image& image, double u, double v);
 
+/// sample_bilinear in linear light: red, green and blue of each of the four texels decoded from sRGB
+/// before they are blended; the result's colour channels are linear intensities scaled to [0,255]
+/// (alpha as stored). Encode with srgb_encode_255.
+std::array<float, 4> sample_bilinear_linear_light(const Image& image, double u, double v);
+
+/// The 8-bit sRGB value (as a float in [0,255], unrounded) of a linear intensity given in [0,255].
+float srgb_encode_255(float linear);
+
 }  // namespace tightex

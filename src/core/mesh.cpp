@@ -2,9 +2,42 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 namespace tightex {
+
+MapEncoding map_encoding(MapSlot slot) {
+  switch (slot) {
+    case MapSlot::kEmissive:
+    case MapSlot::kSpecular:
+      return MapEncoding::kSrgbColour;
+    case MapSlot::kNormal:
+      return MapEncoding::kTangentNormal;
+    default:
+      return MapEncoding::kData;
+  }
+}
+
+unsigned map_slot_channels(MapSlot slot) {
+  switch (slot) {
+    case MapSlot::kMetallicRoughness:
+      return 6;
+    case MapSlot::kOcclusion:
+    case MapSlot::kRoughness:
+    case MapSlot::kMetallic:
+    case MapSlot::kBump:
+      return 1;
+    default:
+      return 7;
+  }
+}
+
+const char* map_slot_name(MapSlot slot) {
+  static constexpr const char* kNames[kMapSlots] = {"metallic_roughness", "occlusion", "emissive", "normal",
+                                                    "specular",           "roughness", "metallic", "bump"};
+  return kNames[size_t(slot)];
+}
 
 Vec2 TexturedMesh::sampled_uv(size_t triangle, int corner) const {
   Vec2 uv = corner_uv[3 * triangle + size_t(corner)];
@@ -31,17 +64,14 @@ double input_texel_area(const TexturedMesh& mesh, size_t t) {
   return a * double(w) * double(h);
 }
 
-double input_detail(const TexturedMesh& mesh, size_t t) {
-  const int32_t m = mesh.face_material[t];
-  if (m < 0) return 0.0;
-  const int ti = mesh.materials[size_t(m)].texture;
-  if (ti < 0 || mesh.textures[size_t(ti)].image.empty()) return 0.0;
-  const Image& img = mesh.textures[size_t(ti)].image;
-  const Vec2 a = mesh.sampled_uv(t, 0), b = mesh.sampled_uv(t, 1), c = mesh.sampled_uv(t, 2);
+namespace {
+
+/// The mean squared gradient of `img` (8-bit levels per texel, summed over the channels of `channels`)
+/// at up to 15 points of triangle a b c, times the triangle's texels in `img`: the squared detail per
+/// unit of 3D area once divided by the 3D area. 0 for a triangle without texels.
+double squared_detail_texels(const Image& img, const Vec2& a, const Vec2& b, const Vec2& c, unsigned channels) {
   const double texels = std::abs(signed_area(a, b, c)) * double(img.width) * double(img.height);
-  const double a3 =
-      triangle_area(mesh.positions[mesh.triangles[t][0]], mesh.positions[mesh.triangles[t][1]], mesh.positions[mesh.triangles[t][2]]);
-  if (!(a3 > 0) || !(texels > 0) || !std::isfinite(texels) || !std::isfinite(a3)) return 0.0;
+  if (!(texels > 0) || !std::isfinite(texels)) return 0.0;
   // Points: a barycentric grid of n(n+1)/2 points, n from 1 (tiny) to 5 (25+ texels).
   const int n = texels >= 25 ? 5 : std::max(1, int(std::sqrt(texels)));
   const double du = 1.0 / img.width, dv = 1.0 / img.height;
@@ -54,13 +84,41 @@ double input_detail(const TexturedMesh& mesh, size_t t) {
       const auto xp = sample_bilinear(img, p.x() + du, p.y()), xm = sample_bilinear(img, p.x() - du, p.y());
       const auto yp = sample_bilinear(img, p.x(), p.y() + dv), ym = sample_bilinear(img, p.x(), p.y() - dv);
       for (int ch = 0; ch < 3; ++ch) {
+        if (!(channels & (1u << ch))) continue;
         const double gx = 0.5 * (xp[size_t(ch)] - xm[size_t(ch)]), gy = 0.5 * (yp[size_t(ch)] - ym[size_t(ch)]);
         sum += gx * gx + gy * gy;
       }
       ++count;
     }
-  // Levels per texel -> levels per unit length: times the texels per unit length.
-  const double detail = std::sqrt(sum / count * texels / a3);
+  return sum / count * texels;
+}
+
+}  // namespace
+
+double input_detail(const TexturedMesh& mesh, size_t t) {
+  const int32_t m = mesh.face_material[t];
+  if (m < 0) return 0.0;
+  const Material& mat = mesh.materials[size_t(m)];
+  const int ti = mat.texture;
+  if (ti < 0 || mesh.textures[size_t(ti)].image.empty()) return 0.0;
+  const Image& img = mesh.textures[size_t(ti)].image;
+  const Vec2 a = mesh.sampled_uv(t, 0), b = mesh.sampled_uv(t, 1), c = mesh.sampled_uv(t, 2);
+  const double texels = std::abs(signed_area(a, b, c)) * double(img.width) * double(img.height);
+  const double a3 =
+      triangle_area(mesh.positions[mesh.triangles[t][0]], mesh.positions[mesh.triangles[t][1]], mesh.positions[mesh.triangles[t][2]]);
+  if (!(a3 > 0) || !(texels > 0) || !std::isfinite(texels) || !std::isfinite(a3)) return 0.0;
+  // Levels per texel -> levels per unit length: times the texels per unit length. Every other slot the
+  // material binds adds its own, brought to the colour's three channels (each slot's PSNR is a mean
+  // over its own channels, so one channel's error counts as much as three of the colour's).
+  double squared = squared_detail_texels(img, a, b, c, 7u) / a3;
+  for (size_t s = 0; s < kMapSlots; ++s) {
+    const int tex = mat.maps[s];
+    if (tex < 0 || mesh.textures[size_t(tex)].image.empty()) continue;
+    const unsigned channels = map_slot_channels(MapSlot(s));
+    const double per_colour = 3.0 / double(std::popcount(channels));
+    squared += per_colour * squared_detail_texels(mesh.textures[size_t(tex)].image, a, b, c, channels) / a3;
+  }
+  const double detail = std::sqrt(squared);
   return std::isfinite(detail) ? detail : 0.0;
 }
 

@@ -19,7 +19,9 @@ double input_texel_area(const TexturedMesh& mesh, size_t t);
 
 /// The texture detail of input triangle t: the root mean square colour gradient of its texture over
 /// the triangle, in 8-bit levels (RGB, summed over channels) per unit of 3D length, from central
-/// differences one input texel apart at up to 15 points spread over the triangle. 0 where the triangle
+/// differences one input texel apart at up to 15 points spread over the triangle; with the other maps
+/// the material binds (Material::maps, each slot over the channels it reads, in its own texels, scaled
+/// to three channels), the root of the sum of their squared details. 0 where the triangle
 /// has no loaded texture or no area. Under the usual model of reconstruction error (a region sampled
 /// with texel spacing h loses about |gradient|^2 h^2 per unit area), the texel density that minimises
 /// the error over the surface for a fixed budget is proportional to this (Sander et al. 2002,

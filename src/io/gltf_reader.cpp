@@ -137,7 +137,7 @@ struct ReadState {
   TexturedMesh mesh;
   std::map<int, int32_t> material_of;  // glTF material (-1: default) -> TexturedMesh material
   std::map<int, int> texture_of;       // glTF image -> TexturedMesh texture
-  bool any_normals = false, any_colors = false;
+  bool any_normals = false, any_colors = false, any_tangents = false;
   std::vector<uint8_t> corner_has_normal;  // per corner, while normals are partial
 };
 
@@ -178,6 +178,8 @@ class GltfReader {
   void finish_normals(ReadState& state) const;
   std::array<int64_t, 2> sampler_wrap(const json& info) const;
   void load_textures(TexturedMesh& mesh);
+  int texture_for(const json& info, const std::string& t_element, ReadState& state);
+  void read_map_slots(const json& g, const json* base, const std::string& element, ReadState& state, Material& m);
 
   std::string path_;
   ModelReadOptions options_;
@@ -191,14 +193,14 @@ class GltfReader {
 };
 
 /// Whether an accessor of `type` may hold a vertex attribute under KHR_mesh_quantization's rules (or
-/// glTF's own without it): POSITION float, or any 8/16-bit integer type; NORMAL float, or normalized
-/// signed 8/16-bit; TEXCOORD float, normalized unsigned 8/16-bit, and with quantization any 8/16-bit
+/// glTF's own without it): POSITION float, or any 8/16-bit integer type; NORMAL and TANGENT float, or
+/// normalized signed 8/16-bit; TEXCOORD float, normalized unsigned 8/16-bit, and with quantization any 8/16-bit
 /// integer type, normalized or not.
 bool attribute_type_allowed(const std::string& attribute, int64_t type, bool normalized, bool quantized) {
   const bool small_integer = type >= 5120 && type <= 5123;
   if (type == kFloat) return true;
   if (attribute == "POSITION") return quantized && small_integer;
-  if (attribute == "NORMAL") return quantized && normalized && (type == 5120 || type == 5122);
+  if (attribute == "NORMAL" || attribute == "TANGENT") return quantized && normalized && (type == 5120 || type == 5122);
   // TEXCOORD_n
   return (normalized && (type == kUnsignedByte || type == kUnsignedShort)) || (quantized && small_integer);
 }
@@ -548,6 +550,69 @@ std::vector<Tri> GltfReader::primitive_triangles(const json& primitive, size_t v
   return tris;
 }
 
+const json* base_color_info(const json& materials, int material);
+
+/// The TexturedMesh texture of a texture info (baseColorTexture, normalTexture, ...), made on first use
+/// for its image (one image bound to two slots is one texture).
+int GltfReader::texture_for(const json& info, const std::string& t_element, ReadState& state) {
+  if (!info.is_object()) fail(t_element, "is not an object");
+  const int64_t tex = index_in(info, "index", "textures", t_element);
+  if (tex < 0) fail(t_element, "has no index");
+  const json& texture = array("textures")[size_t(tex)];
+  int64_t image = index_in(texture, "source", "images", fmt::format("textures[{}]", tex));
+  if (texture.contains("extensions"))
+    for (const char* ext : {"EXT_texture_webp", "KHR_texture_basisu", "MSFT_texture_dds"})
+      if (texture["extensions"].contains(ext) && texture["extensions"][ext].is_object() && image < 0)
+        image = index_in(texture["extensions"][ext], "source", "images", fmt::format("textures[{}].extensions.{}", tex, ext));
+  if (image < 0) fail(fmt::format("textures[{}]", tex), "has no image source tightex can read");
+  auto [it, inserted] = state.texture_of.try_emplace(int(image), int(state.mesh.textures.size()));
+  if (inserted) {
+    const json& img = array("images")[size_t(image)];
+    Texture t;
+    t.path = img.contains("uri") && img["uri"].is_string() && img["uri"].get<std::string>().rfind("data:", 0) != 0
+                 ? (folder_ / with_forward_slashes(percent_decoded(img["uri"].get<std::string>()))).lexically_normal().string()
+                 : fmt::format("{}_image{}", fs::path(path_).stem().string(), image);
+    state.mesh.textures.push_back(std::move(t));
+    doc_->texture_image.push_back(int(image));
+  }
+  return it->second;
+}
+
+/// The UV set and KHR_texture_transform a texture info reads through (texCoord 0 and no transform by
+/// default): two slots with the same read the same texture coordinates.
+std::pair<int64_t, json> uv_source(const json* info) {
+  if (info == nullptr || !info->is_object()) return {0, json()};
+  int64_t set = info->contains("texCoord") && (*info)["texCoord"].is_number_integer() ? (*info)["texCoord"].get<int64_t>() : 0;
+  json transform;
+  if (info->contains("extensions") && (*info)["extensions"].is_object() && (*info)["extensions"].contains("KHR_texture_transform")) {
+    transform = (*info)["extensions"]["KHR_texture_transform"];
+    if (transform.is_object() && transform.contains("texCoord") && transform["texCoord"].is_number_integer())
+      set = transform["texCoord"].get<int64_t>();
+    if (transform.is_object()) transform.erase("texCoord");
+    if (transform.is_object() && transform.empty()) transform = json();
+  }
+  return {set, transform};
+}
+
+/// The material's other maps (MapSlot) that read the same texture coordinates as its base colour:
+/// metallicRoughnessTexture, occlusionTexture, emissiveTexture, normalTexture. A map on another UV set
+/// or under another transform is left out (write_gltf removes it, saying so).
+void GltfReader::read_map_slots(const json& g, const json* base, const std::string& element, ReadState& state, Material& m) {
+  const auto base_source = uv_source(base);
+  auto read_slot = [&](const json& holder, const char* key, const std::string& slot_element, MapSlot slot) {
+    if (!holder.is_object() || !holder.contains(key)) return;
+    const json& info = holder[key];
+    if (uv_source(&info) != base_source) return;
+    m.maps[size_t(slot)] = texture_for(info, slot_element, state);
+  };
+  if (g.contains("pbrMetallicRoughness"))
+    read_slot(g["pbrMetallicRoughness"], "metallicRoughnessTexture", element + ".pbrMetallicRoughness.metallicRoughnessTexture",
+              MapSlot::kMetallicRoughness);
+  read_slot(g, "occlusionTexture", element + ".occlusionTexture", MapSlot::kOcclusion);
+  read_slot(g, "emissiveTexture", element + ".emissiveTexture", MapSlot::kEmissive);
+  read_slot(g, "normalTexture", element + ".normalTexture", MapSlot::kNormal);
+}
+
 /// The TexturedMesh material of glTF material `material` (-1: the default one), made on first use with
 /// its base colour texture and factor.
 int32_t GltfReader::material_for(int material, ReadState& state) {
@@ -568,31 +633,9 @@ int32_t GltfReader::material_for(int material, ReadState& state) {
         m.kd[size_t(k)] = linear_to_srgb(f[size_t(k)].get<double>());
       }
     }
-    if (pbr.contains("baseColorTexture")) {
-      const std::string t_element = element + ".pbrMetallicRoughness.baseColorTexture";
-      const json& info = pbr["baseColorTexture"];
-      if (!info.is_object()) fail(t_element, "is not an object");
-      const int64_t tex = index_in(info, "index", "textures", t_element);
-      if (tex < 0) fail(t_element, "has no index");
-      const json& texture = array("textures")[size_t(tex)];
-      int64_t image = index_in(texture, "source", "images", fmt::format("textures[{}]", tex));
-      if (texture.contains("extensions"))
-        for (const char* ext : {"EXT_texture_webp", "KHR_texture_basisu", "MSFT_texture_dds"})
-          if (texture["extensions"].contains(ext) && texture["extensions"][ext].is_object() && image < 0)
-            image = index_in(texture["extensions"][ext], "source", "images", fmt::format("textures[{}].extensions.{}", tex, ext));
-      if (image < 0) fail(fmt::format("textures[{}]", tex), "has no image source tightex can read");
-      auto [it, inserted] = state.texture_of.try_emplace(int(image), int(state.mesh.textures.size()));
-      if (inserted) {
-        const json& img = array("images")[size_t(image)];
-        Texture t;
-        t.path = img.contains("uri") && img["uri"].is_string() && img["uri"].get<std::string>().rfind("data:", 0) != 0
-                     ? (folder_ / with_forward_slashes(percent_decoded(img["uri"].get<std::string>()))).lexically_normal().string()
-                     : fmt::format("{}_image{}", fs::path(path_).stem().string(), image);
-        state.mesh.textures.push_back(std::move(t));
-        doc_->texture_image.push_back(int(image));
-      }
-      m.texture = it->second;
-    }
+    const json* base = base_color_info(array("materials"), material);
+    if (base != nullptr) m.texture = texture_for(*base, element + ".pbrMetallicRoughness.baseColorTexture", state);
+    read_map_slots(g, base, element, state, m);
   }
   const int32_t index = int32_t(state.mesh.materials.size());
   state.mesh.materials.push_back(std::move(m));
@@ -753,6 +796,11 @@ void GltfReader::read_primitive(size_t m, size_t p, ReadState& state) {
   if (color.data != nullptr && ((color.components != 3 && color.components != 4) || color.count != pos.count ||
                                 !(color.component_type == kFloat || color.normalized)))
     fail(element, "COLOR_0 is not VEC3/VEC4 float or normalized unsigned byte/short with one entry per position");
+  const AccessorView tangent = attribute(primitive, "TANGENT", element, false);
+  if (tangent.data != nullptr && (tangent.components != 4 || tangent.count != pos.count ||
+                                  !attribute_type_allowed("TANGENT", tangent.component_type, tangent.normalized, quantized_)))
+    fail(element, "TANGENT is not VEC4 float{} with one entry per position", quantized_ ? " or normalized byte/short" : "");
+  state.any_tangents |= tangent.data != nullptr;
   state.any_normals |= normal.data != nullptr;
   state.any_colors |= color.data != nullptr;
   const uint32_t prim_index = uint32_t(doc_->primitives.size());
@@ -768,6 +816,10 @@ void GltfReader::read_primitive(size_t m, size_t p, ReadState& state) {
       if (normal.data != nullptr) n = Vec3(normal.get(v, 0), normal.get(v, 1), normal.get(v, 2));
       if (!n.allFinite()) fail(element, "NORMAL entry {} is not finite", v);
       state.mesh.corner_normal.push_back(n);
+      Eigen::Vector4d tg = Eigen::Vector4d::Zero();  // zero: computed later (completed_corner_tangents)
+      if (tangent.data != nullptr) tg = Eigen::Vector4d(tangent.get(v, 0), tangent.get(v, 1), tangent.get(v, 2), tangent.get(v, 3));
+      if (!tg.allFinite()) fail(element, "TANGENT entry {} is not finite", v);
+      state.mesh.corner_tangent.push_back(tg);
       state.corner_has_normal.push_back(normal.data != nullptr);
       std::array<float, 4> c{1, 1, 1, 1};
       if (color.data != nullptr)
@@ -850,6 +902,7 @@ TexturedMesh GltfReader::read(ModelReadStats* stats) {
   if (state.mesh.triangles.empty()) fail_input("{}: no triangle primitive is reached from the scene's nodes", path_);
   finish_normals(state);
   if (!state.any_colors) state.mesh.corner_color.clear();
+  if (!state.any_tangents) state.mesh.corner_tangent.clear();
   TexturedMesh mesh = std::move(state.mesh);
   mesh.source = path_;
   load_textures(mesh);

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/tangents.hpp"
 #include "io/gltf_document.hpp"
 #include "io/little_endian.hpp"
 #include "io/model_files.hpp"
@@ -61,7 +62,7 @@ class DocumentBuilder {
   json build(std::string& bin, std::vector<std::string>& removed);
 
  private:
-  using GroupKey = std::pair<uint32_t, int>;  // (source primitive or output material, output texture)
+  using GroupKey = std::pair<uint32_t, int>;  // (source primitive or output material + 1, output material)
   void start_fresh_document();
   std::map<GroupKey, std::vector<uint32_t>> groups() const;
   int new_view(std::string_view bytes, int64_t target);
@@ -71,7 +72,8 @@ class DocumentBuilder {
                      const std::vector<GltfVertexAttribute>* carried = nullptr);
   int carried_accessor(const GltfVertexAttribute& attribute, const std::vector<uint32_t>& vertices);
   int texture_index(int texture);
-  int material_for(int source_material, int texture);
+  int material_for(int source_material, int out_material);
+  void bind_map_slots(json& m, const std::string& element, int out_material);
   void replace_triangle_primitives(const std::map<GroupKey, std::vector<uint32_t>>& groups);
   void collect_garbage();
   void rebuild_buffer(std::string& bin);
@@ -83,7 +85,7 @@ class DocumentBuilder {
   json doc_;
   std::string fresh_bytes_;                         // the new buffer views' bytes, before the rebuild
   std::map<int, int> texture_of_;                   // output texture -> glTF texture
-  std::map<std::pair<int, int>, int> material_of_;  // (source material, output texture) -> glTF material
+  std::map<std::pair<int, int>, int> material_of_;  // (source material, output material) -> glTF material
   std::set<std::string> removed_;
 };
 
@@ -106,7 +108,18 @@ void DocumentBuilder::start_fresh_document() {
       pbr["baseColorFactor"] = {srgb_to_linear(m.kd[0]), srgb_to_linear(m.kd[1]), srgb_to_linear(m.kd[2]), 1.0};
     else
       pbr["baseColorTexture"] = {{"index", texture_index(m.texture)}};
-    materials.push_back({{"name", m.name}, {"pbrMetallicRoughness", pbr}});
+    json material = {{"name", m.name}, {"pbrMetallicRoughness", pbr}};
+    if (const int t = m.maps[size_t(MapSlot::kMetallicRoughness)]; t >= 0)
+      material["pbrMetallicRoughness"]["metallicRoughnessTexture"] = {{"index", texture_index(t)}},
+      material["pbrMetallicRoughness"]["metallicFactor"] = 1.0;
+    if (const int t = m.maps[size_t(MapSlot::kOcclusion)]; t >= 0) material["occlusionTexture"] = {{"index", texture_index(t)}};
+    if (const int t = m.maps[size_t(MapSlot::kEmissive)]; t >= 0)
+      material["emissiveTexture"] = {{"index", texture_index(t)}}, material["emissiveFactor"] = {1.0, 1.0, 1.0};
+    if (const int t = m.maps[size_t(MapSlot::kNormal)]; t >= 0) material["normalTexture"] = {{"index", texture_index(t)}};
+    // glTF's core has no slot for OBJ's specular colour, roughness or metallic images alone, or a height map.
+    for (const MapSlot slot : {MapSlot::kSpecular, MapSlot::kRoughness, MapSlot::kMetallic, MapSlot::kBump})
+      if (m.maps[size_t(slot)] >= 0) removed_.insert(fmt::format("material {}: its {} map (no glTF slot)", m.name, map_slot_name(slot)));
+    materials.push_back(std::move(material));
   }
 }
 
@@ -116,9 +129,8 @@ std::map<DocumentBuilder::GroupKey, std::vector<uint32_t>> DocumentBuilder::grou
   std::map<GroupKey, std::vector<uint32_t>> g;
   for (uint32_t t = 0; t < uint32_t(mesh_.num_triangles()); ++t) {
     const int32_t m = mesh_.face_material[t];
-    const int texture = m < 0 ? -1 : mesh_.materials[size_t(m)].texture;
     const uint32_t where = source_ != nullptr ? source_->triangle_primitive[mesh_.input_triangle[t]] : uint32_t(m + 1);
-    g[{where, texture}].push_back(t);
+    g[{where, m}].push_back(t);
   }
   return g;
 }
@@ -170,20 +182,50 @@ bool refers_to_texture(const json& j) {
   return false;
 }
 
-/// A copy of source material `source_material` (-1: the default) whose base colour is output texture
-/// `texture` on TEXCOORD_0, without the texture slots that cannot follow the new coordinates.
-int DocumentBuilder::material_for(int source_material, int texture) {
+/// The glTF slots of MapSlot, where they sit in a material.
+struct GltfSlot {
+  MapSlot slot;
+  const char* key;
+  bool in_pbr;  // under pbrMetallicRoughness
+};
+constexpr GltfSlot kGltfSlots[] = {{MapSlot::kMetallicRoughness, "metallicRoughnessTexture", true},
+                                   {MapSlot::kOcclusion, "occlusionTexture", false},
+                                   {MapSlot::kEmissive, "emissiveTexture", false},
+                                   {MapSlot::kNormal, "normalTexture", false}};
+
+/// Each texture slot of material copy `m`: pointed at output material `out_material`'s map for it (on
+/// TEXCOORD_0, without a transform: the new coordinates are what it samples; scale and strength kept),
+/// or removed (noted in removed_) when the output has no such map.
+void DocumentBuilder::bind_map_slots(json& m, const std::string& element, int out_material) {
+  for (const GltfSlot& s : kGltfSlots) {
+    json& holder = s.in_pbr ? m["pbrMetallicRoughness"] : m;
+    if (!holder.contains(s.key)) continue;
+    const int texture = out_material >= 0 ? mesh_.materials[size_t(out_material)].maps[size_t(s.slot)] : -1;
+    const std::string where = element + (s.in_pbr ? ".pbrMetallicRoughness." : ".") + s.key;
+    if (texture < 0) {
+      holder.erase(s.key), removed_.insert(where);
+      continue;
+    }
+    json info = {{"index", texture_index(texture)}};
+    for (const char* keep : {"scale", "strength", "extras"})
+      if (holder[s.key].is_object() && holder[s.key].contains(keep)) info[keep] = holder[s.key][keep];
+    holder[s.key] = std::move(info);
+  }
+}
+
+/// A copy of source material `source_material` (-1: the default) whose base colour is output material
+/// `out_material`'s texture on TEXCOORD_0 and whose other slots are its maps; the slots and extension
+/// textures that cannot follow the new coordinates are removed.
+int DocumentBuilder::material_for(int source_material, int out_material) {
+  const int texture = out_material >= 0 ? mesh_.materials[size_t(out_material)].texture : -1;
   if (texture < 0 && source_material >= 0) return source_material;  // untouched: its triangles keep their input UVs
-  const auto found = material_of_.find({source_material, texture});
+  const auto found = material_of_.find({source_material, out_material});
   if (found != material_of_.end()) return found->second;
   json m = source_material >= 0 ? doc_["materials"][size_t(source_material)] : json::object();
   const std::string element = source_material >= 0 ? fmt::format("materials[{}]", source_material) : std::string("default material");
   if (!m.contains("pbrMetallicRoughness") || !m["pbrMetallicRoughness"].is_object()) m["pbrMetallicRoughness"] = json::object();
   json& pbr = m["pbrMetallicRoughness"];
-  for (const char* slot : {"normalTexture", "occlusionTexture", "emissiveTexture"})
-    if (m.contains(slot)) m.erase(slot), removed_.insert(element + "." + slot);
-  if (pbr.contains("metallicRoughnessTexture"))
-    pbr.erase("metallicRoughnessTexture"), removed_.insert(element + ".pbrMetallicRoughness.metallicRoughnessTexture");
+  bind_map_slots(m, element, out_material);
   if (m.contains("extensions") && m["extensions"].is_object()) {
     std::vector<std::string> drop;
     for (const auto& [key, value] : m["extensions"].items())
@@ -199,7 +241,7 @@ int DocumentBuilder::material_for(int source_material, int texture) {
   }
   json& materials = array_of(doc_, "materials");
   materials.push_back(std::move(m));
-  return material_of_[{source_material, texture}] = int(materials.size() - 1);
+  return material_of_[{source_material, out_material}] = int(materials.size() - 1);
 }
 
 /// An accessor of `attribute`'s elements for the given vertices of the model read (in order), each
@@ -224,31 +266,40 @@ struct CornerVertex {
   uint32_t vertex;
   std::array<float, 2> uv;
   std::array<float, 3> normal;
-  bool operator<(const CornerVertex& o) const { return std::tie(vertex, uv, normal) < std::tie(o.vertex, o.uv, o.normal); }
+  std::array<float, 4> tangent;
+  bool operator<(const CornerVertex& o) const {
+    return std::tie(vertex, uv, normal, tangent) < std::tie(o.vertex, o.uv, o.normal, o.tangent);
+  }
 };
 
-/// One primitive for `triangles` (output triangles): new POSITION, NORMAL (with `normals`), TEXCOORD_0
-/// and indices; `source`'s extras kept.
+/// One primitive for `triangles` (output triangles): new POSITION, NORMAL (with `normals`), TANGENT (with
+/// normals, when the mesh has corner tangents), TEXCOORD_0, the `carried` attributes and indices;
+/// `source`'s extras kept.
 json DocumentBuilder::new_primitive(const json& source, int material, const std::vector<uint32_t>& triangles, bool normals,
                                     const std::vector<GltfVertexAttribute>* carried) {
   std::map<CornerVertex, uint32_t> index_of;
   std::vector<CornerVertex> vertices;
   std::vector<uint32_t> indices;
   indices.reserve(3 * triangles.size());
+  const bool tangents = normals && mesh_.corner_tangent.size() == 3 * mesh_.num_triangles();
   for (const uint32_t t : triangles)
     for (int k = 0; k < 3; ++k) {
       const size_t c = 3 * size_t(t) + size_t(k);
       const Vec2 uv = mesh_.sampled_uv(t, k);  // glTF has no place for a material's -s/-o
-      CornerVertex cv{mesh_.triangles[t][size_t(k)], {float(uv.x()), float(1.0 - uv.y())}, {0, 0, 0}};
+      CornerVertex cv{mesh_.triangles[t][size_t(k)], {float(uv.x()), float(1.0 - uv.y())}, {0, 0, 0}, {0, 0, 0, 0}};
       if (normals) {
-        const Vec3 n = mesh_.corner_normal[c].normalized();
+        const Vec3 n = frame_normal(mesh_, t, k);
         cv.normal = {float(n.x()), float(n.y()), float(n.z())};
+      }
+      if (tangents) {
+        const Vec3 tg = mesh_.corner_tangent[c].head<3>().normalized();
+        cv.tangent = {float(tg.x()), float(tg.y()), float(tg.z()), mesh_.corner_tangent[c].w() < 0 ? -1.0f : 1.0f};
       }
       const auto [it, inserted] = index_of.try_emplace(cv, uint32_t(vertices.size()));
       if (inserted) vertices.push_back(cv);
       indices.push_back(it->second);
     }
-  std::string pos, nor, uv, idx;
+  std::string pos, nor, tan, uv, idx;
   std::array<float, 3> lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
   for (const CornerVertex& v : vertices) {
     for (int i = 0; i < 3; ++i) {
@@ -257,6 +308,8 @@ json DocumentBuilder::new_primitive(const json& source, int material, const std:
       lo[size_t(i)] = std::min(lo[size_t(i)], x), hi[size_t(i)] = std::max(hi[size_t(i)], x);
       if (normals) put(nor, v.normal[size_t(i)]);
     }
+    if (tangents)
+      for (const float x : v.tangent) put(tan, x);
     put(uv, v.uv[0]), put(uv, v.uv[1]);
   }
   const bool short_indices = vertices.size() < 65535;  // 65535 is the restart value
@@ -266,6 +319,7 @@ json DocumentBuilder::new_primitive(const json& source, int material, const std:
   json& attributes = p["attributes"] = json::object();
   attributes["POSITION"] = new_accessor(pos, 5126, vertices.size(), "VEC3", 34962, json::array({lo, hi}));
   if (normals) attributes["NORMAL"] = new_accessor(nor, 5126, vertices.size(), "VEC3", 34962);
+  if (tangents) attributes["TANGENT"] = new_accessor(tan, 5126, vertices.size(), "VEC4", 34962);
   attributes["TEXCOORD_0"] = new_accessor(uv, 5126, vertices.size(), "VEC2", 34962);
   if (carried != nullptr && !carried->empty()) {
     std::vector<uint32_t> input_vertex(vertices.size());
@@ -277,8 +331,11 @@ json DocumentBuilder::new_primitive(const json& source, int material, const std:
   return p;
 }
 
-/// True when every corner of `triangles` has a finite, non-zero normal.
+/// True when every corner of `triangles` has a finite, non-zero normal, or the mesh has tangents (a
+/// normal map's frame needs NORMAL beside TANGENT: a mesh without normals gets its flat ones, which
+/// shade as glTF's missing normals do).
 bool has_normals(const TexturedMesh& mesh, const std::vector<uint32_t>& triangles) {
+  if (mesh.corner_tangent.size() == 3 * mesh.num_triangles()) return true;
   if (mesh.corner_normal.size() != 3 * mesh.num_triangles()) return false;
   for (const uint32_t t : triangles)
     for (size_t k = 0; k < 3; ++k) {
@@ -321,13 +378,14 @@ void DocumentBuilder::replace_triangle_primitives(const std::map<GroupKey, std::
     const GltfPrimitive& sp = source_->primitives[key.first];
     const json& old = doc_["meshes"][sp.mesh]["primitives"][sp.primitive];
     for (const auto& [name, value] : old["attributes"].items())
-      if (name == "TANGENT" || (name != "POSITION" && name != "NORMAL" && name != "TEXCOORD_0" && !is_carried(sp, name) &&
-                                !(name == "COLOR_0" && !has_base_colour_texture(source_->json, old))))  // COLOR_0 baked
+      if (name != "POSITION" && name != "NORMAL" && name != "TEXCOORD_0" && (name != "TANGENT" || mesh_.corner_tangent.empty()) &&
+          !is_carried(sp, name) && !(name == "COLOR_0" && !has_base_colour_texture(source_->json, old)))  // COLOR_0 baked
         dropped_attributes.insert(name);
     if (old.contains("extensions") && old["extensions"].is_object())
       for (const auto& [name, value] : old["extensions"].items())
         removed_.insert(fmt::format("meshes[{}].primitives[{}].extensions.{}", sp.mesh, sp.primitive, name));
-    json p = new_primitive(old, material_for(sp.material, key.second), triangles, sp.normals && has_normals(mesh_, triangles), &sp.carried);
+    json p = new_primitive(old, material_for(sp.material, key.second), triangles,
+                           (sp.normals || !mesh_.corner_tangent.empty()) && has_normals(mesh_, triangles), &sp.carried);
     replacement[{sp.mesh, sp.primitive}].push_back(std::move(p));
   }
   for (const std::string& a : dropped_attributes) removed_.insert("attribute " + a + " of the triangles");

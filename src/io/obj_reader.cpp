@@ -181,7 +181,37 @@ struct MaterialDef {
   std::string texture_written;   // map_Kd file name as written; empty: no texture
   std::string texture_resolved;  // resolved against the MTL's folder
   size_t texture_line = 0;
+  /// The other maps (MapSlot: map_Ks, map_Ke, map_Pr, map_Pm, norm, map_Bump / bump), as map_Kd's.
+  std::array<std::string, kMapSlots> map_written, map_resolved;
+  std::array<size_t, kMapSlots> map_line{};
 };
+
+/// The MapSlot an MTL keyword binds (matched without case), or -1: map_Ks specular colour, map_Ke
+/// emissive, map_Pr roughness, map_Pm metallic, norm a tangent-space normal map, map_Bump / bump a
+/// height map.
+int mtl_map_slot(std::string_view keyword) {
+  static constexpr std::pair<const char*, MapSlot> kKeywords[] = {
+      {"map_Ks", MapSlot::kSpecular}, {"map_Ke", MapSlot::kEmissive}, {"map_Pr", MapSlot::kRoughness}, {"map_Pm", MapSlot::kMetallic},
+      {"norm", MapSlot::kNormal},     {"map_Bump", MapSlot::kBump},   {"bump", MapSlot::kBump}};
+  for (const auto& [word, slot] : kKeywords)
+    if (equals_ignoring_case(keyword, word)) return int(slot);
+  return -1;
+}
+
+/// Skips a map statement's options (each "-name" and the values after it: numbers, on/off, or
+/// -imfchan's channel), leaving the file name. The maps other than map_Kd are read at map_Kd's
+/// coordinates; their own -s/-o are not applied.
+void skip_map_options(Tokens& tokens) {
+  while (!tokens.peek().empty() && tokens.peek()[0] == '-') {
+    const std::string_view opt = tokens.next();
+    if (opt == "-imfchan") {
+      tokens.next();
+      continue;
+    }
+    double value = 0;
+    while (!tokens.peek().empty() && (parse_double(tokens.peek(), value) || tokens.peek() == "on" || tokens.peek() == "off")) tokens.next();
+  }
+}
 
 /// A material name given to usemtl, resolved once every mtllib has been read.
 struct MaterialUse {
@@ -308,6 +338,7 @@ class ObjParser {
   std::unordered_map<std::string, size_t> def_by_name_;  // first definition of a name wins
   std::vector<std::string> loaded_mtls_;                 // each library is read once
   std::vector<std::string> paths_found_;                 // ObjReadStats::paths_found
+  std::vector<std::string> not_read_;                    // ObjReadStats::not_read: maps whose file is missing
   /// find_named_file, noting in paths_found_ a file found under another name than written.
   std::optional<fs::path> locate(const fs::path& folder, const std::string& written) {
     std::optional<fs::path> found = find_named_file(folder, written);
@@ -367,6 +398,7 @@ TexturedMesh ObjParser::read(ObjReadStats* stats) {
     stats->polygons_triangulated = polygons_triangulated_;
     stats->lines = lines.number();
     stats->paths_found = paths_found_;
+    stats->not_read = not_read_;
   }
   return mesh;
 }
@@ -680,9 +712,21 @@ void ObjParser::load_mtl(const fs::path& mtl_path, const std::string& data) {
       const std::optional<fs::path> found = locate(folder, file);
       current->texture_resolved = (found ? *found : folder / file).lexically_normal().string();
       current->texture_line = mtl_line;
+    } else if (const int slot = mtl_map_slot(keyword); slot >= 0) {
+      skip_map_options(tokens);
+      const std::string file = with_forward_slashes(tokens.rest());
+      if (file.empty() || current == nullptr) continue;
+      const std::optional<fs::path> found = locate(folder, file);
+      if (!found) {  // as before this map was read: the model is still usable without it
+        not_read_.push_back(fmt::format("{}:{}: {} '{}' (file not found)", mtl_name, mtl_line, keyword, excerpt(file)));
+        continue;
+      }
+      current->map_written[size_t(slot)] = file;
+      current->map_resolved[size_t(slot)] = found->lexically_normal().string();
+      current->map_line[size_t(slot)] = mtl_line;
     }
-    // Every other statement (Ka, Ks, Ns, d, illum, bump maps, PBR extensions) does not affect the
-    // colour texture and is ignored.
+    // Every other statement (Ka, Ks, Ns, d, illum, PBR factors) does not affect the textures and is
+    // ignored.
   }
 }
 
@@ -718,17 +762,29 @@ void ObjParser::assemble_materials(TexturedMesh& mesh) {
 
   // One Texture per distinct resolved path, however many materials share it.
   std::unordered_map<std::string, int> texture_by_path;
-  std::vector<const MaterialDef*> texture_source;  // the first material naming each texture, to blame
+  struct Source {  // the first statement naming each texture, to blame
+    const MaterialDef* def;
+    size_t line;
+    const std::string* written;
+  };
+  std::vector<Source> texture_source;
+  auto texture_of = [&](const MaterialDef* def, const std::string& resolved, size_t line, const std::string& written) {
+    const auto [it, inserted] = texture_by_path.try_emplace(resolved, int(mesh.textures.size()));
+    if (inserted) {
+      mesh.textures.push_back(Texture{resolved, Image{}});
+      texture_source.push_back({def, line, &written});
+    }
+    return it->second;
+  };
   for (const MaterialDef* def : used_defs) {
     Material& m = mesh.materials.emplace_back(def->material);
-    if (def->texture_resolved.empty()) continue;
-    const auto [it, inserted] = texture_by_path.try_emplace(def->texture_resolved, int(mesh.textures.size()));
-    if (inserted) {
-      mesh.textures.push_back(Texture{def->texture_resolved, Image{}});
-      texture_source.push_back(def);
-    }
-    m.texture = it->second;
+    if (!def->texture_resolved.empty()) m.texture = texture_of(def, def->texture_resolved, def->texture_line, def->texture_written);
   }
+  for (size_t u = 0; u < used_defs.size(); ++u)  // after every map_Kd: their textures keep their numbers
+    for (size_t s = 0; s < kMapSlots; ++s)
+      if (!used_defs[u]->map_resolved[s].empty())
+        mesh.materials[u].maps[s] =
+            texture_of(used_defs[u], used_defs[u]->map_resolved[s], used_defs[u]->map_line[s], used_defs[u]->map_written[s]);
   if (!options_.load_textures) return;
 
   // Errors are kept per texture and the first in file order is reported, so the message does not
@@ -736,9 +792,9 @@ void ObjParser::assemble_materials(TexturedMesh& mesh) {
   const std::vector<std::string> errors = load_texture_images(mesh.textures, options_.max_texture_pixels);
   for (size_t i = 0; i < errors.size(); ++i) {
     if (errors[i].empty()) continue;
-    const MaterialDef& def = *texture_source[i];
-    fail_input("{}:{}: texture '{}' of material '{}' could not be loaded: {}", def.mtl_path, def.texture_line, excerpt(def.texture_written),
-               excerpt(def.material.name), errors[i]);
+    const Source& src = texture_source[i];
+    fail_input("{}:{}: texture '{}' of material '{}' could not be loaded: {}", src.def->mtl_path, src.line, excerpt(*src.written),
+               excerpt(src.def->material.name), errors[i]);
   }
 }
 

@@ -36,6 +36,29 @@ void append(std::string& s, double v) {
   s.append(buf, end);
 }
 
+/// The MTL statements of a material's other maps (Material::maps) with map_Kd's options: map_Ks (and
+/// Ks 1 1 1, which multiplies it), map_Ke (and Ke 1 1 1), map_Pr, map_Pm, norm, map_Bump; glTF's
+/// metallic-roughness image as map_Pr and map_Pm reading its green and blue (-imfchan). glTF's
+/// occlusion has no MTL statement and is not written.
+std::string map_lines(const Material& m, const std::string& options, const std::vector<std::string>& texture_file) {
+  static constexpr std::pair<MapSlot, const char*> kStatements[] = {{MapSlot::kSpecular, "map_Ks"},  {MapSlot::kEmissive, "map_Ke"},
+                                                                    {MapSlot::kRoughness, "map_Pr"}, {MapSlot::kMetallic, "map_Pm"},
+                                                                    {MapSlot::kNormal, "norm"},      {MapSlot::kBump, "map_Bump"}};
+  std::string lines;
+  for (const auto& [slot, keyword] : kStatements) {
+    const int tex = m.maps[size_t(slot)];
+    if (tex < 0) continue;
+    if (slot == MapSlot::kSpecular) lines += "Ks 1 1 1\n";
+    if (slot == MapSlot::kEmissive) lines += "Ke 1 1 1\n";
+    lines += fmt::format("{} {}{}\n", keyword, options, texture_file[size_t(tex)]);
+  }
+  const int mr = m.maps[size_t(MapSlot::kMetallicRoughness)];
+  if (mr >= 0 && m.maps[size_t(MapSlot::kRoughness)] < 0 && m.maps[size_t(MapSlot::kMetallic)] < 0)
+    lines += fmt::format("map_Pr -imfchan g {}{}\nmap_Pm -imfchan b {}{}\n", options, texture_file[size_t(mr)], options,
+                         texture_file[size_t(mr)]);
+  return lines;
+}
+
 /// The MTL file: one material each, map_Kd naming the texture files as written (`texture_file`).
 std::string mtl_text(const TexturedMesh& mesh, const std::vector<std::string>& texture_file) {
   std::string mtl = "# written by tightex\n";
@@ -50,6 +73,7 @@ std::string mtl_text(const TexturedMesh& mesh, const std::vector<std::string>& t
     if (m.uv_offset != std::array<double, 2>{0.0, 0.0})
       options += fmt::format("-o {} {} 0 ", format_double(m.uv_offset[0]), format_double(m.uv_offset[1]));
     mtl += fmt::format("map_Kd {}{}\n", options, texture_file[size_t(m.texture)]);
+    mtl += map_lines(m, options, texture_file);
   }
   return mtl;
 }

@@ -1,6 +1,7 @@
 // bake_plan: the texture half of the method, the output model, the bake (§4.3) and the metrics.
 #include "core/error.hpp"
 #include "core/progress.hpp"
+#include "pipeline/bake_maps.hpp"
 #include "pipeline/output_model.hpp"
 #include "pipeline/plan_state.hpp"
 #include "pipeline/stage_clock.hpp"
@@ -74,9 +75,12 @@ Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& opt
   // 6. Bake the new textures (§4.3).
   progress("bake", 0);
   rep.bake = bake_new_textures(input, options, progress, om);
+  clock.done("bake");
+  // 6b. Every other map the materials bind, through the same layout (issue 30).
+  rep.maps = bake_other_maps(input, options, om);
+  if (!rep.maps.empty()) clock.done("bake_maps");
   Result result;
   result.output = std::move(om.mesh);
-  clock.done("bake");
   // 7. Measure (METRICS.md).
   if (options.measure) {
     progress("measure", 0);

@@ -53,8 +53,10 @@ std::vector<int> renumber_images(const Plan::State& plan, int* new_images) {
 }
 
 /// Appends triangle t of `input` to `out` with its corners in the order `corner` gives.
-void add_input_triangle(const TexturedMesh& input, uint32_t t, const uint8_t* corner, TexturedMesh& out) {
+void add_input_triangle(const TexturedMesh& input, uint32_t t, const uint8_t* corner, TexturedMesh& out,
+                        std::vector<uint8_t>& input_corner) {
   const Tri& it = input.triangles[t];
+  input_corner.insert(input_corner.end(), corner, corner + 3);
   out.triangles.push_back(Tri{it[corner[0]], it[corner[1]], it[corner[2]]});
   out.input_triangle.push_back(t);
   if (!input.corner_normal.empty())
@@ -76,7 +78,7 @@ void add_mapped_triangles(const Plan::State& plan, const TexturedMesh& input, co
       if (t == kNone) continue;  // scaffolding
       BakeTriangle bt = bake_triangle(input, disk, f, plan.uv[c], r);
       bt.image = uint32_t(image);
-      add_input_triangle(input, t, &disk.input_corner[3 * size_t(f)], om.mesh);
+      add_input_triangle(input, t, &disk.input_corner[3 * size_t(f)], om.mesh, om.input_corner);
       for (const Vec2& px : bt.target_px) om.mesh.corner_uv.push_back(Vec2(px.x() / W, 1.0 - px.y() / H));
       om.mesh.face_material.push_back(int32_t(image));
       om.bake_triangles.push_back(bt);
@@ -114,8 +116,8 @@ int32_t kept_material(const TexturedMesh& input, int32_t in_mat, std::vector<int
   if (in_mat >= 0) m = input.materials[size_t(in_mat)];
   m.texture = -1;
   m.name = unique_name(names, "kept_" + file_name_safe(in_mat >= 0 ? input.materials[size_t(in_mat)].name : "none"));
-  if (in_mat >= 0 && input.materials[size_t(in_mat)].texture >= 0) {
-    const int in_tex = input.materials[size_t(in_mat)].texture;
+  // The input's texture copied once under a kept_ name; -1 where it is not loaded.
+  auto kept_texture = [&](int in_tex) {
     int& ot = texture_of[size_t(in_tex)];
     if (ot < 0 && !input.textures[size_t(in_tex)].image.empty()) {
       Texture tex;
@@ -124,8 +126,11 @@ int32_t kept_material(const TexturedMesh& input, int32_t in_mat, std::vector<int
       ot = int(out.textures.size());
       out.textures.push_back(std::move(tex));
     }
-    m.texture = ot;
-  }
+    return ot;
+  };
+  if (in_mat >= 0 && input.materials[size_t(in_mat)].texture >= 0) m.texture = kept_texture(input.materials[size_t(in_mat)].texture);
+  for (int& map : m.maps)
+    if (map >= 0) map = kept_texture(map);
   om = int32_t(out.materials.size());
   out.materials.push_back(std::move(m));
   return om;
@@ -133,7 +138,8 @@ int32_t kept_material(const TexturedMesh& input, int32_t in_mat, std::vector<int
 
 /// The kept components' triangles, after the mapped ones: input corners and texture coordinates as
 /// they were, each input material they use copied once (first use first, so the order is fixed).
-void add_kept_triangles(const Plan::State& plan, const TexturedMesh& input, std::set<std::string>& names, TexturedMesh& out) {
+void add_kept_triangles(const Plan::State& plan, const TexturedMesh& input, std::set<std::string>& names, TexturedMesh& out,
+                        std::vector<uint8_t>& input_corner) {
   std::vector<int32_t> material_of(input.materials.size() + 1, -1);  // input material + 1 -> output
   std::vector<int> texture_of(input.textures.size(), -1);
   for (size_t c = 0; c < plan.components.size(); ++c) {
@@ -143,7 +149,7 @@ void add_kept_triangles(const Plan::State& plan, const TexturedMesh& input, std:
       const uint32_t t = comp.input_face[cf];
       const int32_t om = kept_material(input, input.face_material[t], material_of, texture_of, names, out);
       const uint8_t* corner = &comp.input_corner[3 * size_t(cf)];
-      add_input_triangle(input, t, corner, out);
+      add_input_triangle(input, t, corner, out, input_corner);
       for (int k = 0; k < 3; ++k) out.corner_uv.push_back(input.corner_uv[3 * t + corner[k]]);
       out.face_material.push_back(om);
     }
@@ -162,7 +168,7 @@ OutputModel build_output_model(const Plan::State& plan, const TexturedMesh& inpu
   add_mapped_triangles(plan, input, image_index, om);
   std::set<std::string> names;  // file stems and material names taken, compared without case
   add_new_textures(plan, image_index, names, om);
-  add_kept_triangles(plan, input, names, om.mesh);
+  add_kept_triangles(plan, input, names, om.mesh, om.input_corner);
   return om;
 }
 

@@ -14,6 +14,8 @@ struct OutputModel {
   int new_images = 0;
   std::vector<BakeTriangle> bake_triangles;  // every mapped triangle, as the bake reads it
   std::vector<Rect> rects;                   // every mapped component's rectangle (images renumbered)
+  /// Per corner of mesh (3 per triangle): which corner of its input triangle (mesh.input_triangle) it is.
+  std::vector<uint8_t> input_corner;
 };
 
 /// Builds the output model of `plan` for `input` (the mesh it was made from).

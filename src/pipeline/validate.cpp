@@ -22,9 +22,16 @@ void validate_mesh(const TexturedMesh& m) {
     if (mat < -1 || mat >= int32_t(m.materials.size()))
       fail_input("{}: triangle {} uses material {} (mesh has {})", f, t, mat, m.materials.size());
   }
-  for (size_t i = 0; i < m.materials.size(); ++i)
+  for (size_t i = 0; i < m.materials.size(); ++i) {
     if (m.materials[i].texture >= int(m.textures.size()))
       fail_input("{}: material {} uses texture {} (mesh has {})", f, i, m.materials[i].texture, m.textures.size());
+    for (size_t s = 0; s < kMapSlots; ++s)
+      if (m.materials[i].maps[s] < -1 || m.materials[i].maps[s] >= int(m.textures.size()))
+        fail_input("{}: material {} binds texture {} as its {} map (mesh has {})", f, i, m.materials[i].maps[s], map_slot_name(MapSlot(s)),
+                   m.textures.size());
+  }
+  if (!m.corner_tangent.empty() && m.corner_tangent.size() != 3 * m.triangles.size())
+    fail_input("{}: {} corner tangents for {} triangles (needs 3 per triangle or none)", f, m.corner_tangent.size(), m.triangles.size());
 }
 
 }  // namespace tightex

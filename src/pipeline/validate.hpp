@@ -5,7 +5,8 @@
 namespace tightex {
 
 /// Throws InputError naming the element where `mesh` has no triangle, a non-finite coordinate, an index
-/// out of range, or not three texture coordinates per triangle.
+/// out of range (a material's texture or map included), not three texture coordinates per triangle, or
+/// corner tangents neither absent nor three per triangle.
 void validate_mesh(const TexturedMesh& mesh);
 
 }  // namespace tightex

@@ -167,8 +167,22 @@ std::vector<double> relative_density(const TexturedMesh& mesh) {
   return density;
 }
 
+/// The map slots texture i serves besides a base colour ("metallic_roughness + occlusion"), or "" for a
+/// base colour or a texture no material binds as a map.
+std::string map_slots_of(const TexturedMesh& mesh, int i) {
+  std::string slots;
+  for (const Material& m : mesh.materials)
+    if (m.texture == i) return "";
+  for (size_t s = 0; s < kMapSlots; ++s) {
+    const bool bound = std::any_of(mesh.materials.begin(), mesh.materials.end(), [&](const Material& m) { return m.maps[s] == i; });
+    if (bound) slots += (slots.empty() ? "" : " + ") + std::string(map_slot_name(MapSlot(s)));
+  }
+  return slots;
+}
+
 /// The model's textures for display: full size, and the image box-filtered to at most `max_side`
-/// pixels a side, as a data-URI JPEG ("" where the pixels are not loaded).
+/// pixels a side, as a data-URI JPEG ("" where the pixels are not loaded), and the map slots each
+/// serves ("map": "" for a base colour).
 json textures_json(const TexturedMesh& mesh, const HtmlReportOptions& options) {
   json textures = json::array();
   for (size_t i = 0; i < mesh.textures.size(); ++i) {
@@ -183,7 +197,7 @@ json textures_json(const TexturedMesh& mesh, const HtmlReportOptions& options) {
       const std::string jpeg = encode_jpeg(height == image.height ? image : box_shrink(image, height), options.jpeg_quality);
       uri = "data:image/jpeg;base64," + base64(jpeg.data(), jpeg.size());
     }
-    textures.push_back({{"width", w}, {"height", h}, {"image", uri}});
+    textures.push_back({{"width", w}, {"height", h}, {"image", uri}, {"map", map_slots_of(mesh, int(i))}});
   }
   return textures;
 }

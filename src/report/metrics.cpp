@@ -14,6 +14,7 @@
 #include "core/raster.hpp"
 #include "core/statistics.hpp"
 #include "core/surface.hpp"
+#include "core/tangents.hpp"
 
 namespace tightex {
 
@@ -87,7 +88,15 @@ ModelFigures measure_texture_space(const TexturedMesh& mesh) {
     const int tex = texture_of(mesh, t);
     if (tex >= 0) tris[size_t(tex)].push_back(t);
   }
+  // A texture bound only as another map (MapSlot) shares the base colour's layout: not counted again.
+  std::vector<uint8_t> map_only(mesh.textures.size(), 0);
+  for (const Material& m : mesh.materials)
+    for (int tex : m.maps)
+      if (tex >= 0 && size_t(tex) < map_only.size()) map_only[size_t(tex)] = 1;
+  for (const Material& m : mesh.materials)
+    if (m.texture >= 0 && size_t(m.texture) < map_only.size()) map_only[size_t(m.texture)] = 0;
   for (size_t i = 0; i < mesh.textures.size(); ++i) {
+    if (map_only[i]) continue;
     // Not a structured binding: clang 14 (the fuzz build) cannot capture one in the lambda below.
     const std::pair<int, int> size = texture_size(mesh, int(i));
     const int W = size.first, H = size.second;
@@ -409,6 +418,102 @@ std::pair<double, size_t> measure_surface_psnr(const TexturedMesh& in, const Tex
   return {mse > 0 ? 10 * std::log10(255.0 * 255.0 / mse) : 99.0, n / 3};
 }
 
+/// The image triangle t of `m` binds in `slot`; nullptr when none (or not loaded).
+const Image* map_image_of(const TexturedMesh& m, size_t t, MapSlot slot) {
+  const int32_t mat = m.face_material[t];
+  if (mat < 0) return nullptr;
+  const int tex = m.materials[size_t(mat)].maps[size_t(slot)];
+  if (tex < 0 || m.textures[size_t(tex)].image.empty()) return nullptr;
+  return &m.textures[size_t(tex)].image;
+}
+
+/// The object-space normal of a tangent-space normal map `img` at point uv of triangle t of `m` with
+/// barycentrics b (of t's own corners), decoded as glTF does through the corner tangents.
+Vec3 decoded_normal(const TexturedMesh& m, size_t t, const double* b, const std::vector<Eigen::Vector4d>& tangents, const Image& img,
+                    const Vec2& uv) {
+  Vec3 tangent = Vec3::Zero(), normal = Vec3::Zero();
+  for (int k = 0; k < 3; ++k) tangent += b[k] * tangents[3 * t + size_t(k)].head<3>(), normal += b[k] * frame_normal(m, t, k);
+  const Vec3 bitangent = (tangents[3 * t].w() < 0 ? -1.0 : 1.0) * normal.cross(tangent);
+  const auto c = sample_bilinear(img, uv.x(), uv.y());
+  const Vec3 n = (c[0] / 127.5 - 1) * tangent + (c[1] / 127.5 - 1) * bitangent + (c[2] / 127.5 - 1) * normal;
+  return n.norm() > 0 ? Vec3(n.normalized()) : Vec3(normal.normalized());
+}
+
+/// One slot's MapFigures at the surface PSNR's points (those whose input triangle binds the map).
+MapFigures measure_map_slot(const TexturedMesh& in, const TexturedMesh& out, const Correspondence& c, MapSlot slot, size_t samples,
+                            const std::vector<Eigen::Vector4d>& in_tangents, const std::vector<Eigen::Vector4d>& out_tangents) {
+  MapFigures f;
+  f.slot = slot;
+  const bool normal_map = map_encoding(slot) == MapEncoding::kTangentNormal;
+  const unsigned channels = map_slot_channels(slot);
+  std::vector<double> cdf(in.num_triangles());
+  double acc = 0;
+  for (size_t t = 0; t < in.num_triangles(); ++t) cdf[t] = acc += c.area3[t];
+  std::mt19937_64 rng(kPsnrSeed);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  double se = 0, n = 0;
+  std::vector<double> angles;
+  for (size_t s = 0; s < samples && acc > 0; ++s) {
+    const double pick = uni(rng) * acc;
+    const size_t t = size_t(std::upper_bound(cdf.begin(), cdf.end(), pick) - cdf.begin());
+    double r1 = uni(rng), r2 = uni(rng);
+    if (r1 + r2 > 1) r1 = 1 - r1, r2 = 1 - r2;
+    const double b[3] = {1 - r1 - r2, r1, r2};
+    if (t >= in.num_triangles()) continue;
+    const Image* ii = map_image_of(in, t, slot);
+    if (!ii) continue;
+    const Vec2 uin = b[0] * in.sampled_uv(t, 0) + b[1] * in.sampled_uv(t, 1) + b[2] * in.sampled_uv(t, 2);
+    const uint32_t o = c.match[t];
+    const Image* oi = o == kNone ? nullptr : map_image_of(out, o, slot);
+    double bo[3] = {0, 0, 0};
+    Vec2 uout(0, 0);
+    if (o != kNone)
+      for (int k = 0; k < 3; ++k) bo[c.corner_map[t][size_t(k)]] = b[k], uout += b[k] * out.sampled_uv(o, c.corner_map[t][size_t(k)]);
+    ++f.samples;
+    if (normal_map) {
+      const Vec3 ni = decoded_normal(in, t, b, in_tangents, *ii, uin);
+      const Vec3 no = oi ? decoded_normal(out, o, bo, out_tangents, *oi, uout) : -ni;
+      angles.push_back(std::acos(std::clamp(ni.dot(no), -1.0, 1.0)) * 180 / M_PI);
+      continue;
+    }
+    const auto ci = sample_bilinear(*ii, uin.x(), uin.y());
+    const auto co = oi ? sample_bilinear(*oi, uout.x(), uout.y()) : std::array<float, 4>{0, 0, 0, 0};
+    for (int k = 0; k < 3; ++k)
+      if (channels & (1u << k)) {
+        const double d = double(std::lround(ci[size_t(k)]) - std::lround(co[size_t(k)]));
+        se += d * d, n += 1;
+      }
+  }
+  const double mse = n > 0 ? se / n : 0;
+  f.surface_psnr = mse > 0 ? 10 * std::log10(255.0 * 255.0 / mse) : 99.0;
+  if (normal_map && !angles.empty()) {
+    std::sort(angles.begin(), angles.end());
+    f.angle_median = angles[angles.size() / 2];
+    f.angle_p95 = angles[std::min(angles.size() - 1, size_t(0.95 * double(angles.size())))];
+  }
+  return f;
+}
+
+/// Whether some material of m binds `slot` to a loaded image.
+bool binds(const TexturedMesh& m, MapSlot slot) {
+  for (const Material& mat : m.materials)
+    if (mat.maps[size_t(slot)] >= 0 && !m.textures[size_t(mat.maps[size_t(slot)])].image.empty()) return true;
+  return false;
+}
+
+std::vector<MapFigures> measure_maps(const TexturedMesh& in, const TexturedMesh& out, const Correspondence& c, size_t samples) {
+  std::vector<MapFigures> figures;
+  std::vector<Eigen::Vector4d> in_tangents, out_tangents;
+  for (size_t s = 0; s < kMapSlots; ++s) {
+    const MapSlot slot = MapSlot(s);
+    if (!binds(in, slot) || !binds(out, slot)) continue;
+    if (map_encoding(slot) == MapEncoding::kTangentNormal && in_tangents.empty())
+      in_tangents = completed_corner_tangents(in), out_tangents = completed_corner_tangents(out);
+    figures.push_back(measure_map_slot(in, out, c, slot, samples, in_tangents, out_tangents));
+  }
+  return figures;
+}
+
 }  // namespace
 
 Metrics measure(const TexturedMesh& in, const TexturedMesh& out, size_t psnr_samples) {
@@ -424,7 +529,8 @@ Metrics measure(const TexturedMesh& in, const TexturedMesh& out, size_t psnr_sam
                          r.detail_loss_area = d.detail_loss_area;
                        },
                        [&] { std::tie(r.angle_distortion_mean, r.angle_distortion_p95) = measure_angle_distortion(in, out, c); },
-                       [&] { std::tie(r.surface_psnr, r.psnr_samples) = measure_surface_psnr(in, out, c, psnr_samples); });
+                       [&] { std::tie(r.surface_psnr, r.psnr_samples) = measure_surface_psnr(in, out, c, psnr_samples); },
+                       [&] { r.maps = measure_maps(in, out, c, psnr_samples); });
   return r;
 }
 
@@ -447,7 +553,27 @@ nlohmann::json to_json(const Metrics& m) {
   j["angle_distortion"] = {{"mean", m.angle_distortion_mean}, {"p95", m.angle_distortion_p95}};
   j["surface_psnr_db"] = m.surface_psnr;
   j["psnr_samples"] = m.psnr_samples;
+  if (!m.maps.empty()) {
+    nlohmann::json maps = nlohmann::json::array();
+    for (const MapFigures& f : m.maps) {
+      nlohmann::json e = {{"slot", map_slot_name(f.slot)}, {"samples", f.samples}};
+      if (map_encoding(f.slot) == MapEncoding::kTangentNormal)
+        e["normal_angle_median_deg"] = f.angle_median, e["normal_angle_p95_deg"] = f.angle_p95;
+      else
+        e["surface_psnr_db"] = f.surface_psnr;
+      maps.push_back(std::move(e));
+    }
+    j["maps"] = std::move(maps);
+  }
   return j;
+}
+
+}  // namespace tightex
+
+namespace tightex {
+
+std::vector<MapFigures> measure_maps(const TexturedMesh& input, const TexturedMesh& output, size_t samples) {
+  return measure_maps(input, output, match_triangles(input, output), samples);
 }
 
 }  // namespace tightex

@@ -19,6 +19,16 @@ struct ModelFigures {
   size_t texels = 0;  // sum of W x H
 };
 
+/// One map slot's figures (METRICS.md's surface PSNR, over the channels the slot reads; for a
+/// tangent-space normal map the angle between the object-space normals decoded from input and output
+/// through their own tangent frames, in degrees).
+struct MapFigures {
+  MapSlot slot = MapSlot::kMetallicRoughness;
+  double surface_psnr = 0;                   // not for normal maps
+  double angle_median = -1, angle_p95 = -1;  // normal maps only
+  size_t samples = 0;                        // points where the input binds the map
+};
+
 struct Metrics {
   ModelFigures input, output;
   size_t lost_triangles = 0;
@@ -32,10 +42,13 @@ struct Metrics {
   double angle_distortion_mean = 0, angle_distortion_p95 = 0;
   double surface_psnr = 0;
   size_t psnr_samples = 0;
+  std::vector<MapFigures> maps;  // each slot bound in the input and in the output
 };
 
 /// Texel utilization of a model (texel centres inside at least one triangle sampling that image,
-/// edges included; coordinates outside [0,1] wrap as a renderer's repeat sampler does).
+/// edges included; coordinates outside [0,1] wrap as a renderer's repeat sampler does). Textures that
+/// no material binds as its base colour but some binds as another map (Material::maps) are not
+/// counted: they share the base colour's layout.
 ModelFigures measure_texture_space(const TexturedMesh& mesh);
 
 /// Charts (triangles joined through edges with equal uv on both sides) of a model; `seam_length`
@@ -49,6 +62,9 @@ size_t count_charts(const TexturedMesh& mesh, double* seam_length);
 /// `psnr_samples` points with a fixed seed, so the same models always give the same figures. Never
 /// throws but for allocation.
 Metrics measure(const TexturedMesh& input, const TexturedMesh& output, size_t psnr_samples = 200000);
+
+/// The figures of every map slot that both models bind (MapFigures), at the surface PSNR's points.
+std::vector<MapFigures> measure_maps(const TexturedMesh& input, const TexturedMesh& output, size_t samples = 200000);
 
 /// The metrics as report.json's "metrics" section (and `tightex measure`'s output).
 nlohmann::json to_json(const Metrics& m);

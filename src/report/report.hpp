@@ -39,7 +39,8 @@ struct OptionsUsed {
   bool fit = true;
   bool fine_fit = false;  // in effect: false without `fit`
   CornerRule corners = CornerRule::kEqualArcs;
-  double aspect = 0;  // as asked (Options::aspect); 0: "auto"
+  double aspect = 0;          // as asked (Options::aspect); 0: "auto"
+  double map_budget_db = 51;  // Options::map_budget_db
 };
 
 /// One shape the auto aspect tried ("aspect"/"probes").
@@ -95,6 +96,19 @@ struct StageTiming {
   std::optional<double> peak_rss_mib;  // peak RSS at the stage's end; not written when unset
 };
 
+/// "maps": one output map besides the base colour (bake_other_maps).
+struct MapEntry {
+  std::string name;                        // the first slot's name (map_slot_name)
+  std::vector<std::string> slots;          // every slot it serves ("metallic_roughness", "occlusion")
+  std::string encoding;                    // "srgb_colour", "data" or "tangent_normal"
+  std::vector<std::pair<int, int>> sizes;  // per page
+  int reduction = 1;                       // each side is the base colour's over this
+  /// The chosen size's PSNR at the judging points (bake_other_maps): against the input's map (a normal
+  /// map: against its full-size bake); 99 when not judged.
+  double judged_psnr_db = 99;
+  double seconds = 0;  // its bake and the choice of its size
+};
+
 /// "output": where the CLI wrote the model.
 struct OutputFiles {
   std::string directory;
@@ -113,6 +127,7 @@ struct Report {
   std::vector<ComponentEntry> components;  // the listed ones, in plan order
   std::vector<StageTiming> timings;        // in the order the stages ran
   std::optional<BakeStats> bake;
+  std::vector<MapEntry> maps;  // written only when not empty
   std::optional<Metrics> metrics;
   std::optional<double> peak_rss_mib;
   std::optional<double> wall_seconds;

@@ -30,7 +30,8 @@ json options_json(const OptionsUsed& o) {
           {"fit", o.fit},
           {"fine_fit", o.fine_fit},
           {"corners", std::string(to_string(o.corners))},
-          {"aspect", aspect_json(o.aspect)}};
+          {"aspect", aspect_json(o.aspect)},
+          {"map_budget_db", o.map_budget_db}};
 }
 
 json aspect_choice_json(const AspectChoice& a) {
@@ -185,6 +186,18 @@ json to_json(const Report& report) {
   for (const StageTiming& t : report.timings) timings.push_back(to_json(t));
   j["timings"] = std::move(timings);
   if (report.bake) j["bake"] = bake_json(*report.bake);
+  if (!report.maps.empty()) {
+    json maps = json::array();
+    for (const MapEntry& m : report.maps)
+      maps.push_back({{"name", m.name},
+                      {"slots", m.slots},
+                      {"encoding", m.encoding},
+                      {"sizes", m.sizes},
+                      {"reduction", m.reduction},
+                      {"judged_psnr_db", m.judged_psnr_db},
+                      {"seconds", m.seconds}});
+    j["maps"] = std::move(maps);
+  }
   if (report.metrics) j["metrics"] = to_json(*report.metrics);
   if (report.peak_rss_mib) j["peak_rss_mib"] = *report.peak_rss_mib;
   if (report.wall_seconds) j["wall_seconds"] = *report.wall_seconds;

@@ -330,8 +330,10 @@
       };
       draws.push(draw);
       const used = p.mi === 0 ? 'metrics.input.image_utilization.' : 'metrics.output.image_utilization.';
-      const caption = el('figcaption', {}, [(p.mi === 0 ? 'Input' : 'Output') + (p.m.textures.length > 1 ? ' page ' + (p.ti + 1) : '') +
-        ': ' + p.t.width + ' \u00d7 ' + p.t.height + ' texels, ', reportNumber(used + p.ti, 1, 100, ' % used')]);
+      const caption = p.t.map
+        ? el('figcaption', { text: (p.mi === 0 ? 'Input ' : 'Output ') + p.t.map + ' map: ' + p.t.width + ' \u00d7 ' + p.t.height + ' texels' })
+        : el('figcaption', {}, [(p.mi === 0 ? 'Input' : 'Output') + (p.m.textures.length > 1 ? ' page ' + (p.ti + 1) : '') +
+          ': ' + p.t.width + ' \u00d7 ' + p.t.height + ' texels, ', reportNumber(used + p.ti, 1, 100, ' % used')]);
       row.append(el('figure', { class: 'atlas' }, [canvas, caption]));
     }
     const box = document.getElementById('show-outlines');
@@ -377,6 +379,7 @@
     const colors = Array.from({ length: 257 }, (_, i) => densityColor(((i / 128) - 1) * kDensityRange).map((c) => Math.round(c * 255)));
     const grey = [128, 128, 128];
     output.textures.forEach((t, page) => {
+      if (t.map) return;  // a map shares its base colour page's layout and density
       const scale = 420 / Math.max(t.width, t.height);
       const { canvas, ctx } = hiDpiCanvas(Math.round(t.width * scale), Math.round(t.height * scale));
       canvas.id = page === 0 ? 'heatmap' : 'heatmap-' + page;

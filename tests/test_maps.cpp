@@ -1,0 +1,186 @@
+// Every map a material binds (issue 30): the maps re-baked through the new layout, one image in two
+// slots kept as one, tangent-space normals re-expressed in the output's frame, and the tangent frames
+// compatible with the TANGENT an exporter writes.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include <fmt/format.h>
+#include "bake/bake.hpp"
+#include "core/raster.hpp"
+#include "core/tangents.hpp"
+
+#include "genus_surfaces.hpp"
+#include "pipeline/bake_maps.hpp"
+#include "pipeline/output_model.hpp"
+#include "pipeline/plan_state.hpp"
+#include "report/metrics.hpp"
+#include "tightex/io.hpp"
+#include "tightex/tightex.hpp"
+
+namespace tightex {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// An object-space normal field: the surface normal n tilted by 25 degrees towards a direction that
+/// turns with the position.
+Vec3 tilted(const Vec3& p, const Vec3& n) {
+  const Vec3 u = (std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(n).normalized(), v = n.cross(u);
+  const double turn = 1.7 * p.x() + 1.3 * p.y() + 0.9 * p.z(), tilt = 25 * M_PI / 180;
+  return (std::cos(tilt) * n + std::sin(tilt) * (std::cos(turn) * u + std::sin(turn) * v)).normalized();
+}
+
+/// The perforated plate of the genus tests (each triangle its own chart, turned as its first edge) with
+/// a tangent-space normal map of `tilted` through its own frames, and one image bound as both
+/// metallic-roughness and occlusion (a hard metallic mask in blue).
+TexturedMesh plate_with_maps() {
+  TexturedMesh m = testing::perforated_plate(1);
+  const Image& colour = m.textures[0].image;
+  const int W = colour.width, H = colour.height;
+  Image normal(W, H, Rgba8{128, 128, 255, 255}), orm(W, H, Rgba8{255, 128, 0, 255});
+  const std::vector<Eigen::Vector4d> tg = compute_corner_tangents(m);
+  for (size_t t = 0; t < m.num_triangles(); ++t) {
+    Vec2 px[3];
+    for (int k = 0; k < 3; ++k) px[k] = Vec2(m.corner_uv[3 * t + size_t(k)].x() * W, (1 - m.corner_uv[3 * t + size_t(k)].y()) * H);
+    // Over the whole cell (extrapolated), as the colour: 16 texels a side from the triangle's corner.
+    const int cx = int(std::floor(std::min({px[0].x(), px[1].x(), px[2].x()}) / 16)) * 16;
+    const int cy = int(std::floor(std::min({px[0].y(), px[1].y(), px[2].y()}) / 16)) * 16;
+    const Vec3 n = frame_normal(m, t, 0), T = tg[3 * t].head<3>(), B = tg[3 * t].w() * n.cross(T);
+    const double det = (px[1] - px[0]).x() * (px[2] - px[0]).y() - (px[1] - px[0]).y() * (px[2] - px[0]).x();
+    for (int y = cy; y < cy + 16; ++y)
+      for (int x = cx; x < cx + 16; ++x) {
+        const Vec2 d = Vec2(x + 0.5, y + 0.5) - px[0];
+        const double b1 = (d.x() * (px[2] - px[0]).y() - d.y() * (px[2] - px[0]).x()) / det;
+        const double b2 = ((px[1] - px[0]).x() * d.y() - (px[1] - px[0]).y() * d.x()) / det;
+        const Vec3 p =
+            (1 - b1 - b2) * m.positions[m.triangles[t][0]] + b1 * m.positions[m.triangles[t][1]] + b2 * m.positions[m.triangles[t][2]];
+        const Vec3 o = tilted(p, n);
+        auto q = [](double c) { return uint8_t(std::lround(std::clamp((c + 1) * 127.5, 0.0, 255.0))); };
+        normal.at(x, y) = {q(o.dot(T)), q(o.dot(B)), q(o.dot(n)), 255};
+        orm.at(x, y) = {uint8_t(200 + 40 * std::sin(p.x())), 128, uint8_t(std::sin(2 * p.x()) * std::sin(2 * p.y()) > 0 ? 255 : 0), 255};
+      }
+  }
+  m.textures.push_back(Texture{"normal", std::move(normal)});
+  m.textures.push_back(Texture{"orm", std::move(orm)});
+  m.materials[0].maps[size_t(MapSlot::kNormal)] = 1;
+  m.materials[0].maps[size_t(MapSlot::kMetallicRoughness)] = 2;
+  m.materials[0].maps[size_t(MapSlot::kOcclusion)] = 2;
+  return m;
+}
+
+Options small_options() {
+  Options opt;
+  opt.size = 128;
+  opt.aspect = 1.0;
+  return opt;
+}
+
+const MapFigures* figures_of(const std::vector<MapFigures>& all, MapSlot slot) {
+  for (const MapFigures& f : all)
+    if (f.slot == slot) return &f;
+  return nullptr;
+}
+
+TEST(Maps, EverySlotIsRebakedAndOneImageInTwoSlotsStaysOne) {
+  const TexturedMesh in = plate_with_maps();
+  const Result r = optimize(in, small_options());
+  const TexturedMesh& out = r.output;
+  const Material& mat = out.materials[0];
+  ASSERT_GE(mat.maps[size_t(MapSlot::kNormal)], 0);
+  ASSERT_GE(mat.maps[size_t(MapSlot::kMetallicRoughness)], 0);
+  EXPECT_EQ(mat.maps[size_t(MapSlot::kOcclusion)], mat.maps[size_t(MapSlot::kMetallicRoughness)]);
+  EXPECT_NE(mat.maps[size_t(MapSlot::kNormal)], mat.texture);
+  EXPECT_EQ(out.corner_tangent.size(), 3 * out.num_triangles());
+  ASSERT_TRUE(r.report.contains("maps"));
+  EXPECT_EQ(r.report["maps"].size(), 2u);  // metallic-roughness with occlusion, and normal
+  const std::vector<MapFigures> figures = measure_maps(in, out);
+  const MapFigures* mr = figures_of(figures, MapSlot::kMetallicRoughness);
+  ASSERT_NE(mr, nullptr);
+  EXPECT_GT(mr->surface_psnr, 25.0);  // the hard mask where it belongs
+}
+
+TEST(Maps, NormalsAreReexpressedInTheNewFrameWhereCopiedTexelsFail) {
+  const TexturedMesh in = plate_with_maps();
+  const Plan plan = plan_charts(in, small_options());
+  OutputModel om = build_output_model(plan.state(), in);
+  const OutputModel plain = om;
+  bake_other_maps(in, small_options(), om);
+  const MapFigures* ours = nullptr;
+  const std::vector<MapFigures> figures = measure_maps(in, om.mesh);
+  ours = figures_of(figures, MapSlot::kNormal);
+  ASSERT_NE(ours, nullptr);
+  EXPECT_LT(ours->angle_median, 2.0);
+  EXPECT_LT(ours->angle_p95, 8.0);
+  // The same layout with the tangent-space texels carried as data: the frames of the new charts differ
+  // from the input's, so the decoded normals turn away.
+  OutputModel copied = plain;
+  MapSource as_data;
+  as_data.encoding = MapEncoding::kData;
+  as_data.texture_of_material = {1};
+  std::vector<Image> pages;
+  for (int p = 0; p < copied.new_images; ++p)
+    pages.emplace_back(copied.mesh.textures[size_t(p)].image.width, copied.mesh.textures[size_t(p)].image.height);
+  bake_map(in, as_data, copied.bake_triangles, copied.rects, pages, nullptr);
+  for (int p = 0; p < copied.new_images; ++p) {
+    copied.mesh.materials[size_t(p)].maps[size_t(MapSlot::kNormal)] = int(copied.mesh.textures.size());
+    copied.mesh.textures.push_back(Texture{"copied", std::move(pages[size_t(p)])});
+  }
+  copied.mesh.corner_tangent = compute_corner_tangents(copied.mesh);
+  const std::vector<MapFigures> copied_figures = measure_maps(in, copied.mesh);
+  const MapFigures* copy = figures_of(copied_figures, MapSlot::kNormal);
+  ASSERT_NE(copy, nullptr);
+  EXPECT_GT(copy->angle_median, 2.0);
+}
+
+TEST(Maps, ObjMapsAreReadRebakedAndWritten) {
+  TexturedMesh m = plate_with_maps();
+  // As an OBJ scan's MTL binds them: a normal map (norm), a specular colour and a height map.
+  m.materials[0].maps = {-1, -1, -1, 1, 2, -1, -1, 2};
+  const fs::path dir = fs::temp_directory_path() / fmt::format("tightex_maps_obj_{}", ::getpid());
+  fs::remove_all(dir);
+  write_obj(m, (dir / "in").string(), "plate", ImageFormat::kPng);
+  ObjReadStats stats;
+  const TexturedMesh in = read_obj((dir / "in" / "plate.obj").string(), {}, &stats);
+  EXPECT_TRUE(stats.not_read.empty());
+  ASSERT_EQ(in.materials.size(), 1u);
+  EXPECT_EQ(in.textures.size(), 3u);  // map_Ks and map_Bump name one file: one texture
+  EXPECT_GE(in.materials[0].maps[size_t(MapSlot::kNormal)], 0);
+  EXPECT_EQ(in.materials[0].maps[size_t(MapSlot::kSpecular)], in.materials[0].maps[size_t(MapSlot::kBump)]);
+  const Result r = optimize(in, small_options());
+  write_obj(r.output, (dir / "out").string(), "plate", ImageFormat::kPng);
+  const TexturedMesh back = read_obj((dir / "out" / "plate.obj").string());
+  for (const MapSlot slot : {MapSlot::kNormal, MapSlot::kSpecular, MapSlot::kBump})
+    EXPECT_GE(back.materials[0].maps[size_t(slot)], 0) << map_slot_name(slot);
+  const std::vector<MapFigures> figures = measure_maps(in, back);
+  const MapFigures* normal = figures_of(figures, MapSlot::kNormal);
+  ASSERT_NE(normal, nullptr);  // OBJ has no TANGENT: both sides take the computed frames
+  EXPECT_LT(normal->angle_median, 2.0);
+  fs::remove_all(dir);
+}
+
+TEST(Maps, ComputedTangentsAgreeWithAnExportersTangentAttribute) {
+  const fs::path file = fs::path(TIGHTEX_SHARED_DATA) / "khronos_waterbottle" / "WaterBottle.glb";
+  if (!fs::exists(file)) GTEST_SKIP() << file << " is absent";
+  ModelReadOptions ro;
+  ro.load_textures = false;
+  const TexturedMesh m = read_gltf(file.string(), ro);
+  ASSERT_EQ(m.corner_tangent.size(), 3 * m.num_triangles());
+  const std::vector<Eigen::Vector4d> ours = compute_corner_tangents(m);
+  std::vector<double> angle;
+  size_t same_sign = 0;
+  for (size_t c = 0; c < ours.size(); ++c) {
+    const Vec3 a = ours[c].head<3>(), b = m.corner_tangent[c].head<3>().normalized();
+    angle.push_back(std::acos(std::clamp(a.dot(b), -1.0, 1.0)) * 180 / M_PI);
+    same_sign += (ours[c].w() > 0) == (m.corner_tangent[c].w() > 0);
+  }
+  std::sort(angle.begin(), angle.end());
+  EXPECT_LT(angle[angle.size() / 2], 1.0);
+  EXPECT_GT(double(same_sign), 0.99 * double(ours.size()));
+}
+
+}  // namespace
+}  // namespace tightex

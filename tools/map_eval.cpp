@@ -1,0 +1,240 @@
+// The maps' evaluator of issue 30 (BENCHMARKS.md, "Every map"): for each map slot of an input and its
+// tightex output, the surface PSNR (METRICS.md's points, the channels the slot reads) against what an
+// ideal re-sampler keeps, and the normal maps' object-space angular error. Also makes the scan-like
+// test model: the demo's vase with a hard-mask metallic channel and a tangent-space normal map whose
+// normals tilt 20-30 degrees.
+//
+//   tightex_map_eval make-scan DEMO.obj OUTDIR      writes OUTDIR/scan_pbr.glb
+//   tightex_map_eval compare INPUT OUTPUT          one table row per map, exit 1 when a check fails
+//
+// The ideal re-sampler: every new texel the box average of 4 x 4 bilinear samples over its footprint,
+// on a grid rotated 30 degrees at the input's own texel density, read back bilinearly.
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/image.hpp"
+#include "core/mesh.hpp"
+#include "core/raster.hpp"
+#include "core/tangents.hpp"
+#include "report/metrics.hpp"
+#include "tightex/io.hpp"
+
+using namespace tightex;
+
+namespace {
+
+constexpr double kRotation = 30.0 * M_PI / 180.0;
+constexpr size_t kSamples = 200000;
+constexpr uint64_t kSeed = 20240606;  // METRICS.md's surface PSNR seed
+
+/// The ideal re-sampler's value of `img` at texture coordinates uv (8-bit levels, rounded as stored).
+std::array<float, 4> ideal_resample(const Image& img, const Vec2& uv) {
+  const Eigen::Rotation2Dd rot(kRotation);
+  const Vec2 X(uv.x() * img.width, (1 - uv.y()) * img.height);  // input pixel units, texel centres at +0.5
+  const Vec2 q = rot.inverse() * X;                             // rotated grid units
+  const double gx = q.x() - 0.5, gy = q.y() - 0.5;
+  const double fx = std::floor(gx), fy = std::floor(gy);
+  const double tx = gx - fx, ty = gy - fy;
+  std::array<float, 4> out{0, 0, 0, 0};
+  for (int dj = 0; dj < 2; ++dj)
+    for (int di = 0; di < 2; ++di) {
+      const double w = (di ? tx : 1 - tx) * (dj ? ty : 1 - ty);
+      std::array<float, 4> texel{0, 0, 0, 0};
+      for (int b = 0; b < 4; ++b)
+        for (int a = 0; a < 4; ++a) {
+          const Vec2 p = rot * Vec2(fx + di + (a + 0.5) / 4, fy + dj + (b + 0.5) / 4);
+          const auto c = sample_bilinear(img, p.x() / img.width, 1 - p.y() / img.height);
+          for (int k = 0; k < 4; ++k) texel[size_t(k)] += c[size_t(k)] / 16;
+        }
+      for (int k = 0; k < 4; ++k) out[size_t(k)] += float(w * std::round(texel[size_t(k)]));
+    }
+  return out;
+}
+
+/// The texture of slot (-1: base colour) of triangle t, or nullptr.
+const Image* slot_image(const TexturedMesh& m, size_t t, int slot) {
+  const int32_t mat = m.face_material[t];
+  if (mat < 0) return nullptr;
+  const int tex = slot < 0 ? m.materials[size_t(mat)].texture : m.materials[size_t(mat)].maps[size_t(slot)];
+  return tex >= 0 && !m.textures[size_t(tex)].image.empty() ? &m.textures[size_t(tex)].image : nullptr;
+}
+
+/// Object-space normal of a tangent-space map value c at barycentrics b of triangle t.
+Vec3 decode(const TexturedMesh& m, const std::vector<Eigen::Vector4d>& tg, size_t t, const double* b, const std::array<float, 4>& c) {
+  Vec3 T = Vec3::Zero(), N = Vec3::Zero();
+  for (int k = 0; k < 3; ++k) T += b[k] * tg[3 * t + size_t(k)].head<3>(), N += b[k] * frame_normal(m, t, k);
+  const Vec3 B = (tg[3 * t].w() < 0 ? -1.0 : 1.0) * N.cross(T);
+  return ((c[0] / 127.5 - 1) * T + (c[1] / 127.5 - 1) * B + (c[2] / 127.5 - 1) * N).normalized();
+}
+
+struct IdealFigures {
+  double psnr = 0, median = -1, p95 = -1;
+};
+
+/// The ideal re-sampler's PSNR of slot (-1: base colour) over its channels, or for a normal map its
+/// angular error, at kSamples area-weighted points of the input.
+IdealFigures ideal_figures(const TexturedMesh& in, int slot) {
+  const bool normal = slot >= 0 && map_encoding(MapSlot(slot)) == MapEncoding::kTangentNormal;
+  const unsigned channels = slot < 0 ? 7u : map_slot_channels(MapSlot(slot));
+  const std::vector<Eigen::Vector4d> tg = normal ? completed_corner_tangents(in) : std::vector<Eigen::Vector4d>{};
+  std::vector<double> cdf(in.num_triangles());
+  double acc = 0;
+  for (size_t t = 0; t < in.num_triangles(); ++t) cdf[t] = acc += triangle_area(in.positions, in.triangles[t]);
+  std::mt19937_64 rng(kSeed);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  double se = 0, n = 0;
+  std::vector<double> angles;
+  for (size_t s = 0; s < kSamples; ++s) {
+    const size_t t = std::min(in.num_triangles() - 1, size_t(std::upper_bound(cdf.begin(), cdf.end(), uni(rng) * acc) - cdf.begin()));
+    double r1 = uni(rng), r2 = uni(rng);
+    if (r1 + r2 > 1) r1 = 1 - r1, r2 = 1 - r2;
+    const double b[3] = {1 - r1 - r2, r1, r2};
+    const Image* img = slot_image(in, t, slot);
+    if (!img) continue;
+    const Vec2 uv = b[0] * in.sampled_uv(t, 0) + b[1] * in.sampled_uv(t, 1) + b[2] * in.sampled_uv(t, 2);
+    const auto ci = sample_bilinear(*img, uv.x(), uv.y());
+    const auto co = ideal_resample(*img, uv);
+    if (normal) {
+      angles.push_back(std::acos(std::clamp(decode(in, tg, t, b, ci).dot(decode(in, tg, t, b, co)), -1.0, 1.0)) * 180 / M_PI);
+      continue;
+    }
+    for (int k = 0; k < 3; ++k)
+      if (channels & (1u << k)) {
+        const double d = double(std::lround(ci[size_t(k)]) - std::lround(co[size_t(k)]));
+        se += d * d, n += 1;
+      }
+  }
+  IdealFigures f;
+  f.psnr = n > 0 && se > 0 ? 10 * std::log10(255.0 * 255.0 * n / se) : 99.0;
+  if (!angles.empty()) {
+    std::sort(angles.begin(), angles.end());
+    f.median = angles[angles.size() / 2];
+    f.p95 = angles[size_t(0.95 * double(angles.size() - 1))];
+  }
+  return f;
+}
+
+/// The scan-like model's object-space normal at point p with surface normal n and tangent t: n tilted by
+/// 20 to 30 degrees towards a direction that turns over the surface (smooth bumps about 0.3 units wide).
+Vec3 tilted_normal(const Vec3& p, const Vec3& n, const Vec3& t) {
+  const double tilt = (20 + 10 * (0.5 + 0.5 * std::sin(7.0 * p.x() + 3.0 * p.y()))) * M_PI / 180;
+  const double turn = 2 * M_PI * (0.5 + 0.5 * std::sin(9.0 * p.y() - 5.0 * p.z() + 4.0 * p.x()));
+  const Vec3 u = (t - n * n.dot(t)).normalized(), v = n.cross(u);
+  return (std::cos(tilt) * n + std::sin(tilt) * (std::cos(turn) * u + std::sin(turn) * v)).normalized();
+}
+
+/// The demo's vase with a metallic-roughness map (a hard-mask metallic in blue, a smooth roughness in
+/// green) and a tangent-space normal map (tilted_normal), both drawn through its atlas at the colour's
+/// size: each covered texel from the surface point under it.
+int make_scan(const std::string& demo_obj, const std::string& outdir) {
+  TexturedMesh m = read_obj(demo_obj);
+  const Image& colour = m.textures.at(0).image;
+  const int W = colour.width, H = colour.height;
+  Image mr(W, H, Rgba8{255, 128, 0, 255}), normal(W, H, Rgba8{128, 128, 255, 255});
+  const std::vector<Eigen::Vector4d> tg = compute_corner_tangents(m);
+  std::vector<uint8_t> covered(size_t(W) * size_t(H), 0);
+  for (size_t t = 0; t < m.num_triangles(); ++t) {
+    Vec2 px[3];
+    for (int k = 0; k < 3; ++k) px[k] = Vec2(m.sampled_uv(t, k).x() * W, (1 - m.sampled_uv(t, k).y()) * H);
+    scan_triangle(px[0], px[1], px[2], 0, W, 0, H, EdgeRule::kInclusive, [&](long x, long y, double w0, double w1, double w2) {
+      const double b[3] = {w0, w1, w2};
+      Vec3 p = Vec3::Zero(), T = Vec3::Zero(), N = Vec3::Zero();
+      for (int k = 0; k < 3; ++k)
+        p += b[k] * m.positions[m.triangles[t][size_t(k)]], T += b[k] * tg[3 * t + size_t(k)].head<3>(), N += b[k] * frame_normal(m, t, k);
+      const bool metal = std::sin(11.0 * p.x() + 2.0 * p.z()) * std::sin(13.0 * p.y()) > 0.2;
+      const double rough = 0.5 + 0.4 * std::sin(5.0 * p.y() + 3.0 * p.x());
+      mr.at(int(x), int(y)) = {255, uint8_t(std::lround(255 * rough)), uint8_t(metal ? 255 : 0), 255};
+      const Vec3 n = tilted_normal(p, N.normalized(), T);
+      Eigen::Matrix3d frame;
+      frame.col(0) = T, frame.col(1) = (tg[3 * t].w() < 0 ? -1.0 : 1.0) * N.cross(T), frame.col(2) = N;
+      const Vec3 e = frame.fullPivLu().solve(n).normalized();
+      auto q = [](double c) { return uint8_t(std::clamp(std::lround((c + 1) * 127.5), 0l, 255l)); };
+      normal.at(int(x), int(y)) = {q(e.x()), q(e.y()), q(e.z()), 255};
+      covered[size_t(y) * size_t(W) + size_t(x)] = 1;
+    });
+  }
+  // Gutters grown 4 texels from the charts, as a scan's texturing tool pads them.
+  for (int pass = 0; pass < 4; ++pass) {
+    std::vector<uint8_t> next = covered;
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x) {
+        if (covered[size_t(y) * size_t(W) + size_t(x)]) continue;
+        for (const auto [dx, dy] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
+          const int nx = x + dx, ny = y + dy;
+          if (nx < 0 || ny < 0 || nx >= W || ny >= H || !covered[size_t(ny) * size_t(W) + size_t(nx)]) continue;
+          mr.at(x, y) = mr.at(nx, ny), normal.at(x, y) = normal.at(nx, ny);
+          next[size_t(y) * size_t(W) + size_t(x)] = 1;
+          break;
+        }
+      }
+    covered = std::move(next);
+  }
+  for (Material& mat : m.materials) {
+    mat.maps[size_t(MapSlot::kMetallicRoughness)] = int(m.textures.size());
+    mat.maps[size_t(MapSlot::kNormal)] = int(m.textures.size()) + 1;
+  }
+  m.textures.push_back(Texture{"scan_pbr_metallic_roughness", std::move(mr)});
+  m.textures.push_back(Texture{"scan_pbr_normal", std::move(normal)});
+  m.textures[0].path = "scan_pbr_base_colour";
+  m.source = "scan_pbr.obj";
+  std::filesystem::create_directories(outdir);
+  write_gltf(m, outdir, "scan_pbr", ImageFormat::kPng, GltfContainer::kGlb);
+  return 0;
+}
+
+int compare(const std::string& input_path, const std::string& output_path) {
+  const TexturedMesh in = read_model(input_path), out = read_model(output_path);
+  const Metrics m = measure(in, out);
+  const double ideal_base = ideal_figures(in, -1).psnr;
+  const std::string model = std::filesystem::path(input_path).filename().string();
+  std::printf("| model | map | ideal PSNR | ideal - base | tightex PSNR | tightex - base | margin | check |\n");
+  std::printf("| %s | base_colour | %.1f | 0 | %.1f | 0 | | lost %zu, flipped %zu |\n", model.c_str(), ideal_base, m.surface_psnr,
+              m.lost_triangles, m.flipped);
+  bool ok = m.lost_triangles == 0 && m.flipped == 0;
+  for (size_t s = 0; s < kMapSlots; ++s) {
+    bool in_has = false;
+    for (const Material& mat : in.materials) in_has |= mat.maps[s] >= 0;
+    if (!in_has) continue;
+    const auto f = std::find_if(m.maps.begin(), m.maps.end(), [&](const MapFigures& x) { return size_t(x.slot) == s; });
+    const char* name = map_slot_name(MapSlot(s));
+    if (f == m.maps.end()) {
+      std::printf("| %s | %s | | | lost | | | FAIL |\n", model.c_str(), name);
+      ok = false;
+      continue;
+    }
+    const IdealFigures ideal = ideal_figures(in, int(s));
+    if (map_encoding(MapSlot(s)) == MapEncoding::kTangentNormal) {
+      const bool pass = f->angle_median < 2 && f->angle_p95 < 8;
+      std::printf("| %s | %s (angle median / P95, deg) | %.2f / %.2f | | %.2f / %.2f | | %s |\n", model.c_str(), name, ideal.median,
+                  ideal.p95, f->angle_median, f->angle_p95, pass ? "pass" : "FAIL");
+      ok = ok && pass;
+      continue;
+    }
+    const double ideal_diff = ideal.psnr - ideal_base, diff = f->surface_psnr - m.surface_psnr;
+    const bool pass = f->surface_psnr >= 50 || diff >= ideal_diff - 1.5;
+    std::printf("| %s | %s | %.1f | %+.1f | %.1f | %+.1f | %+.1f | %s |\n", model.c_str(), name, ideal.psnr, ideal_diff, f->surface_psnr,
+                diff, diff - ideal_diff, pass ? "pass" : "FAIL");
+    ok = ok && pass;
+  }
+  return ok ? 0 : 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    if (argc == 4 && std::string(argv[1]) == "compare") return compare(argv[2], argv[3]);
+    if (argc == 4 && std::string(argv[1]) == "make-scan") return make_scan(argv[2], argv[3]);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "tightex_map_eval: %s\n", e.what());
+    return 2;
+  }
+  std::fprintf(stderr, "usage: tightex_map_eval compare INPUT OUTPUT | make-scan DEMO.obj OUTDIR\n");
+  return 2;
+}
