@@ -43,12 +43,12 @@ std::string run_attempt(Attempt&& attempt) {
   }
 }
 
-SquareMapOptions map_options(const MapContext& ctx, const Rect& rect) {
+SquareMapOptions map_options(const MapContext& ctx, size_t c, const Rect& rect) {
   SquareMapOptions mo;
   mo.rect_width = rect.w;
   mo.rect_height = rect.h;
   mo.texel_extent = std::max(rect.x + rect.w, rect.y + rect.h);
-  mo.corners = ctx.options.corners;
+  mo.corners = c < ctx.split_piece.size() && ctx.split_piece[c] ? CornerRule::kTurningAngle : ctx.options.corners;
   return mo;
 }
 
@@ -226,7 +226,7 @@ bool small_longest_hole(const MapContext& ctx, size_t c, const CutInputs& ci) {
 Mapped map_component(const MapContext& ctx, size_t c, const Rect& rect, const CutInputs* pre, CapChoice choice, bool probe) {
   Mapped out;
   out.rect = rect;
-  SquareMapOptions mo = map_options(ctx, rect);
+  SquareMapOptions mo = map_options(ctx, c, rect);
   if (probe) mo.multilevel_from = std::min(mo.multilevel_from, kProbeMultilevelFrom), mo.coarse_vertices = kProbeCoarseVertices;
   const double faces = double(ctx.components[c].num_faces());
   double reported = 0;  // fraction of this map already added to the progress

@@ -56,6 +56,11 @@ struct MapContext {
   ProgressCounter& progress;  // in triangles mapped
   bool have_pixels;           // the textures' pixels are loaded (the estimates need them)
   const PlanHooks& hooks;
+  /// Per component: 1 where it is a piece of a component split for pages (split_into_parts). Its
+  /// border has real corners where the split lines meet the boundary, and a long thin piece's equal
+  /// arcs would put a short end on a side, squeezed flat: such a piece takes the turning-angle corners.
+  /// Empty: none is.
+  const std::vector<char>& split_piece;
 };
 
 /// A shape probe (`probe` in map_component) maps its disk multilevel from this many vertices, on a coarse

@@ -71,18 +71,21 @@ bool have_pixels(const TexturedMesh& input) {
 }
 
 /// Splits every component whose share of the size^2 budget is more than kPageFill of a page
-/// (Options::max_page_side) into pieces that fit (split_into_parts, by area). Returns whether any was.
+/// (Options::max_page_side) into pieces that fit (split_into_parts, by area), and marks the pieces in
+/// `piece` (per component, kept aligned). Returns whether any was.
 bool split_oversized_components(const Options& options, int size, const std::vector<double>& shares, std::vector<Surface>& components,
-                                Pages& pages) {
+                                std::vector<char>& piece, Pages& pages) {
   const double page = kPageFill * double(options.max_page_side) * double(options.max_page_side);
   const double budget = double(size) * double(size), total = std::accumulate(shares.begin(), shares.end(), 0.0);
   if (options.layout != Layout::kAtlas || options.max_page_side <= 0 || budget <= page || !(total > 0)) return false;
+  piece.resize(components.size(), 0);
   std::vector<Surface> split;
+  std::vector<char> split_piece;
   bool any = false;
   for (size_t c = 0; c < components.size(); ++c) {
     const double texels = shares[c] / total * budget;
     if (texels <= page) {
-      split.push_back(std::move(components[c]));
+      split.push_back(std::move(components[c])), split_piece.push_back(piece[c]);
       continue;
     }
     // Not below kMinPieceFaces triangles a piece: a piece of a few triangles cannot fill its square
@@ -90,14 +93,15 @@ bool split_oversized_components(const Options& options, int size, const std::vec
     const size_t most = std::max<size_t>(1, components[c].num_faces() / kMinPieceFaces);
     const int parts = int(std::min<double>(double(most), std::ceil(texels / page)));
     if (parts < 2) {
-      split.push_back(std::move(components[c]));
+      split.push_back(std::move(components[c])), split_piece.push_back(piece[c]);
       continue;
     }
     std::vector<Surface> pieces = split_into_parts(components[c], parts);
     ++pages.components_split, pages.pieces += pieces.size() - 1, any = true;
-    for (Surface& piece : pieces) split.push_back(std::move(piece));
+    for (Surface& p : pieces) split.push_back(std::move(p)), split_piece.push_back(1);
   }
   components = std::move(split);
+  piece = std::move(split_piece);
   return any;
 }
 
@@ -260,7 +264,8 @@ Plan plan_charts(const TexturedMesh& input, const Options& options, const PlanHo
   std::vector<double> shares = plan_density(input, options, plan->components, areas, size, density);
   rep.pages.max_side = options.layout == Layout::kAtlas ? options.max_page_side : 0;
   // Pieces split by area can still hold more than a page where the density is uneven: split again.
-  for (int round = 0; round < 3 && split_oversized_components(options, size, shares, plan->components, rep.pages); ++round) {
+  std::vector<char> split_piece;
+  for (int round = 0; round < 3 && split_oversized_components(options, size, shares, plan->components, split_piece, rep.pages); ++round) {
     areas = component_areas(plan->components);
     shares = plan_density(input, options, plan->components, areas, size, density);
   }
@@ -269,7 +274,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options, const PlanHo
   //    component cut to a disk and mapped onto its rectangle (§4.2).
   progress("cut+map", 0);
   ProgressCounter map_progress(progress.of_stage("cut+map"), 0);
-  const MapContext ctx{input, options, plan->components, density, map_progress, have_pixels(input), hooks};
+  const MapContext ctx{input, options, plan->components, density, map_progress, have_pixels(input), hooks, split_piece};
   rep.aspect.requested = options.aspect;
   rep.aspect.probed_component = aspect_probe_component(ctx, shares);
   map_progress.set_total(faces_to_map(plan->components, rep.aspect.probed_component));
