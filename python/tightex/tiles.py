@@ -538,6 +538,9 @@ def parse_command_line(argv):
     ap.add_argument("--scheduler", help="address of a running Dask scheduler (default: a LocalCluster here)")
     ap.add_argument("--workers", type=int, help="LocalCluster worker processes (default: one per core)")
     ap.add_argument("--threads-per-worker", type=int, help="LocalCluster threads per worker (default: cores / workers)")
+    ap.add_argument("--tile-threads", type=int,
+                    help="threads tightex uses inside a worker process, for all the tiles it runs at once (default with a "
+                         "LocalCluster: cores / workers; with --scheduler: all the worker's cores)")
     ap.add_argument("--memory-per-worker", type=float, metavar="MiB",
                     help="LocalCluster: the memory each worker offers tiles (default: this machine's / workers)")
     ap.add_argument("--force", action="store_true", help="redo tiles an earlier run completed")
@@ -591,7 +594,7 @@ def main(argv=None):
             else:
                 todo.append(tile)
     # Local workers share this machine's cores; an external cluster's workers use their own machine's.
-    threads = None if opts.scheduler else max(1, (os.cpu_count() or 1) // (opts.workers or os.cpu_count() or 1))
+    threads = opts.tile_threads or (None if opts.scheduler else max(1, (os.cpu_count() or 1) // (opts.workers or os.cpu_count() or 1)))
     for tile in todo:
         tile["threads"] = threads
     print(f"tightex.tiles: {len(tiles)} tiles, {len(tiles) - len(todo)} settled by an earlier run (skipped), {len(todo)} to do", file=sys.stderr)
