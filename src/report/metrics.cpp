@@ -384,24 +384,42 @@ std::pair<double, double> measure_angle_distortion(const TexturedMesh& in, const
 /// Seed of the surface PSNR's sample points: the same points in every run.
 constexpr uint64_t kPsnrSeed = 20240606;
 
-/// METRICS.md "surface PSNR": `samples` points uniform by area on the input (fixed seed), the input's
-/// colour against the output's at the same barycentric point of the matched triangle (black if lost).
-/// Returns the PSNR in dB (99 for no error) and the number of points drawn.
-std::pair<double, size_t> measure_surface_psnr(const TexturedMesh& in, const TexturedMesh& out, const Correspondence& c, size_t samples) {
+/// A point of the surface PSNR: input triangle t, barycentrics b of its own corners.
+struct SurfacePoint {
+  uint32_t t = 0;
+  double b[3] = {0, 0, 0};
+};
+
+/// METRICS.md's sample points: `samples` points uniform by area on the input (fixed seed, so the same
+/// points in every run), shared by the surface PSNR and every map's figures.
+std::vector<SurfacePoint> surface_points(const TexturedMesh& in, const Correspondence& c, size_t samples) {
   std::vector<double> cdf(in.num_triangles());
   double acc = 0;
   for (size_t t = 0; t < in.num_triangles(); ++t) cdf[t] = acc += c.area3[t];
   std::mt19937_64 rng(kPsnrSeed);
   std::uniform_real_distribution<double> uni(0.0, 1.0);
-  double se = 0;
-  size_t n = 0;
+  std::vector<SurfacePoint> points;
+  points.reserve(acc > 0 ? samples : 0);
   for (size_t s = 0; s < samples && acc > 0; ++s) {
     const double pick = uni(rng) * acc;
     const size_t t = size_t(std::upper_bound(cdf.begin(), cdf.end(), pick) - cdf.begin());
     double r1 = uni(rng), r2 = uni(rng);
     if (r1 + r2 > 1) r1 = 1 - r1, r2 = 1 - r2;
-    const double b[3] = {1 - r1 - r2, r1, r2};
-    if (t >= in.num_triangles()) continue;
+    if (t < in.num_triangles()) points.push_back({uint32_t(t), {1 - r1 - r2, r1, r2}});
+  }
+  return points;
+}
+
+/// METRICS.md "surface PSNR" at `points`: the input's colour against the output's at the same
+/// barycentric point of the matched triangle (black if lost). Returns the PSNR in dB (99 for no error)
+/// and the number of points.
+std::pair<double, size_t> measure_surface_psnr(const TexturedMesh& in, const TexturedMesh& out, const Correspondence& c,
+                                               const std::vector<SurfacePoint>& points) {
+  double se = 0;
+  size_t n = 0;
+  for (const SurfacePoint& p : points) {
+    const uint32_t t = p.t;
+    const double* b = p.b;
     const Vec2 uin = b[0] * in.sampled_uv(t, 0) + b[1] * in.sampled_uv(t, 1) + b[2] * in.sampled_uv(t, 2);
     const auto ci = colour_at(in, t, uin);
     std::array<uint8_t, 3> co{0, 0, 0};
@@ -440,26 +458,18 @@ Vec3 decoded_normal(const TexturedMesh& m, size_t t, const double* b, const std:
 }
 
 /// One slot's MapFigures at the surface PSNR's points (those whose input triangle binds the map).
-MapFigures measure_map_slot(const TexturedMesh& in, const TexturedMesh& out, const Correspondence& c, MapSlot slot, size_t samples,
-                            const std::vector<Eigen::Vector4d>& in_tangents, const std::vector<Eigen::Vector4d>& out_tangents) {
+MapFigures measure_map_slot(const TexturedMesh& in, const TexturedMesh& out, const Correspondence& c, MapSlot slot,
+                            const std::vector<SurfacePoint>& points, const std::vector<Eigen::Vector4d>& in_tangents,
+                            const std::vector<Eigen::Vector4d>& out_tangents) {
   MapFigures f;
   f.slot = slot;
   const bool normal_map = map_encoding(slot) == MapEncoding::kTangentNormal;
   const unsigned channels = map_slot_channels(slot);
-  std::vector<double> cdf(in.num_triangles());
-  double acc = 0;
-  for (size_t t = 0; t < in.num_triangles(); ++t) cdf[t] = acc += c.area3[t];
-  std::mt19937_64 rng(kPsnrSeed);
-  std::uniform_real_distribution<double> uni(0.0, 1.0);
   double se = 0, n = 0;
   std::vector<double> angles;
-  for (size_t s = 0; s < samples && acc > 0; ++s) {
-    const double pick = uni(rng) * acc;
-    const size_t t = size_t(std::upper_bound(cdf.begin(), cdf.end(), pick) - cdf.begin());
-    double r1 = uni(rng), r2 = uni(rng);
-    if (r1 + r2 > 1) r1 = 1 - r1, r2 = 1 - r2;
-    const double b[3] = {1 - r1 - r2, r1, r2};
-    if (t >= in.num_triangles()) continue;
+  for (const SurfacePoint& p : points) {
+    const uint32_t t = p.t;
+    const double* b = p.b;
     const Image* ii = map_image_of(in, t, slot);
     if (!ii) continue;
     const Vec2 uin = b[0] * in.sampled_uv(t, 0) + b[1] * in.sampled_uv(t, 1) + b[2] * in.sampled_uv(t, 2);
@@ -501,7 +511,8 @@ bool binds(const TexturedMesh& m, MapSlot slot) {
   return false;
 }
 
-std::vector<MapFigures> measure_maps(const TexturedMesh& in, const TexturedMesh& out, const Correspondence& c, size_t samples) {
+std::vector<MapFigures> measure_maps(const TexturedMesh& in, const TexturedMesh& out, const Correspondence& c,
+                                     const std::vector<SurfacePoint>& points) {
   std::vector<MapFigures> figures;
   std::vector<Eigen::Vector4d> in_tangents, out_tangents;
   for (size_t s = 0; s < kMapSlots; ++s) {
@@ -509,7 +520,7 @@ std::vector<MapFigures> measure_maps(const TexturedMesh& in, const TexturedMesh&
     if (!binds(in, slot) || !binds(out, slot)) continue;
     if (map_encoding(slot) == MapEncoding::kTangentNormal && in_tangents.empty())
       in_tangents = completed_corner_tangents(in), out_tangents = completed_corner_tangents(out);
-    figures.push_back(measure_map_slot(in, out, c, slot, samples, in_tangents, out_tangents));
+    figures.push_back(measure_map_slot(in, out, c, slot, points, in_tangents, out_tangents));
   }
   return figures;
 }
@@ -522,6 +533,7 @@ Metrics measure(const TexturedMesh& in, const TexturedMesh& out, size_t psnr_sam
                        [&] { count_charts(in, &r.seam_length_input); }, [&] { r.charts = count_charts(out, &r.seam_length); });
   const Correspondence c = match_triangles(in, out);
   r.lost_triangles = c.lost_triangles;
+  const std::vector<SurfacePoint> points = surface_points(in, c, psnr_samples);
   tbb::parallel_invoke([&] { count_flips(out, &r.flipped, &r.degenerate); }, [&] { r.overlap = overlap_fraction(out); },
                        [&] {
                          const DensityFigures d = measure_density(in, out, c);
@@ -529,8 +541,8 @@ Metrics measure(const TexturedMesh& in, const TexturedMesh& out, size_t psnr_sam
                          r.detail_loss_area = d.detail_loss_area;
                        },
                        [&] { std::tie(r.angle_distortion_mean, r.angle_distortion_p95) = measure_angle_distortion(in, out, c); },
-                       [&] { std::tie(r.surface_psnr, r.psnr_samples) = measure_surface_psnr(in, out, c, psnr_samples); },
-                       [&] { r.maps = measure_maps(in, out, c, psnr_samples); });
+                       [&] { std::tie(r.surface_psnr, r.psnr_samples) = measure_surface_psnr(in, out, c, points); },
+                       [&] { r.maps = measure_maps(in, out, c, points); });
   return r;
 }
 
@@ -573,7 +585,8 @@ nlohmann::json to_json(const Metrics& m) {
 namespace tightex {
 
 std::vector<MapFigures> measure_maps(const TexturedMesh& input, const TexturedMesh& output, size_t samples) {
-  return measure_maps(input, output, match_triangles(input, output), samples);
+  const Correspondence c = match_triangles(input, output);
+  return measure_maps(input, output, c, surface_points(input, c, samples));
 }
 
 }  // namespace tightex
