@@ -51,7 +51,10 @@ double resampling_mse(const TexturedMesh& input, const Surface& disk, const std:
     cdf[i] = acc += triangle_area(disk.positions[t[0]], disk.positions[t[1]], disk.positions[t[2]]);
   }
   if (!(acc > 0)) return -1;
-  // In chunks with their own seeds, summed in order: the same figure for any thread count.
+  // Stratified along the cumulative area: sample s lies at (s + jitter) / samples of it, so the points
+  // come in face order and each chunk reads both images along its faces instead of at random (the
+  // estimate's cost is the memory traffic of these reads), with less variance than independent
+  // picks. In chunks with their own seeds, summed in order: the same figure for any thread count.
   constexpr size_t kChunk = 16384;
   const size_t chunks = (samples + kChunk - 1) / kChunk;
   std::vector<double> chunk_se(chunks, 0.0);
@@ -59,9 +62,12 @@ double resampling_mse(const TexturedMesh& input, const Surface& disk, const std:
     std::mt19937_64 rng(20241201 + ch);
     std::uniform_real_distribution<double> uni(0.0, 1.0);
     double se = 0;
-    for (size_t s = ch * kChunk; s < std::min(samples, (ch + 1) * kChunk); ++s) {
-      const double pick = uni(rng) * acc;
-      const size_t i = std::min(size_t(std::upper_bound(cdf.begin(), cdf.end(), pick) - cdf.begin()), real.size() - 1);
+    const size_t first = ch * kChunk;
+    const double start = double(first) / double(samples) * acc;
+    size_t i = std::min(size_t(std::upper_bound(cdf.begin(), cdf.end(), start) - cdf.begin()), real.size() - 1);
+    for (size_t s = first; s < std::min(samples, first + kChunk); ++s) {
+      const double pick = (double(s) + uni(rng)) / double(samples) * acc;
+      while (i + 1 < real.size() && cdf[i] <= pick) ++i;
       double r1 = uni(rng), r2 = uni(rng);
       if (r1 + r2 > 1) r1 = 1 - r1, r2 = 1 - r2;
       const double b[3] = {1 - r1 - r2, r1, r2};

@@ -15,8 +15,9 @@ namespace tightex {
 /// An estimate of the colour error that a map of a disk leaves when baked into a w x h texel rectangle:
 /// the disk's real faces are baked (bake_texture as bake_plan places them: the unit square's corners on
 /// the corner texels' centres; without the least-squares fit, a fifth of the bake's time, which lifts
-/// every map alike) and the result read back bilinearly at `samples` points spread uniformly by 3D area,
-/// against the input's own bilinear colour there, as METRICS.md's surface PSNR compares.
+/// every map alike) and the result read back bilinearly at `samples` points spread by 3D area
+/// (stratified: jittered along the faces' cumulative area, so they come in face order), against the
+/// input's own bilinear colour there, as METRICS.md's surface PSNR compares.
 /// `uv`: per disk vertex, in the unit square; faces without an input triangle (Surface::input_face)
 /// (kNone: scaffolding, not sampled). Returns the mean squared error per RGB channel in 8-bit levels,
 /// or -1 when no face has loaded texture pixels. Deterministic (fixed seed): two maps of the same disk
