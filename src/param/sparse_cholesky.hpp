@@ -22,8 +22,9 @@ std::mutex& blas_mutex();
 /// a no-op with a BLAS or OpenMP runtime that lacks these functions.
 void use_serial_dense_kernels();
 
-/// Eigen's CHOLMOD wrapper, simplicial or supernodal by the system's size (chosen at analyzePattern;
-/// kSupernodalFrom).
+/// Eigen's CHOLMOD wrapper: supernodal from supernodal_from unknowns on; below, as CHOLMOD's analysis
+/// chooses (supernodal where the factor is dense: a simplicial factorisation of a fill-heavy system of
+/// 30k unknowns is 2x slower; docs/decisions.md).
 class SparseCholesky {
  public:
   using Matrix = Eigen::SparseMatrix<double>;
@@ -33,9 +34,13 @@ class SparseCholesky {
   explicit SparseCholesky(long supernodal_from = kSupernodalFrom) : supernodal_from_(supernodal_from) { solver_.cholmod().print = 0; }
   void analyzePattern(const Matrix& a) {
     use_serial_dense_kernels();
-    supernodal_ = a.rows() >= supernodal_from_;
-    solver_.setMode(supernodal_ ? Eigen::CholmodSupernodalLLt : Eigen::CholmodSimplicialLLt);
+    const bool forced = a.rows() >= supernodal_from_;
+    solver_.setMode(forced ? Eigen::CholmodSupernodalLLt : Eigen::CholmodAuto);
     solver_.analyzePattern(a);
+    // CHOLMOD's own choice below the size: supernodal where the factor is dense enough for its
+    // column blocks to pay (flops per factor entry at least supernodal_switch).
+    const cholmod_common& c = solver_.cholmod();
+    supernodal_ = forced || (c.lnz > 0 && c.fl / c.lnz >= c.supernodal_switch);
   }
   /// False if CHOLMOD failed (a not positive definite, numerically).
   bool factorize(const Matrix& a) {
