@@ -162,6 +162,31 @@ TEST(Maps, ObjMapsAreReadRebakedAndWritten) {
   fs::remove_all(dir);
 }
 
+TEST(Maps, AMapBelowTheBudgetIsBakedLargerUpToItsInputsTexels) {
+  const TexturedMesh in = plate_with_maps();
+  Options unsized = small_options();
+  unsized.map_budget_db = 0;  // every map at the base colour's size
+  const Result plain = optimize(in, unsized), sized = optimize(in, small_options());
+  auto image_of = [](const TexturedMesh& out, MapSlot slot) -> const Image& {
+    return out.textures[size_t(out.materials[0].maps[size_t(slot)])].image;
+  };
+  const Image& base = sized.output.textures[size_t(sized.output.materials[0].texture)].image;
+  const Image& before = image_of(plain.output, MapSlot::kMetallicRoughness);
+  const Image& after = image_of(sized.output, MapSlot::kMetallicRoughness);
+  const Image& input = in.textures[size_t(in.materials[0].maps[size_t(MapSlot::kMetallicRoughness)])].image;
+  EXPECT_EQ(before.width, base.width);
+  ASSERT_GT(after.width, before.width);  // the hard mask is below the budget at the base colour's size
+  EXPECT_EQ(int64_t(after.width) * base.height, int64_t(after.height) * base.width);  // the same texture coordinates
+  EXPECT_LE(int64_t(after.width) * after.height, int64_t(input.width) * input.height);
+  EXPECT_EQ(image_of(sized.output, MapSlot::kNormal).width, base.width);  // judged against itself: never larger
+  const std::vector<MapFigures> figures_before = measure_maps(in, plain.output), figures_after = measure_maps(in, sized.output);
+  EXPECT_GT(figures_of(figures_after, MapSlot::kOcclusion)->surface_psnr, figures_of(figures_before, MapSlot::kOcclusion)->surface_psnr);
+  EXPECT_GT(figures_of(figures_after, MapSlot::kMetallicRoughness)->surface_psnr,
+            figures_of(figures_before, MapSlot::kMetallicRoughness)->surface_psnr);
+  EXPECT_GT(sized.report["maps"][0]["scale"].get<double>(), 1.0);
+  EXPECT_EQ(sized.report["maps"][0]["sizes"][0][0].get<int>(), after.width);
+}
+
 TEST(Maps, ComputedTangentsAgreeWithAnExportersTangentAttribute) {
   const fs::path file = fs::path(TIGHTEX_SHARED_DATA) / "khronos_waterbottle" / "WaterBottle.glb";
   if (!fs::exists(file)) GTEST_SKIP() << file << " is absent";

@@ -138,12 +138,15 @@ struct Options {
   /// about twice the bake time; the texture coordinates do not change. Ignored without `fit`.
   bool fine_fit = false;
   /// The maps other than the base colour (metallic-roughness, occlusion, emissive, normal, ...): each is
-  /// baked at the base colour's size, then halved (down to 1/16 of the side) while, read back at 50k
-  /// surface points, its PSNR against the input's map (over the channels its slots read) stays at or
-  /// above this, or within 0.25 dB of the full-size bake's; a normal map while its PSNR against its own
-  /// full-size bake stays at or above this. A flat or smooth map costs a fraction of the texels; the
-  /// default keeps a 1 dB margin above 50 dB, beyond which differences are about 0.8 of an 8-bit level.
-  /// 0: every map at the base colour's size (CLI --map-budget).
+  /// baked at the base colour's size and read back at 50k surface points, its PSNR taken against the
+  /// input's map over the channels its slots read. Below this, it is baked again larger (steps of 1/8,
+  /// 1/4 or 1/2 of the side, whichever divides the pages' sides) up to as many texels as its input
+  /// images hold, at the smallest step that reaches this or else the largest, when that gains at least
+  /// 0.25 dB; otherwise it is halved (down to 1/16 of the side) while its PSNR stays at or above this,
+  /// or within 0.25 dB of the base colour's size's. A normal map is never baked larger and is halved
+  /// while its PSNR against its own full-size bake stays at or above this. A flat or smooth map costs a
+  /// fraction of the texels; the default keeps a 1 dB margin above 50 dB, beyond which differences are
+  /// about 0.8 of an 8-bit level. 0: every map at the base colour's size (CLI --map-budget).
   double map_budget_db = 51;
   /// Compute the METRICS.md figures into report["metrics"]. A caller that writes the result can turn
   /// this off and measure beside the write (the CLI does).

@@ -162,10 +162,12 @@ CLI::Option* define_options(CLI::App& app, CommandLine& line, ChoiceNames& names
                "fit on 4x4 points per texel instead of 2x2: a little higher surface PSNR, about twice the bake time")
       ->excludes(no_fit_opt);
   app.add_option("--map-budget", line.map_budget_db,
-                 "maps other than the base colour (metallic-roughness, occlusion, emissive, normal, specular, ...): each is "
-                 "halved (down to 1/16 of the base colour's side) while its surface PSNR against the input's map stays at or "
-                 "above this many dB or within 0.25 dB of the map at full size (a normal map: against itself at full size); "
-                 "default 51; 0 keeps every map at the base colour's size")
+                 "maps other than the base colour (metallic-roughness, occlusion, emissive, normal, specular, ...): a map whose "
+                 "surface PSNR against the input's map is below this many dB at the base colour's size is baked larger, up to "
+                 "as many texels as its input image has, at the smallest step that reaches it (else the largest, if that gains "
+                 "0.25 dB); any other map is halved (down to 1/16 of the base colour's side) while its PSNR stays at or above "
+                 "this or within 0.25 dB of the base colour's size's (a normal map: against itself at full size, never "
+                 "larger); default 51; 0 keeps every map at the base colour's size")
       ->check(CLI::Range(0.0, 99.0));
   app.add_flag("--force", line.force, "allow --size above 16384");
   app.add_option("--max-memory", line.max_memory_mib, "refuse inputs whose estimated memory exceeds this many MiB (default: 90% of RAM)")

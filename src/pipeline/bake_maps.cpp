@@ -21,6 +21,8 @@ constexpr int kMaxReduction = 16;
 constexpr size_t kJudgePoints = 50000;
 constexpr uint64_t kJudgeSeed = 20240606;
 constexpr double kMaxReductionLossDb = 0.25;
+/// A map below Options::map_budget_db is baked larger only where that gains at least this much PSNR.
+constexpr double kMinEnlargementGainDb = 0.25;
 
 /// The slots that read the same input textures the same way: one output map.
 struct MapGroup {
@@ -185,15 +187,13 @@ double judged_psnr(const TexturedMesh& input, const MapSource& map, const std::v
 
 /// The largest reduction (a power of two up to kMaxReduction that divides every page's sides) at which
 /// the map, read back at the judge points, keeps at least `min_psnr_db` against the input or loses at
-/// most kMaxReductionLossDb against its full-size bake's PSNR; a normal map (whose new texels are in
-/// another frame than the input's) against its full-size bake, at least `min_psnr_db`. Returns the
-/// reduction and its PSNR.
+/// most kMaxReductionLossDb against its full-size bake's PSNR `full_psnr`; a normal map (whose new
+/// texels are in another frame than the input's) against its full-size bake, at least `min_psnr_db`.
+/// Returns the reduction and its PSNR.
 std::pair<int, double> choose_reduction(const TexturedMesh& input, const MapSource& map, const std::vector<BakeTriangle>& triangles,
-                                        const std::vector<Image>& full, unsigned channels, double min_psnr_db) {
-  if (!(min_psnr_db > 0)) return {1, 99.0};
-  const std::vector<JudgePoint> points = judge_points(triangles, kJudgePoints);
+                                        const std::vector<JudgePoint>& points, const std::vector<Image>& full, unsigned channels,
+                                        double full_psnr, double min_psnr_db) {
   const bool normal = map.encoding == MapEncoding::kTangentNormal;
-  const double full_psnr = normal ? 99.0 : judged_psnr(input, map, triangles, points, full, nullptr, channels);
   int chosen = 1;
   double chosen_psnr = full_psnr;
   for (int factor = 2; factor <= kMaxReduction; factor *= 2) {
@@ -207,6 +207,111 @@ std::pair<int, double> choose_reduction(const TexturedMesh& input, const MapSour
     chosen = factor, chosen_psnr = psnr;
   }
   return {chosen, chosen_psnr};
+}
+
+/// A map's side over the base colour's: num / den (den divides every page's sides, so that the same
+/// texture coordinates address the same point of the larger page).
+struct MapScale {
+  int num = 1, den = 1;
+  double value() const { return double(num) / den; }
+};
+
+/// The pages' bake triangles and rectangles at `scale`: pixel coordinates times the scale, rectangle
+/// edges floored. For a scale >= 1 every texel centre inside a chart stays inside its rectangle, and
+/// rectangles that did not overlap still do not.
+std::pair<std::vector<BakeTriangle>, std::vector<Rect>> scaled_layout(const OutputModel& om, MapScale scale) {
+  std::vector<BakeTriangle> triangles = om.bake_triangles;
+  for (BakeTriangle& t : triangles)
+    for (Vec2& px : t.target_px) px *= scale.value();
+  std::vector<Rect> rects = om.rects;
+  auto at = [&](int x) { return int((int64_t(x) * scale.num) / scale.den); };
+  for (Rect& r : rects) {
+    const int x0 = at(r.x), y0 = at(r.y);
+    r.w = at(r.x + r.w) - x0, r.h = at(r.y + r.h) - y0, r.x = x0, r.y = y0;
+  }
+  return {std::move(triangles), std::move(rects)};
+}
+
+/// The larger scales a map may take: steps of 1/den (den the largest of 8, 4, 2, 1 dividing every new
+/// page's sides) above 1, up to as many texels as the map's input images hold together. In
+/// increasing order; empty when none fits.
+std::vector<MapScale> enlargements(const TexturedMesh& input, const MapSource& map, const OutputModel& om) {
+  double input_texels = 0, page_texels = 0;
+  std::vector<int> seen;
+  for (int tex : map.texture_of_material)
+    if (tex >= 0 && std::find(seen.begin(), seen.end(), tex) == seen.end()) {
+      seen.push_back(tex);
+      input_texels += double(input.textures[size_t(tex)].image.width) * input.textures[size_t(tex)].image.height;
+    }
+  int den = 8;
+  for (int p = 0; p < om.new_images; ++p) {
+    const Image& page = om.mesh.textures[size_t(p)].image;
+    page_texels += double(page.width) * page.height;
+    while (den > 1 && (page.width % den != 0 || page.height % den != 0)) den /= 2;
+  }
+  std::vector<MapScale> scales;
+  for (int num = den + 1; page_texels > 0; ++num) {
+    const MapScale s{num, den};
+    if (s.value() * s.value() * page_texels > input_texels) break;
+    scales.push_back(s);
+  }
+  return scales;
+}
+
+/// Allocated black pages for a map at `scale` of the base colour's pages.
+std::vector<Image> blank_pages(const OutputModel& om, MapScale scale) {
+  std::vector<Image> images;
+  for (int p = 0; p < om.new_images; ++p) {
+    const Image& colour = om.mesh.textures[size_t(p)].image;
+    images.emplace_back(colour.width * scale.num / scale.den, colour.height * scale.num / scale.den, Rgba8{0, 0, 0, 255});
+  }
+  return images;
+}
+
+/// A map baked and sized: its pages, its scale (one of them 1) and PSNR at the judge points.
+struct SizedMap {
+  std::vector<Image> pages;
+  MapScale enlarged;
+  int reduction = 1;
+  double psnr = 99;
+};
+
+/// The map baked at the base colour's size, then sized by `min_psnr_db` (Options::map_budget_db):
+/// below it, baked again larger (enlargements) at the smallest scale that reaches it, or the largest
+/// one when none does, provided that gains at least kMinEnlargementGainDb; otherwise reduced as far as
+/// choose_reduction allows. A normal map (judged against its own full-size bake) is never enlarged.
+SizedMap bake_sized_map(const TexturedMesh& input, const MapSource& map, const OutputModel& om, unsigned channels, double min_psnr_db,
+                        const BakeOptions& options) {
+  SizedMap best;
+  best.pages = blank_pages(om, {});
+  bake_map(input, map, om.bake_triangles, om.rects, best.pages, nullptr, options);
+  if (!(min_psnr_db > 0)) return best;
+  const std::vector<JudgePoint> points = judge_points(om.bake_triangles, kJudgePoints);
+  const bool normal = map.encoding == MapEncoding::kTangentNormal;
+  best.psnr = normal ? 99.0 : judged_psnr(input, map, om.bake_triangles, points, best.pages, nullptr, channels);
+  const std::vector<MapScale> scales = normal || best.psnr >= min_psnr_db ? std::vector<MapScale>{} : enlargements(input, map, om);
+  // Binary search over the scales for the smallest that reaches the budget, starting from the largest.
+  size_t lo = 0, hi = scales.size();  // scales below lo were not enough; scales[hi] (if any) is enough
+  const double gained_floor = best.psnr + kMinEnlargementGainDb;
+  bool largest = true;
+  while (lo < hi) {
+    const size_t mid = largest ? hi - 1 : (lo + hi) / 2;
+    auto [triangles, rects] = scaled_layout(om, scales[mid]);
+    std::vector<Image> pages = blank_pages(om, scales[mid]);
+    bake_map(input, map, triangles, rects, pages, nullptr, options);
+    const double psnr = judged_psnr(input, map, triangles, points, pages, nullptr, channels);
+    if (largest && psnr < gained_floor) break;  // more texels do not help this map
+    if (largest || psnr >= min_psnr_db) best = {std::move(pages), scales[mid], 1, psnr};
+    if (psnr >= min_psnr_db)
+      hi = mid;
+    else
+      lo = mid + 1;
+    largest = false;
+  }
+  if (best.enlarged.num != best.enlarged.den) return best;
+  std::tie(best.reduction, best.psnr) =
+      choose_reduction(input, map, om.bake_triangles, points, best.pages, channels, best.psnr, min_psnr_db);
+  return best;
 }
 
 }  // namespace
@@ -229,29 +334,24 @@ std::vector<MapEntry> bake_other_maps(const TexturedMesh& input, const Options& 
   for (MapGroup& g : groups) {
     const auto start = std::chrono::steady_clock::now();
     g.source.frames = &frames;
-    std::vector<Image> images;
-    for (int p = 0; p < om.new_images; ++p) {
-      const Image& colour = om.mesh.textures[size_t(p)].image;
-      images.emplace_back(colour.width, colour.height, Rgba8{0, 0, 0, 255});
-    }
     BakeOptions map_options = bo;
     // A normal map without the fit: the fit would match encoded texels, which a renderer decodes through
     // a frame that turns across the texel; without it the angles are about as good, at a fraction of
     // the time (measured in BENCHMARKS.md, "Every map").
     if (g.source.encoding == MapEncoding::kTangentNormal) map_options.fit = false;
-    bake_map(input, g.source, om.bake_triangles, om.rects, images, nullptr, map_options);
     unsigned channels = 0;
     for (MapSlot s : g.slots) channels |= map_slot_channels(s);
+    SizedMap sized = bake_sized_map(input, g.source, om, channels, options.map_budget_db, map_options);
     MapEntry entry;
     entry.name = map_slot_name(g.slots[0]);
     for (MapSlot s : g.slots) entry.slots.push_back(map_slot_name(s));
     entry.encoding = encoding_name(g.source.encoding);
-    std::tie(entry.reduction, entry.judged_psnr_db) =
-        choose_reduction(input, g.source, om.bake_triangles, images, channels, options.map_budget_db);
+    entry.scale = sized.enlarged.value() / sized.reduction;
+    entry.judged_psnr_db = sized.psnr;
     for (int p = 0; p < om.new_images; ++p) {
       Texture tex;
       tex.path = om.mesh.textures[size_t(p)].path + "_" + entry.name;
-      tex.image = entry.reduction > 1 ? reduce_image(images[size_t(p)], entry.reduction) : std::move(images[size_t(p)]);
+      tex.image = sized.reduction > 1 ? reduce_image(sized.pages[size_t(p)], sized.reduction) : std::move(sized.pages[size_t(p)]);
       entry.sizes.push_back({tex.image.width, tex.image.height});
       for (MapSlot s : g.slots) om.mesh.materials[size_t(p)].maps[size_t(s)] = int(om.mesh.textures.size());
       om.mesh.textures.push_back(std::move(tex));

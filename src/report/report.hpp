@@ -102,7 +102,7 @@ struct MapEntry {
   std::vector<std::string> slots;          // every slot it serves ("metallic_roughness", "occlusion")
   std::string encoding;                    // "srgb_colour", "data" or "tangent_normal"
   std::vector<std::pair<int, int>> sizes;  // per page
-  int reduction = 1;                       // each side is the base colour's over this
+  double scale = 1;                        // each side is the base colour's times this (below 1: reduced)
   /// The chosen size's PSNR at the judging points (bake_other_maps): against the input's map (a normal
   /// map: against its full-size bake); 99 when not judged.
   double judged_psnr_db = 99;

@@ -193,7 +193,7 @@ json to_json(const Report& report) {
                       {"slots", m.slots},
                       {"encoding", m.encoding},
                       {"sizes", m.sizes},
-                      {"reduction", m.reduction},
+                      {"scale", m.scale},
                       {"judged_psnr_db", m.judged_psnr_db},
                       {"seconds", m.seconds}});
     j["maps"] = std::move(maps);
