@@ -6,7 +6,9 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 
 #include <fmt/format.h>
 #include "bake/bake.hpp"
@@ -185,6 +187,46 @@ TEST(Maps, AMapBelowTheBudgetIsBakedLargerUpToItsInputsTexels) {
             figures_of(figures_before, MapSlot::kMetallicRoughness)->surface_psnr);
   EXPECT_GT(sized.report["maps"][0]["scale"].get<double>(), 1.0);
   EXPECT_EQ(sized.report["maps"][0]["sizes"][0][0].get<int>(), after.width);
+}
+
+/// The warning lines of `stderr_file` that name `slot`'s map.
+size_t warnings_naming(const fs::path& stderr_file, MapSlot slot) {
+  std::ifstream f(stderr_file);
+  size_t n = 0;
+  for (std::string line; std::getline(f, line);)
+    n += line.starts_with("tightex: warning: ") && line.find(fmt::format("the {} map", map_slot_name(slot))) != std::string::npos;
+  return n;
+}
+
+TEST(Maps, PlyAndObjOutputsNameEachMapSlotTheyCannotBind) {
+  const TexturedMesh in = plate_with_maps();  // normal, and one image as metallic-roughness and occlusion
+  const fs::path dir = fs::temp_directory_path() / fmt::format("tightex_maps_unbound_{}", ::getpid());
+  fs::remove_all(dir);
+  const Result r = optimize(in, small_options());
+  const std::vector<std::string> ply = write_ply(r.output, (dir / "ply").string(), "plate", ImageFormat::kPng);
+  EXPECT_EQ(ply.size(), 3u);  // PLY binds no map
+  const std::vector<std::string> obj = write_obj(r.output, (dir / "obj").string(), "plate", ImageFormat::kPng);
+  ASSERT_EQ(obj.size(), 1u);  // MTL has no occlusion statement; the others have one
+  EXPECT_NE(obj[0].find("occlusion"), std::string::npos);
+  TexturedMesh normal_only = in;
+  normal_only.materials[0].maps = {-1, -1, -1, 1, -1, -1, -1, -1};
+  EXPECT_TRUE(write_obj(normal_only, (dir / "obj_normal").string(), "plate", ImageFormat::kPng).empty());
+
+  // The command line: one warning line per slot, and the report lists them.
+  write_gltf(in, (dir / "in").string(), "plate", ImageFormat::kPng, GltfContainer::kGlb);
+  const std::string input = (dir / "in" / "plate.glb").string();
+  for (const auto& [format, unbound] : {std::pair{"ply", 3u}, std::pair{"obj", 1u}}) {
+    const fs::path out = dir / format, err = dir / (std::string(format) + ".err");
+    const std::string cmd = fmt::format("{} '{}' -o '{}' --size 128 --output-format {} --no-html > /dev/null 2> '{}'", TIGHTEX_CLI, input,
+                                        out.string(), format, err.string());
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    EXPECT_EQ(warnings_naming(err, MapSlot::kOcclusion), 1u) << format;
+    EXPECT_EQ(warnings_naming(err, MapSlot::kNormal), unbound == 3u ? 1u : 0u) << format;
+    std::ifstream report_file(out / "report.json");
+    const nlohmann::json report = nlohmann::json::parse(report_file);
+    EXPECT_EQ(report["output"]["not_written"].size(), unbound) << format;
+  }
+  fs::remove_all(dir);
 }
 
 TEST(Maps, ComputedTangentsAgreeWithAnExportersTangentAttribute) {

@@ -109,7 +109,9 @@ void save_image(const std::string& path, const Image& image, ImageFormat format,
 /// all are complete (the OBJ last), so a failed run leaves no model behind. Positions are written in
 /// shortest round-trip form, so they read back bit-identical; texture coordinates likewise, so no UV
 /// triangle collapses on the way to the file. Throws InputError naming the path on failure.
-void write_obj(const TexturedMesh& mesh, const std::string& outdir, const std::string& name, ImageFormat format);
+/// Returns one sentence per map slot the MTL cannot bind (glTF's occlusion; a metallic-roughness image
+/// beside a separate roughness or metallic map), for a warning; the images are written all the same.
+std::vector<std::string> write_obj(const TexturedMesh& mesh, const std::string& outdir, const std::string& name, ImageFormat format);
 
 /// Writes OUTDIR/<name>.ply and every texture of `mesh` (named as write_obj names them), atomically as
 /// write_obj does (the PLY last): a binary_little_endian PLY as photogrammetry tools write it and
@@ -121,10 +123,12 @@ void write_obj(const TexturedMesh& mesh, const std::string& outdir, const std::s
 /// renderer samples, TexturedMesh::sampled_uv, since PLY has no texture transform; float keeps it
 /// within 2^-24 relative, far below a texel of any texture tightex writes) and `texnumber` (int: the
 /// texture of the face's material; -1 where the face has no material or its material has no texture).
-/// PLY has no place for a material's name or Kd colour: they are not written.
+/// PLY has no place for a material's name or Kd colour: they are not written; nor for its other maps
+/// (Material::maps): their images are written beside the model (and named by TextureFile comments, as
+/// every texture is) but bound to no face. Returns one sentence per such map slot, for a warning.
 /// Requires: a mesh as read_model guarantees it, with fewer than 2^31 vertices.
 /// Throws InputError naming the path on failure (too many vertices, cannot create, write or rename).
-void write_ply(const TexturedMesh& mesh, const std::string& outdir, const std::string& name, ImageFormat format);
+std::vector<std::string> write_ply(const TexturedMesh& mesh, const std::string& outdir, const std::string& name, ImageFormat format);
 
 /// The two containers of glTF: JSON text with a .bin buffer and image files beside it, or one .glb.
 enum class GltfContainer { kGltf, kGlb };

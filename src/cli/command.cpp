@@ -391,12 +391,12 @@ struct CliTimings {
   double read_s = 0, textures_s = 0, write_s = 0, measure_s = 0;
 };
 
-/// Writes the output model in the command line's format. Returns what the glTF writer removed.
+/// Writes the output model in the command line's format. Returns what the writer left out: what the
+/// glTF writer removed, or the map slots OBJ or PLY cannot bind.
 std::vector<std::string> write_model(const CommandLine& line, const TexturedMesh& output, const std::string& name) {
   switch (line.output_format) {
     case ModelFormat::kPly:
-      write_ply(output, line.outdir, name, line.format);
-      return {};
+      return write_ply(output, line.outdir, name, line.format);
     case ModelFormat::kGltf:
       return write_gltf(output, line.outdir, name, line.format, GltfContainer::kGltf);
     case ModelFormat::kGlb:
@@ -404,12 +404,11 @@ std::vector<std::string> write_model(const CommandLine& line, const TexturedMesh
     case ModelFormat::kObj:
       break;
   }
-  write_obj(output, line.outdir, name, line.format);
-  return {};
+  return write_obj(output, line.outdir, name, line.format);
 }
 
 /// Writes the output model and measures it, side by side (PNG compression and measuring are
-/// independent). Returns the metrics; the times go to `timings`, what the glTF writer removed to
+/// independent). Returns the metrics; the times go to `timings`, what the writer left out to
 /// `removed`.
 Metrics write_and_measure(const CommandLine& line, const TexturedMesh& input, const TexturedMesh& output, const std::string& name,
                           CliTimings& timings, std::vector<std::string>& removed) {
@@ -455,8 +454,8 @@ void write_preview(const std::string& preview_path, const TexturedMesh& input, c
 }
 
 /// One warning line each for what the output does not carry: the input's parts the reader left as they
-/// were (written back only to glTF), and what the glTF writer removed (texture slots that cannot follow
-/// the new texture coordinates).
+/// were (written back only to glTF), what the glTF writer removed (texture slots that cannot follow
+/// the new texture coordinates; one line), and each map slot OBJ or PLY cannot bind (one line each).
 void print_not_carried(const CommandLine& line, const ObjReadStats& read_stats, const std::vector<std::string>& removed) {
   const bool gltf = line.output_format == ModelFormat::kGltf || line.output_format == ModelFormat::kGlb;
   if (!gltf && !read_stats.not_read.empty())
@@ -464,9 +463,11 @@ void print_not_carried(const CommandLine& line, const ObjReadStats& read_stats, 
         stderr, "tightex: warning: {} {} of the input {} not written ({} has no place for them; --output-format glb keeps them): {}\n",
         read_stats.not_read.size(), read_stats.not_read.size() == 1 ? "part" : "parts", read_stats.not_read.size() == 1 ? "is" : "are",
         kModelFormatNames[size_t(line.output_format)], fmt::join(read_stats.not_read, ", "));
-  if (!removed.empty())
+  if (gltf && !removed.empty())
     fmt::print(stderr, "tightex: warning: removed from the output, as they cannot follow the new texture coordinates: {}\n",
                fmt::join(removed, ", "));
+  if (!gltf)
+    for (const std::string& unbound : removed) fmt::print(stderr, "tightex: warning: {}\n", unbound);
 }
 
 /// The report page's file name in the output folder.
@@ -589,7 +590,7 @@ nlohmann::json run_command(const CommandLine& line, const CommandHooks& hooks) {
   if (printing) print_not_carried(line, read_stats, removed);
   const double wall_seconds = seconds_since(t0);
   add_cli_figures(result.report, metrics, timings, wall_seconds, read_stats,
-                  OutputFiles{line.outdir, output_model_name(line), line.no_html ? "" : kHtmlName});
+                  OutputFiles{line.outdir, output_model_name(line), line.no_html ? "" : kHtmlName, removed});
   if (!line.preview_path.empty()) write_preview(line.preview_path, planned.mesh, result.output);
   const fs::path report_path = write_reports(line, result.report, planned.mesh, result.output);
   if (printing) {

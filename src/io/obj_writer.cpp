@@ -59,6 +59,18 @@ std::string map_lines(const Material& m, const std::string& options, const std::
   return lines;
 }
 
+/// Whether map_lines writes a statement for `slot` of `m`.
+bool map_written(const Material& m, MapSlot slot) {
+  switch (slot) {
+    case MapSlot::kOcclusion:
+      return false;
+    case MapSlot::kMetallicRoughness:
+      return m.maps[size_t(MapSlot::kRoughness)] < 0 && m.maps[size_t(MapSlot::kMetallic)] < 0;
+    default:
+      return true;
+  }
+}
+
 /// The MTL file: one material each, map_Kd naming the texture files as written (`texture_file`).
 std::string mtl_text(const TexturedMesh& mesh, const std::vector<std::string>& texture_file) {
   std::string mtl = "# written by tightex\n";
@@ -152,13 +164,14 @@ std::string obj_text(const TexturedMesh& mesh, const std::string& name) {
 
 }  // namespace
 
-void write_obj(const TexturedMesh& mesh, const std::string& outdir, const std::string& name, ImageFormat format) {
+std::vector<std::string> write_obj(const TexturedMesh& mesh, const std::string& outdir, const std::string& name, ImageFormat format) {
   std::vector<OutputFile> files = texture_output_files(mesh, format);
   std::vector<std::string> texture_file;
   for (const OutputFile& f : files) texture_file.push_back(f.name);
   files.push_back({name + ".mtl", [&](const fs::path& tmp) { write_whole_file(tmp, mtl_text(mesh, texture_file)); }});
   files.push_back({name + ".obj", [&](const fs::path& tmp) { write_whole_file(tmp, obj_text(mesh, name)); }});
   write_files_atomically(outdir, files);
+  return unbound_maps(mesh, map_written, "MTL has no statement for it");
 }
 
 }  // namespace tightex

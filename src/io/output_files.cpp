@@ -54,4 +54,19 @@ std::vector<OutputFile> texture_output_files(const TexturedMesh& mesh, ImageForm
   return files;
 }
 
+std::vector<std::string> unbound_maps(const TexturedMesh& mesh, const std::function<bool(const Material&, MapSlot)>& written,
+                                      const std::string& reason) {
+  std::vector<std::string> lines;
+  for (size_t s = 0; s < kMapSlots; ++s) {
+    std::vector<const Material*> dropped;
+    for (const Material& m : mesh.materials)
+      if (m.maps[s] >= 0 && !written(m, MapSlot(s))) dropped.push_back(&m);
+    if (dropped.empty()) continue;
+    const std::string of =
+        dropped.size() == 1 ? fmt::format("material \"{}\"", dropped[0]->name) : fmt::format("{} materials", dropped.size());
+    lines.push_back(fmt::format("the {} map of {} is not bound in the output ({})", map_slot_name(MapSlot(s)), of, reason));
+  }
+  return lines;
+}
+
 }  // namespace tightex

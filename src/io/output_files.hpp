@@ -36,4 +36,11 @@ std::string texture_file_name(const Texture& texture, ImageFormat format);
 /// in `format`. The writers refer to `mesh`, which must outlive them.
 std::vector<OutputFile> texture_output_files(const TexturedMesh& mesh, ImageFormat format);
 
+/// What a writer leaves out of a model's materials: one sentence per map slot that some material of
+/// `mesh` binds and `written` says the format does not carry ("the occlusion map of material \"m\" is
+/// not bound in the output (REASON)"; "of N materials" when more than one), in slot order.
+/// Throws: nothing but std::bad_alloc.
+std::vector<std::string> unbound_maps(const TexturedMesh& mesh, const std::function<bool(const Material&, MapSlot)>& written,
+                                      const std::string& reason);
+
 }  // namespace tightex

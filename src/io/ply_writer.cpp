@@ -66,7 +66,7 @@ std::string ply_bytes(const TexturedMesh& mesh, const std::vector<std::string>& 
 
 }  // namespace
 
-void write_ply(const TexturedMesh& mesh, const std::string& outdir, const std::string& name, ImageFormat format) {
+std::vector<std::string> write_ply(const TexturedMesh& mesh, const std::string& outdir, const std::string& name, ImageFormat format) {
   const std::string ply_name = name + ".ply";
   if (mesh.num_vertices() > size_t(INT32_MAX))
     fail_input("{}: {} vertices are more than a PLY's int vertex indices can name", (fs::path(outdir) / ply_name).string(),
@@ -76,6 +76,8 @@ void write_ply(const TexturedMesh& mesh, const std::string& outdir, const std::s
   for (const OutputFile& f : files) texture_file.push_back(f.name);
   files.push_back({ply_name, [&](const fs::path& tmp) { write_whole_file(tmp, ply_bytes(mesh, texture_file)); }});
   write_files_atomically(outdir, files);
+  return unbound_maps(
+      mesh, [](const Material&, MapSlot) { return false; }, "PLY has no material maps; its image is written beside the model");
 }
 
 }  // namespace tightex

@@ -114,6 +114,9 @@ struct OutputFiles {
   std::string directory;
   std::string model;  // the model file's name within `directory` (OBJ or PLY)
   std::string html;   // the report page's name within `directory`; empty: none written (not written)
+  /// What the model file leaves out (write_gltf's removed parts, write_obj's and write_ply's unbound
+  /// maps), one sentence each; not written when empty.
+  std::vector<std::string> not_written;
 };
 
 /// The whole report. Sections that only some callers fill are optional and not written when unset:

@@ -152,6 +152,7 @@ json to_json(const StageTiming& timing) {
 json to_json(const OutputFiles& files) {
   json j = {{"directory", files.directory}, {"model", files.model}};
   if (!files.html.empty()) j["html"] = files.html;
+  if (!files.not_written.empty()) j["not_written"] = files.not_written;
   return j;
 }
 
