@@ -137,6 +137,10 @@ struct Options {
   /// The fit on a 4 x 4 grid of points per texel instead of 2 x 2: a little higher surface PSNR at
   /// about twice the bake time; the texture coordinates do not change. Ignored without `fit`.
   bool fine_fit = false;
+  /// The base colour filtered in linear light (each bilinear tap decoded from sRGB, the footprint mean
+  /// encoded back), as the other colour maps are; off: filtered as stored (sRGB). An internal switch
+  /// for measurement (CLI: the hidden --linear-light-colour); docs/decisions.md has the figures.
+  bool linear_light_colour = false;
   /// The maps other than the base colour (metallic-roughness, occlusion, emissive, normal, ...): each is
   /// baked at the base colour's size and read back at 50k surface points, its PSNR taken against the
   /// input's map over the channels its slots read. Below this, it is baked again larger (steps of 1/8,

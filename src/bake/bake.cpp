@@ -43,8 +43,8 @@ struct BakeContext {
 };
 
 /// The sampler of every triangle: its material's texture where it has one with pixels, else the
-/// material's flat colour (white without a material).
-std::vector<TriangleSampler> make_samplers(const TexturedMesh& input, const std::vector<BakeTriangle>& triangles) {
+/// material's flat colour (white without a material); `linear_light`: filtered in linear light.
+std::vector<TriangleSampler> make_samplers(const TexturedMesh& input, const std::vector<BakeTriangle>& triangles, bool linear_light) {
   std::vector<Rgba8> flat_colour(input.materials.size());
   for (size_t m = 0; m < input.materials.size(); ++m) {
     const auto& kd = input.materials[m].kd;
@@ -67,6 +67,7 @@ std::vector<TriangleSampler> make_samplers(const TexturedMesh& input, const std:
     }
     samplers[t].init(tri, src, flat);
     samplers[t].corner_samples = from_vertex_colours;
+    if (linear_light) samplers[t].encoding = MapEncoding::kSrgbColour;
   });
   return samplers;
 }
@@ -320,7 +321,7 @@ void bake_with_samplers(const std::vector<TriangleSampler>& samplers, const std:
 
 void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& triangles, const std::vector<Rect>& rects,
                   std::vector<Image>& images, BakeStats* stats, const BakeOptions& options) {
-  bake_with_samplers(make_samplers(input, triangles), triangles, rects, images, stats, options);
+  bake_with_samplers(make_samplers(input, triangles, options.linear_light_colour), triangles, rects, images, stats, options);
 }
 
 void bake_map(const TexturedMesh& input, const MapSource& map, const std::vector<BakeTriangle>& triangles, const std::vector<Rect>& rects,

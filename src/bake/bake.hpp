@@ -73,6 +73,9 @@ struct BakeOptions {
   /// weaker pull over-fits the sample points of each texel; a stronger one gives the fit away. Chosen
   /// by measurement (docs/decisions.md).
   double fit_lambda = 1.0;
+  /// bake_texture only: the base colour filtered in linear light, as bake_map filters a kSrgbColour
+  /// map (Options::linear_light_colour); off: as stored.
+  bool linear_light_colour = false;
 };
 
 /// The fine fit (Options::fine_fit, CLI --fine-fit): BakeOptions::fit_samples and fit_lambda;

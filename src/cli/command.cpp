@@ -161,6 +161,8 @@ CLI::Option* define_options(CLI::App& app, CommandLine& line, ChoiceNames& names
   app.add_flag("--fine-fit", line.fine_fit,
                "fit on 4x4 points per texel instead of 2x2: a little higher surface PSNR, about twice the bake time")
       ->excludes(no_fit_opt);
+  app.add_flag("--linear-light-colour", line.linear_light_colour, "filter the base colour in linear light (measurement only)")
+      ->group("");  // hidden: Options::linear_light_colour
   app.add_option("--map-budget", line.map_budget_db,
                  "maps other than the base colour (metallic-roughness, occlusion, emissive, normal, specular, ...): a map whose "
                  "surface PSNR against the input's map is below this many dB at the base colour's size is baked larger, up to "
@@ -316,6 +318,7 @@ Options library_options(const CommandLine& line, int size, ProgressCallback prog
   opt.max_page_side = line.max_size;
   opt.fit = !line.no_fit;
   opt.fine_fit = line.fine_fit;
+  opt.linear_light_colour = line.linear_light_colour;
   opt.map_budget_db = line.map_budget_db;
   opt.measure = false;
   opt.progress = std::move(progress);

@@ -31,7 +31,7 @@ struct CommandLine {
   CornerRule corners = CornerRule::kEqualArcs;
   ImageFormat format = ImageFormat::kPng;
   ModelFormat output_format = ModelFormat::kObj;  // --output-format, else the input's kind
-  bool quiet = false, verbose = false, force = false, no_fit = false, fine_fit = false;
+  bool quiet = false, verbose = false, force = false, no_fit = false, fine_fit = false, linear_light_colour = false;
   double map_budget_db = 51;  // Options::map_budget_db
   bool no_html = false;       // --no-html: no OUTDIR/report.html
   double max_memory_mib = 0;  // 0: 90% of RAM

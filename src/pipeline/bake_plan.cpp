@@ -20,6 +20,7 @@ BakeStats bake_new_textures(const TexturedMesh& input, const Options& options, c
   bo.fit = options.fit;
   if (options.fine_fit) bo.fit_samples = kFineFitSamples, bo.fit_lambda = kFineFitLambda;
   bo.progress = progress.of_stage("bake");
+  bo.linear_light_colour = options.linear_light_colour;
   bake_texture(input, om.bake_triangles, om.rects, images, &bs, bo);
   for (size_t i = 0; i < images.size(); ++i) om.mesh.textures[i].image = std::move(images[i]);
   return bs;
