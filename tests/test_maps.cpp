@@ -187,6 +187,10 @@ TEST(Maps, AMapBelowTheBudgetIsBakedLargerUpToItsInputsTexels) {
             figures_of(figures_before, MapSlot::kMetallicRoughness)->surface_psnr);
   EXPECT_GT(sized.report["maps"][0]["scale"].get<double>(), 1.0);
   EXPECT_EQ(sized.report["maps"][0]["sizes"][0][0].get<int>(), after.width);
+  Options capped = small_options();
+  capped.max_page_side = base.width;  // no page side beyond the base colour's
+  const Result at_cap = optimize(in, capped);
+  EXPECT_EQ(image_of(at_cap.output, MapSlot::kMetallicRoughness).width, base.width);
 }
 
 /// The warning lines of `stderr_file` that name `slot`'s map.

@@ -233,9 +233,9 @@ std::pair<std::vector<BakeTriangle>, std::vector<Rect>> scaled_layout(const Outp
 }
 
 /// The larger scales a map may take: steps of 1/den (den the largest of 8, 4, 2, 1 dividing every new
-/// page's sides) above 1, up to as many texels as the map's input images hold together. In
-/// increasing order; empty when none fits.
-std::vector<MapScale> enlargements(const TexturedMesh& input, const MapSource& map, const OutputModel& om) {
+/// page's sides) above 1, up to as many texels as the map's input images hold together and no page
+/// side above `max_side` (Options::max_page_side; 0: no cap). In increasing order; empty when none fits.
+std::vector<MapScale> enlargements(const TexturedMesh& input, const MapSource& map, const OutputModel& om, int max_side) {
   double input_texels = 0, page_texels = 0;
   std::vector<int> seen;
   for (int tex : map.texture_of_material)
@@ -243,16 +243,17 @@ std::vector<MapScale> enlargements(const TexturedMesh& input, const MapSource& m
       seen.push_back(tex);
       input_texels += double(input.textures[size_t(tex)].image.width) * input.textures[size_t(tex)].image.height;
     }
-  int den = 8;
+  int den = 8, longest_side = 0;
   for (int p = 0; p < om.new_images; ++p) {
     const Image& page = om.mesh.textures[size_t(p)].image;
     page_texels += double(page.width) * page.height;
+    longest_side = std::max({longest_side, page.width, page.height});
     while (den > 1 && (page.width % den != 0 || page.height % den != 0)) den /= 2;
   }
   std::vector<MapScale> scales;
   for (int num = den + 1; page_texels > 0; ++num) {
     const MapScale s{num, den};
-    if (s.value() * s.value() * page_texels > input_texels) break;
+    if (s.value() * s.value() * page_texels > input_texels || (max_side > 0 && int64_t(longest_side) * num / den > max_side)) break;
     scales.push_back(s);
   }
   return scales;
@@ -276,12 +277,13 @@ struct SizedMap {
   double psnr = 99;
 };
 
-/// The map baked at the base colour's size, then sized by `min_psnr_db` (Options::map_budget_db):
-/// below it, baked again larger (enlargements) at the smallest scale that reaches it, or the largest
-/// one when none does, provided that gains at least kMinEnlargementGainDb; otherwise reduced as far as
-/// choose_reduction allows. A normal map (judged against its own full-size bake) is never enlarged.
-SizedMap bake_sized_map(const TexturedMesh& input, const MapSource& map, const OutputModel& om, unsigned channels, double min_psnr_db,
+/// The map baked at the base colour's size, then sized by `sizing`'s map_budget_db: below it, baked again larger (enlargements) at the
+/// smallest scale that reaches it, or the largest one when none does, provided that gains at least kMinEnlargementGainDb; otherwise reduced
+/// as far as choose_reduction allows. A normal map (judged against its own full-size bake) is never enlarged; no page side grows beyond
+/// sizing.max_page_side.
+SizedMap bake_sized_map(const TexturedMesh& input, const MapSource& map, const OutputModel& om, unsigned channels, const Options& sizing,
                         const BakeOptions& options) {
+  const double min_psnr_db = sizing.map_budget_db;
   SizedMap best;
   best.pages = blank_pages(om, {});
   bake_map(input, map, om.bake_triangles, om.rects, best.pages, nullptr, options);
@@ -289,7 +291,8 @@ SizedMap bake_sized_map(const TexturedMesh& input, const MapSource& map, const O
   const std::vector<JudgePoint> points = judge_points(om.bake_triangles, kJudgePoints);
   const bool normal = map.encoding == MapEncoding::kTangentNormal;
   best.psnr = normal ? 99.0 : judged_psnr(input, map, om.bake_triangles, points, best.pages, nullptr, channels);
-  const std::vector<MapScale> scales = normal || best.psnr >= min_psnr_db ? std::vector<MapScale>{} : enlargements(input, map, om);
+  const std::vector<MapScale> scales =
+      normal || best.psnr >= min_psnr_db ? std::vector<MapScale>{} : enlargements(input, map, om, sizing.max_page_side);
   // Binary search over the scales for the smallest that reaches the budget, starting from the largest.
   size_t lo = 0, hi = scales.size();  // scales below lo were not enough; scales[hi] (if any) is enough
   const double gained_floor = best.psnr + kMinEnlargementGainDb;
@@ -341,7 +344,7 @@ std::vector<MapEntry> bake_other_maps(const TexturedMesh& input, const Options& 
     if (g.source.encoding == MapEncoding::kTangentNormal) map_options.fit = false;
     unsigned channels = 0;
     for (MapSlot s : g.slots) channels |= map_slot_channels(s);
-    SizedMap sized = bake_sized_map(input, g.source, om, channels, options.map_budget_db, map_options);
+    SizedMap sized = bake_sized_map(input, g.source, om, channels, options, map_options);
     MapEntry entry;
     entry.name = map_slot_name(g.slots[0]);
     for (MapSlot s : g.slots) entry.slots.push_back(map_slot_name(s));
