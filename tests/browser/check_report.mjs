@@ -29,6 +29,11 @@ function checkNumbers(shown, report, fail) {
     'metrics.flipped', 'metrics.lost_triangles', 'metrics.seam_length.output', 'metrics.density_spread.p50',
     'metrics.angle_distortion.mean', 'wall_seconds', 'timings.0.seconds', 'components.0.triangles'])
     if (!shown.some((s) => s.key === required)) fail(`the page does not show ${required}`);
+  // Each map's figures beside its picture (metrics.maps: a PSNR, or a normal map's angles).
+  (lookup(report, 'metrics.maps') || []).forEach((m, i) => {
+    const key = `metrics.maps.${i}.` + (typeof m.surface_psnr_db === 'number' ? 'surface_psnr_db' : 'normal_angle_median_deg');
+    if (!shown.some((s) => s.key === key)) fail(`the page does not show ${key} (the ${m.slot} map)`);
+  });
   for (const { key, scale, text, precision } of shown) {
     const expected = lookup(report, key);
     const value = Number(text.replace(/,/g, ''));

@@ -1,8 +1,9 @@
 #!/bin/sh
 # The browser test of report.html (ctest Browser.ReportPage): runs tightex on the demo and, where
-# ../shared/data has it, on meshroom_esp32cam, then opens each report.html in Debian's headless chromium
-# (check_report.mjs, through the npm package playwright-core pinned in package-lock.json). Exit 77
-# (skipped) when chromium or node is absent. Screenshots: BUILD/browser_test/*.png.
+# ../shared/data has them, on meshroom_esp32cam and WaterBottle.glb (a PBR material's maps), then
+# opens each report.html in Debian's headless chromium (check_report.mjs, through the npm package
+# playwright-core pinned in package-lock.json). Exit 77 (skipped) when chromium or node is absent.
+# Screenshots: BUILD/browser_test/*.png.
 #   run.sh BUILD_DIR TIGHTEX MAKE_DEMO SHARED_DATA
 set -eu
 skip() { echo "SKIPPED: $*"; exit 77; }
@@ -23,7 +24,7 @@ if ! cmp -s "$here/package-lock.json" "$work/package-lock.json" || [ ! -d "$work
 fi
 cp "$here/check_report.mjs" "$work/"
 
-rm -rf "$work/demo" "$work/meshroom" "$work/network_probe"
+rm -rf "$work/demo" "$work/meshroom" "$work/bottle" "$work/network_probe"
 "$make_demo" "$work/demo/input" >/dev/null
 "$tightex" "$work/demo/input/vase.obj" -o "$work/demo/out" -q
 pages="$work/demo/out/report.html $work/demo/out/report.json $work/demo.png"
@@ -34,6 +35,15 @@ if [ -f "$scan" ]; then
   pages="$pages $work/meshroom/out/report.html $work/meshroom/out/report.json $work/meshroom.png"
 else
   echo "note: $scan absent: only the demo is checked"
+fi
+
+bottle=$shared/khronos_waterbottle/WaterBottle.glb
+if [ -f "$bottle" ]; then
+  # Every map of a PBR material beside the base colour, with its figures; --size 512 keeps it short.
+  "$tightex" "$bottle" -o "$work/bottle/out" -q --size 512
+  pages="$pages $work/bottle/out/report.html $work/bottle/out/report.json $work/bottle.png"
+else
+  echo "note: $bottle absent: no page with maps is checked"
 fi
 
 # The checker must notice a page that reaches for the network (an image and a fetch).

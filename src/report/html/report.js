@@ -310,6 +310,22 @@
     ctx.stroke();
   }
 
+  // The figures of an output map's slots ("metallic_roughness + occlusion"), from metrics.maps: each
+  // slot's surface PSNR against the input's map, or a normal map's angular error (median / P95).
+  function mapFigures(slots) {
+    const maps = get('metrics.maps') || [];
+    const parts = [];
+    for (const slot of slots.split(' + ')) {
+      const i = maps.findIndex((f) => f.slot === slot);
+      if (i < 0) continue;
+      const key = 'metrics.maps.' + i + '.';
+      parts.push('; ' + slot + ' ');
+      if (typeof maps[i].surface_psnr_db === 'number') parts.push(reportNumber(key + 'surface_psnr_db', 1, 1, ' dB'));
+      else parts.push(reportNumber(key + 'normal_angle_median_deg', 2), ' / ', reportNumber(key + 'normal_angle_p95_deg', 2, 1, '\u00b0'));
+    }
+    return parts;
+  }
+
   function drawAtlases(models, images) {
     const row = document.getElementById('atlas-row');
     const pages = [];
@@ -331,7 +347,8 @@
       draws.push(draw);
       const used = p.mi === 0 ? 'metrics.input.image_utilization.' : 'metrics.output.image_utilization.';
       const caption = p.t.map
-        ? el('figcaption', { text: (p.mi === 0 ? 'Input ' : 'Output ') + p.t.map + ' map: ' + p.t.width + ' \u00d7 ' + p.t.height + ' texels' })
+        ? el('figcaption', {}, [(p.mi === 0 ? 'Input ' : 'Output ') + p.t.map + ' map: ' + p.t.width + ' \u00d7 ' + p.t.height + ' texels',
+          ...(p.mi === 0 ? [] : mapFigures(p.t.map))])
         : el('figcaption', {}, [(p.mi === 0 ? 'Input' : 'Output') + (p.m.textures.length > 1 ? ' page ' + (p.ti + 1) : '') +
           ': ' + p.t.width + ' \u00d7 ' + p.t.height + ' texels, ', reportNumber(used + p.ti, 1, 100, ' % used')]);
       row.append(el('figure', { class: 'atlas' }, [canvas, caption]));
