@@ -44,6 +44,19 @@ def test_optimize_real_scan(tightex, tmp_path):
     assert report["metrics"]["input"]["utilization"] < report["metrics"]["output"]["utilization"]
 
 
+def test_optimize_reports_every_map(tightex, tmp_path):
+    model = os.path.join(SHARED_DATA, "khronos_waterbottle", "WaterBottle.glb")
+    if not os.path.isfile(model):
+        pytest.skip("../shared/data/khronos_waterbottle not present")
+    report = tightex.optimize(model, tmp_path, size=512)
+    check_output(report, tmp_path, "WaterBottle.glb")
+    maps = {m["name"]: m for m in report["maps"]}
+    assert set(maps) == {"metallic_roughness", "emissive", "normal"}
+    assert maps["metallic_roughness"]["slots"] == ["metallic_roughness", "occlusion"]
+    assert all(len(m["sizes"]) == report["pages"]["count"] and m["scale"] > 0 for m in maps.values())
+    assert {f["slot"] for f in report["metrics"]["maps"]} == {"metallic_roughness", "occlusion", "emissive", "normal"}
+
+
 def test_bad_input_raises_input_error_and_writes_nothing(tightex, boxes_model, tmp_path):
     bad = make_bad_obj(tmp_path / "bad.obj")
     out = tmp_path / "out"
