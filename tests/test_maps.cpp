@@ -166,9 +166,11 @@ TEST(Maps, ObjMapsAreReadRebakedAndWritten) {
 
 TEST(Maps, AMapBelowTheBudgetIsBakedLargerUpToItsInputsTexels) {
   const TexturedMesh in = plate_with_maps();
-  Options unsized = small_options();
+  Options defaulted = small_options();
+  defaulted.default_budget = true;  // the size stands for tightex's own budget, which maps may exceed
+  Options unsized = defaulted;
   unsized.map_budget_db = 0;  // every map at the base colour's size
-  const Result plain = optimize(in, unsized), sized = optimize(in, small_options());
+  const Result plain = optimize(in, unsized), sized = optimize(in, defaulted);
   auto image_of = [](const TexturedMesh& out, MapSlot slot) -> const Image& {
     return out.textures[size_t(out.materials[0].maps[size_t(slot)])].image;
   };
@@ -187,10 +189,13 @@ TEST(Maps, AMapBelowTheBudgetIsBakedLargerUpToItsInputsTexels) {
             figures_of(figures_before, MapSlot::kMetallicRoughness)->surface_psnr);
   EXPECT_GT(sized.report["maps"][0]["scale"].get<double>(), 1.0);
   EXPECT_EQ(sized.report["maps"][0]["sizes"][0][0].get<int>(), after.width);
-  Options capped = small_options();
+  Options capped = defaulted;
   capped.max_page_side = base.width;  // no page side beyond the base colour's
   const Result at_cap = optimize(in, capped);
   EXPECT_EQ(image_of(at_cap.output, MapSlot::kMetallicRoughness).width, base.width);
+  const Result chosen = optimize(in, small_options());  // a budget the caller chose (--size): kept by every map
+  EXPECT_EQ(image_of(chosen.output, MapSlot::kMetallicRoughness).width,
+            chosen.output.textures[size_t(chosen.output.materials[0].texture)].image.width);
 }
 
 /// The warning lines of `stderr_file` that name `slot`'s map.
