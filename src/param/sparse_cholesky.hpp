@@ -15,9 +15,9 @@ namespace tightex {
 /// threaded BLAS uses every core within the call.
 std::mutex& blas_mutex();
 
-/// Makes the dense kernels under CHOLMOD run on the calling thread only: OpenBLAS's thread pool and
-/// libgomp's teams (for the process, once; libgomp's default team size also for this thread). The components and shape probes are mapped in
-/// parallel already, and the BLAS calls are serialised (blas_mutex), so the kernels' own threads mostly
+/// Makes the dense kernels under CHOLMOD run on the calling thread only: OpenBLAS's thread pool (for
+/// the process, once) and libgomp's teams (for this thread: libgomp keeps those settings per thread).
+/// The components and shape probes are mapped in parallel already, and the BLAS calls are serialised (blas_mutex), so the kernels' own threads mostly
 /// spin and yield in the kernel (BENCHMARKS.md, "Where the default run's time goes"). Looked up by name:
 /// a no-op with a BLAS or OpenMP runtime that lacks these functions.
 void use_serial_dense_kernels();
