@@ -95,25 +95,49 @@ TexturedMesh read_model(const std::string& path, const ModelReadOptions& options
 
 enum class ImageFormat { kPng, kJpeg };
 
+/// ImageEncoding::png_level's default: zlib level 1, the Z_RLE strategy and the UP filter on every row,
+/// several times faster than level 6 for about the same size (docs/decisions.md).
+constexpr int kPngLevelFast = -1;
+constexpr int kDefaultJpegQuality = 92;
+
+/// How the texture images of a model are encoded: the format and its setting. An ImageFormat converts
+/// to it with the defaults, so a writer call that names only a format means the fast PNG or quality 92.
+struct ImageEncoding {
+  ImageFormat format = ImageFormat::kPng;
+  /// PNG: kPngLevelFast, or 0..9: that zlib level with zlib's default strategy and libspng's adaptive
+  /// choice of filter per row (9: the smallest file, the slowest).
+  int png_level = kPngLevelFast;
+  int jpeg_quality = kDefaultJpegQuality;  // JPEG: 1..100
+
+  ImageEncoding() = default;
+  ImageEncoding(ImageFormat image_format) : format(image_format) {}  // NOLINT(google-explicit-constructor): see above
+  ImageEncoding(ImageFormat image_format, int png, int jpeg) : format(image_format), png_level(png), jpeg_quality(jpeg) {}
+};
+
 /// Loads an image file. Throws InputError naming the file and the problem (missing, unreadable,
 /// truncated, corrupt, unsupported, or larger than max_pixels) -- never crashes on a bad file.
 Image load_image(const std::string& path, size_t max_pixels = size_t(1) << 30);
 
-/// Writes an image (RGB; alpha is dropped when it is 255 everywhere). PNG uses fast compression
-/// settings (tightex writes 8K textures; zlib level 9 would dominate the run time). `jpeg_quality`
-/// is 1..100. Throws InputError naming the file when it cannot be written.
-void save_image(const std::string& path, const Image& image, ImageFormat format, int jpeg_quality = 92);
+/// Writes an image (RGB; alpha is dropped when it is 255 everywhere) as `encoding` says. The default
+/// PNG settings are fast ones (tightex writes 8K textures; zlib level 9 would dominate the run time).
+/// Requires: a non-empty image. Throws InputError naming the file when it cannot be written, or when
+/// encoding.png_level is not kPngLevelFast or 0..9, or encoding.jpeg_quality is not 1..100 (for its format).
+void save_image(const std::string& path, const Image& image, const ImageEncoding& encoding);
+
+/// save_image in `format` with the default PNG settings, or JPEG at `jpeg_quality` (1..100).
+void save_image(const std::string& path, const Image& image, ImageFormat format, int jpeg_quality = kDefaultJpegQuality);
 
 /// Writes OUTDIR/<name>.obj, <name>.mtl and every texture of `mesh` (Texture::path is the file stem inside
-/// OUTDIR; .png or .jpg is appended). Every file is first written under a temporary name and renamed only once
-/// all are complete (the OBJ last), so a failed run leaves no model behind. Positions are written in
-/// shortest round-trip form, so they read back bit-identical; texture coordinates likewise, so no UV
-/// triangle collapses on the way to the file. Throws InputError naming the path on failure.
-/// Returns one sentence per map slot the MTL cannot bind (glTF's occlusion; a metallic-roughness image
-/// beside a separate roughness or metallic map), for a warning; the images are written all the same.
-std::vector<std::string> write_obj(const TexturedMesh& mesh, const std::string& outdir, const std::string& name, ImageFormat format);
+/// OUTDIR; .png or .jpg is appended), each image encoded as `encoding` says (save_image). Every file is first written under a temporary
+/// name and renamed only once all are complete (the OBJ last), so a failed run leaves no model behind. Positions are written in shortest
+/// round-trip form, so they read back bit-identical; texture coordinates likewise, so no UV triangle collapses on the way to the file.
+/// Throws InputError naming the path on failure (and for an encoding save_image refuses, before any file is written). Returns one sentence
+/// per map slot the MTL cannot bind (glTF's occlusion; a metallic-roughness image beside a separate roughness or metallic map), for a
+/// warning; the images are written all the same.
+std::vector<std::string> write_obj(const TexturedMesh& mesh, const std::string& outdir, const std::string& name,
+                                   const ImageEncoding& encoding);
 
-/// Writes OUTDIR/<name>.ply and every texture of `mesh` (named as write_obj names them), atomically as
+/// Writes OUTDIR/<name>.ply and every texture of `mesh` (named and encoded as write_obj does), atomically as
 /// write_obj does (the PLY last): a binary_little_endian PLY as photogrammetry tools write it and
 /// MeshLab reads it. Header: one `comment TextureFile <file>` per texture, in the order of
 /// mesh.textures, so that a face's `texnumber` indexes them. Vertex: x y z, as float when every
@@ -128,13 +152,14 @@ std::vector<std::string> write_obj(const TexturedMesh& mesh, const std::string& 
 /// every texture is) but bound to no face. Returns one sentence per such map slot, for a warning.
 /// Requires: a mesh as read_model guarantees it, with fewer than 2^31 vertices.
 /// Throws InputError naming the path on failure (too many vertices, cannot create, write or rename).
-std::vector<std::string> write_ply(const TexturedMesh& mesh, const std::string& outdir, const std::string& name, ImageFormat format);
+std::vector<std::string> write_ply(const TexturedMesh& mesh, const std::string& outdir, const std::string& name,
+                                   const ImageEncoding& encoding);
 
 /// The two containers of glTF: JSON text with a .bin buffer and image files beside it, or one .glb.
 enum class GltfContainer { kGltf, kGlb };
 
-/// Writes OUTDIR/<name>.glb, or <name>.gltf with <name>.bin and the texture files (named as write_obj
-/// names them), atomically as write_obj does (the model last). For a model read by read_gltf
+/// Writes OUTDIR/<name>.glb, or <name>.gltf with <name>.bin and the texture files (named
+/// and encoded as write_obj does), atomically as write_obj does (the model last). For a model read by read_gltf
 /// (mesh.gltf set, mesh.input_triangle naming each triangle's input triangle) the input's document is
 /// written back: scenes, nodes (transforms as they were), meshes' names, extras, materials' factors,
 /// alphaMode, alphaCutoff, doubleSided, extensions that do not refer to textures, points and lines
@@ -151,7 +176,7 @@ enum class GltfContainer { kGltf, kGlb };
 /// Returns one line per kind of thing removed ("materials[0].normalTexture", ...), for a warning.
 /// Requires: a mesh as the pipeline's output guarantees it, fewer than 2^32 vertices per primitive.
 /// Throws InputError naming the path on failure.
-std::vector<std::string> write_gltf(const TexturedMesh& mesh, const std::string& outdir, const std::string& name, ImageFormat format,
-                                    GltfContainer container);
+std::vector<std::string> write_gltf(const TexturedMesh& mesh, const std::string& outdir, const std::string& name,
+                                    const ImageEncoding& encoding, GltfContainer container);
 
 }  // namespace tightex

@@ -114,6 +114,22 @@ struct ChoiceNames {
   std::string output_format;  // empty: not given
 };
 
+/// Declares --png-level and --jpeg-quality, and refuses each beside the other format (it would do nothing).
+void define_encoding_options(CLI::App& app, CommandLine& line, const ChoiceNames& names) {
+  auto* png_level = app.add_option("--png-level", line.encoding.png_level,
+                                   "PNG textures: zlib level 0..9 with the adaptive filter (9: the smallest files, several times "
+                                   "slower to write). Default: fast settings (level 1, run-length matches, the Up filter), about "
+                                   "as small as level 6")
+                        ->check(CLI::Range(0, 9));
+  auto* jpeg_quality =
+      app.add_option("--jpeg-quality", line.encoding.jpeg_quality, "JPEG textures (--format jpg): quality 1..100 (default 92)")
+          ->check(CLI::Range(1, 100));
+  app.callback([png_level, jpeg_quality, &names] {
+    if (png_level->count() > 0 && names.format != "png") throw CLI::ValidationError("--png-level", "needs --format png");
+    if (jpeg_quality->count() > 0 && names.format != "jpg") throw CLI::ValidationError("--jpeg-quality", "needs --format jpg");
+  });
+}
+
 /// Declares every option of the main command on `app`, bound to `line` and `names`. Returns --size's
 /// option, whose count says whether it was given.
 CLI::Option* define_options(CLI::App& app, CommandLine& line, ChoiceNames& names) {
@@ -177,6 +193,7 @@ CLI::Option* define_options(CLI::App& app, CommandLine& line, ChoiceNames& names
   app.add_option("--layout", names.layout, "atlas: all components in one texture; per-component: one texture each (the paper's)")
       ->check(CLI::IsMember(names_of(kLayouts)));
   app.add_option("--format", names.format, "texture file format")->check(CLI::IsMember({"png", "jpg"}));
+  define_encoding_options(app, line, names);
   app.add_option("--output-format", names.output_format,
                  "model file format: obj (OBJ + MTL), ply (binary PLY, textures named by comment TextureFile), gltf (.gltf + .bin "
                  "+ texture files) or glb. Default: the input's kind (.ply, .gltf or .glb as the input, anything else .obj)")
@@ -205,7 +222,7 @@ void finish_command_line(CommandLine& line, const ChoiceNames& names, const CLI:
   line.holes = parsed(kHoleModes, names.holes);
   line.map = parsed(kMapKinds, names.map);
   line.corners = parsed(kCornerRules, names.corners);
-  line.format = names.format == "png" ? ImageFormat::kPng : ImageFormat::kJpeg;
+  line.encoding.format = names.format == "png" ? ImageFormat::kPng : ImageFormat::kJpeg;
   line.output_format = model_format_of(line.input);
   for (size_t i = 0; i < kModelFormatNames.size(); ++i)
     if (names.output_format == kModelFormatNames[i]) line.output_format = ModelFormat(i);
@@ -399,15 +416,15 @@ struct CliTimings {
 std::vector<std::string> write_model(const CommandLine& line, const TexturedMesh& output, const std::string& name) {
   switch (line.output_format) {
     case ModelFormat::kPly:
-      return write_ply(output, line.outdir, name, line.format);
+      return write_ply(output, line.outdir, name, line.encoding);
     case ModelFormat::kGltf:
-      return write_gltf(output, line.outdir, name, line.format, GltfContainer::kGltf);
+      return write_gltf(output, line.outdir, name, line.encoding, GltfContainer::kGltf);
     case ModelFormat::kGlb:
-      return write_gltf(output, line.outdir, name, line.format, GltfContainer::kGlb);
+      return write_gltf(output, line.outdir, name, line.encoding, GltfContainer::kGlb);
     case ModelFormat::kObj:
       break;
   }
-  return write_obj(output, line.outdir, name, line.format);
+  return write_obj(output, line.outdir, name, line.encoding);
 }
 
 /// Writes the output model and measures it, side by side (PNG compression and measuring are

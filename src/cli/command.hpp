@@ -29,7 +29,7 @@ struct CommandLine {
   HoleMode holes = HoleMode::kFill;
   MapKind map = MapKind::kDetail;
   CornerRule corners = CornerRule::kEqualArcs;
-  ImageFormat format = ImageFormat::kPng;
+  ImageEncoding encoding;                         // --format, --png-level, --jpeg-quality: how every texture image of the model is written
   ModelFormat output_format = ModelFormat::kObj;  // --output-format, else the input's kind
   bool quiet = false, verbose = false, force = false, no_fit = false, fine_fit = false, linear_light_colour = false;
   double map_budget_db = 51;  // Options::map_budget_db

@@ -15,6 +15,7 @@
 #include "core/error.hpp"
 #include "core/tangents.hpp"
 #include "io/gltf_document.hpp"
+#include "io/image_io.hpp"
 #include "io/little_endian.hpp"
 #include "io/model_files.hpp"
 #include "io/output_files.hpp"
@@ -634,15 +635,15 @@ std::string glb_bytes(const json& doc, const std::string& bin) {
   return out;
 }
 
-/// Encodes every texture of `mesh` in `format` through a temporary file beside `tmp` (the encoders write
-/// files), for embedding in a GLB.
-std::vector<TextureImage> encoded_textures(const TexturedMesh& mesh, ImageFormat format, const fs::path& tmp) {
+/// Encodes every texture of `mesh` as `encoding` says through a temporary file beside `tmp` (the
+/// encoders write files), for embedding in a GLB.
+std::vector<TextureImage> encoded_textures(const TexturedMesh& mesh, const ImageEncoding& encoding, const fs::path& tmp) {
   std::vector<TextureImage> images;
   for (size_t i = 0; i < mesh.textures.size(); ++i) {
     const fs::path file = tmp.string() + fmt::format(".image{}", i);
     TextureImage ti;
     try {
-      save_image(file.string(), mesh.textures[i].image, format);
+      save_image(file.string(), mesh.textures[i].image, encoding);
       std::string reason;
       if (!read_whole_file(file, ti.bytes, reason)) fail_input("{}: {}", file.string(), reason);
     } catch (...) {
@@ -652,7 +653,7 @@ std::vector<TextureImage> encoded_textures(const TexturedMesh& mesh, ImageFormat
     }
     std::error_code ec;
     fs::remove(file, ec);
-    ti.mime = format == ImageFormat::kPng ? "image/png" : "image/jpeg";
+    ti.mime = encoding.format == ImageFormat::kPng ? "image/png" : "image/jpeg";
     images.push_back(std::move(ti));
   }
   return images;
@@ -660,19 +661,20 @@ std::vector<TextureImage> encoded_textures(const TexturedMesh& mesh, ImageFormat
 
 }  // namespace
 
-std::vector<std::string> write_gltf(const TexturedMesh& mesh, const std::string& outdir, const std::string& name, ImageFormat format,
-                                    GltfContainer container) {
+std::vector<std::string> write_gltf(const TexturedMesh& mesh, const std::string& outdir, const std::string& name,
+                                    const ImageEncoding& encoding, GltfContainer container) {
   std::vector<std::string> removed;
   if (container == GltfContainer::kGlb) {
+    check_image_encoding(encoding, (fs::path(outdir) / (name + ".glb")).string());
     write_files_atomically(outdir, {{name + ".glb", [&](const fs::path& tmp) {
-                                       const std::vector<TextureImage> images = encoded_textures(mesh, format, tmp);
+                                       const std::vector<TextureImage> images = encoded_textures(mesh, encoding, tmp);
                                        std::string bin;
                                        const json doc = DocumentBuilder(mesh, images).build(bin, removed);
                                        write_whole_file(tmp, glb_bytes(doc, bin));
                                      }}});
     return removed;
   }
-  std::vector<OutputFile> files = texture_output_files(mesh, format);
+  std::vector<OutputFile> files = texture_output_files(mesh, encoding);
   std::vector<TextureImage> images(files.size());
   for (size_t i = 0; i < files.size(); ++i) images[i].uri = files[i].name;
   std::string bin;

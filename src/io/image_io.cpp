@@ -74,12 +74,13 @@ constexpr size_t kPngChunkCacheLimit = size_t(256) << 20;
 // dozen (libjpeg-turbo's djpeg -maxscans and TurboJPEG's scan limit are the same kind of cap).
 constexpr int kMaxJpegScans = 500;
 
-// PNG encoder settings: after the UP filter, photographic data has almost no long repeats for LZ77 to
-// find, so Z_RLE skips the mostly useless match search; about as small as zlib level 6 and several
-// times faster (docs/decisions.md). One fixed filter also avoids trying all five on every row.
-constexpr int kPngCompressionLevel = 1;
-constexpr int kPngCompressionStrategy = Z_RLE;
-constexpr int kPngFilterChoice = SPNG_FILTER_CHOICE_UP;
+// The fast PNG settings (kPngLevelFast): after the UP filter, photographic data has almost no long
+// repeats for LZ77 to find, so Z_RLE skips the mostly useless match search; about as small as zlib
+// level 6 and several times faster (docs/decisions.md). One fixed filter also avoids trying all five on
+// every row.
+constexpr int kPngFastCompressionLevel = 1;
+constexpr int kPngFastCompressionStrategy = Z_RLE;
+constexpr int kPngFastFilterChoice = SPNG_FILTER_CHOICE_UP;
 
 // From this quality on, JPEG keeps full-resolution chroma (4:4:4). A texture atlas packs unrelated
 // charts side by side, so sharp colour edges are everywhere; 4:2:0 averages chroma over 2x2 texels and
@@ -278,7 +279,18 @@ bool is_opaque(const Image& image) {
   return std::all_of(image.pixels.begin(), image.pixels.end(), [](const Rgba8& p) { return p.a == 255; });
 }
 
-void save_png(OutputFile& out, const Image& image) {
+// The zlib level, strategy and filter choice for ImageEncoding::png_level: the fast settings, or that
+// level with zlib's default strategy and libspng's adaptive filter (each row tries all five).
+struct PngSettings {
+  int level, strategy, filter_choice;
+};
+PngSettings png_settings(int png_level) {
+  if (png_level == kPngLevelFast) return {kPngFastCompressionLevel, kPngFastCompressionStrategy, kPngFastFilterChoice};
+  return {png_level, Z_DEFAULT_STRATEGY, SPNG_FILTER_CHOICE_ALL};
+}
+
+void save_png(OutputFile& out, const Image& image, int png_level) {
+  const PngSettings settings = png_settings(png_level);
   SpngContext ctx = make_spng_context(SPNG_CTX_ENCODER);
   const bool opaque = is_opaque(image);
   spng_ihdr ihdr{};
@@ -289,9 +301,9 @@ void save_png(OutputFile& out, const Image& image) {
 
   int error = spng_set_png_file(ctx.get(), out.get());
   if (error == 0) error = spng_set_ihdr(ctx.get(), &ihdr);
-  if (error == 0) error = spng_set_option(ctx.get(), SPNG_IMG_COMPRESSION_LEVEL, kPngCompressionLevel);
-  if (error == 0) error = spng_set_option(ctx.get(), SPNG_IMG_COMPRESSION_STRATEGY, kPngCompressionStrategy);
-  if (error == 0) error = spng_set_option(ctx.get(), SPNG_FILTER_CHOICE, kPngFilterChoice);
+  if (error == 0) error = spng_set_option(ctx.get(), SPNG_IMG_COMPRESSION_LEVEL, settings.level);
+  if (error == 0) error = spng_set_option(ctx.get(), SPNG_IMG_COMPRESSION_STRATEGY, settings.strategy);
+  if (error == 0) error = spng_set_option(ctx.get(), SPNG_FILTER_CHOICE, settings.filter_choice);
   // Row by row, so dropping alpha needs one row of scratch memory instead of a copy of the image.
   if (error == 0) {
     error = spng_encode_image(ctx.get(), nullptr, 0, SPNG_FMT_PNG, SPNG_ENCODE_PROGRESSIVE | SPNG_ENCODE_FINALIZE);
@@ -728,23 +740,32 @@ Image decode_image(const unsigned char* data, size_t size, const std::string& na
   return decode_with_stb(data, size, name, max_pixels);
 }
 
-void save_image(const std::string& path, const Image& image, ImageFormat format, int jpeg_quality) {
+void check_image_encoding(const ImageEncoding& encoding, const std::string& path) {
+  if (encoding.format == ImageFormat::kPng && encoding.png_level != kPngLevelFast && (encoding.png_level < 0 || encoding.png_level > 9))
+    fail_input("{}: PNG compression level {} is outside 0..9", path, encoding.png_level);
+  if (encoding.format == ImageFormat::kJpeg && (encoding.jpeg_quality < 1 || encoding.jpeg_quality > 100))
+    fail_input("{}: JPEG quality {} is outside 1..100", path, encoding.jpeg_quality);
+}
+
+void save_image(const std::string& path, const Image& image, const ImageEncoding& encoding) {
   if (image.empty() || image.pixels.size() != size_t(image.width) * size_t(image.height)) {
     fail_internal("{}: cannot save a {}x{} image with {} pixels", path, image.width, image.height, image.pixels.size());
   }
-  if (format == ImageFormat::kJpeg && (jpeg_quality < 1 || jpeg_quality > 100)) {
-    fail_input("{}: JPEG quality {} is outside 1..100", path, jpeg_quality);
-  }
+  check_image_encoding(encoding, path);
   OutputFile out(path);
-  switch (format) {
+  switch (encoding.format) {
     case ImageFormat::kPng:
-      save_png(out, image);
+      save_png(out, image, encoding.png_level);
       break;
     case ImageFormat::kJpeg:
-      save_jpeg(out, image, jpeg_quality);
+      save_jpeg(out, image, encoding.jpeg_quality);
       break;
   }
   out.commit();
+}
+
+void save_image(const std::string& path, const Image& image, ImageFormat format, int jpeg_quality) {
+  save_image(path, image, ImageEncoding(format, kPngLevelFast, jpeg_quality));
 }
 
 std::string encode_jpeg(const Image& image, int quality) {

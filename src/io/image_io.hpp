@@ -18,6 +18,10 @@ Image decode_image(const unsigned char* data, size_t size, const std::string& na
 /// and quality in 1..100 (else InternalError); throws std::bad_alloc where memory runs out.
 std::string encode_jpeg(const Image& image, int quality);
 
+/// Refuses an encoding save_image would refuse: InputError "PATH: PNG compression level N is outside
+/// 0..9" or "PATH: JPEG quality N is outside 1..100" (only the setting of encoding.format is checked).
+void check_image_encoding(const ImageEncoding& encoding, const std::string& path);
+
 /// Width and height from the file's header alone ({0, 0} when unknown), so memory can be estimated
 /// before any pixel is allocated.
 std::pair<int, int> image_dimensions(const std::string& path);

@@ -164,8 +164,9 @@ std::string obj_text(const TexturedMesh& mesh, const std::string& name) {
 
 }  // namespace
 
-std::vector<std::string> write_obj(const TexturedMesh& mesh, const std::string& outdir, const std::string& name, ImageFormat format) {
-  std::vector<OutputFile> files = texture_output_files(mesh, format);
+std::vector<std::string> write_obj(const TexturedMesh& mesh, const std::string& outdir, const std::string& name,
+                                   const ImageEncoding& encoding) {
+  std::vector<OutputFile> files = texture_output_files(mesh, encoding);
   std::vector<std::string> texture_file;
   for (const OutputFile& f : files) texture_file.push_back(f.name);
   files.push_back({name + ".mtl", [&](const fs::path& tmp) { write_whole_file(tmp, mtl_text(mesh, texture_file)); }});

@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "core/error.hpp"
+#include "io/image_io.hpp"
 
 namespace tightex {
 
@@ -47,10 +48,13 @@ std::string texture_file_name(const Texture& texture, ImageFormat format) {
   return texture.path + (format == ImageFormat::kPng ? ".png" : ".jpg");
 }
 
-std::vector<OutputFile> texture_output_files(const TexturedMesh& mesh, ImageFormat format) {
+std::vector<OutputFile> texture_output_files(const TexturedMesh& mesh, const ImageEncoding& encoding) {
   std::vector<OutputFile> files;
-  for (const Texture& tex : mesh.textures)
-    files.push_back({texture_file_name(tex, format), [&tex, format](const fs::path& tmp) { save_image(tmp.string(), tex.image, format); }});
+  for (const Texture& tex : mesh.textures) {
+    const std::string name = texture_file_name(tex, encoding.format);
+    check_image_encoding(encoding, name);
+    files.push_back({name, [&tex, encoding](const fs::path& tmp) { save_image(tmp.string(), tex.image, encoding); }});
+  }
   return files;
 }
 

@@ -33,8 +33,9 @@ void write_whole_file(const std::filesystem::path& path, const std::string& byte
 std::string texture_file_name(const Texture& texture, ImageFormat format);
 
 /// One OutputFile per texture of `mesh`, in its order, named by texture_file_name and writing the image
-/// in `format`. The writers refer to `mesh`, which must outlive them.
-std::vector<OutputFile> texture_output_files(const TexturedMesh& mesh, ImageFormat format);
+/// as `encoding` says. The writers refer to `mesh`, which must outlive them.
+/// Throws InputError for an encoding save_image refuses (check_image_encoding), before anything is written.
+std::vector<OutputFile> texture_output_files(const TexturedMesh& mesh, const ImageEncoding& encoding);
 
 /// What a writer leaves out of a model's materials: one sentence per map slot that some material of
 /// `mesh` binds and `written` says the format does not carry ("the occlusion map of material \"m\" is

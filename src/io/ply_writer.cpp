@@ -66,12 +66,13 @@ std::string ply_bytes(const TexturedMesh& mesh, const std::vector<std::string>& 
 
 }  // namespace
 
-std::vector<std::string> write_ply(const TexturedMesh& mesh, const std::string& outdir, const std::string& name, ImageFormat format) {
+std::vector<std::string> write_ply(const TexturedMesh& mesh, const std::string& outdir, const std::string& name,
+                                   const ImageEncoding& encoding) {
   const std::string ply_name = name + ".ply";
   if (mesh.num_vertices() > size_t(INT32_MAX))
     fail_input("{}: {} vertices are more than a PLY's int vertex indices can name", (fs::path(outdir) / ply_name).string(),
                mesh.num_vertices());
-  std::vector<OutputFile> files = texture_output_files(mesh, format);
+  std::vector<OutputFile> files = texture_output_files(mesh, encoding);
   std::vector<std::string> texture_file;
   for (const OutputFile& f : files) texture_file.push_back(f.name);
   files.push_back({ply_name, [&](const fs::path& tmp) { write_whole_file(tmp, ply_bytes(mesh, texture_file)); }});
