@@ -293,6 +293,38 @@ TEST_F(ImageIoTest, FormatIsDetectedByContentNotExtension) {
   EXPECT_TRUE(load_image(path("really_a_png.jpg")).pixels == image.pixels);
 }
 
+TEST_F(ImageIoTest, PngEveryLevelRoundTripsExactlyAndLevelNineIsTheSmallest) {
+  for (const bool alpha : {false, true}) {
+    const Image image = gradient_image(96, 80, alpha);
+    auto size_at = [&](int level) {
+      const std::string file = path("level" + std::to_string(level) + ".png");
+      save_image(file, image, ImageEncoding(ImageFormat::kPng, level, kDefaultJpegQuality));
+      EXPECT_TRUE(load_image(file).pixels == image.pixels) << "level " << level << (alpha ? " RGBA" : " RGB");
+      return read_bytes(file).size();
+    };
+    const size_t fast = size_at(kPngLevelFast), stored = size_at(0), best = size_at(9);
+    size_at(6);
+    EXPECT_LE(best, fast) << (alpha ? "RGBA" : "RGB");
+    EXPECT_LT(best, stored) << (alpha ? "RGBA" : "RGB");
+  }
+  // The ImageFormat overload is the fast setting, byte for byte.
+  const Image image = noise_image(40, 30, false, 5);
+  save_image(path("format.png"), image, ImageFormat::kPng);
+  save_image(path("encoding.png"), image, ImageEncoding(ImageFormat::kPng));
+  EXPECT_TRUE(read_bytes(path("format.png")) == read_bytes(path("encoding.png")));
+}
+
+TEST_F(ImageIoTest, PngLevelOutOfRangeIsRefusedBeforeTheFileIsCreated) {
+  for (const int level : {-2, 10}) {
+    expect_input_error([&] { save_image(path("l.png"), Image(2, 2), ImageEncoding(ImageFormat::kPng, level, kDefaultJpegQuality)); },
+                       "compression level");
+    EXPECT_FALSE(fs::exists(path("l.png")));
+  }
+  // Only the setting of the format written is checked.
+  save_image(path("q.png"), Image(2, 2), ImageEncoding(ImageFormat::kPng, 9, 0));
+  EXPECT_TRUE(fs::exists(path("q.png")));
+}
+
 // ---------------------------------------------------------------------------------------------------
 // PNG colour types and bit depths
 

@@ -57,6 +57,15 @@ def test_optimize_reports_every_map(tightex, tmp_path):
     assert {f["slot"] for f in report["metrics"]["maps"]} == {"metallic_roughness", "occlusion", "emissive", "normal"}
 
 
+def test_texture_encoding_options(tightex, boxes_model, tmp_path):
+    tightex.optimize(boxes_model, tmp_path / "fast", map="area", size=128, no_html=True)
+    tightex.optimize(boxes_model, tmp_path / "best", map="area", size=128, no_html=True, png_level=9)
+    tightex.optimize(boxes_model, tmp_path / "jpg", map="area", size=128, no_html=True, format="jpg", jpeg_quality=40)
+    fast, best = (os.path.getsize(tmp_path / d / "boxes_tightex.png") for d in ("fast", "best"))
+    assert best <= fast
+    assert os.path.getsize(tmp_path / "jpg" / "boxes_tightex.jpg") > 0
+
+
 def test_bad_input_raises_input_error_and_writes_nothing(tightex, boxes_model, tmp_path):
     bad = make_bad_obj(tmp_path / "bad.obj")
     out = tmp_path / "out"
@@ -66,6 +75,10 @@ def test_bad_input_raises_input_error_and_writes_nothing(tightex, boxes_model, t
         tightex.optimize(tmp_path / "missing.obj", out)
     with pytest.raises(tightex.InputError, match="--size"):
         tightex.optimize(boxes_model, out, size=3)
+    with pytest.raises(tightex.InputError, match="--png-level"):
+        tightex.optimize(boxes_model, out, png_level=10)
+    with pytest.raises(tightex.InputError, match="--jpeg-quality: needs --format jpg"):
+        tightex.optimize(boxes_model, out, jpeg_quality=80)
     with pytest.raises(tightex.InputError, match="--no-such-option"):
         tightex.optimize(boxes_model, out, no_such_option=1)
     with pytest.raises(tightex.InputError, match="input's own folder"):
