@@ -95,8 +95,8 @@ TexturedMesh read_model(const std::string& path, const ModelReadOptions& options
 
 enum class ImageFormat { kPng, kJpeg };
 
-/// ImageEncoding::png_level's default: zlib level 1, the Z_RLE strategy and the UP filter on every row,
-/// several times faster than level 6 for about the same size (docs/decisions.md).
+/// ImageEncoding::png_level's default: zlib level 1, the Z_RLE strategy and the UP filter on every row:
+/// several times faster than level 6, files within about a tenth of level 9's (BENCHMARKS.md, "Options").
 constexpr int kPngLevelFast = -1;
 constexpr int kDefaultJpegQuality = 92;
 

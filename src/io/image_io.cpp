@@ -75,9 +75,9 @@ constexpr size_t kPngChunkCacheLimit = size_t(256) << 20;
 constexpr int kMaxJpegScans = 500;
 
 // The fast PNG settings (kPngLevelFast): after the UP filter, photographic data has almost no long
-// repeats for LZ77 to find, so Z_RLE skips the mostly useless match search; about as small as zlib
-// level 6 and several times faster (docs/decisions.md). One fixed filter also avoids trying all five on
-// every row.
+// repeats for LZ77 to find, so Z_RLE skips the mostly useless match search: several times faster than
+// level 6, files a few percent larger (docs/decisions.md; BENCHMARKS.md, "Options"). One fixed filter
+// also avoids trying all five on every row.
 constexpr int kPngFastCompressionLevel = 1;
 constexpr int kPngFastCompressionStrategy = Z_RLE;
 constexpr int kPngFastFilterChoice = SPNG_FILTER_CHOICE_UP;
