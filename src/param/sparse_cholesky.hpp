@@ -36,6 +36,12 @@ class SparseCholesky {
     use_serial_dense_kernels();
     const bool forced = a.rows() >= supernodal_from_;
     solver_.setMode(forced ? Eigen::CholmodSupernodalLLt : Eigen::CholmodAuto);
+    if (!forced) {
+      // A simplicial factor as LL' (Eigen's CholmodAuto would leave CHOLMOD's LDL'), so that a
+      // system that is not numerically positive definite fails to factorise, as it always has.
+      solver_.cholmod().final_asis = 0;
+      solver_.cholmod().final_ll = 1;
+    }
     solver_.analyzePattern(a);
     // CHOLMOD's own choice below the size: supernodal where the factor is dense enough for its
     // column blocks to pay (flops per factor entry at least supernodal_switch).
