@@ -12,8 +12,10 @@
 #include <iterator>
 #include <stdexcept>
 
+#include "core/error.hpp"
 #include "io/image_io.hpp"
 #include "io/obj_reader.hpp"
+#include "io/output_files.hpp"
 #include "report/metrics.hpp"
 
 namespace fs = std::filesystem;
@@ -23,12 +25,12 @@ namespace {
 
 struct Case {
   std::string name;
-  std::string obj;           // OBJ text; "mtllib m.mtl" refers to the MTL below
-  std::string mtl;           // empty: no MTL file written
-  bool texture = true;       // write t.png (a small gradient)
-  std::string texture_bytes; // non-empty: write these bytes as t.png instead (a corrupt or unusual texture)
+  std::string obj;            // OBJ text; "mtllib m.mtl" refers to the MTL below
+  std::string mtl;            // empty: no MTL file written
+  bool texture = true;        // write t.png (a small gradient)
+  std::string texture_bytes;  // non-empty: write these bytes as t.png instead (a corrupt or unusual texture)
   bool valid = false;
-  std::string folder;        // the model's folder inside the test's own (may contain spaces)
+  std::string folder;  // the model's folder inside the test's own (may contain spaces)
   std::string obj_name = "in.obj", mtl_name = "m.mtl", texture_name = "t.png";
   bool out_under_file = false;  // -o names a path below a regular file: nothing can be written there
 };
@@ -78,17 +80,18 @@ std::vector<Case> catalogue() {
   c.push_back({"valid_quads", grid_obj("mtllib m.mtl\nusemtl a\n", true), kMtl, true, "", true});
   c.push_back({"valid_crlf", grid_obj("mtllib m.mtl\nusemtl a\n", false, true), kMtl, true, "", true});
   c.push_back({"valid_map_options", grid_obj(), "newmtl a\nmap_Kd -s 2 2 1 -o 0.1 0 0 -bm 1 t.png\n", true, "", true});
-  c.push_back({"valid_uv_outside_unit_square", [] {
+  c.push_back({"valid_uv_outside_unit_square",
+               [] {
                  std::string s = grid_obj();
                  for (size_t p = s.find("vt "); p != std::string::npos; p = s.find("vt ", p + 1)) s.replace(p, 3, "vt 3");
                  return s;
-               }(), kMtl, true, "", true});
+               }(),
+               kMtl, true, "", true});
   c.push_back({"valid_no_material", grid_obj(""), "", false, "", true});
   for (const char* png : {"rgb16", "rgba16", "grey16", "grey8", "greyalpha8", "rgba8"})
     c.push_back({std::string("valid_texture_") + png, grid_obj(), kMtl, true, seed_png(std::string(png) + ".png"), true});
-  c.push_back({"valid_spaces_in_names", grid_obj("mtllib my materials.mtl\nusemtl a\n"),
-               "newmtl a\nmap_Kd my texture.png\n", true, "", true, "my scans", "my model.obj", "my materials.mtl",
-               "my texture.png"});
+  c.push_back({"valid_spaces_in_names", grid_obj("mtllib my materials.mtl\nusemtl a\n"), "newmtl a\nmap_Kd my texture.png\n", true, "",
+               true, "my scans", "my model.obj", "my materials.mtl", "my texture.png"});
   c.push_back({"empty_file", "", "", false, "", false});
   c.push_back({"only_comments", "# nothing\n\n", "", false, "", false});
   c.push_back({"no_texture_coordinates", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "", false, "", false});
@@ -107,7 +110,10 @@ std::vector<Case> catalogue() {
   c.push_back({"corrupt_texture", grid_obj(), kMtl, false, "\x89PNG\r\n\x1a\n garbage garbage", false});
   // A 68-byte PNG whose header declares 200000 x 200000 pixels: refused from its header, before anything
   // is sized by it.
-  static const char kHugePng[] = "\x89\x50\x4e\x47\x0d\x0a\x1a\x0a\x00\x00\x00\x0d\x49\x48\x44\x52\x00\x03\x0d\x40\x00\x03\x0d\x40\x08\x02\x00\x00\x00\x76\x59\x1f\x5d\x00\x00\x00\x0b\x49\x44\x41\x54\x78\x9c\x63\x60\x80\x01\x00\x00\x0a\x00\x01\x7f\x80\x74\x5e\x00\x00\x00\x00\x49\x45\x4e\x44\xae\x42\x60\x82";
+  static const char kHugePng[] =
+      "\x89\x50\x4e\x47\x0d\x0a\x1a\x0a\x00\x00\x00\x0d\x49\x48\x44\x52\x00\x03\x0d\x40\x00\x03\x0d\x40\x08\x02\x00\x00\x00\x76\x59\x1f\x5d"
+      "\x00\x00\x00\x0b\x49\x44\x41\x54\x78\x9c\x63\x60\x80\x01\x00\x00\x0a\x00\x01\x7f\x80\x74\x5e\x00\x00\x00\x00\x49\x45\x4e\x44\xae\x42"
+      "\x60\x82";
   c.push_back({"texture_header_declares_200000_squared", grid_obj(), kMtl, false, std::string(kHugePng, sizeof kHugePng - 1), false});
   c.push_back({"mtllib_is_a_device", grid_obj("mtllib /dev/zero\nusemtl a\n"), "", false, "", false});
   c.push_back({"texture_is_a_device", grid_obj(), "newmtl a\nmap_Kd /dev/zero\n", false, "", false});
@@ -199,6 +205,19 @@ TEST(HostileCliOutput, OutputIntoTheInputsOwnFolderIsRefusedAndTheInputUntouched
     EXPECT_FALSE(fs::exists(dir / "report.json"));
     EXPECT_FALSE(fs::exists(dir / "in_tightex.png"));
   }
+  fs::remove_all(dir);
+}
+
+TEST(HostileCliOutput, AnOutputFolderThatCannotBeCreatedIsRefusedBeforeAnyWorkAndNothingIsCreated) {
+  const fs::path dir = fs::temp_directory_path() / ("tightex_outcheck_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "blocker") << "a file, not a folder";
+  EXPECT_THROW(check_output_folder((dir / "blocker").string()), InputError);
+  EXPECT_THROW(check_output_folder((dir / "blocker" / "out" / "deeper").string()), InputError);
+  EXPECT_NO_THROW(check_output_folder(dir.string()));
+  EXPECT_NO_THROW(check_output_folder((dir / "new" / "nested").string()));
+  EXPECT_FALSE(fs::exists(dir / "new"));  // checked, not created: a failed run leaves no folder behind
   fs::remove_all(dir);
 }
 

@@ -26,6 +26,7 @@
 #include "io/model_files.hpp"
 #include "io/obj_reader.hpp"
 #include "io/obj_writer.hpp"
+#include "io/output_files.hpp"
 #include "report/html_report.hpp"
 #include "report/metrics.hpp"
 #include "report/preview.hpp"
@@ -234,11 +235,13 @@ std::string output_model_name(const CommandLine& line) {
   return fs::path(line.input).stem().string() + "." + kModelFormatNames[size_t(line.output_format)];
 }
 
-/// Refuses an input that is a folder, and an output folder that is the input's own: the outputs are
-/// named after the input, so written there they would replace it or lie among its files. Throws
-/// InputError.
+/// Refuses an input that is a folder, an output folder that cannot be created or written into
+/// (check_output_folder: before the work, not after it), and an output folder that is the input's own:
+/// the outputs are named after the input, so written there they would replace it or lie among its
+/// files. Throws InputError.
 void check_paths(const CommandLine& line) {
   if (fs::is_directory(line.input)) fail_input("{}: is a directory, not a model file", line.input);
+  check_output_folder(line.outdir);
   std::error_code ec;
   const fs::path in_dir = fs::absolute(fs::path(line.input)).parent_path();
   if (fs::exists(line.outdir, ec) && fs::exists(in_dir, ec) && fs::equivalent(line.outdir, in_dir, ec)) {

@@ -36,6 +36,16 @@ void write_files_atomically(const std::string& folder, const std::vector<OutputF
   }
 }
 
+void check_output_folder(const std::string& folder) {
+  std::error_code ec;
+  fs::path existing = fs::absolute(fs::path(folder), ec);
+  if (ec) fail_input("{}: cannot create output directory ({})", folder, ec.message());
+  while (!fs::exists(existing, ec) && existing.has_parent_path() && existing != existing.parent_path()) existing = existing.parent_path();
+  if (!fs::is_directory(existing, ec)) fail_input("{}: cannot create output directory ({} is not a directory)", folder, existing.string());
+  if (::access(existing.c_str(), W_OK | X_OK) != 0)
+    fail_input("{}: cannot create output directory ({}: {})", folder, existing.string(), std::strerror(errno));
+}
+
 void write_whole_file(const fs::path& path, const std::string& bytes) {
   std::ofstream f(path, std::ios::binary);
   if (!f) fail_input("{}: cannot write ({})", path.string(), std::strerror(errno));

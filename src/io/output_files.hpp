@@ -25,6 +25,11 @@ struct OutputFile {
 /// Throws InputError naming the folder or file that cannot be created, written or renamed.
 void write_files_atomically(const std::string& folder, const std::vector<OutputFile>& files);
 
+/// Refuses, before any work, an output folder that write_files_atomically could not create or write
+/// into: a path that exists and is not a folder, or whose nearest existing ancestor is not a folder this
+/// process may write into. Creates nothing. Throws InputError naming the folder and why.
+void check_output_folder(const std::string& folder);
+
 /// Writes `bytes` to `path` as they are. Throws InputError naming the path (and the system's reason).
 void write_whole_file(const std::filesystem::path& path, const std::string& bytes);
 
