@@ -1,10 +1,13 @@
 #include "report/metrics.hpp"
 
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
+#include <tbb/parallel_sort.h>
 
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -29,18 +32,23 @@ uint64_t bits(double d) {
 
 /// Vertex ids by bit-equal position, so models with split vertices compare as surfaces.
 std::vector<uint32_t> weld_positions(const TexturedMesh& m) {
-  struct Key {
-    uint64_t x, y, z;
-    bool operator==(const Key&) const = default;
+  // Sorted by the coordinates' bits (a sort on every core, where a hash map's inserts miss the cache
+  // one by one); each run of equal positions shares an id.
+  struct Keyed {
+    std::array<uint64_t, 3> key;
+    uint32_t vertex;
   };
-  struct Hash {
-    size_t operator()(const Key& k) const { return size_t((k.x * 0x9E3779B97F4A7C15ull) ^ (k.y * 0xC2B2AE3D27D4EB4Full) ^ k.z); }
-  };
-  std::unordered_map<Key, uint32_t, Hash> index;
-  std::vector<uint32_t> id(m.num_vertices());
-  for (size_t v = 0; v < m.num_vertices(); ++v) {
+  std::vector<Keyed> keyed(m.num_vertices());
+  tbb::parallel_for(size_t(0), keyed.size(), [&](size_t v) {
     const Vec3& p = m.positions[v];
-    id[v] = index.try_emplace(Key{bits(p.x()), bits(p.y()), bits(p.z())}, uint32_t(index.size())).first->second;
+    keyed[v] = {{bits(p.x()), bits(p.y()), bits(p.z())}, uint32_t(v)};
+  });
+  tbb::parallel_sort(keyed.begin(), keyed.end(), [](const Keyed& a, const Keyed& b) { return a.key < b.key; });
+  std::vector<uint32_t> id(m.num_vertices());
+  uint32_t next = 0;
+  for (size_t i = 0; i < keyed.size(); ++i) {
+    if (i > 0 && keyed[i].key != keyed[i - 1].key) ++next;
+    id[keyed[i].vertex] = next;
   }
   return id;
 }
@@ -130,7 +138,7 @@ std::vector<uint32_t> chart_ids(const TexturedMesh& m, double* seam) {
     const uint64_t a = vid[m.triangles[h / 3][h % 3]], b = vid[m.triangles[h / 3][(h % 3 + 1) % 3]];
     keyed[h] = {std::min(a, b) << 32 | std::max(a, b), h};
   }
-  std::sort(keyed.begin(), keyed.end());
+  tbb::parallel_sort(keyed.begin(), keyed.end());
   detail::UnionFind uf(m.num_triangles());
   auto uv_at = [&](uint32_t h, uint64_t v) {
     const uint32_t t = h / 3;
@@ -180,15 +188,8 @@ namespace {
 /// The sorted triple of a triangle's corner positions (bit patterns), so that the same triangle is
 /// found whatever its corner order and vertex numbering.
 struct CornerKey {
-  uint64_t v[9];
-  bool operator==(const CornerKey& o) const { return std::memcmp(v, o.v, sizeof v) == 0; }
-};
-struct CornerKeyHash {
-  size_t operator()(const CornerKey& k) const {
-    uint64_t h = 0;
-    for (uint64_t x : k.v) h = (h ^ x) * 0x100000001B3ull + 0x9E3779B97F4A7C15ull;
-    return size_t(h);
-  }
+  std::array<uint64_t, 9> v;
+  auto operator<=>(const CornerKey&) const = default;
 };
 
 /// Whether every coordinate of m is a float32 value (a model read from glTF, which stores no other).
@@ -231,29 +232,44 @@ struct Correspondence {
 /// Positions compare exactly; where one model stores float32 (glTF) and the other does not, both are
 /// rounded to float32 first.
 Correspondence match_triangles(const TexturedMesh& in, const TexturedMesh& out) {
+  // Both models' triangles sorted by key (then index), on every core, and merged: the k-th of an input
+  // triangle's copies matches the k-th copy in the output (the last where the output has fewer).
   const bool as_float32 = has_float32_positions(in) != has_float32_positions(out);
-  std::unordered_multimap<CornerKey, uint32_t, CornerKeyHash> out_index;
-  out_index.reserve(out.num_triangles());
-  for (uint32_t t = 0; t < out.num_triangles(); ++t) out_index.emplace(corner_key(out, t, as_float32, nullptr), t);
+  auto sorted_keys = [&](const TexturedMesh& m) {
+    std::vector<std::pair<CornerKey, uint32_t>> keys(m.num_triangles());
+    tbb::parallel_for(uint32_t(0), uint32_t(m.num_triangles()), [&](uint32_t t) { keys[t] = {corner_key(m, t, as_float32, nullptr), t}; });
+    tbb::parallel_sort(keys.begin(), keys.end());
+    return keys;
+  };
+  std::vector<std::pair<CornerKey, uint32_t>> in_keys, out_keys;
+  tbb::parallel_invoke([&] { in_keys = sorted_keys(in); }, [&] { out_keys = sorted_keys(out); });
   Correspondence c;
   c.match.assign(in.num_triangles(), kNone);
   c.corner_map.resize(in.num_triangles());
   c.area3.resize(in.num_triangles());
-  for (uint32_t t = 0; t < in.num_triangles(); ++t) {
-    c.area3[t] = triangle_area(in.positions, in.triangles[t]);
-    std::array<int, 3> oi;
-    const CornerKey k = corner_key(in, t, as_float32, &oi);
-    auto it = out_index.find(k);
-    if (it == out_index.end()) {
-      c.lost_triangles += c.area3[t] > 0;
-      continue;
-    }
-    const uint32_t o = it->second;
-    std::array<int, 3> oo;
-    corner_key(out, o, as_float32, &oo);
-    c.match[t] = o;
-    for (int i = 0; i < 3; ++i) c.corner_map[t][size_t(oi[size_t(i)])] = oo[size_t(i)];
+  for (size_t i = 0, o = 0; i < in_keys.size();) {
+    size_t i_end = i + 1;
+    while (i_end < in_keys.size() && in_keys[i_end].first == in_keys[i].first) ++i_end;
+    while (o < out_keys.size() && out_keys[o].first < in_keys[i].first) ++o;
+    size_t o_end = o;
+    while (o_end < out_keys.size() && out_keys[o_end].first == in_keys[i].first) ++o_end;
+    if (o_end > o)
+      for (size_t k = i; k < i_end; ++k) c.match[in_keys[k].second] = out_keys[std::min(o + (k - i), o_end - 1)].second;
+    i = i_end, o = o_end;
   }
+  std::vector<char> lost(in.num_triangles(), 0);
+  tbb::parallel_for(uint32_t(0), uint32_t(in.num_triangles()), [&](uint32_t t) {
+    c.area3[t] = triangle_area(in.positions, in.triangles[t]);
+    if (c.match[t] == kNone) {
+      lost[t] = c.area3[t] > 0;
+      return;
+    }
+    std::array<int, 3> oi, oo;
+    corner_key(in, t, as_float32, &oi);
+    corner_key(out, c.match[t], as_float32, &oo);
+    for (int i = 0; i < 3; ++i) c.corner_map[t][size_t(oi[size_t(i)])] = oo[size_t(i)];
+  });
+  c.lost_triangles = size_t(std::count(lost.begin(), lost.end(), 1));
   return c;
 }
 
