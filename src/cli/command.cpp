@@ -411,7 +411,15 @@ void print_notes(const Plan& plan, const nlohmann::json& report) {
 
 /// How long the CLI's own stages took, in seconds (read_s, textures_s from the start).
 struct CliTimings {
-  double read_s = 0, textures_s = 0, write_s = 0, measure_s = 0;
+  double read_s = 0, textures_s = 0, write_s = 0, measure_s = 0, html_s = 0;
+};
+
+/// What the run's last stage gives: the output's metrics, what the writer left out, and report.html's
+/// model data (empty with --no-html).
+struct WrittenAndMeasured {
+  Metrics metrics;
+  std::vector<std::string> removed;
+  std::string html_data;
 };
 
 /// Writes the output model in the command line's format. Returns what the writer left out: what the
@@ -430,23 +438,28 @@ std::vector<std::string> write_model(const CommandLine& line, const TexturedMesh
   return write_obj(output, line.outdir, name, line.encoding);
 }
 
-/// Writes the output model and measures it, side by side (PNG compression and measuring are
-/// independent). Returns the metrics; the times go to `timings`, what the writer left out to
-/// `removed`.
-Metrics write_and_measure(const CommandLine& line, const TexturedMesh& input, const TexturedMesh& output, const std::string& name,
-                          CliTimings& timings, std::vector<std::string>& removed) {
+/// Writes the output model, measures it and gathers report.html's model data (the models' shown
+/// triangles, their textures as JPEG), side by side: the three are independent. The times go to
+/// `timings`.
+WrittenAndMeasured write_and_measure(const CommandLine& line, const TexturedMesh& input, const TexturedMesh& output,
+                                     const std::string& name, CliTimings& timings) {
   const auto tw = std::chrono::steady_clock::now();
-  Metrics metrics;
+  WrittenAndMeasured r;
   tbb::parallel_invoke(
       [&] {
-        removed = write_model(line, output, name);
+        r.removed = write_model(line, output, name);
         timings.write_s = seconds_since(tw);
       },
       [&] {
-        metrics = measure(input, output);
+        r.metrics = measure(input, output);
         timings.measure_s = seconds_since(tw);
+      },
+      [&] {
+        if (line.no_html) return;
+        r.html_data = html_model_data(input, output);
+        timings.html_s = seconds_since(tw);
       });
-  return metrics;
+  return r;
 }
 
 /// Adds what the CLI knows to the library's report: the metrics, its own stages' times (reading first,
@@ -457,6 +470,7 @@ void add_cli_figures(nlohmann::json& rep, const Metrics& metrics, const CliTimin
   nlohmann::json& timings = rep["timings"];
   timings.push_back(to_json(StageTiming{"write (beside measure)", t.write_s, std::nullopt}));
   timings.push_back(to_json(StageTiming{"measure (beside write)", t.measure_s, std::nullopt}));
+  if (t.html_s > 0) timings.push_back(to_json(StageTiming{"report.html data (beside write and measure)", t.html_s, std::nullopt}));
   timings.insert(timings.begin(), to_json(StageTiming{"read geometry", t.read_s, std::nullopt}));
   timings.insert(timings.begin() + 1,
                  to_json(StageTiming{"read textures (beside the geometric stages, from start)", t.textures_s, std::nullopt}));
@@ -496,26 +510,16 @@ void print_not_carried(const CommandLine& line, const ObjReadStats& read_stats, 
 /// The report page's file name in the output folder.
 constexpr const char* kHtmlName = "report.html";
 
-/// The report page's data (the models' shown triangles, their textures as JPEG), timed: the time goes
-/// into the report's timings, which the page shows.
-std::string timed_html_model_data(const TexturedMesh& input, const TexturedMesh& output, nlohmann::json& report) {
-  const auto t0 = std::chrono::steady_clock::now();
-  std::string data = html_model_data(input, output);
-  report["timings"].push_back(to_json(StageTiming{"report.html data", seconds_since(t0), std::nullopt}));
-  return data;
-}
-
-/// Writes report.json and, unless --no-html, OUTDIR/report.html (its data timed into the report
-/// first, so that the page shows the same report as the file), renamed into place together, the JSON
-/// last. Returns the report a reader opens: the page, or the JSON with --no-html. Throws InputError
-/// naming a file that cannot be written.
-fs::path write_reports(const CommandLine& line, nlohmann::json& report, const TexturedMesh& input, const TexturedMesh& output) {
+/// Writes report.json and, unless --no-html, OUTDIR/report.html (`model_data`: html_model_data's; the
+/// page shows the same report as the file), renamed into place together, the JSON last. Returns the
+/// report a reader opens: the page, or the JSON with --no-html. Throws InputError naming a file that
+/// cannot be written.
+fs::path write_reports(const CommandLine& line, const nlohmann::json& report, const std::string& model_data) {
   const fs::path json_path = line.report_path.empty() ? fs::path(line.outdir) / "report.json" : fs::path(line.report_path);
   if (line.no_html) {
     write_texts_atomically({{json_path, report.dump(2) + "\n"}});
     return json_path;
   }
-  const std::string model_data = timed_html_model_data(input, output, report);
   std::string json_text = report.dump(2) + "\n";
   std::string page = html_report_page(json_text, model_data);
   const fs::path html_path = fs::path(line.outdir) / kHtmlName;
@@ -608,14 +612,15 @@ nlohmann::json run_command(const CommandLine& line, const CommandHooks& hooks) {
   if (printing) print_notes(planned.plan, planned.plan.report());
 
   const std::string name = fs::path(line.input).stem().string();
-  std::vector<std::string> removed;
-  const Metrics metrics = write_and_measure(line, planned.mesh, result.output, name, timings, removed);
+  const WrittenAndMeasured written = write_and_measure(line, planned.mesh, result.output, name, timings);
+  const Metrics& metrics = written.metrics;
+  const std::vector<std::string>& removed = written.removed;
   if (printing) print_not_carried(line, read_stats, removed);
   const double wall_seconds = seconds_since(t0);
   add_cli_figures(result.report, metrics, timings, wall_seconds, read_stats,
                   OutputFiles{line.outdir, output_model_name(line), line.no_html ? "" : kHtmlName, removed});
   if (!line.preview_path.empty()) write_preview(line.preview_path, planned.mesh, result.output);
-  const fs::path report_path = write_reports(line, result.report, planned.mesh, result.output);
+  const fs::path report_path = write_reports(line, result.report, written.html_data);
   if (printing) {
     print_summary(line, result.output, result.report["preparation"]["components"].get<size_t>(), metrics, wall_seconds);
     fmt::print("tightex: report: {}\n", report_path.string());

@@ -1,5 +1,7 @@
 #include "report/html_report.hpp"
 
+#include <tbb/parallel_invoke.h>
+
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -287,9 +289,10 @@ std::string html_model_data(const TexturedMesh& input, const TexturedMesh& outpu
   // The input's count sets the fraction for both, so that both show the same surface triangles.
   const double keep_fraction =
       input.num_triangles() > options.max_triangles ? double(options.max_triangles) / double(input.num_triangles()) : 1.0;
-  json data = {
-      {"max_triangles", options.max_triangles},
-      {"models", json::array({model_json(input, "input", keep_fraction, options), model_json(output, "output", keep_fraction, options)})}};
+  json in, out;  // side by side: each encodes its own textures
+  tbb::parallel_invoke([&] { in = model_json(input, "input", keep_fraction, options); },
+                       [&] { out = model_json(output, "output", keep_fraction, options); });
+  json data = {{"max_triangles", options.max_triangles}, {"models", json::array({std::move(in), std::move(out)})}};
   return data.dump();
 }
 
