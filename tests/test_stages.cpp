@@ -789,6 +789,51 @@ TEST(SparseCholesky, ResidualCheckAcceptsTheSolutionAndRejectsAWrongOne) {
   }
 }
 
+// One fill-reducing order of a mesh's vertices (nested dissection) serves every system over them:
+// it is a permutation of the vertices, and restricted to a Laplacian's unknowns (boundary held) the
+// factorisation in that order solves the system as CHOLMOD's own order does.
+TEST(SparseCholesky, AMeshsNestedDissectionOrderSolvesItsLaplacianAsCholmodsOwn) {
+  const auto g = testing::param_grid(90, 70, false, false, [](int i, int j) { return Vec3(i, j, 0.1 * std::sin(0.3 * i)); });
+  const auto comps = split_components(prepare_surface(testing::make_textured("sheet", g.positions, g.triangles), nullptr));
+  ASSERT_EQ(comps.size(), 1u);
+  const Disk disk = cut_to_disk(comps[0], {.holes = HoleMode::kFill}, nullptr);
+  const Surface& m = disk.mesh;
+  const std::vector<int> order = nested_dissection_order(m);
+  ASSERT_EQ(order.size(), m.num_vertices());
+  std::vector<int> sorted = order;
+  std::sort(sorted.begin(), sorted.end());
+  for (size_t k = 0; k < sorted.size(); ++k) ASSERT_EQ(sorted[k], int(k));
+  // The Laplacian of the interior (uniform weights), its unknowns numbered in the mesh's order.
+  const std::vector<char> on_boundary = boundary_mask(m.num_vertices(), disk.boundary);
+  std::vector<int> unknown(m.num_vertices(), -1);
+  int n = 0;
+  for (size_t v = 0; v < m.num_vertices(); ++v)
+    if (!on_boundary[v]) unknown[v] = n++;
+  std::vector<Eigen::Triplet<double>> trips;
+  Eigen::VectorXd diag = Eigen::VectorXd::Zero(n), b = Eigen::VectorXd::Zero(n);
+  for (uint32_t h = 0; h < m.opposite.size(); ++h) {
+    if (m.opposite[h] != kNone && m.opposite[h] < h) continue;
+    const int a = unknown[m.from(h)], c = unknown[m.to(h)];
+    if (a >= 0) diag(a) += 1, b(a) += m.positions[m.to(h)].x();
+    if (c >= 0) diag(c) += 1, b(c) += m.positions[m.from(h)].x();
+    if (a >= 0 && c >= 0)
+      trips.emplace_back(std::max(a, c), std::min(a, c), -1.0), b(a) -= m.positions[m.to(h)].x(), b(c) -= m.positions[m.from(h)].x();
+  }
+  for (int i = 0; i < n; ++i) trips.emplace_back(i, i, diag(i));
+  SparseCholesky::Matrix a(n, n);
+  a.setFromTriplets(trips.begin(), trips.end());
+  const std::vector<int> restricted = order_of_unknowns(order, unknown, 1);
+  ASSERT_EQ(restricted.size(), size_t(n));
+  Eigen::VectorXd own, given;
+  for (const std::vector<int>* o : {static_cast<const std::vector<int>*>(nullptr), &restricted}) {
+    SparseCholesky solver;
+    solver.analyzePattern(a, o);
+    ASSERT_TRUE(solver.factorize(a));
+    ASSERT_TRUE(solver.solve(a, b, o ? given : own));
+  }
+  EXPECT_LT((given - own).norm(), 1e-9 * own.norm());
+}
+
 // Large systems are factorised supernodally (BLAS kernels), small ones simplicially; components are
 // mapped in parallel. Here the supernodal path is forced on a small sheet, mapped by four threads at
 // once: every result must be fold-free and the same map as the simplicial one (a BLAS that is not

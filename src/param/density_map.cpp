@@ -40,7 +40,8 @@ double worst_error(double p5, double p95) { return std::max(-p5, p95); }
 SlimStats refine_in_rectangle(const DensityConstraints& c, const std::vector<double>& target, int iterations,
                               const std::function<void(int)>& on_step, std::vector<Vec2>& uv,
                               const std::vector<FaceShape>* shapes = nullptr) {
-  if (c.aspect == 1.0) return refine_map(c.mesh, c.fixed, target, iterations, uv, c.options.supernodal_from, on_step, shapes);
+  if (c.aspect == 1.0)
+    return refine_map(c.mesh, c.fixed, target, iterations, uv, c.options.supernodal_from, on_step, shapes, c.vertex_order.get());
   const double sx = std::sqrt(c.aspect);
   const std::vector<Vec2> before = uv;
   for (Vec2& p : uv) p = Vec2(p.x() * sx, p.y() / sx);
@@ -50,8 +51,8 @@ SlimStats refine_in_rectangle(const DensityConstraints& c, const std::vector<dou
     for (FaceShape& s : scaled_shapes)
       for (Vec2& p : s) p = Vec2(p.x() * sx, p.y() / sx);
   }
-  const SlimStats r =
-      refine_map(c.mesh, c.fixed, target, iterations, uv, c.options.supernodal_from, on_step, shapes ? &scaled_shapes : nullptr);
+  const SlimStats r = refine_map(c.mesh, c.fixed, target, iterations, uv, c.options.supernodal_from, on_step,
+                                 shapes ? &scaled_shapes : nullptr, c.vertex_order.get());
   for (Vec2& p : uv) p = Vec2(p.x() / sx, p.y() * sx);
   // Held coordinates come back exactly (x * sx / sx may miss 1 by an ulp: a side's texel centres
   // would fall outside the chart).
@@ -161,7 +162,8 @@ void correct_targets(const DensityConstraints& c, std::vector<double> log_ratio,
 
 }  // namespace
 
-DensityConstraints density_constraints(const Disk& disk, const SquareBoundary& boundary, const SquareMapOptions& options) {
+DensityConstraints density_constraints(const Disk& disk, const SquareBoundary& boundary, const SquareMapOptions& options,
+                                       std::shared_ptr<const std::vector<int>> vertex_order) {
   const auto& bnd = disk.boundary;
   const size_t nb = bnd.size();
   const auto& corner = boundary.corner;
@@ -176,7 +178,12 @@ DensityConstraints density_constraints(const Disk& disk, const SquareBoundary& b
     for (size_t i = 0; i < nb; ++i) fixed[bnd[i]] = holds(i) || !options.slide_boundary ? 3 : (boundary.side_of[i] % 2 == 0 ? 2 : 1);
     return fixed;
   };
-  return {disk.mesh, options, map_aspect(options), side_constraints([&](size_t i) { return held[i] != 0; }), side_constraints(is_corner)};
+  return {disk.mesh,
+          options,
+          map_aspect(options),
+          side_constraints([&](size_t i) { return held[i] != 0; }),
+          side_constraints(is_corner),
+          std::move(vertex_order)};
 }
 
 void measure_density_spread(const Surface& mesh, const std::vector<Vec2>& uv, SquareMapStats& stats) {

@@ -1,6 +1,7 @@
 // Beyond the paper: the density maps' last stages, after the reweighting (density_reweighting.hpp):
 // the density-equalising flow and the symmetric Dirichlet refinement, both in the texel rectangle.
 #pragma once
+#include <memory>
 #include <vector>
 
 #include "param/boundary.hpp"
@@ -13,9 +14,10 @@ namespace tightex {
 struct DensityConstraints {
   const Surface& mesh;
   const SquareMapOptions& options;
-  double aspect = 1;             // the texel rectangle's width/height (map_aspect)
-  std::vector<char> fixed;       // for the refinement: corners, bumps and a bump's two side neighbours stay
-  std::vector<char> flow_fixed;  // for the flow: only the corners stay
+  double aspect = 1;                                     // the texel rectangle's width/height (map_aspect)
+  std::vector<char> fixed;                               // for the refinement: corners, bumps and a bump's two side neighbours stay
+  std::vector<char> flow_fixed;                          // for the flow: only the corners stay
+  std::shared_ptr<const std::vector<int>> vertex_order;  // the systems' fill-reducing order (optional)
 };
 
 /// The constraints for a disk whose boundary map_boundary_to_square placed. Every other boundary
@@ -25,8 +27,10 @@ struct DensityConstraints {
 /// and turn the boundary back on itself, whereas two neighbours on the side cannot pass each other
 /// without their boundary triangle collapsing, which the line search prevents. In the flow every side
 /// vertex slides with the field, the bumps' too (a continuous flow along a line keeps its points in
-/// order, so none passes a bump).
-DensityConstraints density_constraints(const Disk& disk, const SquareBoundary& boundary, const SquareMapOptions& options);
+/// order, so none passes a bump). vertex_order (optional): the systems' fill-reducing order
+/// (vertex_order_from).
+DensityConstraints density_constraints(const Disk& disk, const SquareBoundary& boundary, const SquareMapOptions& options,
+                                       std::shared_ptr<const std::vector<int>> vertex_order = {});
 
 /// The density error of uv against stats.blended_target (scaled to the map's area) into
 /// stats.spread_p5 and stats.spread_p95 (P5 / P95 of log2(area / target), weighted by target).

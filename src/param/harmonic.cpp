@@ -63,7 +63,8 @@ std::vector<char> boundary_mask(size_t num_vertices, const std::vector<uint32_t>
   return on_boundary;
 }
 
-DirichletSolver::DirichletSolver(long supernodal_from) : cholesky_(std::make_unique<SparseCholesky>(supernodal_from)) {}
+DirichletSolver::DirichletSolver(long supernodal_from, std::shared_ptr<const std::vector<int>> vertex_order)
+    : cholesky_(std::make_unique<SparseCholesky>(supernodal_from)), vertex_order_(std::move(vertex_order)) {}
 
 DirichletSolver::~DirichletSolver() = default;
 
@@ -98,7 +99,9 @@ bool DirichletSolver::solve(const Surface& m, const std::vector<double>& w, cons
   Eigen::SparseMatrix<double> A(n, n);
   A.setFromTriplets(trips.begin(), trips.end());
   if (!analyzed_) {
-    cholesky_->analyzePattern(A);
+    const std::vector<int> order =
+        vertex_order_ && vertex_order_->size() == nv ? order_of_unknowns(*vertex_order_, unknown, 1) : std::vector<int>{};
+    cholesky_->analyzePattern(A, order.empty() ? nullptr : &order);
     analyzed_ = true;
   }
   if (!cholesky_->factorize(A)) return false;

@@ -32,7 +32,8 @@ std::vector<char> boundary_mask(size_t num_vertices, const std::vector<uint32_t>
 /// done at the first solve and reused.
 class DirichletSolver {
  public:
-  explicit DirichletSolver(long supernodal_from = kSupernodalFrom);
+  /// vertex_order (optional): nested_dissection_order of the meshes solved, the systems' fill-reducing order.
+  explicit DirichletSolver(long supernodal_from = kSupernodalFrom, std::shared_ptr<const std::vector<int>> vertex_order = {});
   ~DirichletSolver();
   DirichletSolver(const DirichletSolver&) = delete;
   DirichletSolver& operator=(const DirichletSolver&) = delete;
@@ -44,6 +45,7 @@ class DirichletSolver {
 
  private:
   std::unique_ptr<SparseCholesky> cholesky_;
+  std::shared_ptr<const std::vector<int>> vertex_order_;
   bool analyzed_ = false;
 };
 

@@ -7,6 +7,7 @@
 #include "param/folds.hpp"
 #include "param/harmonic.hpp"
 #include "param/multilevel.hpp"
+#include "param/sparse_cholesky.hpp"
 
 namespace tightex {
 
@@ -34,7 +35,9 @@ std::vector<Vec2> map_disk(const Disk& disk, const SquareMapOptions& options, Sq
   st.bumped_vertices = boundary.bumped_vertices;
 
   // Alg. 2: the harmonic map with the fold-free fallbacks.
-  DirichletSolver solver(options.supernodal_from);
+  // One fill-reducing order for all of this map's systems (harmonic, reweighting, symmetric Dirichlet).
+  const std::shared_ptr<const std::vector<int>> order = vertex_order_from(m, options.vertex_order_from);
+  DirichletSolver solver(options.supernodal_from, order);
   HarmonicAttempts harmonic = fold_free_harmonic_map(m, bnd, boundary.uv, solver);
   // No weighting solved (a factorisation failed, or its solution did not solve the system): the
   // interior still sits where the boundary left it. A failure, never a map.
@@ -59,7 +62,7 @@ std::vector<Vec2> map_disk(const Disk& disk, const SquareMapOptions& options, Sq
     std::vector<double> positive = harmonic.positive_weights;
     if (positive.empty()) positive = edge_weights(m, EdgeWeights::kClamped);
     reweight_towards_density(m, bnd, options, options.slide_boundary ? &boundary : nullptr, std::move(positive), solver, uv, st);
-    const DensityConstraints constraints = density_constraints(disk, boundary, options);
+    const DensityConstraints constraints = density_constraints(disk, boundary, options, order);
     flow_towards_targets(constraints, uv, st);
     refine_towards_targets(constraints, uv, st);
     st.blended_target.clear();

@@ -8,6 +8,7 @@
 #include "param/folds.hpp"
 #include "param/harmonic.hpp"
 #include "param/map_to_square.hpp"
+#include "param/sparse_cholesky.hpp"
 
 namespace tightex {
 
@@ -16,12 +17,13 @@ namespace {
 /// The harmonic map between the coarse vertices (held where coarse_uv puts them): a target close to the
 /// coarse map, with its own detail between the coarse vertices, but which may fold where the held
 /// vertices enclose a concave patch.
-std::vector<Vec2> harmonic_between(const Disk& disk, const CoarseDisk& coarse, const std::vector<Vec2>& coarse_uv, long supernodal_from) {
+std::vector<Vec2> harmonic_between(const Disk& disk, const CoarseDisk& coarse, const std::vector<Vec2>& coarse_uv, long supernodal_from,
+                                   const std::shared_ptr<const std::vector<int>>& order) {
   const Surface& m = disk.mesh;
   std::vector<Vec2> uv(m.num_vertices(), Vec2::Zero());
   std::vector<char> held(m.num_vertices(), 0);
   for (size_t c = 0; c < coarse.fine_vertex.size(); ++c) uv[coarse.fine_vertex[c]] = coarse_uv[c], held[coarse.fine_vertex[c]] = 1;
-  DirichletSolver solver(supernodal_from);
+  DirichletSolver solver(supernodal_from, order);
   if (!solver.solve(m, edge_weights(m, EdgeWeights::kClamped), held, uv)) return {};
   return uv;
 }
@@ -58,9 +60,10 @@ std::vector<double> target_cotangent_weights(const Surface& m, const std::vector
 /// target between the coarse vertices (target_cotangent_weights), which `weights` gets; `solver` has
 /// its pattern. Empty if a solve fails or the result folds numerically.
 std::vector<Vec2> fill_between(const Disk& disk, const CoarseDisk& coarse, const std::vector<Vec2>& coarse_uv, long supernodal_from,
-                               DirichletSolver& solver, std::vector<double>& weights) {
+                               const std::shared_ptr<const std::vector<int>>& order, DirichletSolver& solver,
+                               std::vector<double>& weights) {
   const Surface& m = disk.mesh;
-  const std::vector<Vec2> target = harmonic_between(disk, coarse, coarse_uv, supernodal_from);
+  const std::vector<Vec2> target = harmonic_between(disk, coarse, coarse_uv, supernodal_from, order);
   if (target.empty()) return {};
   std::vector<Vec2> uv = target;
   weights = target_cotangent_weights(m, target);
@@ -86,9 +89,11 @@ std::optional<std::vector<Vec2>> multilevel_map(const Disk& disk, const SquareMa
   st.crowded_vertex = kNone;
   for (uint32_t& corner : st.corners) corner = coarse.fine_vertex[corner];
   st.coarse_vertices = coarse.fine_vertex.size();
-  DirichletSolver solver(options.supernodal_from);
+  // One fill-reducing order for every system on the full mesh.
+  const std::shared_ptr<const std::vector<int>> order = vertex_order_from(m, options.vertex_order_from);
+  DirichletSolver solver(options.supernodal_from, order);
   std::vector<double> weights;
-  std::vector<Vec2> uv = fill_between(disk, coarse, coarse_uv, options.supernodal_from, solver, weights);
+  std::vector<Vec2> uv = fill_between(disk, coarse, coarse_uv, options.supernodal_from, order, solver, weights);
   if (uv.empty()) return std::nullopt;
   // The density on the full mesh (the coarse map's holds only on average over each coarse triangle).
   SquareMapOptions fine_options = options;
@@ -100,7 +105,7 @@ std::optional<std::vector<Vec2>> multilevel_map(const Disk& disk, const SquareMa
   // boundary's, in the same order).
   fine_options.refine_iterations = options.fine_steps;
   fine_options.correction_rounds = 0;
-  const DensityConstraints constraints = density_constraints(disk, placed, fine_options);
+  const DensityConstraints constraints = density_constraints(disk, placed, fine_options, order);
   refine_towards_targets(constraints, uv, fine);
   st.fine_reweighting = fine.iterations;
   st.fine_steps = fine.refine_iterations;

@@ -241,11 +241,11 @@ class SlimSystem {
 
 /// Solves the system assembled at uv; where it fails (weights of 1e28 and more, from a sliver in the
 /// start map), again with its weights capped at kMaxWeight. False if that fails too.
-bool solve_step(SlimSystem& system, SparseCholesky& solver, bool& analyzed, const std::vector<Vec2>& uv, Eigen::VectorXd& x,
-                SlimStats& st) {
+bool solve_step(SlimSystem& system, SparseCholesky& solver, bool& analyzed, const std::vector<int>& order, const std::vector<Vec2>& uv,
+                Eigen::VectorXd& x, SlimStats& st) {
   system.assemble(uv, INFINITY);
   if (!analyzed) {
-    solver.analyzePattern(system.A);
+    solver.analyzePattern(system.A, order.empty() ? nullptr : &order);
     analyzed = true;
   }
   if (solver.factorize(system.A) && solver.solve(system.A, system.rhs, x)) return true;
@@ -259,7 +259,7 @@ bool solve_step(SlimSystem& system, SparseCholesky& solver, bool& analyzed, cons
 
 SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,
                      std::vector<Vec2>& uv, long supernodal_from, const std::function<void(int step)>& on_step,
-                     const std::vector<FaceShape>* shapes) {
+                     const std::vector<FaceShape>* shapes, const std::vector<int>* vertex_order) {
   SlimStats st;
   const size_t nv = m.num_vertices();
   const auto fr = target_frames(m, target, uv, shapes);
@@ -270,10 +270,12 @@ SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std
   SparseCholesky solver(supernodal_from);
   bool analyzed = false;
   SlimSystem system(m, fr, index, n);
+  const std::vector<int> order =
+      vertex_order && vertex_order->size() == nv ? order_of_unknowns(*vertex_order, index, 2) : std::vector<int>{};
   std::vector<Vec2> d(nv), trial(nv);
   for (int it = 0; it < iterations; ++it) {
     Eigen::VectorXd x;
-    if (!solve_step(system, solver, analyzed, uv, x, st)) {
+    if (!solve_step(system, solver, analyzed, order, uv, x, st)) {
       st.stopped = "solver";
       break;
     }

@@ -24,12 +24,13 @@ using FaceShape = std::array<Vec2, 3>;
 /// area; `shapes`, optional: face f's shapes[f] instead, where that has a positive area), weighted by
 /// target area; fixed[v] bit 0 holds the vertex's u, bit 1 its v (3: the vertex stays; 1 or 2: it
 /// slides along a side). SLIM (Rabinovich, Lipman and Sorkine-Hornung 2017): each step solves a
-/// reweighted proxy with CHOLMOD (pattern analysed once), then a line search.
+/// reweighted proxy with CHOLMOD (pattern analysed once; in `vertex_order`, nested_dissection_order's, where
+/// given), then a line search.
 /// Requires uv fold-free, one target per face. Guarantees uv stays fold-free (the line search stops
 /// short of any triangle's collapse) and its energy never rises. Stops after `iterations` steps, when a
 /// step gains less than 0.1%, or when no step lowers the energy; on_step (optional) hears each step.
 SlimStats refine_map(const Surface& mesh, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,
                      std::vector<Vec2>& uv, long supernodal_from = kSupernodalFrom, const std::function<void(int step)>& on_step = {},
-                     const std::vector<FaceShape>* shapes = nullptr);
+                     const std::vector<FaceShape>* shapes = nullptr, const std::vector<int>* vertex_order = nullptr);
 
 }  // namespace tightex

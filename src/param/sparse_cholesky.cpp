@@ -25,4 +25,45 @@ void use_serial_dense_kernels() {
   if (auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "omp_set_num_threads"))) set(1);
 }
 
+std::vector<int> nested_dissection_order(const Surface& mesh) {
+  const int n = int(mesh.num_vertices());
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(size_t(n) + mesh.opposite.size() / 2 + 1);
+  for (int v = 0; v < n; ++v) entries.emplace_back(v, v, 1.0);
+  for (uint32_t h = 0; h < mesh.opposite.size(); ++h) {
+    const uint32_t o = mesh.opposite[h];
+    if (o != kNone && o < h) continue;
+    const int a = int(mesh.from(h)), b = int(mesh.to(h));
+    if (a != b) entries.emplace_back(std::max(a, b), std::min(a, b), 1.0);
+  }
+  Eigen::SparseMatrix<double> pattern(n, n);
+  pattern.setFromTriplets(entries.begin(), entries.end());
+  cholmod_common common;
+  cholmod_start(&common);
+  common.print = 0;
+  const Eigen::SparseMatrix<double>& lower = pattern;
+  cholmod_sparse view = Eigen::viewAsCholmod(lower.selfadjointView<Eigen::Lower>());
+  std::vector<int> order(static_cast<size_t>(n));
+  const bool ok = cholmod_metis(&view, nullptr, 0, 0, order.data(), &common);
+  cholmod_finish(&common);
+  if (!ok) order.clear();
+  return order;
+}
+
+std::shared_ptr<const std::vector<int>> vertex_order_from(const Surface& mesh, size_t from) {
+  if (mesh.num_vertices() < from) return nullptr;
+  std::vector<int> order = nested_dissection_order(mesh);
+  if (order.empty()) return nullptr;
+  return std::make_shared<const std::vector<int>>(std::move(order));
+}
+
+std::vector<int> order_of_unknowns(const std::vector<int>& vertex_order, const std::vector<int>& unknown, int per_vertex) {
+  std::vector<int> order;
+  order.reserve(unknown.size());
+  for (int v : vertex_order)
+    for (int j = 0; j < per_vertex; ++j)
+      if (const int k = unknown[size_t(v) * size_t(per_vertex) + size_t(j)]; k >= 0) order.push_back(k);
+  return order;
+}
+
 }  // namespace tightex

@@ -3,11 +3,59 @@
 #include <Eigen/CholmodSupport>
 #include <Eigen/Sparse>
 #include <cmath>
+#include <memory>
 #include <mutex>
+#include <vector>
 
 #include "param/square_map_options.hpp"
 
 namespace tightex {
+
+namespace detail {
+
+/// Eigen's CHOLMOD wrapper, with the analysis also from a given fill-reducing order (Eigen's own
+/// analyzePattern always lets CHOLMOD order the system).
+class OrderedCholmod : public Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> {
+ public:
+  /// CHOLMOD's symbolic analysis of `a` in `order` (order[k]: the unknown eliminated k-th; CHOLMOD
+  /// may still postorder it).
+  void analyzePatternInOrder(const Eigen::SparseMatrix<double>& a, std::vector<int> order) {
+    cholmod_common& common = cholmod();
+    if (m_cholmodFactor) {
+      cholmod_free_factor(&m_cholmodFactor, &common);
+      m_cholmodFactor = nullptr;
+    }
+    cholmod_sparse view = Eigen::viewAsCholmod(a.selfadjointView<Eigen::Lower>());
+    const int methods = common.nmethods, ordering = common.method[0].ordering;
+    common.nmethods = 1;
+    common.method[0].ordering = CHOLMOD_GIVEN;
+    m_cholmodFactor = cholmod_analyze_p(&view, order.data(), nullptr, 0, &common);
+    common.nmethods = methods;
+    common.method[0].ordering = ordering;
+    m_isInitialized = true;
+    m_info = m_cholmodFactor ? Eigen::Success : Eigen::NumericalIssue;
+    m_analysisIsOk = m_cholmodFactor != nullptr;
+    m_factorizationIsOk = false;
+  }
+};
+
+}  // namespace detail
+
+/// A fill-reducing order of a mesh's vertices: METIS's nested dissection of its edge graph (through
+/// CHOLMOD), order[k] the vertex eliminated k-th. Every system of a map is over some of the vertices
+/// (a Laplacian's unknowns) or their coordinates (a symmetric Dirichlet step's): restricted to those
+/// (order_of_unknowns), one order serves them all, computed once per mesh, where CHOLMOD's own
+/// minimum degree ordering (AMD) orders each system again and, on a large planar mesh, leaves 2.7x
+/// the flops (BENCHMARKS.md, "Scale"). Empty where METIS fails.
+std::vector<int> nested_dissection_order(const Surface& mesh);
+
+/// nested_dissection_order of `mesh` where it has at least `from` vertices (and METIS succeeds); null
+/// otherwise: CHOLMOD then orders each system itself.
+std::shared_ptr<const std::vector<int>> vertex_order_from(const Surface& mesh, size_t from);
+
+/// `vertex_order` restricted to a system's unknowns: unknown[k * per_vertex + j] is vertex k's j-th
+/// unknown (per_vertex 1: a Laplacian's; 2: u and v), -1 where it has none.
+std::vector<int> order_of_unknowns(const std::vector<int>& vertex_order, const std::vector<int>& unknown, int per_vertex);
 
 /// Serialises the supernodal factorisations and solves of all threads. The components are mapped in
 /// parallel, and a BLAS built without locking (Debian's serial OpenBLAS) returns garbage when two
@@ -17,9 +65,9 @@ std::mutex& blas_mutex();
 
 /// Makes the dense kernels under CHOLMOD run on the calling thread only: OpenBLAS's thread pool (for
 /// the process, once) and libgomp's teams (for this thread: libgomp keeps those settings per thread).
-/// The components and shape probes are mapped in parallel already, and the BLAS calls are serialised (blas_mutex), so the kernels' own threads mostly
-/// spin and yield in the kernel (BENCHMARKS.md, "Where the default run's time goes"). Looked up by name:
-/// a no-op with a BLAS or OpenMP runtime that lacks these functions.
+/// The components and shape probes are mapped in parallel already, and the BLAS calls are serialised (blas_mutex), so the kernels' own
+/// threads mostly spin and yield in the kernel (BENCHMARKS.md, "Where the default run's time goes"). Looked up by name: a no-op with a BLAS
+/// or OpenMP runtime that lacks these functions.
 void use_serial_dense_kernels();
 
 /// Eigen's CHOLMOD wrapper: supernodal from supernodal_from unknowns on; below, as CHOLMOD's analysis
@@ -32,7 +80,8 @@ class SparseCholesky {
   /// CHOLMOD's own printing is off: a failed factorisation is reported through factorize() / solve()
   /// and handled by the caller (a retry, the fallback), and `tightex -q` prints nothing but errors.
   explicit SparseCholesky(long supernodal_from = kSupernodalFrom) : supernodal_from_(supernodal_from) { solver_.cholmod().print = 0; }
-  void analyzePattern(const Matrix& a) {
+  /// `order` (optional): the fill-reducing order to analyse in (order_of_unknowns), instead of CHOLMOD's.
+  void analyzePattern(const Matrix& a, const std::vector<int>* order = nullptr) {
     use_serial_dense_kernels();
     const bool forced = a.rows() >= supernodal_from_;
     solver_.setMode(forced ? Eigen::CholmodSupernodalLLt : Eigen::CholmodAuto);
@@ -42,7 +91,10 @@ class SparseCholesky {
       solver_.cholmod().final_asis = 0;
       solver_.cholmod().final_ll = 1;
     }
-    solver_.analyzePattern(a);
+    if (order && order->size() == size_t(a.rows()))
+      solver_.analyzePatternInOrder(a, *order);
+    else
+      solver_.analyzePattern(a);
     // CHOLMOD's own choice below the size: supernodal where the factor is dense enough for its
     // column blocks to pay (flops per factor entry at least supernodal_switch).
     const cholmod_common& c = solver_.cholmod();
@@ -90,7 +142,7 @@ class SparseCholesky {
   bool supernodal() const { return supernodal_; }
 
  private:
-  Eigen::CholmodDecomposition<Matrix, Eigen::Lower> solver_;
+  detail::OrderedCholmod solver_;
   long supernodal_from_;
   bool supernodal_ = false;
 };

@@ -15,6 +15,10 @@ namespace tightex {
 /// on column blocks); below it, simplicially, which is as fast there. Chosen by measurement:
 /// docs/decisions.md.
 constexpr long kSupernodalFrom = 40000;
+/// From this many disk vertices on, a map orders its systems by one nested dissection of the disk
+/// (nested_dissection_order) instead of CHOLMOD's minimum degree per system. Chosen by measurement:
+/// BENCHMARKS.md, "Scale".
+constexpr size_t kVertexOrderFrom = 200000;
 
 struct SquareMapOptions {
   /// Size of the texel rectangle the square will be stretched to. Sizes the boundary bumps in texels;
@@ -60,6 +64,8 @@ struct SquareMapOptions {
   /// Linear systems of this many unknowns or more are factorised supernodally, smaller ones
   /// simplicially (see kSupernodalFrom). Tests set it low to run the supernodal path on small meshes.
   long supernodal_from = kSupernodalFrom;
+  /// A disk of this many vertices or more orders its systems by its nested dissection (kVertexOrderFrom).
+  size_t vertex_order_from = kVertexOrderFrom;
   /// A disk of more than this many vertices with a density target (and balance 1) is mapped multilevel
   /// (multilevel_map): the reweighting, flow and refinement on a copy of at most coarse_vertices
   /// vertices, carried to the full mesh, then up to fine_reweighting reweighting steps and fine_steps
