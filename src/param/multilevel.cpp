@@ -1,6 +1,7 @@
 #include "param/multilevel.hpp"
 
 #include <cmath>
+#include <utility>
 
 #include "param/coarsen.hpp"
 #include "param/density_map.hpp"
@@ -72,20 +73,42 @@ std::vector<Vec2> fill_between(const Disk& disk, const CoarseDisk& coarse, const
   return uv;
 }
 
+/// Coarse copies tried, each twice the vertices of the one before, while it stays within
+/// multilevel_from and at most a quarter of the disk.
+constexpr int kCoarseTries = 3;
+
+/// Step 1 of multilevel_map: a coarse copy and its map (the boundary as `placed`), with stats in `st`.
+/// A copy whose map folds (decimation can leave a narrow neck, which even the uniform harmonic map
+/// crowds below floating-point precision: esp32cam subdivided three times, at 30k of 1.7M vertices) is
+/// replaced by a finer one. nullopt where no copy maps fold-free or the disk cannot be coarsened enough.
+std::optional<std::pair<CoarseDisk, std::vector<Vec2>>> coarse_map(const Disk& disk, const SquareMapOptions& options, SquareMapStats& st,
+                                                                    SquareBoundary& placed) {
+  size_t vertices = options.coarse_vertices;
+  for (int tries = 0; tries < kCoarseTries; ++tries, vertices *= 2) {
+    if (tries > 0 && (vertices > options.multilevel_from || 4 * vertices > disk.mesh.num_vertices())) break;
+    CoarseDisk coarse = coarsen_disk(disk, options.face_target, vertices);
+    if (coarse.fine_vertex.size() > options.multilevel_from) return std::nullopt;  // it could not be coarsened enough
+    SquareMapOptions coarse_options = options;
+    coarse_options.face_target = coarse.face_target;
+    coarse_options.density_despite_crowding = true;
+    st = SquareMapStats{};
+    std::vector<Vec2> uv = map_disk(coarse.disk, coarse_options, st, &placed);
+    if (st.flipped == 0) return std::pair{std::move(coarse), std::move(uv)};
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 std::optional<std::vector<Vec2>> multilevel_map(const Disk& disk, const SquareMapOptions& options, SquareMapStats& stats) {
   const Surface& m = disk.mesh;
   if (options.face_target.empty() || options.balance != 1.0 || m.num_vertices() <= options.multilevel_from) return std::nullopt;
-  const CoarseDisk coarse = coarsen_disk(disk, options.face_target, options.coarse_vertices);
-  if (coarse.fine_vertex.size() > options.multilevel_from) return std::nullopt;  // it could not be coarsened enough
-  SquareMapOptions coarse_options = options;
-  coarse_options.face_target = coarse.face_target;
-  coarse_options.density_despite_crowding = true;
   SquareMapStats st;
   SquareBoundary placed;
-  const std::vector<Vec2> coarse_uv = map_disk(coarse.disk, coarse_options, st, &placed);
-  if (st.flipped > 0) return std::nullopt;
+  std::optional<std::pair<CoarseDisk, std::vector<Vec2>>> coarse_and_map = coarse_map(disk, options, st, placed);
+  if (!coarse_and_map) return std::nullopt;
+  const CoarseDisk& coarse = coarse_and_map->first;
+  const std::vector<Vec2>& coarse_uv = coarse_and_map->second;
   st.crowded_vertex = kNone;
   for (uint32_t& corner : st.corners) corner = coarse.fine_vertex[corner];
   st.coarse_vertices = coarse.fine_vertex.size();

@@ -11,6 +11,8 @@ namespace tightex {
 /// Where options ask for it (a density target, balance 1, more than options.multilevel_from vertices):
 /// 1. coarsen_disk to at most options.coarse_vertices (boundary, cut and chords kept) and map that with
 ///    map_disk (the same steps as a small disk gets; its crowding does not stop the density steps);
+///    where that map folds, again from a copy of twice the vertices (up to three copies, each within
+///    multilevel_from and a quarter of the disk);
 /// 2. carry it to the full mesh: the harmonic map between the coarse vertices (held where the coarse
 ///    map put them) is a target that follows the coarse map but may fold; the Tutte map with that
 ///    target's own cotangent weights (clamped positive) and only the boundary held reproduces it where
