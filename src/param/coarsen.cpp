@@ -51,14 +51,15 @@ class Collapser {
       const auto [len, v, stamp] = queue_.top();
       queue_.pop();
       if (!vertex_alive_[v] || stamp != stamp_[v]) continue;
-      std::vector<uint32_t> ring = neighbours(v);
-      std::sort(ring.begin(), ring.end(), [&](uint32_t a, uint32_t b) { return dist(v, a) < dist(v, b); });
-      for (uint32_t u : ring)
+      neighbours(v, ring_);
+      std::sort(ring_.begin(), ring_.end(), [&](uint32_t a, uint32_t b) { return dist(v, a) < dist(v, b); });
+      for (uint32_t u : ring_)
         if (allowed(v, u)) {
           collapse(v, u);
           ++stamp_[v];
           push(u);
-          for (uint32_t w : neighbours(u)) push(w);
+          neighbours(u, ring_);
+          for (uint32_t w : ring_) push(w);
           break;
         }
     }
@@ -69,14 +70,14 @@ class Collapser {
  private:
   double dist(uint32_t a, uint32_t b) const { return (m_.positions[a] - m_.positions[b]).norm(); }
 
-  std::vector<uint32_t> neighbours(uint32_t v) const {
-    std::vector<uint32_t> r;
+  /// v's neighbours, sorted, into r (a buffer reused: the collapses ask hundreds of thousands of times).
+  void neighbours(uint32_t v, std::vector<uint32_t>& r) const {
+    r.clear();
     for (uint32_t f : faces_[v])
       for (uint32_t w : tri_[f])
         if (w != v) r.push_back(w);
     std::sort(r.begin(), r.end());
     r.erase(std::unique(r.begin(), r.end()), r.end());
-    return r;
   }
 
   void push(uint32_t v) {
@@ -89,15 +90,20 @@ class Collapser {
   }
 
   /// Whether v may move onto its neighbour u (see coarsen_disk).
-  bool allowed(uint32_t v, uint32_t u) const {
-    std::vector<uint32_t> apex;
+  bool allowed(uint32_t v, uint32_t u) {
+    std::vector<uint32_t>& apex = apex_;
+    apex.clear();
     for (uint32_t f : faces_[v])
       if (std::find(tri_[f].begin(), tri_[f].end(), u) != tri_[f].end())
         for (uint32_t w : tri_[f])
           if (w != u && w != v) apex.push_back(w);
     if (apex.size() != 2 || apex[0] == apex[1]) return false;
-    const std::vector<uint32_t> nv = neighbours(v), nu = neighbours(u);
-    std::vector<uint32_t> common;
+    std::vector<uint32_t>& nv = nv_;
+    std::vector<uint32_t>& nu = nu_;
+    std::vector<uint32_t>& common = common_;
+    neighbours(v, nv);
+    neighbours(u, nu);
+    common.clear();
     std::set_intersection(nv.begin(), nv.end(), nu.begin(), nu.end(), std::back_inserter(common));
     std::sort(apex.begin(), apex.end());
     if (common != apex) return false;  // the link condition
@@ -145,6 +151,7 @@ class Collapser {
   std::vector<char> face_alive_, vertex_alive_, locked_, on_boundary_;
   std::vector<uint32_t> stamp_;
   std::vector<std::vector<uint32_t>> faces_;
+  std::vector<uint32_t> ring_, apex_, nv_, nu_, common_;  // scratch of run() and allowed()
   size_t alive_ = 0;
   std::priority_queue<std::tuple<double, uint32_t, uint32_t>, std::vector<std::tuple<double, uint32_t, uint32_t>>, std::greater<>> queue_;
 };
