@@ -70,6 +70,25 @@ TEST(Multilevel, CoarseDiskKeepsTheBoundaryTopologyAndTargets) {
   for (const Tri& f : cm.triangles) EXPECT_GT(triangle_area(cm.positions[f[0]], cm.positions[f[1]], cm.positions[f[2]]), 0);
 }
 
+// The copies of one run of collapses, stopped at each size in turn, are the copies coarsen_disk gives
+// for each size alone (the multilevel map's finer copies, where a coarse one's map folds, cost no
+// second coarsening).
+TEST(Multilevel, CopiesInStepsAreTheCopiesOfEachSize) {
+  const Disk fine = torus_disk();
+  const std::vector<double> target = varying_targets(fine.mesh);
+  const std::vector<size_t> sizes{2400, 1200, 600};
+  const std::vector<CoarseDisk> steps = coarsen_disk_in_steps(fine, target, sizes);
+  ASSERT_EQ(steps.size(), sizes.size());
+  for (size_t k = 0; k < sizes.size(); ++k) {
+    SCOPED_TRACE(sizes[k]);
+    const CoarseDisk alone = coarsen_disk(fine, target, sizes[k]);
+    EXPECT_LE(steps[k].fine_vertex.size(), sizes[k]);
+    EXPECT_EQ(steps[k].fine_vertex, alone.fine_vertex);
+    EXPECT_EQ(steps[k].disk.mesh.triangles, alone.disk.mesh.triangles);
+    EXPECT_EQ(steps[k].face_target, alone.face_target);
+  }
+}
+
 TEST(Multilevel, MapIsFoldFreeOnTheSquareAndNearTheFullMapsDensity) {
   const Disk disk = torus_disk();
   SquareMapOptions options;

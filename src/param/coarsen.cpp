@@ -44,9 +44,12 @@ class Collapser {
     alive_ = m_.num_vertices();
   }
 
-  /// Collapses until at most max_vertices are left or nothing more may collapse.
+  /// Collapses until at most max_vertices are left or nothing more may collapse. A later call goes on
+  /// from there, as one call with its size would have.
   void run(size_t max_vertices) {
-    for (uint32_t v = 0; v < m_.num_vertices(); ++v) push(v);
+    if (!queued_)
+      for (uint32_t v = 0; v < m_.num_vertices(); ++v) push(v);
+    queued_ = true;
     while (alive_ > max_vertices && !queue_.empty()) {
       const auto [len, v, stamp] = queue_.top();
       queue_.pop();
@@ -153,6 +156,7 @@ class Collapser {
   std::vector<std::vector<uint32_t>> faces_;
   std::vector<uint32_t> ring_, apex_, nv_, nu_, common_;  // scratch of run() and allowed()
   size_t alive_ = 0;
+  bool queued_ = false;  // every vertex pushed once (the first run)
   std::priority_queue<std::tuple<double, uint32_t, uint32_t>, std::vector<std::tuple<double, uint32_t, uint32_t>>, std::greater<>> queue_;
 };
 
@@ -184,6 +188,17 @@ CoarseDisk coarsen_disk(const Disk& fine, const std::vector<double>& face_target
   Collapser collapser(fine, face_target);
   collapser.run(max_vertices);
   return collapser.result(fine);
+}
+
+std::vector<CoarseDisk> coarsen_disk_in_steps(const Disk& fine, const std::vector<double>& face_target,
+                                              const std::vector<size_t>& max_vertices) {
+  Collapser collapser(fine, face_target);
+  std::vector<CoarseDisk> copies;
+  for (size_t size : max_vertices) {
+    collapser.run(size);
+    copies.push_back(collapser.result(fine));
+  }
+  return copies;
 }
 
 }  // namespace tightex

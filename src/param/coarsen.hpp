@@ -24,4 +24,10 @@ struct CoarseDisk {
 /// all kept, in the same order; fine_vertex strictly increasing.
 CoarseDisk coarsen_disk(const Disk& fine, const std::vector<double>& face_target, size_t max_vertices);
 
+/// coarsen_disk's copy for each of `max_vertices` (in decreasing order), from one run of collapses: the
+/// collapses stop at each size in turn and go on from there, so each copy is the one coarsen_disk gives
+/// for that size, for the cost of one.
+std::vector<CoarseDisk> coarsen_disk_in_steps(const Disk& fine, const std::vector<double>& face_target,
+                                              const std::vector<size_t>& max_vertices);
+
 }  // namespace tightex

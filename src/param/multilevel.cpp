@@ -1,5 +1,6 @@
 #include "param/multilevel.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <utility>
 
@@ -77,23 +78,31 @@ std::vector<Vec2> fill_between(const Disk& disk, const CoarseDisk& coarse, const
 /// multilevel_from and at most a quarter of the disk.
 constexpr int kCoarseTries = 3;
 
+/// The sizes of the coarse copies to try, largest first (coarsen_disk_in_steps' order).
+std::vector<size_t> coarse_sizes(const Disk& disk, const SquareMapOptions& options) {
+  std::vector<size_t> sizes{options.coarse_vertices};
+  while (sizes.size() < size_t(kCoarseTries) && 2 * sizes.back() <= options.multilevel_from && 8 * sizes.back() <= disk.mesh.num_vertices())
+    sizes.push_back(2 * sizes.back());
+  std::reverse(sizes.begin(), sizes.end());
+  return sizes;
+}
+
 /// Step 1 of multilevel_map: a coarse copy and its map (the boundary as `placed`), with stats in `st`.
 /// A copy whose map folds (decimation can leave a narrow neck, which even the uniform harmonic map
 /// crowds below floating-point precision: esp32cam subdivided three times, at 30k of 1.7M vertices) is
-/// replaced by a finer one. nullopt where no copy maps fold-free or the disk cannot be coarsened enough.
+/// replaced by a finer one (the copies come from one run of collapses). nullopt where no copy maps
+/// fold-free or the disk cannot be coarsened enough.
 std::optional<std::pair<CoarseDisk, std::vector<Vec2>>> coarse_map(const Disk& disk, const SquareMapOptions& options, SquareMapStats& st,
-                                                                    SquareBoundary& placed) {
-  size_t vertices = options.coarse_vertices;
-  for (int tries = 0; tries < kCoarseTries; ++tries, vertices *= 2) {
-    if (tries > 0 && (vertices > options.multilevel_from || 4 * vertices > disk.mesh.num_vertices())) break;
-    CoarseDisk coarse = coarsen_disk(disk, options.face_target, vertices);
-    if (coarse.fine_vertex.size() > options.multilevel_from) return std::nullopt;  // it could not be coarsened enough
+                                                                   SquareBoundary& placed) {
+  std::vector<CoarseDisk> copies = coarsen_disk_in_steps(disk, options.face_target, coarse_sizes(disk, options));
+  for (auto coarse = copies.rbegin(); coarse != copies.rend(); ++coarse) {
+    if (coarse->fine_vertex.size() > options.multilevel_from) return std::nullopt;  // it could not be coarsened enough
     SquareMapOptions coarse_options = options;
-    coarse_options.face_target = coarse.face_target;
+    coarse_options.face_target = coarse->face_target;
     coarse_options.density_despite_crowding = true;
     st = SquareMapStats{};
-    std::vector<Vec2> uv = map_disk(coarse.disk, coarse_options, st, &placed);
-    if (st.flipped == 0) return std::pair{std::move(coarse), std::move(uv)};
+    std::vector<Vec2> uv = map_disk(coarse->disk, coarse_options, st, &placed);
+    if (st.flipped == 0) return std::pair{std::move(*coarse), std::move(uv)};
   }
   return std::nullopt;
 }
