@@ -6,6 +6,7 @@
 // topology_of, UV areas summed independently of count_folds, tilings painted texel by texel), so a
 // stage that breaks its contract fails here even when its own statistics claim success.
 #include <gtest/gtest-spi.h>  // ScopedFakeTestPartResultReporter: the checkers' own test
+#include <dlfcn.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -13,6 +14,7 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <mutex>
 #include <numeric>
 #include <random>
 #include <set>
@@ -787,6 +789,46 @@ TEST(SparseCholesky, ResidualCheckAcceptsTheSolutionAndRejectsAWrongOne) {
     EXPECT_FALSE(SparseCholesky::solves(a, wrong, b));
     EXPECT_FALSE(SparseCholesky::solves(a, Eigen::VectorXd::Zero(n), b));
   }
+}
+
+extern "C" void GOMP_parallel(void (*body)(void*), void* data, unsigned num_threads, unsigned flags);
+
+// The OpenMP regions CHOLMOD opens: on a thread set for serial dense kernels the region's body runs
+// once, on that thread, without libgomp opening a region (its nesting level stays 0; libgomp's own
+// region of one thread would count a level); on any other thread libgomp still opens the team asked for.
+TEST(SparseCholesky, OpenMpRegionsRunOnTheCallingThreadOnlyWhereTeamsAreOff) {
+  using Level = int (*)();
+  const auto omp_level = reinterpret_cast<Level>(dlsym(RTLD_DEFAULT, "omp_get_level"));
+  ASSERT_NE(omp_level, nullptr) << "libgomp is loaded with CHOLMOD";
+  struct Calls {
+    Level level;
+    std::mutex mutex;
+    std::set<std::thread::id> threads;
+    std::set<int> levels;
+    int count = 0;
+  };
+  const auto body = [](void* data) {
+    auto& calls = *static_cast<Calls*>(data);
+    const std::lock_guard lock(calls.mutex);
+    calls.threads.insert(std::this_thread::get_id());
+    calls.levels.insert(calls.level());
+    ++calls.count;
+  };
+  std::thread([&] {
+    use_serial_dense_kernels();
+    Calls calls{omp_level};
+    GOMP_parallel(body, &calls, 2, 0);
+    EXPECT_EQ(calls.count, 1);
+    EXPECT_EQ(calls.threads, std::set<std::thread::id>{std::this_thread::get_id()});
+    EXPECT_EQ(calls.levels, std::set<int>{0});
+  }).join();
+  std::thread([&] {
+    Calls calls{omp_level};
+    GOMP_parallel(body, &calls, 2, 0);
+    EXPECT_EQ(calls.count, 2);
+    EXPECT_EQ(calls.threads.size(), 2u);
+    EXPECT_EQ(calls.levels, std::set<int>{1});
+  }).join();
 }
 
 // One fill-reducing order of a mesh's vertices (nested dissection) serves every system over them:

@@ -9,15 +9,19 @@ std::mutex& blas_mutex() {
   return m;
 }
 
+namespace {
+/// Whether use_serial_dense_kernels() has run on this thread: libgomp opens no team on it any more.
+thread_local bool omp_serial = false;
+}  // namespace
+
 void use_serial_dense_kernels() {
   using SetThreads = void (*)(int);
   static std::once_flag blas_once;
   std::call_once(blas_once, [] {
     if (auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"))) set(1);
   });
-  thread_local bool omp_done = false;
-  if (omp_done) return;
-  omp_done = true;
+  if (omp_serial) return;
+  omp_serial = true;
   // CHOLMOD asks for an explicit team size in places, which omp_set_num_threads does not cap; with
   // no active level allowed, every parallel region runs on the thread that meets it. Both are
   // per-thread settings in libgomp (OpenMP 5's data environment), hence on each thread that factorises.
@@ -67,3 +71,18 @@ std::vector<int> order_of_unknowns(const std::vector<int>& vertex_order, const s
 }
 
 }  // namespace tightex
+
+/// Every parallel region CHOLMOD's supernodal factorisation meets (several per supernode: millions per
+/// factorisation at 850k unknowns) costs libgomp a team's allocation and a futex wake at its closing
+/// barrier even when it runs on one thread: most of the process's kernel time (BENCHMARKS.md). On a
+/// thread that use_serial_dense_kernels() has set, where libgomp would run the region on that thread
+/// alone anyway, the region's body is called directly; on any other thread libgomp's own runs. The
+/// body's worksharing and barriers then meet no team, which libgomp treats as a team of one.
+extern "C" void GOMP_parallel(void (*body)(void*), void* data, unsigned num_threads, unsigned flags) {
+  using Parallel = void (*)(void (*)(void*), void*, unsigned, unsigned);
+  static const auto next = reinterpret_cast<Parallel>(dlsym(RTLD_NEXT, "GOMP_parallel"));
+  if (tightex::omp_serial || !next)
+    body(data);
+  else
+    next(body, data, num_threads, flags);
+}

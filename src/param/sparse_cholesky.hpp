@@ -67,7 +67,8 @@ std::mutex& blas_mutex();
 /// the process, once) and libgomp's teams (for this thread: libgomp keeps those settings per thread).
 /// The components and shape probes are mapped in parallel already, and the BLAS calls are serialised (blas_mutex), so the kernels' own
 /// threads mostly spin and yield in the kernel (BENCHMARKS.md, "Where the default run's time goes"). Looked up by name: a no-op with a BLAS
-/// or OpenMP runtime that lacks these functions.
+/// or OpenMP runtime that lacks these functions. On such a thread the regions CHOLMOD opens skip libgomp
+/// altogether (GOMP_parallel in sparse_cholesky.cpp).
 void use_serial_dense_kernels();
 
 /// Eigen's CHOLMOD wrapper: supernodal from supernodal_from unknowns on; below, as CHOLMOD's analysis
