@@ -21,6 +21,7 @@
 #include <thread>
 
 #include "core/error.hpp"
+#include "core/statistics.hpp"
 #include "cut/cut.hpp"
 #include "layout/layout.hpp"
 #include "mesh_catalogue.hpp"
@@ -789,6 +790,34 @@ TEST(SparseCholesky, ResidualCheckAcceptsTheSolutionAndRejectsAWrongOne) {
     EXPECT_FALSE(SparseCholesky::solves(a, wrong, b));
     EXPECT_FALSE(SparseCholesky::solves(a, Eigen::VectorXd::Zero(n), b));
   }
+}
+
+// The weighted quantile by selection is the one read off the sorted pairs: integer weights (sums exact
+// in any order, so the answers must be equal), with zero weights and repeated values, at quantiles
+// that fall on a cumulative weight exactly and between.
+TEST(Statistics, WeightedQuantileBySelectionIsTheSortedOne) {
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 50; ++trial) {
+    const size_t n = 1 + rng() % 400;
+    std::vector<std::pair<double, double>> pairs(n);
+    for (auto& [v, w] : pairs) v = double(rng() % 50) - 20, w = double(rng() % 4);
+    std::vector<std::pair<double, double>> sorted = pairs;
+    std::sort(sorted.begin(), sorted.end());
+    double total = 0;
+    for (const auto& [v, w] : sorted) total += w;
+    for (double q : {0.0, 0.05, 0.25, 0.5, 0.95, 1.0}) {
+      double expected = sorted.back().first, acc = 0;
+      for (const auto& [v, w] : sorted)
+        if ((acc += w) >= q * total) {
+          expected = v;
+          break;
+        }
+      std::vector<std::pair<double, double>> scratch = pairs;
+      EXPECT_EQ(weighted_quantile(scratch, q), expected) << "n " << n << ", q " << q;
+    }
+  }
+  std::vector<std::pair<double, double>> none;
+  EXPECT_EQ(weighted_quantile(none, 0.5), 0.0);
 }
 
 extern "C" void GOMP_parallel(void (*body)(void*), void* data, unsigned num_threads, unsigned flags);
