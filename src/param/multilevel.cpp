@@ -137,16 +137,21 @@ std::optional<std::vector<Vec2>> multilevel_map(const Disk& disk, const SquareMa
   st.crowded_vertex = kNone;
   for (uint32_t& corner : st.corners) corner = coarse.fine_vertex[corner];
   st.coarse_vertices = coarse.fine_vertex.size();
-  DirichletSolver solver(options.supernodal_from, order);
-  std::vector<double> weights;
-  std::vector<Vec2> uv = fill_between(disk, coarse, coarse_uv, options.supernodal_from, order, solver, weights);
-  if (uv.empty()) return std::nullopt;
-  // The density on the full mesh (the coarse map's holds only on average over each coarse triangle).
   SquareMapOptions fine_options = options;
   fine_options.max_iterations = options.fine_reweighting;
   fine_options.progress = nullptr;
   SquareMapStats fine;
-  reweight_towards_density(m, disk.boundary, fine_options, nullptr, weights, solver, uv, fine);
+  std::vector<Vec2> uv;
+  {
+    // The Laplacian's factor is freed before the symmetric Dirichlet steps factorise a system of
+    // twice the unknowns (the peak of the run).
+    DirichletSolver solver(options.supernodal_from, order);
+    std::vector<double> weights;
+    uv = fill_between(disk, coarse, coarse_uv, options.supernodal_from, order, solver, weights);
+    if (uv.empty()) return std::nullopt;
+    // The density on the full mesh (the coarse map's holds only on average over each coarse triangle).
+    reweight_towards_density(m, disk.boundary, fine_options, nullptr, weights, solver, uv, fine);
+  }
   // The symmetric Dirichlet steps, in the constraints the coarse boundary had (its vertices are the fine
   // boundary's, in the same order).
   fine_options.refine_iterations = options.fine_steps;
