@@ -22,9 +22,10 @@ struct Loop {
 /// the two tree paths trimmed where they share a prefix (so the loop is a simple cycle). Searches only
 /// within `radius` of the root (see tree_cotree): a loop costing up to twice that is found. Empty
 /// (cost infinite) when there is none: the surface has genus 0, or every loop through root costs more.
+/// `scratch` and `tc`: tree_cotree's arrays, reused from root to root.
 Loop shortest_loop_through(const Surface& s, const EdgeGraph& g, uint32_t root, const std::vector<std::vector<uint32_t>>& loops,
-                           double radius) {
-  const TreeCotree tc = tree_cotree(s, g, {root}, loops, radius);
+                           double radius, TreeCotreeScratch& scratch, TreeCotree& tc) {
+  tree_cotree(s, g, {root}, loops, radius, scratch, tc);
   Loop loop;
   if (tc.leftover.empty()) return loop;
   const uint32_t e = tc.leftover.front();
@@ -76,7 +77,7 @@ class LoopSearch {
   /// the root cheaper than the best reaches no vertex farther than half the best's cost plus half its
   /// leftover edge: that is the radius searched.
   void try_root(uint32_t root) {
-    Loop l = shortest_loop_through(s_, g_, root, loops_, (best_.cost + longest_edge_) / 2);
+    Loop l = shortest_loop_through(s_, g_, root, loops_, (best_.cost + longest_edge_) / 2, scratch_, tree_);
     if (l.cost < best_.cost * (1 - 1e-12)) best_ = std::move(l);
   }
   const Loop& best() const { return best_; }
@@ -87,6 +88,8 @@ class LoopSearch {
   const std::vector<std::vector<uint32_t>>& loops_;
   const double longest_edge_;
   Loop best_;
+  TreeCotreeScratch scratch_;
+  TreeCotree tree_;
 };
 
 /// Candidate roots: a global tree-cotree from one vertex; its leftover edges sit on the handles, so
