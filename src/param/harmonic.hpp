@@ -44,9 +44,10 @@ class DirichletSolver {
   bool solve(const Surface& mesh, const std::vector<double>& weights, const std::vector<char>& on_boundary, std::vector<Vec2>& uv);
 
  private:
+  struct Laplacian;
   std::unique_ptr<SparseCholesky> cholesky_;
   std::shared_ptr<const std::vector<int>> vertex_order_;
-  bool analyzed_ = false;
+  std::unique_ptr<Laplacian> laplacian_;  // the pattern, built at the first solve
 };
 
 /// Alg. 2, in the manner of libigl's harmonic(V, F, b, bc, k): the map of `mesh` whose vertex
