@@ -7,13 +7,18 @@
 # Usage: bench/scale.sh [LEVELS="0 1 2"] [extra tightex options...]
 #   LEVELS 3 (3.4M faces) and 4 (13.7M) take minutes to generate and to run.
 # Subdivided copies are kept in ${TIGHTEX_SCALE_CACHE:-/tmp/tightex_scale}.
+# TIGHTEX_SCALE_SOURCE=OBJ subdivides another model instead, e.g. the 10M-face row of BENCHMARKS.md:
+#   ./build/tightex_make_demo --segments 600 /tmp/vase600    # 622k faces
+#   TIGHTEX_SCALE_SOURCE=/tmp/vase600/vase.obj bench/scale.sh 2 --size 8192
 set -euo pipefail
 cd "$(dirname "$0")/.."
 levels=${1:-0 1 2}; shift || true
 bin=./build/tightex
-src=../shared/data/meshroom_esp32cam/texturedMesh.obj
+src=${TIGHTEX_SCALE_SOURCE:-../shared/data/meshroom_esp32cam/texturedMesh.obj}
 [ -f "$src" ] || { echo "no $src"; exit 0; }
 cache=${TIGHTEX_SCALE_CACHE:-/tmp/tightex_scale}
+name=$(basename "$src" .obj)
+[ -z "${TIGHTEX_SCALE_SOURCE:-}" ] && name=esp32cam
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 mkdir -p "$cache"
@@ -21,8 +26,8 @@ rows=()
 for level in $levels; do
   obj=$src
   if [ "$level" != 0 ]; then
-    obj=$cache/esp32cam_s$level/texturedMesh.obj
-    [ -f "$obj" ] || python3 tools/subdivide_obj.py "$src" "$cache/esp32cam_s$level" "$level"
+    obj=$cache/${name}_s$level/$(basename "$src")
+    [ -f "$obj" ] || python3 tools/subdivide_obj.py "$src" "$cache/${name}_s$level" "$level"
   fi
   /usr/bin/time -f "%e %U %S %M" -o "$out/time" "$bin" "$obj" -o "$out/run" --quiet "$@"
   rows+=("$(python3 - "$out/run/report.json" "$(cat "$out/time")" <<'PY'
