@@ -903,6 +903,23 @@ TEST(SparseCholesky, AMeshsNestedDissectionOrderSolvesItsLaplacianAsCholmodsOwn)
     ASSERT_TRUE(solver.solve(a, b, o ? given : own));
   }
   EXPECT_LT((given - own).norm(), 1e-9 * own.norm());
+  // Supernodal, the system copied into the factor's order once: the same solution, for one right-hand
+  // side and two, and again after the values change (the copy's values follow a's).
+  SparseCholesky supernodal(0);
+  supernodal.analyzePattern(a, &restricted);
+  ASSERT_TRUE(supernodal.factorises_permuted_copy());
+  ASSERT_TRUE(supernodal.factorize(a));
+  Eigen::VectorXd x;
+  ASSERT_TRUE(supernodal.solve(a, b, x));
+  EXPECT_LT((x - own).norm(), 1e-9 * own.norm());
+  Eigen::MatrixX2d b2(n, 2), x2;
+  b2 << b, 2 * b;
+  ASSERT_TRUE(supernodal.solve(a, b2, x2));
+  EXPECT_LT((x2.col(1) - 2 * own).norm(), 1e-9 * own.norm());
+  SparseCholesky::Matrix doubled = 2 * a;
+  ASSERT_TRUE(supernodal.factorize(doubled));
+  ASSERT_TRUE(supernodal.solve(doubled, b, x));
+  EXPECT_LT((2 * x - own).norm(), 1e-9 * own.norm());
 }
 
 // Large systems are factorised supernodally (BLAS kernels), small ones simplicially; components are

@@ -2,6 +2,8 @@
 
 #include <dlfcn.h>
 
+#include <algorithm>
+
 namespace tightex {
 
 std::mutex& blas_mutex() {
@@ -59,6 +61,44 @@ std::shared_ptr<const std::vector<int>> vertex_order_from(const Surface& mesh, s
   std::vector<int> order = nested_dissection_order(mesh);
   if (order.empty()) return nullptr;
   return std::make_shared<const std::vector<int>>(std::move(order));
+}
+
+bool SparseCholesky::permute_into_factor_order(const Matrix& a) {
+  const int* perm = solver_.permutation();
+  if (perm == nullptr || !a.isCompressed()) return false;
+  const int n = int(a.rows());
+  permutation_.assign(perm, perm + n);
+  std::vector<int> position(static_cast<size_t>(n));
+  for (int k = 0; k < n; ++k) position[size_t(permutation_[size_t(k)])] = k;
+  const int* outer = a.outerIndexPtr();
+  const int* inner = a.innerIndexPtr();
+  // Entry (row, col) of the lower triangle goes to (max, min) of their positions: lower again.
+  std::vector<int> start(size_t(n) + 1, 0);
+  for (int col = 0; col < n; ++col)
+    for (int p = outer[col]; p < outer[col + 1]; ++p) ++start[size_t(std::min(position[size_t(inner[p])], position[size_t(col)])) + 1];
+  for (int col = 0; col < n; ++col) start[size_t(col) + 1] += start[size_t(col)];
+  std::vector<std::pair<int, int>> entries(size_t(a.nonZeros()));  // (new row, index in a's values)
+  std::vector<int> fill(start.begin(), start.end() - 1);
+  for (int col = 0; col < n; ++col)
+    for (int p = outer[col]; p < outer[col + 1]; ++p) {
+      const int r = position[size_t(inner[p])], c = position[size_t(col)];
+      entries[size_t(fill[size_t(std::min(r, c))]++)] = {std::max(r, c), p};
+    }
+  permuted_.resize(n, n);
+  permuted_.resizeNonZeros(a.nonZeros());
+  slot_.resize(entries.size());
+  for (int col = 0; col < n; ++col) {
+    std::sort(entries.begin() + start[size_t(col)], entries.begin() + start[size_t(col) + 1]);
+    permuted_.outerIndexPtr()[col] = start[size_t(col)];
+  }
+  permuted_.outerIndexPtr()[n] = start[size_t(n)];
+  for (size_t p = 0; p < entries.size(); ++p) {
+    permuted_.innerIndexPtr()[p] = entries[p].first;
+    permuted_.valuePtr()[p] = 0.0;
+    slot_[size_t(entries[p].second)] = int(p);
+  }
+  solver_.analyzePatternAsOrdered(permuted_);
+  return solver_.info() == Eigen::Success;
 }
 
 std::vector<int> order_of_unknowns(const std::vector<int>& vertex_order, const std::vector<int>& unknown, int per_vertex) {

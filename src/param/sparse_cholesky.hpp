@@ -2,6 +2,7 @@
 #pragma once
 #include <Eigen/CholmodSupport>
 #include <Eigen/Sparse>
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <mutex>
@@ -14,24 +15,37 @@ namespace tightex {
 namespace detail {
 
 /// Eigen's CHOLMOD wrapper, with the analysis also from a given fill-reducing order (Eigen's own
-/// analyzePattern always lets CHOLMOD order the system).
+/// analyzePattern always lets CHOLMOD order the system), or in the matrix's own order.
 class OrderedCholmod : public Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> {
  public:
   /// CHOLMOD's symbolic analysis of `a` in `order` (order[k]: the unknown eliminated k-th; CHOLMOD
   /// may still postorder it).
   void analyzePatternInOrder(const Eigen::SparseMatrix<double>& a, std::vector<int> order) {
+    analyze(a, CHOLMOD_GIVEN, order.data(), true);
+  }
+  /// CHOLMOD's symbolic analysis of `a` eliminated in its own order, not postordered: for a matrix
+  /// permuted into an analysed factor's order (permutation()), which CHOLMOD then factorises without
+  /// copying it.
+  void analyzePatternAsOrdered(const Eigen::SparseMatrix<double>& a) { analyze(a, CHOLMOD_NATURAL, nullptr, false); }
+  /// The analysed factor's order: permutation()[k] is the unknown eliminated k-th. Null before an analysis.
+  const int* permutation() const { return m_cholmodFactor ? static_cast<const int*>(m_cholmodFactor->Perm) : nullptr; }
+
+ private:
+  void analyze(const Eigen::SparseMatrix<double>& a, int ordering, int* order, bool postorder) {
     cholmod_common& common = cholmod();
     if (m_cholmodFactor) {
       cholmod_free_factor(&m_cholmodFactor, &common);
       m_cholmodFactor = nullptr;
     }
     cholmod_sparse view = Eigen::viewAsCholmod(a.selfadjointView<Eigen::Lower>());
-    const int methods = common.nmethods, ordering = common.method[0].ordering;
+    const int methods = common.nmethods, was_ordering = common.method[0].ordering, was_postorder = common.postorder;
     common.nmethods = 1;
-    common.method[0].ordering = CHOLMOD_GIVEN;
-    m_cholmodFactor = cholmod_analyze_p(&view, order.data(), nullptr, 0, &common);
-    common.nmethods = methods;
     common.method[0].ordering = ordering;
+    common.postorder = postorder;
+    m_cholmodFactor = cholmod_analyze_p(&view, order, nullptr, 0, &common);
+    common.nmethods = methods;
+    common.method[0].ordering = was_ordering;
+    common.postorder = was_postorder;
     m_isInitialized = true;
     m_info = m_cholmodFactor ? Eigen::Success : Eigen::NumericalIssue;
     m_analysisIsOk = m_cholmodFactor != nullptr;
@@ -96,6 +110,14 @@ class SparseCholesky {
       solver_.analyzePatternInOrder(a, *order);
     else
       solver_.analyzePattern(a);
+    permutation_.clear();
+    if (forced && solver_.info() == Eigen::Success && !permute_into_factor_order(a)) {
+      permutation_.clear();  // analysed as ordered failed: CHOLMOD permutes at each factorisation
+      if (order && order->size() == size_t(a.rows()))
+        solver_.analyzePatternInOrder(a, *order);
+      else
+        solver_.analyzePattern(a);
+    }
     // CHOLMOD's own choice below the size: supernodal where the factor is dense enough for its
     // column blocks to pay (flops per factor entry at least supernodal_switch).
     const cholmod_common& c = solver_.cholmod();
@@ -106,7 +128,14 @@ class SparseCholesky {
     use_serial_dense_kernels();
     std::unique_lock<std::mutex> lock(blas_mutex(), std::defer_lock);
     if (supernodal_) lock.lock();
-    solver_.factorize(a);
+    if (permutation_.empty()) {
+      solver_.factorize(a);
+    } else {
+      const double* from = a.valuePtr();
+      double* to = permuted_.valuePtr();
+      for (size_t k = 0; k < slot_.size(); ++k) to[slot_[k]] = from[k];
+      solver_.factorize(permuted_);
+    }
     return solver_.info() == Eigen::Success;
   }
   /// x = a^-1 b with the factorisation of `a` (factorize(a) first). False, and x unspecified, if CHOLMOD
@@ -116,7 +145,16 @@ class SparseCholesky {
     {
       std::unique_lock<std::mutex> lock(blas_mutex(), std::defer_lock);
       if (supernodal_) lock.lock();
-      x = solver_.solve(b);
+      if (permutation_.empty()) {
+        x = solver_.solve(b);
+      } else {
+        using Dense = Eigen::Matrix<double, Eigen::Dynamic, B::ColsAtCompileTime>;
+        Dense permuted_b(b.rows(), b.cols());
+        for (Eigen::Index k = 0; k < b.rows(); ++k) permuted_b.row(k) = b.row(permutation_[size_t(k)]);
+        const Dense permuted_x = solver_.solve(permuted_b);
+        x.resize(b.rows(), b.cols());
+        for (Eigen::Index k = 0; k < b.rows(); ++k) x.row(permutation_[size_t(k)]) = permuted_x.row(k);
+      }
     }
     return solver_.info() == Eigen::Success && x.allFinite() && solves(a, x, b);
   }
@@ -141,11 +179,23 @@ class SparseCholesky {
     return residual <= 1e-8 * scale;
   }
   bool supernodal() const { return supernodal_; }
+  /// Whether the system is factorised as a copy permuted into the factor's order (supernodal systems).
+  bool factorises_permuted_copy() const { return !permutation_.empty(); }
 
  private:
+  /// `a` permuted into the analysed factor's order (permuted_, where each of a's values lands in
+  /// slot_) and analysed again as ordered: each factorisation then scatters the values, and CHOLMOD
+  /// copies nothing (with its own permutation it makes two permuted transposes of a lower-triangle
+  /// system every time: 13% of the page faults at 3.4M faces, BENCHMARKS.md). False if that analysis
+  /// fails or `a` is not compressed.
+  bool permute_into_factor_order(const Matrix& a);
+
   detail::OrderedCholmod solver_;
   long supernodal_from_;
   bool supernodal_ = false;
+  std::vector<int> permutation_;  // the factor's order (permutation_[k]: the unknown at k); empty: CHOLMOD's own path
+  Matrix permuted_;
+  std::vector<int> slot_;
 };
 
 }  // namespace tightex
