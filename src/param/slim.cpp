@@ -160,7 +160,7 @@ class SlimSystem {
   Eigen::VectorXd rhs;
 
   SlimSystem(const Surface& m, const std::vector<TargetFrame>& fr, const std::vector<int>& index, int n)
-      : A(n, n), rhs(n), m_(m), fr_(fr), index_(index), slot_(m.num_faces() * 36, -1) {
+      : A(n, n), rhs(n), m_(m), fr_(fr), index_(index), slot_(m.num_faces() * kPairs, -1) {
     std::vector<Eigen::Triplet<double>> trips;
     trips.reserve(m.num_faces() * 24);
     for_each_entry([&](size_t, int row, int col) { trips.emplace_back(row, col, 1.0); });
@@ -182,8 +182,16 @@ class SlimSystem {
   }
 
  private:
+  /// A face's six coordinates (corner i's a-th: 2i + a) make 21 unordered pairs, each one entry of
+  /// the lower triangle: pair(p, q) numbers them, so each face keeps 21 slots, not 36.
+  static constexpr size_t kPairs = 21;
+  static size_t pair(int p, int q) {
+    const int lo = std::min(p, q), hi = std::max(p, q);
+    return size_t(lo * 6 - lo * (lo - 1) / 2 + (hi - lo));
+  }
+
   /// Calls f(slot, row, col) for every lower-triangle entry (row >= col) a face contributes; slot:
-  /// face, (i, j) corner pair, (a, b) coordinate pair.
+  /// face, then the pair of corner i's a-th and corner j's b-th coordinate.
   template <class F>
   void for_each_entry(F&& f) const {
     for (size_t face = 0; face < m_.num_faces(); ++face)
@@ -192,7 +200,7 @@ class SlimSystem {
           for (int a = 0; a < 2; ++a)
             for (int b = 0; b < 2; ++b) {
               const int row = index_[2 * m_.triangles[face][i] + size_t(a)], col = index_[2 * m_.triangles[face][j] + size_t(b)];
-              if (row >= 0 && col >= 0 && row >= col) f(face * 36 + size_t((i * 3 + j) * 4 + a * 2 + b), row, col);
+              if (row >= 0 && col >= 0 && row >= col) f(face * kPairs + pair(2 * i + a, 2 * j + b), row, col);
             }
   }
 
@@ -221,12 +229,12 @@ class SlimSystem {
         rhs(row) += b(a);
         for (int j = 0; j < 3; ++j) {
           const Mat2 H = F.area * F.g[i].dot(F.g[j]) * M;
-          const int* sl = &slot_[f * 36 + size_t((i * 3 + j) * 4)];
           for (int b2 = 0; b2 < 2; ++b2) {
-            if (index_[2 * t[j] + size_t(b2)] < 0)
+            const int col = index_[2 * t[j] + size_t(b2)];
+            if (col < 0)
               rhs(row) -= H(a, b2) * uv[t[j]](b2);  // a fixed coordinate
-            else if (sl[a * 2 + b2] >= 0)
-              values[sl[a * 2 + b2]] += H(a, b2);
+            else if (row >= col)  // the lower triangle: the pair's other order adds the upper entry
+              values[slot_[f * kPairs + pair(2 * i + a, 2 * j + b2)]] += H(a, b2);
           }
         }
       }
