@@ -820,6 +820,28 @@ TEST(Statistics, WeightedQuantileBySelectionIsTheSortedOne) {
   EXPECT_EQ(weighted_quantile(none, 0.5), 0.0);
 }
 
+// An analysis that fails (here an order that is not a permutation) leaves no factor: factorize()
+// says so instead of handing CHOLMOD a missing one, simplicial or supernodal.
+TEST(SparseCholesky, AFailedAnalysisFailsTheFactorisationWithoutCrashing) {
+  const int n = 200;
+  std::vector<Eigen::Triplet<double>> trips;
+  for (int i = 0; i < n; ++i) {
+    trips.emplace_back(i, i, 4.0);
+    if (i > 0) trips.emplace_back(i, i - 1, -1.0);
+  }
+  SparseCholesky::Matrix a(n, n);
+  a.setFromTriplets(trips.begin(), trips.end());
+  const std::vector<int> not_a_permutation(size_t(n), 0);
+  for (long from : {1L << 40, 0L}) {
+    SCOPED_TRACE(from == 0 ? "supernodal" : "simplicial");
+    SparseCholesky solver(from);
+    solver.analyzePattern(a, &not_a_permutation);
+    EXPECT_FALSE(solver.factorize(a));
+    solver.analyzePattern(a);  // analysed again, in CHOLMOD's order: it factorises
+    EXPECT_TRUE(solver.factorize(a));
+  }
+}
+
 extern "C" void GOMP_parallel(void (*body)(void*), void* data, unsigned num_threads, unsigned flags);
 
 // The OpenMP regions CHOLMOD opens: on a thread set for serial dense kernels the region's body runs

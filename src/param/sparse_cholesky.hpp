@@ -106,25 +106,28 @@ class SparseCholesky {
       solver_.cholmod().final_asis = 0;
       solver_.cholmod().final_ll = 1;
     }
-    if (order && order->size() == size_t(a.rows()))
-      solver_.analyzePatternInOrder(a, *order);
-    else
-      solver_.analyzePattern(a);
-    permutation_.clear();
-    if (forced && solver_.info() == Eigen::Success && !permute_into_factor_order(a)) {
-      permutation_.clear();  // analysed as ordered failed: CHOLMOD permutes at each factorisation
+    const auto analyse = [&] {
       if (order && order->size() == size_t(a.rows()))
         solver_.analyzePatternInOrder(a, *order);
       else
         solver_.analyzePattern(a);
+    };
+    analyse();
+    permutation_.clear();
+    if (forced && solver_.info() == Eigen::Success && !permute_into_factor_order(a)) {
+      permutation_.clear();  // analysed as ordered failed: CHOLMOD permutes at each factorisation
+      analyse();
     }
+    analysed_ = solver_.info() == Eigen::Success;
     // CHOLMOD's own choice below the size: supernodal where the factor is dense enough for its
     // column blocks to pay (flops per factor entry at least supernodal_switch).
     const cholmod_common& c = solver_.cholmod();
     supernodal_ = forced || (c.lnz > 0 && c.fl / c.lnz >= c.supernodal_switch);
   }
-  /// False if CHOLMOD failed (a not positive definite, numerically).
+  /// False if CHOLMOD failed (a not positive definite, numerically), or its analysis had (out of
+  /// memory, an order that is not a permutation): there is no factor to compute then.
   bool factorize(const Matrix& a) {
+    if (!analysed_) return false;
     use_serial_dense_kernels();
     std::unique_lock<std::mutex> lock(blas_mutex(), std::defer_lock);
     if (supernodal_) lock.lock();
@@ -193,6 +196,7 @@ class SparseCholesky {
   detail::OrderedCholmod solver_;
   long supernodal_from_;
   bool supernodal_ = false;
+  bool analysed_ = false;
   std::vector<int> permutation_;  // the factor's order (permutation_[k]: the unknown at k); empty: CHOLMOD's own path
   Matrix permuted_;
   std::vector<int> slot_;
