@@ -1,14 +1,19 @@
 // Per-stage benchmarks on generated meshes of 10k..1M triangles: a bumpy sphere (closed, genus 0,
-// cut along one path) and the same with holes. Speed is measured here, never asserted in tests.
+// cut along one path) and the same with holes, and reading it back from an OBJ (in stretches on every
+// core, and as one stretch). Speed is measured here, never asserted in tests.
 // Run: build/bench/tightex_bench --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
 
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
 #include <map>
 #include <numbers>
 
 #include "bake/bake.hpp"
 #include "cut/cut.hpp"
+#include "io/obj_reader.hpp"
 #include "layout/layout.hpp"
 #include "param/param.hpp"
 #include "prepare/components.hpp"
@@ -73,6 +78,39 @@ const TexturedMesh& mesh_for(int triangles) {
   return it->second;
 }
 
+/// The bumpy sphere of `triangles` written as an OBJ (once per size, removed at exit).
+const std::string& obj_for(int triangles) {
+  struct Folders {
+    std::map<int, std::filesystem::path> dir;
+    std::map<int, std::string> obj;
+    ~Folders() {
+      std::error_code ec;
+      for (const auto& [size, d] : dir) std::filesystem::remove_all(d, ec);
+    }
+  };
+  static Folders written;
+  if (!written.obj.contains(triangles)) {
+    const auto dir =
+        std::filesystem::temp_directory_path() / ("tightex_bench_" + std::to_string(::getpid()) + "_" + std::to_string(triangles));
+    written.dir[triangles] = dir;
+    write_obj(mesh_for(triangles), dir.string(), "sphere", ImageEncoding{});
+    written.obj[triangles] = (dir / "sphere.obj").string();
+  }
+  return written.obj[triangles];
+}
+
+/// read_obj's geometry (no texture decoding); range(1) 0: the default stretches on every core, else
+/// one stretch (the file parsed from start to end on one core).
+void BM_ReadObj(benchmark::State& state) {
+  const std::string& path = obj_for(int(state.range(0)));
+  ObjReadOptions options;
+  options.load_textures = false;
+  const size_t chunk_bytes = state.range(1) == 0 ? kObjChunkBytes : std::numeric_limits<size_t>::max();
+  for (auto _ : state) benchmark::DoNotOptimize(read_obj_in_chunks(path, options, nullptr, chunk_bytes));
+  state.counters["MB/s"] =
+      benchmark::Counter(double(std::filesystem::file_size(path)) / 1e6, benchmark::Counter::kIsIterationInvariantRate);
+}
+
 void BM_PrepareSurface(benchmark::State& state) {
   const TexturedMesh& m = mesh_for(int(state.range(0)));
   for (auto _ : state) benchmark::DoNotOptimize(prepare_surface(m, nullptr));
@@ -123,6 +161,7 @@ void BM_BakeTexture(benchmark::State& state) {
 
 }  // namespace
 
+BENCHMARK(BM_ReadObj)->Args({1000000, 0})->Args({1000000, 1})->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_PrepareSurface)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CutToDisk)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_MapToSquare)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);

@@ -103,9 +103,25 @@ inline Outcome run_obj(const uint8_t* data, size_t size) {
   ObjReadOptions options;
   options.max_texture_pixels = size_t(1) << 20;
   options.load_textures = false;
+  // Parsed as one stretch and with every line a stretch of its own (read_obj_in_chunks): the same
+  // mesh or the same message.
+  std::string by_line_error;
+  TexturedMesh by_line;
   try {
-    check_mesh(read_obj(path, options), false);
-  } catch (const InputError&) {
+    by_line = read_obj_in_chunks(path, options, nullptr, 1);
+  } catch (const InputError& e) {
+    by_line_error = e.what();
+  }
+  try {
+    const TexturedMesh mesh = read_obj_in_chunks(path, options, nullptr, size_t(-1));
+    check_mesh(mesh, false);
+    require(by_line_error.empty(), "refused only when cut into lines: " + by_line_error);
+    require(mesh.positions == by_line.positions && mesh.triangles == by_line.triangles && mesh.corner_uv == by_line.corner_uv &&
+                mesh.corner_normal == by_line.corner_normal && mesh.corner_color == by_line.corner_color &&
+                mesh.face_material == by_line.face_material && mesh.materials.size() == by_line.materials.size(),
+            "a different mesh when cut into lines");
+  } catch (const InputError& e) {
+    require(by_line_error == e.what(), std::string("a different message when cut into lines: ") + e.what() + " / " + by_line_error);
     return Outcome::kRefused;
   }
   // The same file with its textures: parsing is the same, so only texture loading can refuse it now.

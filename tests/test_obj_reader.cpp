@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string>
 
 #include "core/error.hpp"
@@ -44,10 +45,59 @@ class ObjReaderTest : public ::testing::Test {
     return p.string();
   }
 
+  /// read_obj, checked against the same file parsed with every line a stretch of its own: the mesh,
+  /// the stats and the error must not depend on how the file is cut.
+  static TexturedMesh read(const std::string& path, const ObjReadOptions& options = {}, ObjReadStats* stats = nullptr) {
+    ObjReadStats by_line_stats;
+    TexturedMesh by_line;
+    std::string by_line_error;
+    try {
+      by_line = read_obj_in_chunks(path, options, &by_line_stats, 1);
+    } catch (const InputError& e) {
+      by_line_error = e.what();
+    }
+    try {
+      TexturedMesh mesh = read_obj(path, options, stats);
+      EXPECT_EQ(by_line_error, "");
+      expect_same(mesh, by_line);
+      if (stats != nullptr) expect_same(*stats, by_line_stats);
+      return mesh;
+    } catch (const InputError& e) {
+      EXPECT_EQ(by_line_error, e.what());
+      throw;
+    }
+  }
+
+  static void expect_same(const TexturedMesh& a, const TexturedMesh& b) {
+    EXPECT_EQ(a.positions, b.positions);
+    EXPECT_EQ(a.triangles, b.triangles);
+    EXPECT_EQ(a.corner_uv, b.corner_uv);
+    EXPECT_EQ(a.corner_normal, b.corner_normal);
+    EXPECT_EQ(a.corner_color, b.corner_color);
+    EXPECT_EQ(a.face_material, b.face_material);
+    ASSERT_EQ(a.materials.size(), b.materials.size());
+    for (size_t m = 0; m < a.materials.size(); ++m) {
+      EXPECT_EQ(a.materials[m].name, b.materials[m].name);
+      EXPECT_EQ(a.materials[m].kd, b.materials[m].kd);
+      EXPECT_EQ(a.materials[m].texture, b.materials[m].texture);
+      EXPECT_EQ(a.materials[m].maps, b.materials[m].maps);
+      EXPECT_EQ(a.materials[m].uv_scale, b.materials[m].uv_scale);
+    }
+    ASSERT_EQ(a.textures.size(), b.textures.size());
+    for (size_t t = 0; t < a.textures.size(); ++t) EXPECT_EQ(a.textures[t].path, b.textures[t].path);
+  }
+
+  static void expect_same(const ObjReadStats& a, const ObjReadStats& b) {
+    EXPECT_EQ(a.polygons_triangulated, b.polygons_triangulated);
+    EXPECT_EQ(a.lines, b.lines);
+    EXPECT_EQ(a.paths_found, b.paths_found);
+    EXPECT_EQ(a.not_read, b.not_read);
+  }
+
   /// The message read_obj throws, or "" when it succeeds. Every message must be a single line.
   static std::string error_of(const std::string& path, const ObjReadOptions& options = {}) {
     try {
-      read_obj(path, options);
+      read(path, options);
     } catch (const InputError& e) {
       const std::string message = e.what();
       EXPECT_EQ(message.find('\n'), std::string::npos) << message;
@@ -73,7 +123,7 @@ const char* const kSquareVerts =
 TEST_F(ObjReaderTest, QuadIsFanTriangulated) {
   const std::string path = write("quad.obj", std::string(kSquareVerts) + "f 1/1 2/2 3/3 4/4\n");
   ObjReadStats stats;
-  const TexturedMesh mesh = read_obj(path, {}, &stats);
+  const TexturedMesh mesh = read(path, {}, &stats);
   EXPECT_EQ(mesh.source, path);
   ASSERT_EQ(mesh.num_vertices(), 4u);
   ASSERT_EQ(mesh.num_triangles(), 2u);
@@ -95,7 +145,7 @@ TEST_F(ObjReaderTest, NegativeIndicesAreRelativeToTheirLine) {
                                  "f -3/-3 -2/-2 -1/-1\n"
                                  "v 5 5 5\nvt 0.5 0.5\n"
                                  "f -4/-1 -3/-3 -1/-2\n");
-  const TexturedMesh mesh = read_obj(path);
+  const TexturedMesh mesh = read(path);
   ASSERT_EQ(mesh.num_triangles(), 2u);
   EXPECT_EQ(mesh.triangles[0], (Tri{0, 1, 2}));
   EXPECT_EQ(mesh.triangles[1], (Tri{0, 1, 3}));
@@ -125,7 +175,7 @@ TEST_F(ObjReaderTest, CrlfTabsBlankLinesAndComments) {
                                  "l 1 2\r\np 1\r\n"
                                  "f 1/1 2/2 3/3");  // last line without a newline
   ObjReadStats stats;
-  const TexturedMesh mesh = read_obj(path, {}, &stats);
+  const TexturedMesh mesh = read(path, {}, &stats);
   ASSERT_EQ(mesh.num_triangles(), 2u);
   EXPECT_EQ(mesh.positions[1], Vec3(1, 0, 0));
   EXPECT_EQ(mesh.corner_uv[2], Vec2(0, 1));
@@ -137,7 +187,7 @@ TEST_F(ObjReaderTest, CornerFormsAndNormals) {
                                                     "vn 0 0 1\n"
                                                     "f 1/1/1 2/2/1 3/3/1\n"
                                                     "f 1/1/-1 3/3/-1 4/4/1\n");
-  const TexturedMesh mesh = read_obj(path);
+  const TexturedMesh mesh = read(path);
   ASSERT_EQ(mesh.corner_normal.size(), 6u);
   for (const Vec3& n : mesh.corner_normal) EXPECT_EQ(n, Vec3(0, 0, 1));
 }
@@ -145,7 +195,7 @@ TEST_F(ObjReaderTest, CornerFormsAndNormals) {
 TEST_F(ObjReaderTest, NormalsOnSomeFacesOnlyAreDropped) {
   const std::string path =
       write("some_normals.obj", std::string(kSquareVerts) + "vn 0 0 1\nf 1/1/1 2/2/1 3/3/1\nf 1/1 3/3 4/4\n");
-  const TexturedMesh mesh = read_obj(path);
+  const TexturedMesh mesh = read(path);
   EXPECT_EQ(mesh.num_triangles(), 2u);
   EXPECT_TRUE(mesh.corner_normal.empty());
 }
@@ -173,7 +223,7 @@ TEST_F(ObjReaderTest, ModelWithoutTextureCoordinates) {
 TEST_F(ObjReaderTest, ForwardReferencesAreResolvedAtTheEnd) {
   const std::string path =
       write("forward.obj", "f 1/1 2/2 3/3\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n");
-  const TexturedMesh mesh = read_obj(path);
+  const TexturedMesh mesh = read(path);
   EXPECT_EQ(mesh.num_triangles(), 1u);
   EXPECT_EQ(mesh.corner_uv[1], Vec2(1, 0));
 }
@@ -218,7 +268,7 @@ TEST_F(ObjReaderTest, VertexColoursAndPlusSignsAreAccepted) {
   const std::string path = write("colours.obj",
                                  "v 0 0 0 1 0.5 0.25\nv +1 0 0 0 0 0\nv 0 1 0 1.0\n"
                                  "vt 0 0 0\nvt 1\nvt 0 1\nf 1/1 2/2 3/3\n");
-  const TexturedMesh mesh = read_obj(path);
+  const TexturedMesh mesh = read(path);
   EXPECT_EQ(mesh.positions[1], Vec3(1, 0, 0));
   EXPECT_EQ(mesh.corner_uv[1], Vec2(1, 0));
 }
@@ -231,7 +281,7 @@ TEST_F(ObjReaderTest, FaceWithTwoCornersIsRefused) {
 TEST_F(ObjReaderTest, UnknownStatementsAreIgnored) {
   const std::string path =
       write("unknown.obj", std::string(kSquareVerts) + "vp 0.5\ncstype bspline\nmg 1\nf 1/1 2/2 3/3\n");
-  EXPECT_EQ(read_obj(path).num_triangles(), 1u);
+  EXPECT_EQ(read(path).num_triangles(), 1u);
 }
 
 TEST_F(ObjReaderTest, EmptyAndUnreadableFiles) {
@@ -257,7 +307,7 @@ TEST_F(ObjReaderTest, MaterialsAndFacesBeforeUsemtl) {
                                                  "usemtl grey\nf 1/1 3/3 4/4\n"
                                                  "usemtl red\nf 1/1 2/2 4/4\n"
                                                  "usemtl grey\nf 2/2 3/3 4/4\n");
-  const TexturedMesh mesh = read_obj(path);
+  const TexturedMesh mesh = read(path);
   // Materials in order of first use; unused ones are left out.
   ASSERT_EQ(mesh.materials.size(), 2u);
   EXPECT_EQ(mesh.materials[0].name, "grey");
@@ -284,7 +334,7 @@ TEST_F(ObjReaderTest, SeveralLibrariesAndNamesWithSpaces) {
   const std::string path =
       write("multi.obj", std::string("mtllib a.mtl b.mtl\nmtllib sub dir\\my mats.mtl\n") + kSquareVerts +
                              "usemtl third\nf 1/1 2/2 3/3\nusemtl second\nf 1/1 3/3 4/4\n");
-  const TexturedMesh mesh = read_obj(path);
+  const TexturedMesh mesh = read(path);
   ASSERT_EQ(mesh.materials.size(), 2u);
   EXPECT_EQ(mesh.materials[0].name, "third");
   EXPECT_EQ(mesh.materials[1].name, "second");
@@ -308,7 +358,7 @@ TEST_F(ObjReaderTest, UsemtlBeforeMtllibIsResolved) {
   write("late.mtl", "newmtl late\nKd 0 0 0\n");
   const std::string path =
       write("late.obj", std::string(kSquareVerts) + "usemtl late\nf 1/1 2/2 3/3\nmtllib late.mtl\n");
-  const TexturedMesh mesh = read_obj(path);
+  const TexturedMesh mesh = read(path);
   ASSERT_EQ(mesh.materials.size(), 1u);
   EXPECT_EQ(mesh.face_material[0], 0);
 }
@@ -327,7 +377,7 @@ TEST_F(ObjReaderTest, MapKdOptionsAndFileNameWithSpaces) {
                                                 "usemtl tiled\nf 1/1 2/2 3/3\n"
                                                 "usemtl same_texture\nf 1/1 3/3 4/4\n"
                                                 "usemtl short_options\nf 2/2 3/3 4/4\n");
-  const TexturedMesh mesh = read_obj(path, no_textures());
+  const TexturedMesh mesh = read(path, no_textures());
   ASSERT_EQ(mesh.materials.size(), 3u);
   const Material& tiled = mesh.materials[0];
   EXPECT_EQ(tiled.uv_scale, (std::array<double, 2>{2, 3}));
@@ -353,7 +403,7 @@ TEST_F(ObjReaderTest, TexturesAreLoaded) {
         "newmtl a\nmap_Kd -s 1 1 textures/atlas page.png\nnewmtl b\nmap_Kd textures/atlas page.png\n");
   const std::string path = write("t.obj", std::string("mtllib t.mtl\n") + kSquareVerts +
                                               "usemtl a\nf 1/1 2/2 3/3\nusemtl b\nf 1/1 3/3 4/4\n");
-  const TexturedMesh mesh = read_obj(path);
+  const TexturedMesh mesh = read(path);
   ASSERT_EQ(mesh.textures.size(), 1u);
   EXPECT_EQ(mesh.textures[0].image.width, 2);
   EXPECT_EQ(mesh.textures[0].image.height, 3);
@@ -374,7 +424,7 @@ TEST_F(ObjReaderTest, FilesNamedByAnotherMachineAreFound) {
   const std::string path = write("scan.obj", std::string("mtllib scan.mtl\n") + kSquareVerts +
                                                  "usemtl a\nf 1/1 2/2 3/3\nusemtl b\nf 1/1 3/3 4/4\n");
   ObjReadStats stats;
-  const TexturedMesh mesh = read_obj(path, {}, &stats);
+  const TexturedMesh mesh = read(path, {}, &stats);
   ASSERT_EQ(mesh.textures.size(), 2u);
   EXPECT_EQ(mesh.textures[0].image.width, 4);
   EXPECT_EQ(fs::path(mesh.textures[0].path), dir_ / "Textures/Tex_0.PNG");
@@ -393,7 +443,7 @@ TEST_F(ObjReaderTest, AmbiguousOrAbsentNamesAreNotGuessed) {
   auto model = [&](const char* material) {
     return write(std::string(material) + ".obj", std::string("mtllib m.mtl\n") + kSquareVerts + "usemtl " + material + "\nf 1/1 2/2 3/3\n");
   };
-  EXPECT_EQ(read_obj(model("a")).textures.at(0).image.width, 5);
+  EXPECT_EQ(read(model("a")).textures.at(0).image.width, 5);
   EXPECT_NE(error_of(model("b")).find("texture 't.PNG' of material 'b' could not be loaded"), std::string::npos);
   EXPECT_NE(error_of(model("c")).find("texture 'C:/elsewhere/none.png' of material 'c' could not be loaded"), std::string::npos);
 }
@@ -406,7 +456,7 @@ TEST_F(ObjReaderTest, MissingTextureNamesTheMaterialLibraryLine) {
   EXPECT_EQ(message.rfind(mtl + ":3: texture 'gone.png' of material 'a' could not be loaded: ", 0), 0u)
       << message;
   // Without pixels the path is kept and nothing is opened.
-  const TexturedMesh mesh = read_obj(path, no_textures());
+  const TexturedMesh mesh = read(path, no_textures());
   ASSERT_EQ(mesh.textures.size(), 1u);
   EXPECT_EQ(fs::path(mesh.textures[0].path), dir_ / "gone.png");
 }
@@ -437,6 +487,23 @@ TEST_F(ObjReaderTest, DevicesAndPipesNamedByTheModelAreRefused) {
   }
 }
 
+TEST_F(ObjReaderTest, TheFirstProblemInFileOrderIsReportedHoweverTheFileIsCut) {
+  // read() parses each file also with every line a stretch of its own; what depends on the lines
+  // before (colours are all-or-nothing, libraries are read as their line comes) must come out the same.
+  const std::string verts = "vt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n";
+  const std::string uncoloured_first = write("a.obj", "v 0 0 0 1 1 1\nv 1 0 0\nv 0 1 0 -1 0 0\n" + verts);
+  const TexturedMesh mesh = read(uncoloured_first);
+  EXPECT_TRUE(mesh.corner_color.empty());  // the bad colour after an uncoloured vertex is not read at all
+  const std::string coloured_first = write("b.obj", "v 0 0 0 1 1 1\nv 1 0 0 1 1 1\nv 0 1 0 -1 0 0\n" + verts);
+  EXPECT_EQ(error_of(coloured_first), coloured_first + ":3: vertex colour -1 is not a number from 0 to 1 (or 0 to 255)");
+  const std::string library_first = write("c.obj", "mtllib nowhere.mtl\nv 0 0\n" + verts);
+  EXPECT_EQ(error_of(library_first), library_first + ":1: material library 'nowhere.mtl' not found");
+  const std::string vertex_first = write("d.obj", "v 0 0\nmtllib nowhere.mtl\n" + verts);
+  EXPECT_EQ(error_of(vertex_first), vertex_first + ":1: 'v' needs 3 coordinates, got 2");
+  const std::string relative = write("e.obj", "v 0 0 0\nv 1 0 0\nvt 0 0\nv 0 1 0\nvt 1 0\nvt 0 1\nf -3/-3 -2/-2 -1/-1\nf -4/1 1/1 2/2\n");
+  EXPECT_EQ(error_of(relative), relative + ":8: vertex index -4 out of range (only 3 vertices defined before this line)");
+}
+
 TEST_F(ObjReaderTest, MeshroomScan) {
   const fs::path obj = fs::path(TIGHTEX_SHARED_DATA) / "meshroom_esp32cam" / "texturedMesh.obj";
   if (!fs::exists(obj)) GTEST_SKIP() << obj << " not present";
@@ -446,6 +513,12 @@ TEST_F(ObjReaderTest, MeshroomScan) {
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   std::printf("read_obj(%s): %.1f ms\n", obj.filename().c_str(), ms);
+  // Cut into many stretches or read as one: the same mesh.
+  for (const size_t chunk_bytes : {size_t(4096), std::numeric_limits<size_t>::max()}) {
+    ObjReadStats chunk_stats;
+    expect_same(mesh, read_obj_in_chunks(obj.string(), no_textures(), &chunk_stats, chunk_bytes));
+    expect_same(stats, chunk_stats);
+  }
   EXPECT_EQ(mesh.num_triangles(), 53364u);
   EXPECT_EQ(mesh.num_vertices(), 26984u);
   EXPECT_EQ(mesh.corner_uv.size(), 3u * 53364u);

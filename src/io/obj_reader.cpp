@@ -1,11 +1,19 @@
-// Wavefront OBJ + MTL reader. The whole file is read into memory and scanned once, line by line, with
-// std::from_chars for numbers, and every problem is reported as "FILE:LINE: problem" on one line.
+// Wavefront OBJ + MTL reader. The whole file is read into memory, cut into stretches of whole lines,
+// and each stretch is parsed on its own on every core (std::from_chars for numbers); a first pass
+// counts each stretch's lines and elements, so relative indices and line numbers are the whole
+// file's. Every problem is reported as "FILE:LINE: problem" on one line, the first in file order,
+// whatever the stretches: what depends on the lines before (material uses, the all-or-nothing
+// vertex colours, material libraries read as their line comes) is settled in file order afterwards.
 //
 // Things that cannot be checked while scanning (positive indices that point forward, usemtl before
 // its mtllib, faces without texture coordinates) are recorded with their line and checked once the
 // whole file is read, so the error still names the line that caused it.
 #include "io/obj_reader.hpp"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -48,38 +56,6 @@ template <typename T>
 void reserve_prefaulted(std::vector<T>& v, size_t n) {
   v.reserve(n);
   prefault_for_write(v.data(), n * sizeof(T));
-}
-
-/// How many statements of each kind a file holds, counted in a quick first pass so the arrays are
-/// allocated once at their final size instead of growing (and copying) as they fill.
-struct StatementCounts {
-  size_t v = 0, vt = 0, vn = 0, f = 0;
-};
-
-StatementCounts count_statements(std::string_view text) {
-  StatementCounts counts;
-  const char* p = text.data();
-  const char* const end = p + text.size();
-  while (p < end) {
-    while (p < end && (*p == ' ' || *p == '\t')) ++p;
-    if (end - p >= 2) {
-      const bool blank_after_1 = is_blank(p[1]);
-      const bool blank_after_2 = end - p >= 3 && is_blank(p[2]);
-      if (p[0] == 'v') {
-        if (blank_after_1)
-          ++counts.v;
-        else if (p[1] == 't' && blank_after_2)
-          ++counts.vt;
-        else if (p[1] == 'n' && blank_after_2)
-          ++counts.vn;
-      } else if (p[0] == 'f' && blank_after_1) {
-        ++counts.f;
-      }
-    }
-    const auto* nl = static_cast<const char*>(std::memchr(p, '\n', size_t(end - p)));
-    p = nl != nullptr ? nl + 1 : end;
-  }
-  return counts;
 }
 
 /// Splits a buffer into lines; the last line need not end with '\n'. '\r' is left for the
@@ -139,6 +115,60 @@ class Tokens {
   const char* p_;
   const char* end_;
 };
+
+/// What a stretch of the file holds that the stretches after it count from: its lines ("FILE:LINE"),
+/// the elements it defines (relative indices) and its triangles: where its own go in the whole
+/// file's arrays.
+struct ElementCounts {
+  size_t lines = 0, v = 0, vt = 0, vn = 0, triangles = 0;
+
+  ElementCounts operator+(const ElementCounts& o) const {
+    return {lines + o.lines, v + o.v, vt + o.vt, vn + o.vn, triangles + o.triangles};
+  }
+};
+
+/// Counts a stretch's lines, its v, vt and vn statements and the triangles of its faces (a face of n
+/// corners is n - 2), each by its keyword and tokens as parse_line reads them: a stretch that parses
+/// without error defines exactly these many elements.
+ElementCounts count_elements(std::string_view text) {
+  ElementCounts counts;
+  LineReader lines(text);
+  std::string_view line;
+  while (lines.next(line)) {
+    Tokens tokens(line);
+    const std::string_view keyword = tokens.next();
+    if (keyword == "v") {
+      ++counts.v;
+    } else if (keyword == "vt") {
+      ++counts.vt;
+    } else if (keyword == "f") {
+      size_t corners = 0;
+      while (!tokens.next().empty()) ++corners;
+      counts.triangles += corners >= 3 ? corners - 2 : 0;
+    } else if (keyword == "vn") {
+      ++counts.vn;
+    }
+  }
+  counts.lines = lines.number();
+  return counts;
+}
+
+/// The text cut into stretches of about `bytes` each, every one ending after a line's '\n' (the last
+/// at the end of the text), so that each parses on its own.
+std::vector<std::string_view> split_at_lines(std::string_view text, size_t bytes) {
+  std::vector<std::string_view> pieces;
+  size_t start = 0;
+  while (start < text.size()) {
+    size_t end = text.size();
+    if (text.size() - start > bytes) {
+      const size_t newline = text.find('\n', start + std::max<size_t>(bytes, 1) - 1);
+      if (newline != std::string_view::npos) end = newline + 1;
+    }
+    pieces.push_back(text.substr(start, end - start));
+    start = end;
+  }
+  return pieces;
+}
 
 enum class IndexKind : uint8_t { kVertex, kTexcoord, kNormal };
 
@@ -271,16 +301,86 @@ void read_map_kd_options(Tokens& tokens, const std::string& mtl_name, size_t mtl
   }
 }
 
-class ObjParser {
- public:
-  ObjParser(const std::string& path, const ObjReadOptions& options) : path_(path), options_(options) {}
+/// An error found while parsing a stretch, reported only if nothing earlier in the file fails.
+struct DeferredError {
+  size_t line = 0;  // 0: none
+  std::string message;
+};
 
-  TexturedMesh read(ObjReadStats* stats);
+/// The whole file's elements and faces, each stretch's at its offset (ElementCounts before it).
+struct ObjArrays {
+  std::vector<Vec3> positions;
+  std::vector<Vec2> texcoords;
+  std::vector<Vec3> normals;
+  std::vector<Tri> triangles;
+  std::vector<uint32_t> corner_vt;  // 3 per triangle
+  std::vector<uint32_t> corner_vn;  // 3 per triangle where the file has normals
+  /// Per triangle, the material use: while parsing, the stretch's own number (ObjChunk::uses) or -1
+  /// for the one in use where the stretch starts; then the file's (ObjParser::uses_), -1 before any.
+  std::vector<int32_t> triangle_use;
+
+  /// Allocated once at their final size, before the stretches fill them on every core.
+  explicit ObjArrays(const ElementCounts& n) {
+    allocate(positions, n.v);
+    allocate(texcoords, n.vt);
+    allocate(normals, n.vn);
+    allocate(triangles, n.triangles);
+    allocate(corner_vt, 3 * n.triangles);
+    if (n.vn > 0) allocate(corner_vn, 3 * n.triangles);
+    allocate(triangle_use, n.triangles);
+  }
+  template <typename T>
+  static void allocate(std::vector<T>& v, size_t n) {
+    reserve_prefaulted(v, n);
+    v.resize(n);
+  }
+};
+
+/// What one stretch of whole lines holds besides its elements (which go to ObjArrays), parsed on its
+/// own with indices resolved against the whole file (the counts before it are known): what only file
+/// order can settle, the material uses and libraries, the all-or-nothing colours and normals, the
+/// first error.
+struct ObjChunk {
+  ElementCounts before;  // of the stretches before this one
+  ElementCounts own;
+
+  std::vector<std::array<float, 4>> vertex_colours;  // per vertex while every vertex so far has r g b
+  bool all_vertices_coloured = true;
+  bool colours_above_one = false;  // then the file writes colours as 0..255
+  bool all_faces_have_normals = true;
+  std::vector<MaterialUse> uses;                          // in order of first use in the stretch
+  int32_t use_at_end = -1;                                // as triangle_use
+  std::vector<std::pair<size_t, std::string>> libraries;  // mtllib: line, the rest of the line
+  std::vector<ForwardRef> forward_refs;
+
+  bool normals_finite = true;
+  size_t first_face_without_vt = 0;  // line, 0 = none
+  size_t polygons_triangulated = 0;
+  // Statements tightex does not know (curves, surfaces, vp, ...); counted, not fatal. ObjReadStats
+  // has no field for this yet.
+  size_t unknown_statements = 0;
+
+  /// A vertex colour out of range while every vertex of the stretch before it had one: an error only
+  /// if every vertex before the stretch had one too (colours are all-or-nothing, as normals).
+  DeferredError colour_error;
+  DeferredError error;  // the first malformed line; parsing stops there
+};
+
+/// Parses one stretch into its ObjChunk and its part of ObjArrays.
+class ChunkParser {
+ public:
+  ChunkParser(const std::string& path, ObjChunk& chunk, ObjArrays& all) : path_(path), chunk_(chunk), all_(all) {}
+
+  void parse(std::string_view text);
 
  private:
   template <typename... Args>
+  std::string message_here(fmt::format_string<Args...> f, Args&&... args) const {
+    return fmt::format("{}:{}: {}", path_, line_, fmt::format(f, std::forward<Args>(args)...));
+  }
+  template <typename... Args>
   [[noreturn]] void fail_here(fmt::format_string<Args...> f, Args&&... args) const {
-    fail_input("{}:{}: {}", path_, line_, fmt::format(f, std::forward<Args>(args)...));
+    throw InputError(message_here(f, std::forward<Args>(args)...));
   }
 
   void parse_line(std::string_view line);
@@ -291,154 +391,40 @@ class ObjParser {
   void parse_face(Tokens& tokens);
   void parse_corner(std::string_view token, Corner& corner, bool& has_vt, bool& has_vn);
   uint32_t resolve_index(std::string_view text, IndexKind kind, std::string_view token);
-  void parse_mtllib(std::string_view rest);
   void parse_usemtl(std::string_view rest);
-  void load_mtl(const fs::path& mtl_path, const std::string& data);
-
   size_t parse_numbers(Tokens& tokens, std::string_view keyword, double* out, size_t max_count);
   void check_coordinate(double value, std::string_view what) const;
 
-  void check_forward_refs() const;
-  bool coloured() const;
-  void check_texture_coordinates() const;
-  void assemble_uvs(TexturedMesh& mesh) const;
-  void assemble_colours(TexturedMesh& mesh) const;
-  void assemble_materials(TexturedMesh& mesh);
+  /// Where the next element of a kind goes in ObjArrays; fails (a bug, not the input) past what the
+  /// first pass counted.
+  size_t next_slot(size_t& written, size_t counted, size_t before) const {
+    if (written == counted) fail_internal("{}:{}: more elements than counted", path_, line_);
+    return before + written++;
+  }
 
   const std::string& path_;
-  const ObjReadOptions& options_;
+  ObjChunk& chunk_;
+  ObjArrays& all_;
+  ElementCounts written_;  // elements of the stretch so far
   size_t line_ = 0;
-
-  std::vector<Vec3> positions_;
-  std::vector<Vec2> texcoords_;
-  std::vector<Vec3> normals_;
-  std::vector<std::array<float, 4>> vertex_colours_;  // per vertex while every vertex so far has r g b
-  bool all_vertices_coloured_ = true;
-  bool colours_above_one_ = false;  // then the file writes colours as 0..255
-  std::vector<Tri> triangles_;
-  std::vector<uint32_t> corner_vt_;    // 3 per triangle
-  std::vector<uint32_t> corner_vn_;    // 3 per triangle while every face so far has normals
-  std::vector<int32_t> triangle_use_;  // index into uses_, -1 before any usemtl
-  std::vector<Corner> face_corners_;   // scratch for the face being parsed
-  std::vector<ForwardRef> forward_refs_;
-
-  bool all_faces_have_normals_ = true;
-  bool normals_finite_ = true;
-  size_t first_face_without_vt_ = 0;  // line, 0 = none
-  size_t polygons_triangulated_ = 0;
-  // Statements tightex does not know (curves, surfaces, vp, ...); counted, not fatal. ObjReadStats
-  // has no field for this yet.
-  size_t unknown_statements_ = 0;
-
-  int32_t current_use_ = -1;
-  std::vector<MaterialUse> uses_;
+  std::vector<Corner> face_corners_;  // scratch for the face being parsed
   std::unordered_map<std::string, int32_t> use_by_name_;
-
-  std::vector<MaterialDef> defs_;
-  std::unordered_map<std::string, size_t> def_by_name_;  // first definition of a name wins
-  std::vector<std::string> loaded_mtls_;                 // each library is read once
-  std::vector<std::string> paths_found_;                 // ObjReadStats::paths_found
-  std::vector<std::string> not_read_;                    // ObjReadStats::not_read: maps whose file is missing
-  /// find_named_file, noting in paths_found_ a file found under another name than written.
-  std::optional<fs::path> locate(const fs::path& folder, const std::string& written) {
-    std::optional<fs::path> found = find_named_file(folder, written);
-    if (found && *found != folder / written) paths_found_.push_back(fmt::format("{} -> {}", written, found->lexically_normal().string()));
-    return found;
-  }
-  bool saw_mtllib_ = false;
 };
 
-TexturedMesh ObjParser::read(ObjReadStats* stats) {
-  std::string data;
-  std::string reason;
-  if (!read_whole_file(path_, data, reason)) fail_input("{}: {}", path_, reason);
-  // A binary file (a PNG or a PLY picked by mistake) would otherwise "parse" as unknown statements
-  // and end in a puzzling "no faces".
-  if (std::memchr(data.data(), '\0', data.size()) != nullptr)
-    fail_input("{}: not a text file (contains NUL bytes); expected a Wavefront OBJ", path_);
-
-  const StatementCounts counts = count_statements(data);
-  reserve_prefaulted(positions_, counts.v);
-  reserve_prefaulted(texcoords_, counts.vt);
-  reserve_prefaulted(normals_, counts.vn);
-  // One triangle per face is exact for the triangle meshes scanners write; polygons grow the arrays.
-  reserve_prefaulted(triangles_, counts.f);
-  reserve_prefaulted(corner_vt_, 3 * counts.f);
-  if (counts.vn > 0) reserve_prefaulted(corner_vn_, 3 * counts.f);
-  reserve_prefaulted(triangle_use_, counts.f);
-
-  LineReader lines(data);
+void ChunkParser::parse(std::string_view text) {
+  LineReader lines(text);
   std::string_view line;
-  while (lines.next(line)) {
-    line_ = lines.number();
-    parse_line(line);
-  }
-  line_ = 0;
-
-  if (triangles_.empty()) fail_input("{}: no faces", path_);
-  check_forward_refs();
-  check_texture_coordinates();
-
-  TexturedMesh mesh;
-  mesh.source = path_;
-  mesh.positions = std::move(positions_);
-  assemble_uvs(mesh);
-  assemble_colours(mesh);
-  mesh.triangles = std::move(triangles_);
-  // Normals are all-or-nothing: a half-filled array would make every consumer check each corner.
-  if (all_faces_have_normals_ && normals_finite_ && !normals_.empty()) {
-    reserve_prefaulted(mesh.corner_normal, corner_vn_.size());
-    mesh.corner_normal.resize(corner_vn_.size());
-    for (size_t i = 0; i < corner_vn_.size(); ++i) mesh.corner_normal[i] = normals_[corner_vn_[i]];
-  }
-  mesh.face_material = std::move(triangle_use_);
-  assemble_materials(mesh);
-
-  if (stats != nullptr) {
-    stats->polygons_triangulated = polygons_triangulated_;
-    stats->lines = lines.number();
-    stats->paths_found = paths_found_;
-    stats->not_read = not_read_;
-  }
-  return mesh;
-}
-
-bool ObjParser::coloured() const { return all_vertices_coloured_ && !vertex_colours_.empty(); }
-
-/// Every face needs texture coordinates, unless the model is vertex-coloured (every vertex has r g b):
-/// then a face without them takes its texture from the colours.
-void ObjParser::check_texture_coordinates() const {
-  if (coloured()) return;
-  if (texcoords_.empty())
-    fail_input(
-        "{}: model has neither texture coordinates (vt) nor vertex colours (v x y z r g b); tightex needs the input's UV atlas or "
-        "its vertex colours",
-        path_);
-  if (first_face_without_vt_ != 0)
-    fail_input("{}:{}: face has no texture coordinates (every face needs v/vt indices)", path_, first_face_without_vt_);
-}
-
-/// The corners' texture coordinates; (0, 0) where a vertex-coloured model's face has none.
-void ObjParser::assemble_uvs(TexturedMesh& mesh) const {
-  reserve_prefaulted(mesh.corner_uv, corner_vt_.size());
-  mesh.corner_uv.resize(corner_vt_.size());
-  for (size_t i = 0; i < corner_vt_.size(); ++i) mesh.corner_uv[i] = corner_vt_[i] == kNone ? Vec2::Zero() : texcoords_[corner_vt_[i]];
-}
-
-/// Per corner, its vertex's colour, in [0, 1]: a file with any value above 1 writes them as 0..255.
-void ObjParser::assemble_colours(TexturedMesh& mesh) const {
-  if (!coloured()) return;
-  const float scale = colours_above_one_ ? 1.0f / 255.0f : 1.0f;
-  mesh.corner_color.reserve(3 * triangles_.size());
-  for (const Tri& t : triangles_)
-    for (const uint32_t v : t) {
-      std::array<float, 4> c = vertex_colours_[v];
-      for (int k = 0; k < 3; ++k) c[size_t(k)] = std::clamp(c[size_t(k)] * scale, 0.0f, 1.0f);
-      mesh.corner_color.push_back(c);
+  try {
+    while (lines.next(line)) {
+      line_ = chunk_.before.lines + lines.number();
+      parse_line(line);
     }
+  } catch (const InputError& e) {
+    chunk_.error = {line_, e.what()};
+  }
 }
 
-void ObjParser::parse_line(std::string_view line) {
+void ChunkParser::parse_line(std::string_view line) {
   Tokens tokens(line);
   const std::string_view keyword = tokens.next();
   if (keyword.empty()) return;  // blank line or comment
@@ -448,15 +434,20 @@ void ObjParser::parse_line(std::string_view line) {
   if (keyword == "f") return parse_face(tokens);
   if (keyword == "vn") return parse_normal(tokens);
   if (keyword == "usemtl") return parse_usemtl(tokens.rest());
-  if (keyword == "mtllib") return parse_mtllib(tokens.rest());
+  if (keyword == "mtllib") {
+    const std::string_view rest = tokens.rest();
+    if (rest.empty()) fail_here("'mtllib' without a file name");
+    chunk_.libraries.emplace_back(line_, std::string(rest));
+    return;
+  }
   // Object and group names, smoothing groups, and line and point elements carry nothing a texture
   // needs.
   if (keyword == "o" || keyword == "g" || keyword == "s" || keyword == "l" || keyword == "p") return;
-  ++unknown_statements_;
+  ++chunk_.unknown_statements;
 }
 
 /// Parses up to max_count numbers; fails on a malformed one or on more than max_count.
-size_t ObjParser::parse_numbers(Tokens& tokens, std::string_view keyword, double* out, size_t max_count) {
+size_t ChunkParser::parse_numbers(Tokens& tokens, std::string_view keyword, double* out, size_t max_count) {
   size_t n = 0;
   for (std::string_view t = tokens.next(); !t.empty(); t = tokens.next()) {
     if (n == max_count) fail_here("too many values in '{}' (at most {})", keyword, max_count);
@@ -466,62 +457,64 @@ size_t ObjParser::parse_numbers(Tokens& tokens, std::string_view keyword, double
   return n;
 }
 
-void ObjParser::check_coordinate(double value, std::string_view what) const {
+void ChunkParser::check_coordinate(double value, std::string_view what) const {
   if (!std::isfinite(value)) fail_here("NaN or infinite {}", what);
   if (std::abs(value) > kAbsurdCoordinate) fail_here("absurd {} {:g} (absolute value above 1e15)", what, value);
 }
 
-void ObjParser::parse_vertex(Tokens& tokens) {
+void ChunkParser::parse_vertex(Tokens& tokens) {
   // x y z, then either w or r g b (vertex colours, written by scanners and MeshLab), possibly followed
   // by more numbers, which are checked and ignored.
   double values[7];
   const size_t n = parse_numbers(tokens, "v", values, 7);
   if (n < 3) fail_here("'v' needs 3 coordinates, got {}", n);
   for (size_t i = 0; i < 3; ++i) check_coordinate(values[i], "coordinate");
-  if (positions_.size() >= size_t(kNone) - 1) fail_here("too many vertices");
-  positions_.emplace_back(values[0], values[1], values[2]);
+  if (chunk_.before.v + written_.v >= size_t(kNone) - 1) fail_here("too many vertices");
+  all_.positions[next_slot(written_.v, chunk_.own.v, chunk_.before.v)] = Vec3(values[0], values[1], values[2]);
   add_vertex_colour(values, n);
 }
 
 /// `v x y z r g b`: the colour, kept while every vertex so far has one (all-or-nothing, as normals).
-void ObjParser::add_vertex_colour(const double* values, size_t n) {
-  if (!all_vertices_coloured_) return;
-  if (n < 6) {
-    all_vertices_coloured_ = false;
-    vertex_colours_ = {};
-    return;
-  }
+void ChunkParser::add_vertex_colour(const double* values, size_t n) {
+  if (!chunk_.all_vertices_coloured) return;
+  auto no_colours = [&] {
+    chunk_.all_vertices_coloured = false;
+    chunk_.vertex_colours = {};
+  };
+  if (n < 6) return no_colours();
   std::array<float, 4> c{0.0f, 0.0f, 0.0f, 1.0f};
   for (size_t k = 0; k < 3; ++k) {
-    if (!std::isfinite(values[3 + k]) || values[3 + k] < 0)
-      fail_here("vertex colour {:g} is not a number from 0 to 1 (or 0 to 255)", values[3 + k]);
-    colours_above_one_ = colours_above_one_ || values[3 + k] > 1.0;
+    if (!std::isfinite(values[3 + k]) || values[3 + k] < 0) {
+      chunk_.colour_error = {line_, message_here("vertex colour {:g} is not a number from 0 to 1 (or 0 to 255)", values[3 + k])};
+      return no_colours();
+    }
+    chunk_.colours_above_one = chunk_.colours_above_one || values[3 + k] > 1.0;
     c[k] = float(values[3 + k]);
   }
-  vertex_colours_.push_back(c);
+  chunk_.vertex_colours.push_back(c);
 }
 
-void ObjParser::parse_texcoord(Tokens& tokens) {
+void ChunkParser::parse_texcoord(Tokens& tokens) {
   double values[3] = {0.0, 0.0, 0.0};  // v and w default to 0 (OBJ specification)
   const size_t n = parse_numbers(tokens, "vt", values, 3);
   if (n < 1) fail_here("'vt' needs at least 1 value");
   for (size_t i = 0; i < 2; ++i) check_coordinate(values[i], "texture coordinate");
-  if (texcoords_.size() >= size_t(kNone) - 1) fail_here("too many texture coordinates");
-  texcoords_.emplace_back(values[0], values[1]);
+  if (chunk_.before.vt + written_.vt >= size_t(kNone) - 1) fail_here("too many texture coordinates");
+  all_.texcoords[next_slot(written_.vt, chunk_.own.vt, chunk_.before.vt)] = Vec2(values[0], values[1]);
 }
 
-void ObjParser::parse_normal(Tokens& tokens) {
+void ChunkParser::parse_normal(Tokens& tokens) {
   double values[3];
   const size_t n = parse_numbers(tokens, "vn", values, 3);
   if (n != 3) fail_here("'vn' needs 3 values, got {}", n);
   // Exporters write NaN normals for degenerate faces. Normals are optional, so such a file loses its
   // normals instead of being refused.
-  if (!std::isfinite(values[0]) || !std::isfinite(values[1]) || !std::isfinite(values[2])) normals_finite_ = false;
-  if (normals_.size() >= size_t(kNone) - 1) fail_here("too many normals");
-  normals_.emplace_back(values[0], values[1], values[2]);
+  if (!std::isfinite(values[0]) || !std::isfinite(values[1]) || !std::isfinite(values[2])) chunk_.normals_finite = false;
+  if (chunk_.before.vn + written_.vn >= size_t(kNone) - 1) fail_here("too many normals");
+  all_.normals[next_slot(written_.vn, chunk_.own.vn, chunk_.before.vn)] = Vec3(values[0], values[1], values[2]);
 }
 
-uint32_t ObjParser::resolve_index(std::string_view text, IndexKind kind, std::string_view token) {
+uint32_t ChunkParser::resolve_index(std::string_view text, IndexKind kind, std::string_view token) {
   const char* b = text.data();
   const char* e = b + text.size();
   if (b != e && *b == '+') {
@@ -532,9 +525,9 @@ uint32_t ObjParser::resolve_index(std::string_view text, IndexKind kind, std::st
   const auto [ptr, ec] = std::from_chars(b, e, index);
   if (ptr != e || b == e || (ec != std::errc() && ec != std::errc::result_out_of_range))
     fail_here("malformed face corner '{}'", excerpt(token));
-  const size_t defined = kind == IndexKind::kVertex     ? positions_.size()
-                         : kind == IndexKind::kTexcoord ? texcoords_.size()
-                                                        : normals_.size();
+  const size_t defined = kind == IndexKind::kVertex     ? chunk_.before.v + written_.v
+                         : kind == IndexKind::kTexcoord ? chunk_.before.vt + written_.vt
+                                                        : chunk_.before.vn + written_.vn;
   if (ec == std::errc::result_out_of_range)
     fail_here("{} index {} out of range (file has {} {} so far)", kind_name(kind), excerpt(text), defined, kind_plural(kind));
   if (index == 0) fail_here("index 0 is invalid (OBJ indices start at 1)");
@@ -547,12 +540,12 @@ uint32_t ObjParser::resolve_index(std::string_view text, IndexKind kind, std::st
   if (uint64_t(index) > defined) {
     // Maybe defined further down; checked at the end with this line's number.
     if (index >= int64_t(kNone)) fail_here("{} index {} out of range (more than any file can hold)", kind_name(kind), index);
-    forward_refs_.push_back({line_, index, kind});
+    chunk_.forward_refs.push_back({line_, index, kind});
   }
   return uint32_t(index - 1);
 }
 
-void ObjParser::parse_corner(std::string_view token, Corner& corner, bool& has_vt, bool& has_vn) {
+void ChunkParser::parse_corner(std::string_view token, Corner& corner, bool& has_vt, bool& has_vn) {
   // v, v/vt, v/vt/vn or v//vn.
   const size_t slash1 = token.find('/');
   corner.v = resolve_index(token.substr(0, slash1), IndexKind::kVertex, token);
@@ -579,7 +572,7 @@ void ObjParser::parse_corner(std::string_view token, Corner& corner, bool& has_v
   corner.vn = resolve_index(vn_text, IndexKind::kNormal, token);
 }
 
-void ObjParser::parse_face(Tokens& tokens) {
+void ChunkParser::parse_face(Tokens& tokens) {
   face_corners_.clear();
   bool has_vt = true, has_vn = true;
   for (std::string_view t = tokens.next(); !t.empty(); t = tokens.next()) {
@@ -588,36 +581,269 @@ void ObjParser::parse_face(Tokens& tokens) {
   }
   const size_t n = face_corners_.size();
   if (n < 3) fail_here("face has {} corner{} (needs at least 3)", n, n == 1 ? "" : "s");
-  if (!has_vt && first_face_without_vt_ == 0) first_face_without_vt_ = line_;
-  if (!has_vn && all_faces_have_normals_) {
-    // Normals are all-or-nothing, so the normal indices are of no use from here on.
-    all_faces_have_normals_ = false;
-    corner_vn_ = {};
-  }
-  if (n > 3) ++polygons_triangulated_;
+  if (!has_vt && chunk_.first_face_without_vt == 0) chunk_.first_face_without_vt = line_;
+  // Normals are all-or-nothing, so the normal indices are of no use from here on.
+  if (!has_vn) chunk_.all_faces_have_normals = false;
+  if (n > 3) ++chunk_.polygons_triangulated;
   // Fan around the first corner: exact for the convex polygons exporters write, and it keeps the
   // polygon's winding.
   for (size_t i = 1; i + 1 < n; ++i) {
     const Corner& a = face_corners_[0];
     const Corner& b = face_corners_[i];
     const Corner& c = face_corners_[i + 1];
-    triangles_.push_back({a.v, b.v, c.v});
-    corner_vt_.insert(corner_vt_.end(), {a.vt, b.vt, c.vt});
-    if (all_faces_have_normals_) corner_vn_.insert(corner_vn_.end(), {a.vn, b.vn, c.vn});
-    triangle_use_.push_back(current_use_);
+    const size_t t = next_slot(written_.triangles, chunk_.own.triangles, chunk_.before.triangles);
+    all_.triangles[t] = {a.v, b.v, c.v};
+    std::copy_n(std::array{a.vt, b.vt, c.vt}.begin(), 3, all_.corner_vt.begin() + ptrdiff_t(3 * t));
+    if (chunk_.all_faces_have_normals && !all_.corner_vn.empty())
+      std::copy_n(std::array{a.vn, b.vn, c.vn}.begin(), 3, all_.corner_vn.begin() + ptrdiff_t(3 * t));
+    all_.triangle_use[t] = chunk_.use_at_end;
   }
 }
 
-void ObjParser::parse_usemtl(std::string_view rest) {
+void ChunkParser::parse_usemtl(std::string_view rest) {
   if (rest.empty()) fail_here("'usemtl' without a material name");
   const std::string name(rest);
-  const auto [it, inserted] = use_by_name_.try_emplace(name, int32_t(uses_.size()));
-  if (inserted) uses_.push_back({name, line_});
-  current_use_ = it->second;
+  const auto [it, inserted] = use_by_name_.try_emplace(name, int32_t(chunk_.uses.size()));
+  if (inserted) chunk_.uses.push_back({name, line_});
+  chunk_.use_at_end = it->second;
+}
+
+class ObjParser {
+ public:
+  ObjParser(const std::string& path, const ObjReadOptions& options, size_t chunk_bytes)
+      : path_(path), options_(options), chunk_bytes_(chunk_bytes) {}
+
+  TexturedMesh read(ObjReadStats* stats);
+
+ private:
+  template <typename... Args>
+  [[noreturn]] void fail_here(fmt::format_string<Args...> f, Args&&... args) const {
+    fail_input("{}:{}: {}", path_, line_, fmt::format(f, std::forward<Args>(args)...));
+  }
+
+  std::vector<ObjChunk> parse_in_chunks(std::string_view text);
+  void settle_in_file_order(const std::vector<ObjChunk>& chunks);
+  void number_uses(std::vector<ObjChunk>& chunks);
+  void gather(std::vector<ObjChunk>& chunks);
+  void parse_mtllib(std::string_view rest);
+  void load_mtl(const fs::path& mtl_path, const std::string& data);
+
+  void check_forward_refs() const;
+  bool coloured() const;
+  void check_texture_coordinates() const;
+  void assemble_uvs(TexturedMesh& mesh) const;
+  void assemble_colours(TexturedMesh& mesh) const;
+  void assemble_materials(TexturedMesh& mesh);
+
+  const std::string& path_;
+  const ObjReadOptions& options_;
+  const size_t chunk_bytes_;
+  size_t line_ = 0;  // of the mtllib being read
+
+  // The whole file's, gathered from its stretches.
+  std::vector<Vec3> positions_;
+  std::vector<Vec2> texcoords_;
+  std::vector<Vec3> normals_;
+  std::vector<std::array<float, 4>> vertex_colours_;
+  bool all_vertices_coloured_ = true;
+  bool colours_above_one_ = false;
+  std::vector<Tri> triangles_;
+  std::vector<uint32_t> corner_vt_;
+  std::vector<uint32_t> corner_vn_;
+  std::vector<int32_t> triangle_use_;  // index into uses_, -1 before any usemtl
+  std::vector<ForwardRef> forward_refs_;
+  bool all_faces_have_normals_ = true;
+  bool normals_finite_ = true;
+  size_t first_face_without_vt_ = 0;
+  size_t polygons_triangulated_ = 0;
+  size_t lines_ = 0;
+
+  std::vector<MaterialUse> uses_;
+  std::unordered_map<std::string, int32_t> use_by_name_;
+
+  std::vector<MaterialDef> defs_;
+  std::unordered_map<std::string, size_t> def_by_name_;  // first definition of a name wins
+  std::vector<std::string> loaded_mtls_;                 // each library is read once
+  std::vector<std::string> paths_found_;                 // ObjReadStats::paths_found
+  std::vector<std::string> not_read_;                    // ObjReadStats::not_read: maps whose file is missing
+  /// find_named_file, noting in paths_found_ a file found under another name than written.
+  std::optional<fs::path> locate(const fs::path& folder, const std::string& written) {
+    std::optional<fs::path> found = find_named_file(folder, written);
+    if (found && *found != folder / written) paths_found_.push_back(fmt::format("{} -> {}", written, found->lexically_normal().string()));
+    return found;
+  }
+  bool saw_mtllib_ = false;
+};
+
+TexturedMesh ObjParser::read(ObjReadStats* stats) {
+  std::string data;
+  std::string reason;
+  if (!read_whole_file(path_, data, reason)) fail_input("{}: {}", path_, reason);
+  // A binary file (a PNG or a PLY picked by mistake) would otherwise "parse" as unknown statements
+  // and end in a puzzling "no faces".
+  if (std::memchr(data.data(), '\0', data.size()) != nullptr)
+    fail_input("{}: not a text file (contains NUL bytes); expected a Wavefront OBJ", path_);
+  std::vector<ObjChunk> chunks = parse_in_chunks(data);
+  settle_in_file_order(chunks);
+  number_uses(chunks);
+  gather(chunks);
+  chunks = {};
+
+  if (triangles_.empty()) fail_input("{}: no faces", path_);
+  check_forward_refs();
+  check_texture_coordinates();
+
+  TexturedMesh mesh;
+  mesh.source = path_;
+  mesh.positions = std::move(positions_);
+  assemble_uvs(mesh);
+  assemble_colours(mesh);
+  mesh.triangles = std::move(triangles_);
+  // Normals are all-or-nothing: a half-filled array would make every consumer check each corner.
+  if (all_faces_have_normals_ && normals_finite_ && !normals_.empty()) {
+    reserve_prefaulted(mesh.corner_normal, corner_vn_.size());
+    mesh.corner_normal.resize(corner_vn_.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, corner_vn_.size(), size_t(1) << 16), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i < r.end(); ++i) mesh.corner_normal[i] = normals_[corner_vn_[i]];
+    });
+  }
+  mesh.face_material = std::move(triangle_use_);
+  assemble_materials(mesh);
+
+  if (stats != nullptr) {
+    stats->polygons_triangulated = polygons_triangulated_;
+    stats->lines = lines_;
+    stats->paths_found = paths_found_;
+    stats->not_read = not_read_;
+  }
+  return mesh;
+}
+
+/// Counts each stretch's lines and elements (one pass on every core), so that each knows what comes
+/// before it and where its elements go, then parses them on every core into the arrays allocated
+/// once.
+std::vector<ObjChunk> ObjParser::parse_in_chunks(std::string_view text) {
+  const std::vector<std::string_view> pieces = split_at_lines(text, chunk_bytes_);
+  std::vector<ObjChunk> chunks(pieces.size());
+  tbb::parallel_for(size_t(0), pieces.size(), [&](size_t i) { chunks[i].own = count_elements(pieces[i]); });
+  for (size_t i = 1; i < chunks.size(); ++i) chunks[i].before = chunks[i - 1].before + chunks[i - 1].own;
+  ObjArrays all(chunks.empty() ? ElementCounts{} : chunks.back().before + chunks.back().own);
+  tbb::parallel_for(size_t(0), pieces.size(), [&](size_t i) { ChunkParser(path_, chunks[i], all).parse(pieces[i]); });
+  positions_ = std::move(all.positions);
+  texcoords_ = std::move(all.texcoords);
+  normals_ = std::move(all.normals);
+  triangles_ = std::move(all.triangles);
+  corner_vt_ = std::move(all.corner_vt);
+  corner_vn_ = std::move(all.corner_vn);
+  triangle_use_ = std::move(all.triangle_use);
+  return chunks;
+}
+
+/// Raises the file's first error, as a reader going line by line would: a malformed line, or a bad
+/// vertex colour while every vertex before had one, or a material library (read as its line comes)
+/// that fails before either.
+void ObjParser::settle_in_file_order(const std::vector<ObjChunk>& chunks) {
+  const DeferredError* first_error = nullptr;
+  bool coloured_before = true;
+  for (const ObjChunk& c : chunks) {
+    if (coloured_before && c.colour_error.line != 0) {
+      first_error = &c.colour_error;
+      break;
+    }
+    if (c.error.line != 0) {
+      first_error = &c.error;
+      break;
+    }
+    coloured_before = coloured_before && c.all_vertices_coloured;
+  }
+  for (const ObjChunk& c : chunks)
+    for (const auto& [line, rest] : c.libraries) {
+      if (first_error != nullptr && line > first_error->line) break;
+      line_ = line;
+      parse_mtllib(rest);
+    }
+  line_ = 0;
+  if (first_error != nullptr) throw InputError(first_error->message);
+}
+
+/// Numbers the usemtl names in order of first use in the file, and every triangle's use by those
+/// numbers; a stretch's triangles before its first usemtl take the material in use where it starts.
+void ObjParser::number_uses(std::vector<ObjChunk>& chunks) {
+  int32_t in_use = -1;
+  for (ObjChunk& c : chunks) {
+    std::vector<int32_t> number(c.uses.size());
+    for (size_t u = 0; u < c.uses.size(); ++u) {
+      const auto [it, inserted] = use_by_name_.try_emplace(c.uses[u].name, int32_t(uses_.size()));
+      if (inserted) uses_.push_back(c.uses[u]);
+      number[u] = it->second;
+    }
+    if (!c.uses.empty() || in_use >= 0)
+      for (size_t t = c.before.triangles; t < c.before.triangles + c.own.triangles; ++t)
+        triangle_use_[t] = triangle_use_[t] < 0 ? in_use : number[size_t(triangle_use_[t])];
+    if (c.use_at_end >= 0) in_use = number[size_t(c.use_at_end)];
+  }
+}
+
+/// The whole file's flags, forward references and vertex colours from its stretches'.
+void ObjParser::gather(std::vector<ObjChunk>& chunks) {
+  for (const ObjChunk& c : chunks) {
+    all_vertices_coloured_ = all_vertices_coloured_ && c.all_vertices_coloured;
+    colours_above_one_ = colours_above_one_ || c.colours_above_one;
+    all_faces_have_normals_ = all_faces_have_normals_ && c.all_faces_have_normals;
+    normals_finite_ = normals_finite_ && c.normals_finite;
+    if (first_face_without_vt_ == 0) first_face_without_vt_ = c.first_face_without_vt;
+    polygons_triangulated_ += c.polygons_triangulated;
+    lines_ += c.own.lines;
+    forward_refs_.insert(forward_refs_.end(), c.forward_refs.begin(), c.forward_refs.end());
+  }
+  if (all_vertices_coloured_) {
+    vertex_colours_.reserve(positions_.size());
+    for (ObjChunk& c : chunks) {
+      vertex_colours_.insert(vertex_colours_.end(), c.vertex_colours.begin(), c.vertex_colours.end());
+      c.vertex_colours = {};
+    }
+  }
+  if (!all_faces_have_normals_) corner_vn_ = {};
+}
+
+bool ObjParser::coloured() const { return all_vertices_coloured_ && !vertex_colours_.empty(); }
+
+/// Every face needs texture coordinates, unless the model is vertex-coloured (every vertex has r g b):
+/// then a face without them takes its texture from the colours.
+void ObjParser::check_texture_coordinates() const {
+  if (coloured()) return;
+  if (texcoords_.empty())
+    fail_input(
+        "{}: model has neither texture coordinates (vt) nor vertex colours (v x y z r g b); tightex needs the input's UV atlas or "
+        "its vertex colours",
+        path_);
+  if (first_face_without_vt_ != 0)
+    fail_input("{}:{}: face has no texture coordinates (every face needs v/vt indices)", path_, first_face_without_vt_);
+}
+
+/// The corners' texture coordinates; (0, 0) where a vertex-coloured model's face has none.
+void ObjParser::assemble_uvs(TexturedMesh& mesh) const {
+  reserve_prefaulted(mesh.corner_uv, corner_vt_.size());
+  mesh.corner_uv.resize(corner_vt_.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, corner_vt_.size(), size_t(1) << 16), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) mesh.corner_uv[i] = corner_vt_[i] == kNone ? Vec2::Zero() : texcoords_[corner_vt_[i]];
+  });
+}
+
+/// Per corner, its vertex's colour, in [0, 1]: a file with any value above 1 writes them as 0..255.
+void ObjParser::assemble_colours(TexturedMesh& mesh) const {
+  if (!coloured()) return;
+  const float scale = colours_above_one_ ? 1.0f / 255.0f : 1.0f;
+  mesh.corner_color.reserve(3 * triangles_.size());
+  for (const Tri& t : triangles_)
+    for (const uint32_t v : t) {
+      std::array<float, 4> c = vertex_colours_[v];
+      for (int k = 0; k < 3; ++k) c[size_t(k)] = std::clamp(c[size_t(k)] * scale, 0.0f, 1.0f);
+      mesh.corner_color.push_back(c);
+    }
 }
 
 void ObjParser::parse_mtllib(std::string_view rest) {
-  if (rest.empty()) fail_here("'mtllib' without a file name");
   saw_mtllib_ = true;
   const fs::path folder = fs::path(path_).parent_path();
   const std::string whole = with_forward_slashes(rest);
@@ -800,9 +1026,13 @@ void ObjParser::assemble_materials(TexturedMesh& mesh) {
 
 }  // namespace
 
-TexturedMesh read_obj(const std::string& path, const ObjReadOptions& options, ObjReadStats* stats) {
-  ObjParser parser(path, options);
+TexturedMesh read_obj_in_chunks(const std::string& path, const ObjReadOptions& options, ObjReadStats* stats, size_t chunk_bytes) {
+  ObjParser parser(path, options, chunk_bytes);
   return parser.read(stats);
+}
+
+TexturedMesh read_obj(const std::string& path, const ObjReadOptions& options, ObjReadStats* stats) {
+  return read_obj_in_chunks(path, options, stats, kObjChunkBytes);
 }
 
 }  // namespace tightex
