@@ -55,7 +55,8 @@ class Collapser {
       queue_.pop();
       if (!vertex_alive_[v] || stamp != stamp_[v]) continue;
       neighbours(v, ring_);
-      std::sort(ring_.begin(), ring_.end(), [&](uint32_t a, uint32_t b) { return dist(v, a) < dist(v, b); });
+      // The lambda names a copy: clang before 16 cannot capture a structured binding.
+      std::sort(ring_.begin(), ring_.end(), [&, centre = v](uint32_t a, uint32_t b) { return dist(centre, a) < dist(centre, b); });
       for (uint32_t u : ring_)
         if (allowed(v, u)) {
           collapse(v, u);
