@@ -9,6 +9,7 @@
 #include "cut/cut.hpp"
 #include "mesh_catalogue.hpp"
 #include "param/param.hpp"
+#include "pipeline/aspect.hpp"
 #include "prepare/components.hpp"
 #include "prepare/repair.hpp"
 #include "report/metrics.hpp"
@@ -110,6 +111,20 @@ TEST(Aspect, AMapIntoARectangleOfTheSurfacesShapeIsLessAnisotropicInTexels) {
   EXPECT_LT(std::min(wide, tall), square + 0.05);
 }
 
+// The stretch that decides whether other shapes are probed: a 2:1 sheet mapped affinely into a square
+// has texels twice as long along x as along y (4 in squares); into a 2:1 rectangle, square texels.
+TEST(Aspect, TexelStretchRatioOfASheetMappedAffinely) {
+  Mapped m;
+  m.disk = sheet_disk(25, 13);  // 24 x 12 units
+  for (const Vec3& p : m.disk.mesh.positions) m.uv.push_back(Vec2(p.x() / 24, p.y() / 12));
+  m.rect = Rect{0, 0, 0, 100, 100};
+  EXPECT_NEAR(texel_stretch_ratio(m), 4.0, 1e-9);
+  m.rect = Rect{0, 0, 0, 200, 100};
+  EXPECT_NEAR(texel_stretch_ratio(m), 1.0, 1e-9);
+  m.rect = Rect{0, 0, 0, 50, 100};
+  EXPECT_NEAR(texel_stretch_ratio(m), 16.0, 1e-9);
+}
+
 // Options::aspect 0 (auto): a long sheet gets a long texture, which keeps more of its (noise) texture
 // than the square at the same budget; a square sheet keeps the square. The report says what was probed.
 TEST(Aspect, AutoShapeFollowsTheSurfaceAndKeepsMoreOfTheTexture) {
@@ -119,6 +134,9 @@ TEST(Aspect, AutoShapeFollowsTheSurfaceAndKeepsMoreOfTheTexture) {
   const double chosen = aut.report["aspect"]["chosen"];
   EXPECT_NE(chosen, 1.0);
   EXPECT_EQ(aut.report["aspect"]["probes"].size(), 3u);
+  const double long_stretch = aut.report["aspect"]["square_texel_stretch"];  // < 1: the long side along y
+  EXPECT_GT(std::max(long_stretch, 1 / long_stretch), kAspectProbeStretch);
+  for (const auto& p : aut.report["aspect"]["probes"]) EXPECT_GT(p["estimated_psnr_db"].get<double>(), 0.0) << p;
   const Image& img = aut.output.textures.at(0).image;
   EXPECT_EQ(chosen > 1, img.width > img.height);
   opt.aspect = 1;
@@ -132,6 +150,12 @@ TEST(Aspect, AutoShapeFollowsTheSurfaceAndKeepsMoreOfTheTexture) {
   const TexturedMesh squaresheet = noisy_sheet(33, 33, 0.9 / 32);
   const Result sq2 = optimize(squaresheet, Options{});
   EXPECT_EQ(sq2.report["aspect"]["chosen"].get<double>(), 1.0);
+  // Its square map's texels are about as long as wide, so the other shapes are not mapped at all, and
+  // with nothing to compare the square with, nothing is estimated.
+  const double stretch = sq2.report["aspect"]["square_texel_stretch"];
+  EXPECT_LT(stretch, kAspectProbeStretch);
+  EXPECT_GT(stretch, 1 / kAspectProbeStretch);
+  for (const auto& p : sq2.report["aspect"]["probes"]) EXPECT_EQ(p["estimated_psnr_db"].get<double>(), -1.0) << p;
   // The harmonic map is the paper's square, and so is any map in the paper's per-component layout.
   Options h;
   h.map = MapKind::kHarmonic;

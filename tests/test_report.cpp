@@ -39,6 +39,7 @@ Report filled_report() {
   r.aspect.chosen = 2.0;
   r.aspect.probed_component = 1;
   r.aspect.probes = {{1.0, 368, 368, 100.0}, {2.0, 520, 264, -1.0}};
+  r.aspect.square_texel_stretch = 2.5;
   r.preparation.repair.input_vertices = 502;
   r.preparation.repair.welded_vertices = 500;
   r.preparation.repair.zero_area_triangles = 1;
@@ -119,7 +120,7 @@ TEST(Report, HasEveryKeyOfTheSchema) {
                                                          "polygons_triangulated", "paths_found", "vertex_coloured_triangles"}));
   EXPECT_EQ(keys_of(j["options"]), (std::set<std::string>{"size", "size_grown_from", "layout", "holes", "map", "balance", "fit",
                                                            "fine_fit", "corners", "aspect", "map_budget_db"}));
-  EXPECT_EQ(keys_of(j["aspect"]), (std::set<std::string>{"requested", "chosen", "probed_component", "probes"}));
+  EXPECT_EQ(keys_of(j["aspect"]), (std::set<std::string>{"requested", "chosen", "probed_component", "probes", "square_texel_stretch"}));
   EXPECT_EQ(keys_of(j["pages"]), (std::set<std::string>{"max_side", "count", "components_split", "pieces", "reason"}));
   EXPECT_EQ(keys_of(j["aspect"]["probes"][0]), (std::set<std::string>{"aspect", "width", "height", "estimated_psnr_db"}));
   EXPECT_EQ(keys_of(j["preparation"]),
@@ -167,6 +168,8 @@ TEST(Report, WritesEachFieldsValue) {
   EXPECT_EQ(j["aspect"]["probed_component"], 1);
   EXPECT_DOUBLE_EQ(j["aspect"]["probes"][0]["estimated_psnr_db"].get<double>(), 10 * std::log10(255.0 * 255.0 / 100.0));
   EXPECT_EQ(j["aspect"]["probes"][1]["estimated_psnr_db"], -1.0);  // not mapped
+  EXPECT_EQ(j["aspect"]["square_texel_stretch"], 2.5);
+  EXPECT_TRUE(to_json(Report{})["aspect"]["square_texel_stretch"].is_null());
   EXPECT_EQ(j["aspect"]["probes"][1]["width"], 520);
   EXPECT_EQ(j["preparation"]["zero_area_dropped"], 1);
   EXPECT_EQ(j["preparation"]["vertices_sliced"], 6);

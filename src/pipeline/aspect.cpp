@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 
 #include "core/error.hpp"
@@ -28,7 +29,32 @@ std::optional<CutInputs> shared_cut_inputs(const MapContext& ctx, size_t c) {
   }
 }
 
+/// Whether the square's map leaves room for another shape to do better: its texels are longer on the
+/// surface along one axis than along the other by more than kAspectProbeStretch (or it has no map).
+bool worth_probing_other_shapes(const std::optional<Mapped>& square, double stretch) {
+  return !square || !square->kept.empty() || stretch > kAspectProbeStretch || stretch < 1 / kAspectProbeStretch;
+}
+
 }  // namespace
+
+double texel_stretch_ratio(const Mapped& m) {
+  const Surface& d = m.disk.mesh;
+  double along_x = 0, along_y = 0;
+  for (uint32_t f = 0; f < d.num_faces(); ++f) {
+    if (d.face_parent[f] == kNone) continue;  // scaffolding: no texel of it is baked
+    const Tri& t = d.triangles[f];
+    const Vec2 scale(m.rect.w, m.rect.h);
+    const Vec2 a = (m.uv[t[1]] - m.uv[t[0]]).cwiseProduct(scale), b = (m.uv[t[2]] - m.uv[t[0]]).cwiseProduct(scale);
+    const double det = a.x() * b.y() - a.y() * b.x();
+    if (!(std::abs(det) > 0)) continue;
+    const Vec3 e1 = d.positions[t[1]] - d.positions[t[0]], e2 = d.positions[t[2]] - d.positions[t[0]];
+    // [dp/dx dp/dy] = [e1 e2] [a b]^-1
+    const Vec3 dp_dx = (e1 * b.y() - e2 * a.y()) / det, dp_dy = (e2 * a.x() - e1 * b.x()) / det;
+    along_x += std::abs(det) * dp_dx.squaredNorm();
+    along_y += std::abs(det) * dp_dy.squaredNorm();
+  }
+  return along_y > 0 ? along_x / along_y : 1.0;
+}
 
 size_t aspect_probe_component(const MapContext& ctx, const std::vector<double>& shares) {
   const Options& o = ctx.options;
@@ -53,19 +79,23 @@ ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const std::vec
     if (!rects) return;  // this shape cannot hold every component: not probed
     rect[i] = (*rects)[dominant];
     probe[i] = map_component(ctx, dominant, rect[i], shared ? &*shared : nullptr, choice, true);
-    if (probe[i]->kept.empty()) mse[i] = estimate_mse(ctx.input, *probe[i]);
   };
-  if (shared && small_longest_hole(ctx, dominant, *shared)) {
-    // Both cuts are mapped for the square (side by side), and the other shapes take its choice.
-    run_probe(0, CapChoice::kCompare);
-    const CutStats square = probe[0] ? probe[0]->cut : CutStats{};
-    const CapChoice decided = !square.compared_mse.empty() && square.longest_loop_capped ? CapChoice::kCap : CapChoice::kKeep;
-    tbb::parallel_for(size_t(1), n, [&](size_t i) {
-      run_probe(i, decided);
-      if (probe[i]) probe[i]->cut.compared_mse = square.compared_mse;  // the report's estimates: the square's
+  // The square first: where the longest hole is small both its cuts are mapped (side by side), and the
+  // other shapes take its choice.
+  const bool compare_cuts = shared && small_longest_hole(ctx, dominant, *shared);
+  run_probe(0, compare_cuts ? CapChoice::kCompare : CapChoice::kKeep);
+  const CutStats square = probe[0] ? probe[0]->cut : CutStats{};
+  const CapChoice decided = !square.compared_mse.empty() && square.longest_loop_capped ? CapChoice::kCap : CapChoice::kKeep;
+  const double stretch = probe[0] && probe[0]->kept.empty() ? texel_stretch_ratio(*probe[0]) : -1;
+  if (worth_probing_other_shapes(probe[0], stretch)) {
+    // The other shapes mapped beside the square's estimate; each estimated (the square alone needs none).
+    tbb::parallel_for(size_t(0), n, [&](size_t i) {
+      if (i > 0) run_probe(i, decided);
+      if (i > 0 && probe[i] && compare_cuts) probe[i]->cut.compared_mse = square.compared_mse;  // the report's: the square's
+      if (probe[i] && probe[i]->kept.empty()) mse[i] = estimate_mse(ctx.input, *probe[i]);
     });
   } else {
-    tbb::parallel_for(size_t(0), n, [&](size_t i) { run_probe(i, CapChoice::kKeep); });
+    ctx.progress.advance(double(ctx.components[dominant].num_faces()) * double(n - 1));  // the maps not made
   }
   // The area map's density promise first, then the estimate, where another shape must beat the square
   // by kAspectMinGain.
@@ -76,6 +106,7 @@ ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const std::vec
     if (better_map(ctx.options.map, stats(i), mse[i], stats(chosen), mse[chosen], chosen == 0 ? kAspectMinGain : 1.0)) chosen = i;
   ShapeChoice choice;
   choice.aspect = kAspectProbes[chosen];
+  choice.square_texel_stretch = stretch;
   for (size_t i = 0; i < n; ++i) {
     const auto [W, H] = atlas_size(size, kAspectProbes[i]);
     choice.probes.push_back({kAspectProbes[i], W, H, mse[i]});

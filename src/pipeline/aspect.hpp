@@ -1,6 +1,7 @@
 // The texture's shape (Options::aspect 0): the component that holds most of the texture is mapped into
-// a square, a 1:2 and a 2:1 texture of the same budget, and the shape whose map keeps the most of the
-// input's colour (better_map on resampling_mse) is chosen; the square unless another is clearly better.
+// a square and, where that map's texels are stretched along one axis, into a 1:2 and a 2:1 texture of
+// the same budget; the shape whose map keeps the most of the input's colour (better_map on
+// resampling_mse) is chosen, the square unless another is clearly better.
 #pragma once
 #include <optional>
 #include <vector>
@@ -14,13 +15,28 @@ namespace tightex {
 /// shape's estimated error is at most kAspectMinGain of it.
 constexpr double kAspectProbes[] = {1.0, 0.5, 2.0};
 
+/// The other shapes are probed only where the square's map has texels longer on the surface along one
+/// axis than along the other by more than this, in squared length (texel_stretch_ratio outside
+/// [1/k, k]): the best shape is about sqrt(ratio) wide per high, and where that is near 1 neither 1:2
+/// nor 2:1 wins. On ../shared/data every shape that won had a ratio of at most 0.68 or at least 1.80,
+/// and skipping below 1.35 left every choice as it was (BENCHMARKS.md, "Options").
+constexpr double kAspectProbeStretch = 1.35;
+
 /// The shape chosen, what each probe was estimated to give (estimated_mse < 0: not probed, since the
 /// shape cannot hold every component, or not mapped), and the probed component's map in that shape.
 struct ShapeChoice {
   double aspect = 1.0;
   std::vector<AspectProbe> probes;
   std::optional<Mapped> dominant_map;  // the probed component's map in the chosen shape
+  double square_texel_stretch = -1;    // texel_stretch_ratio of the square's map; < 0: not mapped
 };
+
+/// How much longer a texel of the map is on the surface along the texture's x axis than along its y
+/// axis, squared, over all texels: the sum of A |dp/dx|^2 over the sum of A |dp/dy|^2 over the disk's
+/// triangles (p the surface point, x and y in texels of the map's rectangle, A a triangle's texel
+/// area); scaffolding does not count. 1 where texels are as long as wide; 4 for a 2:1 sheet mapped
+/// affinely into a square.
+double texel_stretch_ratio(const Mapped& m);
 
 /// The component whose shape decides the texture's: the one holding at least half the texels, if the
 /// shape is to be chosen (Options::aspect 0, not the harmonic map, atlas layout), its texture's pixels

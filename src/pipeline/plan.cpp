@@ -285,6 +285,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options, const PlanHo
                                        options.map == MapKind::kArea ? AtlasShares::kExact : AtlasShares::kLeastError);
     rep.aspect.chosen = choice.aspect;
     rep.aspect.probes = std::move(choice.probes);
+    rep.aspect.square_texel_stretch = choice.square_texel_stretch;
     probed = std::move(choice.dominant_map);
   }
   lay_out(options, shares, size, rep.aspect.chosen, *plan);

@@ -47,7 +47,9 @@ struct OptionsUsed {
 struct AspectProbe {
   double aspect = 1.0;        // width / height
   int width = 0, height = 0;  // the texture's size at that shape
-  double estimated_mse = -1;  // resampling_mse of the probed map (< 0: not mapped); written as "estimated_psnr_db"
+  /// resampling_mse of the probed map; written as "estimated_psnr_db". < 0: not estimated (not mapped, or
+  /// the square alone was: the other shapes were not worth probing, see square_texel_stretch).
+  double estimated_mse = -1;
 };
 
 /// "aspect": the texture's shape, as asked and as chosen.
@@ -56,6 +58,9 @@ struct AspectChoice {
   double chosen = 1.0;
   size_t probed_component = kNone;  // the component the probes mapped; kNone: none probed (null)
   std::vector<AspectProbe> probes;  // in probe order; empty unless probed
+  /// texel_stretch_ratio of the square probe's map, which decides whether the other shapes are probed
+  /// (kAspectProbeStretch); < 0: none (null).
+  double square_texel_stretch = -1;
 };
 
 /// "pages": the texture pages of the atlas and why there is more than one.

@@ -42,7 +42,8 @@ json aspect_choice_json(const AspectChoice& a) {
   return {{"requested", aspect_json(a.requested)},
           {"chosen", a.chosen},
           {"probed_component", a.probed_component == kNone ? json(nullptr) : json(a.probed_component)},
-          {"probes", probes}};
+          {"probes", probes},
+          {"square_texel_stretch", a.square_texel_stretch < 0 ? json(nullptr) : json(a.square_texel_stretch)}};
 }
 
 json preparation_json(const Preparation& p, size_t listed) {
