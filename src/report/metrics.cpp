@@ -172,15 +172,26 @@ std::vector<uint32_t> chart_ids(const TexturedMesh& m, double* seam) {
 
 }  // namespace
 
-size_t count_charts(const TexturedMesh& m, double* seam_length) {
+namespace {
+
+/// count_charts, keeping the chart of every triangle in *ids (count_flips needs them too).
+size_t count_charts(const TexturedMesh& m, double* seam_length, std::vector<uint32_t>* ids) {
   double seam = 0, area = 0;
-  const auto id = chart_ids(m, &seam);
+  *ids = chart_ids(m, &seam);
+  const std::vector<uint32_t>& id = *ids;
   for (size_t t = 0; t < m.num_triangles(); ++t)
     area += triangle_area(m.positions[m.triangles[t][0]], m.positions[m.triangles[t][1]], m.positions[m.triangles[t][2]]);
   size_t charts = 0;
   for (uint32_t t = 0; t < m.num_triangles(); ++t) charts += id[t] == t;
   if (seam_length) *seam_length = area > 0 ? seam / std::sqrt(area) : 0;
   return charts;
+}
+
+}  // namespace
+
+size_t count_charts(const TexturedMesh& m, double* seam_length) {
+  std::vector<uint32_t> ids;
+  return count_charts(m, seam_length, &ids);
 }
 
 namespace {
@@ -273,9 +284,9 @@ Correspondence match_triangles(const TexturedMesh& in, const TexturedMesh& out) 
   return c;
 }
 
-/// METRICS.md "flipped" and "degenerate": UV signed area against the majority sign of its chart.
-void count_flips(const TexturedMesh& out, size_t* flipped, size_t* degenerate) {
-  const auto chart = chart_ids(out, nullptr);
+/// METRICS.md "flipped" and "degenerate": UV signed area against the majority sign of its chart
+/// (`chart`: chart_ids of out).
+void count_flips(const TexturedMesh& out, const std::vector<uint32_t>& chart, size_t* flipped, size_t* degenerate) {
   std::vector<double> sa(out.num_triangles());
   std::unordered_map<uint32_t, long> balance;
   for (uint32_t t = 0; t < out.num_triangles(); ++t) {
@@ -545,12 +556,13 @@ std::vector<MapFigures> measure_maps(const TexturedMesh& in, const TexturedMesh&
 
 Metrics measure(const TexturedMesh& in, const TexturedMesh& out, size_t psnr_samples) {
   Metrics r;
+  std::vector<uint32_t> out_chart;
   tbb::parallel_invoke([&] { r.input = measure_texture_space(in); }, [&] { r.output = measure_texture_space(out); },
-                       [&] { count_charts(in, &r.seam_length_input); }, [&] { r.charts = count_charts(out, &r.seam_length); });
+                       [&] { count_charts(in, &r.seam_length_input); }, [&] { r.charts = count_charts(out, &r.seam_length, &out_chart); });
   const Correspondence c = match_triangles(in, out);
   r.lost_triangles = c.lost_triangles;
   const std::vector<SurfacePoint> points = surface_points(in, c, psnr_samples);
-  tbb::parallel_invoke([&] { count_flips(out, &r.flipped, &r.degenerate); }, [&] { r.overlap = overlap_fraction(out); },
+  tbb::parallel_invoke([&] { count_flips(out, out_chart, &r.flipped, &r.degenerate); }, [&] { r.overlap = overlap_fraction(out); },
                        [&] {
                          const DensityFigures d = measure_density(in, out, c);
                          r.density_spread = d.spread;
