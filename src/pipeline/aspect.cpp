@@ -1,6 +1,7 @@
 #include "pipeline/aspect.hpp"
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <algorithm>
 #include <cmath>
@@ -71,19 +72,29 @@ ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const std::vec
   std::vector<double> mse(n, -1);
   std::vector<Rect> rect(n);
   const std::optional<CutInputs> shared = shared_cut_inputs(ctx, dominant);
-  auto run_probe = [&](size_t i, CapChoice choice) {
+  // The component's rectangle in each shape's texture; none where the shape is not probed.
+  std::vector<std::optional<Rect>> shape_rect(n);
+  for (size_t i = 0; i < n; ++i) {
     const auto [W, H] = atlas_size(size, kAspectProbes[i]);
-    if (std::max(W, H) > std::max(size, kDefaultSizeMax)) return;  // not beyond the size limit for a shape
-    if (kAspectProbes[i] != 1.0 && W == H) return;                 // too small a texture to take another shape
+    if (std::max(W, H) > std::max(size, kDefaultSizeMax)) continue;  // not beyond the size limit for a shape
+    if (kAspectProbes[i] != 1.0 && W == H) continue;                 // too small a texture to take another shape
     const auto rects = try_layout_atlas(shares, W, H, 4, mode);
-    if (!rects) return;  // this shape cannot hold every component: not probed
-    rect[i] = (*rects)[dominant];
-    probe[i] = map_component(ctx, dominant, rect[i], shared ? &*shared : nullptr, choice, true);
+    if (rects) shape_rect[i] = rect[i] = (*rects)[dominant];  // else this shape cannot hold every component
+  }
+  auto run_probe = [&](size_t i, CapChoice choice) {
+    if (shape_rect[i]) probe[i] = map_component(ctx, dominant, rect[i], shared ? &*shared : nullptr, choice, true);
   };
   // The square first: where the longest hole is small both its cuts are mapped (side by side), and the
-  // other shapes take its choice.
+  // other shapes take its choice. Where its probe is multilevel, the square's own map (what the probe
+  // stands for, made again if the square is chosen) is made beside it, on the core the lone probe
+  // leaves idle.
   const bool compare_cuts = shared && small_longest_hole(ctx, dominant, *shared);
-  run_probe(0, compare_cuts ? CapChoice::kCompare : CapChoice::kKeep);
+  std::optional<Mapped> square_own;
+  if (!compare_cuts && shape_rect[0] && ctx.components[dominant].num_faces() > 2 * kProbeMultilevelFrom)
+    tbb::parallel_invoke([&] { run_probe(0, CapChoice::kKeep); },
+                         [&] { square_own = map_component(ctx, dominant, rect[0], shared ? &*shared : nullptr, CapChoice::kKeep); });
+  else
+    run_probe(0, compare_cuts ? CapChoice::kCompare : CapChoice::kKeep);
   const CutStats square = probe[0] ? probe[0]->cut : CutStats{};
   const CapChoice decided = !square.compared_mse.empty() && square.longest_loop_capped ? CapChoice::kCap : CapChoice::kKeep;
   const double stretch = probe[0] && probe[0]->kept.empty() ? texel_stretch_ratio(*probe[0]) : -1;
@@ -112,6 +123,8 @@ ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const std::vec
     choice.probes.push_back({kAspectProbes[i], W, H, mse[i]});
   }
   choice.dominant_map = std::move(probe[chosen]);
+  if (chosen == 0 && square_own && choice.dominant_map && choice.dominant_map->map.coarse_vertices > 0)
+    choice.dominant_map = std::move(square_own);  // the map the square's probe would be made again as
   if (choice.dominant_map && choice.dominant_map->map.coarse_vertices > 0) {
     // A probe's multilevel map chose the shape; the component gets its own map for it, with the cut the
     // probe kept (the estimates of a small hole's two cuts stay in the report).
