@@ -31,10 +31,9 @@ std::optional<CutInputs> shared_cut_inputs(const MapContext& ctx, size_t c) {
 }
 
 /// Whether the square's map leaves room for another shape to do better: its texels are longer on the
-/// surface along one axis than along the other by more than kAspectProbeStretch (or it has no map).
-bool worth_probing_other_shapes(const std::optional<Mapped>& square, double stretch) {
-  return !square || !square->kept.empty() || stretch > kAspectProbeStretch || stretch < 1 / kAspectProbeStretch;
-}
+/// surface along one axis than along the other by more than kAspectProbeStretch (`stretch` < 0: the
+/// square has no map).
+bool worth_probing_other_shapes(double stretch) { return stretch > kAspectProbeStretch || stretch < 1 / kAspectProbeStretch; }
 
 }  // namespace
 
@@ -70,19 +69,18 @@ ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const std::vec
   const size_t n = std::size(kAspectProbes);
   std::vector<std::optional<Mapped>> probe(n);
   std::vector<double> mse(n, -1);
-  std::vector<Rect> rect(n);
   const std::optional<CutInputs> shared = shared_cut_inputs(ctx, dominant);
   // The component's rectangle in each shape's texture; none where the shape is not probed.
-  std::vector<std::optional<Rect>> shape_rect(n);
+  std::vector<std::optional<Rect>> rect(n);
   for (size_t i = 0; i < n; ++i) {
     const auto [W, H] = atlas_size(size, kAspectProbes[i]);
     if (std::max(W, H) > std::max(size, kDefaultSizeMax)) continue;  // not beyond the size limit for a shape
     if (kAspectProbes[i] != 1.0 && W == H) continue;                 // too small a texture to take another shape
     const auto rects = try_layout_atlas(shares, W, H, 4, mode);
-    if (rects) shape_rect[i] = rect[i] = (*rects)[dominant];  // else this shape cannot hold every component
+    if (rects) rect[i] = (*rects)[dominant];  // else this shape cannot hold every component
   }
   auto run_probe = [&](size_t i, CapChoice choice) {
-    if (shape_rect[i]) probe[i] = map_component(ctx, dominant, rect[i], shared ? &*shared : nullptr, choice, true);
+    if (rect[i]) probe[i] = map_component(ctx, dominant, *rect[i], shared ? &*shared : nullptr, choice, true);
   };
   // The square first: where the longest hole is small both its cuts are mapped (side by side), and the
   // other shapes take its choice. Where its probe is multilevel, the square's own map (what the probe
@@ -90,15 +88,15 @@ ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const std::vec
   // leaves idle.
   const bool compare_cuts = shared && small_longest_hole(ctx, dominant, *shared);
   std::optional<Mapped> square_own;
-  if (!compare_cuts && shape_rect[0] && ctx.components[dominant].num_faces() > 2 * kProbeMultilevelFrom)
+  if (!compare_cuts && rect[0] && ctx.components[dominant].num_faces() > 2 * kProbeMultilevelFrom)
     tbb::parallel_invoke([&] { run_probe(0, CapChoice::kKeep); },
-                         [&] { square_own = map_component(ctx, dominant, rect[0], shared ? &*shared : nullptr, CapChoice::kKeep); });
+                         [&] { square_own = map_component(ctx, dominant, *rect[0], shared ? &*shared : nullptr, CapChoice::kKeep); });
   else
     run_probe(0, compare_cuts ? CapChoice::kCompare : CapChoice::kKeep);
   const CutStats square = probe[0] ? probe[0]->cut : CutStats{};
   const CapChoice decided = !square.compared_mse.empty() && square.longest_loop_capped ? CapChoice::kCap : CapChoice::kKeep;
   const double stretch = probe[0] && probe[0]->kept.empty() ? texel_stretch_ratio(*probe[0]) : -1;
-  if (worth_probing_other_shapes(probe[0], stretch)) {
+  if (worth_probing_other_shapes(stretch)) {
     // The other shapes mapped beside the square's estimate; each estimated (the square alone needs none).
     tbb::parallel_for(size_t(0), n, [&](size_t i) {
       if (i > 0) run_probe(i, decided);
@@ -131,7 +129,7 @@ ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const std::vec
     const CutStats& cut = choice.dominant_map->cut;
     const CapChoice kept = cut.longest_loop_capped && !cut.compared_mse.empty() ? CapChoice::kCap : CapChoice::kKeep;
     const std::vector<double> compared = cut.compared_mse;
-    choice.dominant_map = map_component(ctx, dominant, rect[chosen], shared ? &*shared : nullptr, kept);
+    choice.dominant_map = map_component(ctx, dominant, *rect[chosen], shared ? &*shared : nullptr, kept);
     if (choice.dominant_map->cut.compared_mse.empty()) choice.dominant_map->cut.compared_mse = compared;
   }
   return choice;
