@@ -38,7 +38,7 @@ Report filled_report() {
   r.aspect.requested = 0;
   r.aspect.chosen = 2.0;
   r.aspect.probed_component = 1;
-  r.aspect.probes = {{1.0, 368, 368, 100.0}, {2.0, 520, 264, -1.0}};
+  r.aspect.probes = {{1.0, 368, 368, 100.0, 50.0}, {2.0, 520, 264, -1.0}};
   r.aspect.square_texel_stretch = 2.5;
   r.preparation.repair.input_vertices = 502;
   r.preparation.repair.welded_vertices = 500;
@@ -122,7 +122,8 @@ TEST(Report, HasEveryKeyOfTheSchema) {
                                                            "fine_fit", "corners", "aspect", "map_budget_db"}));
   EXPECT_EQ(keys_of(j["aspect"]), (std::set<std::string>{"requested", "chosen", "probed_component", "probes", "square_texel_stretch"}));
   EXPECT_EQ(keys_of(j["pages"]), (std::set<std::string>{"max_side", "count", "components_split", "pieces", "reason"}));
-  EXPECT_EQ(keys_of(j["aspect"]["probes"][0]), (std::set<std::string>{"aspect", "width", "height", "estimated_psnr_db"}));
+  EXPECT_EQ(keys_of(j["aspect"]["probes"][0]),
+            (std::set<std::string>{"aspect", "width", "height", "estimated_psnr_db", "full_map_estimated_psnr_db"}));
   EXPECT_EQ(keys_of(j["preparation"]),
             (std::set<std::string>{"input_vertices", "welded_vertices", "zero_area_dropped", "duplicates_dropped",
                                    "non_manifold_edges_sliced", "inconsistent_edges_sliced", "reoriented_triangles", "vertices_sliced",
@@ -168,6 +169,8 @@ TEST(Report, WritesEachFieldsValue) {
   EXPECT_EQ(j["aspect"]["probed_component"], 1);
   EXPECT_DOUBLE_EQ(j["aspect"]["probes"][0]["estimated_psnr_db"].get<double>(), 10 * std::log10(255.0 * 255.0 / 100.0));
   EXPECT_EQ(j["aspect"]["probes"][1]["estimated_psnr_db"], -1.0);  // not mapped
+  EXPECT_DOUBLE_EQ(j["aspect"]["probes"][0]["full_map_estimated_psnr_db"].get<double>(), 10 * std::log10(255.0 * 255.0 / 50.0));
+  EXPECT_TRUE(j["aspect"]["probes"][1]["full_map_estimated_psnr_db"].is_null());  // no own map made
   EXPECT_EQ(j["aspect"]["square_texel_stretch"], 2.5);
   EXPECT_TRUE(to_json(Report{})["aspect"]["square_texel_stretch"].is_null());
   EXPECT_EQ(j["aspect"]["probes"][1]["width"], 520);

@@ -1,7 +1,8 @@
 // The texture's shape (Options::aspect 0): the component that holds most of the texture is mapped into
 // a square and, where that map's texels are stretched along one axis, into a 1:2 and a 2:1 texture of
 // the same budget; the shape whose map keeps the most of the input's colour (better_map on
-// resampling_mse) is chosen, the square unless another is clearly better.
+// resampling_mse) is chosen, the square unless another is clearly better. Where the probes are
+// multilevel maps and choose another shape, the choice is made again on the two shapes' own maps.
 #pragma once
 #include <optional>
 #include <vector>

@@ -50,6 +50,10 @@ struct AspectProbe {
   /// resampling_mse of the probed map; written as "estimated_psnr_db". < 0: not estimated (not mapped, or
   /// the square alone was: the other shapes were not worth probing, see square_texel_stretch).
   double estimated_mse = -1;
+  /// resampling_mse of the shape's own (full) map, where the probes chose a shape other than the square
+  /// on multilevel maps and the choice was confirmed on both shapes' own maps; written as
+  /// "full_map_estimated_psnr_db". < 0: not made (null).
+  double full_map_estimated_mse = -1;
 };
 
 /// "aspect": the texture's shape, as asked and as chosen.

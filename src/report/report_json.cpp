@@ -38,7 +38,11 @@ json aspect_choice_json(const AspectChoice& a) {
   json probes = json::array();
   for (const AspectProbe& p : a.probes)
     probes.push_back(
-        {{"aspect", p.aspect}, {"width", p.width}, {"height", p.height}, {"estimated_psnr_db", estimated_psnr_db(p.estimated_mse)}});
+        {{"aspect", p.aspect},
+         {"width", p.width},
+         {"height", p.height},
+         {"estimated_psnr_db", estimated_psnr_db(p.estimated_mse)},
+         {"full_map_estimated_psnr_db", p.full_map_estimated_mse < 0 ? json(nullptr) : json(estimated_psnr_db(p.full_map_estimated_mse))}});
   return {{"requested", aspect_json(a.requested)},
           {"chosen", a.chosen},
           {"probed_component", a.probed_component == kNone ? json(nullptr) : json(a.probed_component)},
