@@ -1,6 +1,6 @@
 // Per-stage benchmarks on generated meshes of 10k..1M triangles: a bumpy sphere (closed, genus 0,
-// cut along one path) and the same with holes, and reading it back from an OBJ (in stretches on every
-// core, and as one stretch). Speed is measured here, never asserted in tests.
+// cut along one path) and the same with holes, its coarse copy for the multilevel map, and reading it
+// back from an OBJ (in stretches on every core, and as one stretch). Speed is measured here, never asserted in tests.
 // Run: build/bench/tightex_bench --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
 
@@ -15,6 +15,7 @@
 #include "cut/cut.hpp"
 #include "io/obj_reader.hpp"
 #include "layout/layout.hpp"
+#include "param/coarsen.hpp"
 #include "param/param.hpp"
 #include "prepare/components.hpp"
 #include "prepare/repair.hpp"
@@ -129,6 +130,14 @@ void BM_MapToSquare(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(map_to_square(d, {}, nullptr));
 }
 
+/// The multilevel map's coarse copy: the disk of range(0) triangles down to 30000 vertices (uniform targets).
+void BM_CoarsenDisk(benchmark::State& state) {
+  const Surface s = prepare_surface(mesh_for(int(state.range(0))), nullptr);
+  const Disk d = cut_to_disk(split_components(s)[0], {.holes = HoleMode::kFill}, nullptr);
+  const std::vector<double> target(d.mesh.num_faces(), 1.0);
+  for (auto _ : state) benchmark::DoNotOptimize(coarsen_disk(d, target, 30000));
+  state.counters["triangles"] = double(d.mesh.num_faces());
+}
 void BM_BakeTexture(benchmark::State& state) {
   const TexturedMesh& m = mesh_for(int(state.range(0)));
   const Surface s = prepare_surface(m, nullptr);
@@ -165,6 +174,7 @@ BENCHMARK(BM_ReadObj)->Args({1000000, 0})->Args({1000000, 1})->Unit(benchmark::k
 BENCHMARK(BM_PrepareSurface)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CutToDisk)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_MapToSquare)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CoarsenDisk)->Arg(200000)->Arg(1000000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_BakeTexture)->Args({100000, 2048})->Args({100000, 4096})->Args({1000000, 8192})->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();
