@@ -12,7 +12,8 @@ out=$(mktemp -d)
 echo "| model | map | corners | comps | charts | flipped | lost | angle mean / P95 | density P5 / P95 | PSNR dB | seam in -> out |"
 echo "|---|---|---|---|---|---|---|---|---|---|---|"
 for dir in "$data"/*/; do
-  obj=$(ls "$dir"*.obj | head -1); name=$(basename "$dir")
+  obj=$(ls "$dir"*.obj 2>/dev/null | head -1 || true); name=$(basename "$dir")
+  [ -n "$obj" ] || continue  # a glTF-only model
   for map in $maps; do
     for rule in $rules; do
       nice "$bin" "$obj" -o "$out/$name" --quiet --map "$map" --corners "$rule"

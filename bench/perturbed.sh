@@ -14,7 +14,8 @@ out=$(mktemp -d)
 echo "| model | perturbation | map | PSNR dB | flipped | density P5 / P95 | utilization | charts | reoriented | holes capped / opened |"
 echo "|---|---|---|---|---|---|---|---|---|---|"
 for dir in "$data"/*/; do
-  obj=$(ls "$dir"*.obj | head -1); name=$(basename "$dir")
+  obj=$(ls "$dir"*.obj 2>/dev/null | head -1 || true); name=$(basename "$dir")
+  [ -n "$obj" ] || continue  # a glTF-only model
   for mode in ${MODES:-pepper patches noise flip}; do
     python3 tools/perturb_obj.py "$obj" "$out/in_$name.$mode" "$mode" "$seed"
     for map in ${MAPS:-detail texel area harmonic}; do
