@@ -820,6 +820,37 @@ TEST(Statistics, WeightedQuantileBySelectionIsTheSortedOne) {
   EXPECT_EQ(weighted_quantile(none, 0.5), 0.0);
 }
 
+// A supernodal factor of more than 4M entries gets its storage allocated and written on every core
+// before its first factorisation (OrderedCholmod::allocate_supernodal_factor); CHOLMOD factorises
+// into it: the solves pass the residual check, again after the values change (the storage reused).
+TEST(SparseCholesky, ALargeFactorAllocatedAheadSolves) {
+  const int side = 420, n = side * side;  // a grid's Laplacian plus a small shift
+  auto at = [&](int i, int j) { return i * side + j; };
+  std::vector<Eigen::Triplet<double>> trips;
+  for (int i = 0; i < side; ++i)
+    for (int j = 0; j < side; ++j) {
+      trips.emplace_back(at(i, j), at(i, j), 4.01);
+      if (i > 0) trips.emplace_back(at(i, j), at(i - 1, j), -1.0);
+      if (j > 0) trips.emplace_back(at(i, j), at(i, j - 1), -1.0);
+    }
+  SparseCholesky::Matrix a(n, n);
+  a.setFromTriplets(trips.begin(), trips.end());
+  Eigen::VectorXd b(n);
+  for (int k = 0; k < n; ++k) b(k) = std::sin(0.001 * k);
+  SparseCholesky solver(0);
+  solver.analyzePattern(a);
+  ASSERT_TRUE(solver.supernodal());
+  ASSERT_GE(solver.factor_entries(), double(1 << 22));
+  for (double diagonal : {4.01, 5.0}) {
+    SCOPED_TRACE(diagonal);
+    for (int k = 0; k < n; ++k) a.coeffRef(k, k) = diagonal;
+    ASSERT_TRUE(solver.factorize(a));
+    Eigen::VectorXd x;
+    ASSERT_TRUE(solver.solve(a, b, x));
+    EXPECT_TRUE(SparseCholesky::solves(a, x, b));
+  }
+}
+
 // An analysis that fails (here an order that is not a permutation) leaves no factor: factorize()
 // says so instead of handing CHOLMOD a missing one, simplicial or supernodal.
 TEST(SparseCholesky, AFailedAnalysisFailsTheFactorisationWithoutCrashing) {

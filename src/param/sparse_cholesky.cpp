@@ -4,6 +4,9 @@
 
 #include <algorithm>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 namespace tightex {
 
 std::mutex& blas_mutex() {
@@ -30,6 +33,24 @@ void use_serial_dense_kernels() {
   if (auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "omp_set_max_active_levels"))) set(0);
   if (auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "omp_set_num_threads"))) set(1);
 }
+
+namespace detail {
+
+namespace {
+/// Factors smaller than this many entries (32 MB) are left to their factorisation's own faults.
+constexpr size_t kTouchInParallelFrom = size_t(1) << 22;
+}  // namespace
+
+void OrderedCholmod::allocate_supernodal_factor() {
+  cholmod_factor* factor = m_cholmodFactor;
+  if (!factor || !factor->is_super || factor->xtype != CHOLMOD_PATTERN || factor->xsize < kTouchInParallelFrom) return;
+  if (!cholmod_change_factor(CHOLMOD_REAL, true, true, true, true, factor, &cholmod()) || !factor->x) return;
+  double* x = static_cast<double*>(factor->x);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, factor->xsize, size_t(1) << 18),
+                    [&](const tbb::blocked_range<size_t>& r) { std::fill(x + r.begin(), x + r.end(), 0.0); });
+}
+
+}  // namespace detail
 
 std::vector<int> nested_dissection_order(const Surface& mesh) {
   const int n = int(mesh.num_vertices());
