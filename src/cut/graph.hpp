@@ -157,28 +157,46 @@ struct TreeCotree {
 struct TreeCotreeScratch {
   std::vector<double> weight;  // g.cost, boundary edges free
   std::vector<char> in_tree;
-  std::vector<uint32_t> hole_node;
+  std::vector<uint32_t> hole_node;  // per boundary halfedge, its hole's node of the dual graph
   detail::UnionFind dual{0};
   std::vector<std::pair<double, uint32_t>> order;
+  /// weight and hole_node hold one surface's, graph's and loops' (keep_fixed_arrays): every run with
+  /// this scratch must be on those, and none builds them again.
+  bool fixed_arrays = false;
 };
+
+/// The arrays of tree_cotree that depend on the surface, graph and loops alone (not on the sources or
+/// the radius), into scratch.
+inline void build_fixed_arrays(const Surface& s, const EdgeGraph& g, const std::vector<std::vector<uint32_t>>& loops,
+                               TreeCotreeScratch& scratch) {
+  scratch.weight.assign(g.cost.begin(), g.cost.end());
+  for (uint32_t e = 0; e < g.num_edges(); ++e)
+    if (s.opposite[g.edge_halfedge[e]] == kNone) scratch.weight[e] = 0;
+  const uint32_t nf = uint32_t(s.num_faces());
+  scratch.hole_node.assign(s.opposite.size(), kNone);
+  for (size_t i = 0; i < loops.size(); ++i)
+    for (uint32_t h : loops[i]) scratch.hole_node[h] = nf + uint32_t(i);
+}
+
+/// Builds scratch's fixed arrays once, for a caller that runs tree_cotree many times on one surface,
+/// graph and loops (the handle search: 80 roots at 854k faces, each of which rebuilt them).
+inline void keep_fixed_arrays(const Surface& s, const EdgeGraph& g, const std::vector<std::vector<uint32_t>>& loops,
+                              TreeCotreeScratch& scratch) {
+  build_fixed_arrays(s, g, loops, scratch);
+  scratch.fixed_arrays = true;
+}
 
 /// tree_cotree into `tc`, its arrays and scratch's reused.
 inline void tree_cotree(const Surface& s, const EdgeGraph& g, const std::vector<uint32_t>& sources,
                         const std::vector<std::vector<uint32_t>>& loops, double radius, TreeCotreeScratch& scratch, TreeCotree& tc) {
-  std::vector<double>& weight = scratch.weight;
-  weight.assign(g.cost.begin(), g.cost.end());
-  for (uint32_t e = 0; e < g.num_edges(); ++e)
-    if (s.opposite[g.edge_halfedge[e]] == kNone) weight[e] = 0;
-  dijkstra(g, s.num_vertices(), sources, weight, tc.dist, tc.pred, radius);
+  if (!scratch.fixed_arrays) build_fixed_arrays(s, g, loops, scratch);
+  dijkstra(g, s.num_vertices(), sources, scratch.weight, tc.dist, tc.pred, radius);
   std::vector<char>& in_tree = scratch.in_tree;
   in_tree.assign(g.num_edges(), 0);
   for (uint32_t v = 0; v < s.num_vertices(); ++v)
     if (tc.pred[v] != kNone) in_tree[tc.pred[v]] = 1;
   const uint32_t nf = uint32_t(s.num_faces());
-  std::vector<uint32_t>& hole_node = scratch.hole_node;
-  hole_node.assign(s.opposite.size(), kNone);
-  for (size_t i = 0; i < loops.size(); ++i)
-    for (uint32_t h : loops[i]) hole_node[h] = nf + uint32_t(i);
+  const std::vector<uint32_t>& hole_node = scratch.hole_node;
   detail::UnionFind& dual = scratch.dual;
   dual.parent.resize(nf + loops.size());
   std::iota(dual.parent.begin(), dual.parent.end(), 0u);

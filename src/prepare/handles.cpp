@@ -71,7 +71,9 @@ uint64_t splitmix64(uint64_t x) {
 class LoopSearch {
  public:
   LoopSearch(const Surface& s, const EdgeGraph& g, const std::vector<std::vector<uint32_t>>& loops)
-      : s_(s), g_(g), loops_(loops), longest_edge_(g.cost.empty() ? 0.0 : *std::max_element(g.cost.begin(), g.cost.end())) {}
+      : s_(s), g_(g), loops_(loops), longest_edge_(g.cost.empty() ? 0.0 : *std::max_element(g.cost.begin(), g.cost.end())) {
+    keep_fixed_arrays(s, g, loops, scratch_);
+  }
 
   /// Searches the loops through `root`; keeps the cheapest (ties to the earlier root). A loop through
   /// the root cheaper than the best reaches no vertex farther than half the best's cost plus half its
