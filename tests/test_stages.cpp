@@ -27,6 +27,7 @@
 #include "mesh_catalogue.hpp"
 #include "param/param.hpp"
 #include "param/sparse_cholesky.hpp"
+#include "pipeline/plan_state.hpp"
 #include "prepare/components.hpp"
 #include "prepare/repair.hpp"
 #include "report/metrics.hpp"
@@ -1955,6 +1956,41 @@ TEST(Pipeline, BakePlanRefusesAnotherMesh) {
   EXPECT_THROW(bake_plan(plan, moved_uv, opt), InputError);
   EXPECT_THROW(bake_plan(Plan(), planned, opt), InputError);
   EXPECT_NO_THROW(bake_plan(plan, planned, opt));
+}
+
+// A plan whose preparation (repair, components, seams, handles) was made from the geometry alone, as
+// the CLI makes it while the textures decode, is the plan made in one call: the same charts and UVs,
+// the same texture. A preparation of another mesh, or one used already, is an InputError.
+TEST(Pipeline, PlanFromAPreparationWithoutPixelsIsTheSamePlan) {
+  Options opt;
+  opt.size = 96;
+  const TexturedMesh input = cat::multi_component();  // a torus (one handle), a disk, a triangle, a quad
+  TexturedMesh geometry = input;
+  for (Texture& t : geometry.textures) {
+    std::tie(t.width, t.height) = std::pair{t.image.width, t.image.height};
+    t.image = Image();
+  }
+  PreparedMesh prepared = prepare_mesh(geometry, opt);
+  const Plan at_once = plan_charts(input, opt);
+  const Plan from_prepared = plan_charts(input, opt, std::move(prepared));
+  const Plan::State &a = at_once.state(), &b = from_prepared.state();
+  ASSERT_EQ(a.components.size(), 4u);
+  ASSERT_EQ(b.components.size(), a.components.size());
+  EXPECT_EQ(b.uv, a.uv);
+  for (const char* key : {"preparation", "components", "aspect"}) EXPECT_EQ(from_prepared.report()[key], at_once.report()[key]) << key;
+  std::vector<std::string> stages;
+  for (const auto& t : from_prepared.report()["timings"]) stages.push_back(t["stage"]);
+  EXPECT_EQ(stages, (std::vector<std::string>{"repair", "seams+handles", "cut+map"}));
+  const Result ra = bake_plan(at_once, input, opt), rb = bake_plan(from_prepared, input, opt);
+  EXPECT_EQ(rb.output.corner_uv, ra.output.corner_uv);
+  ASSERT_EQ(rb.output.textures.size(), ra.output.textures.size());
+  EXPECT_EQ(rb.output.textures[0].image.pixels, ra.output.textures[0].image.pixels);
+  EXPECT_EQ(ra.report["metrics"]["flipped"], 0);
+
+  EXPECT_THROW(plan_charts(input, opt, std::move(prepared)), InputError);  // used already
+  TexturedMesh moved_uv = input;
+  moved_uv.corner_uv[0].x() += 0.25;
+  EXPECT_THROW(plan_charts(moved_uv, opt, prepare_mesh(geometry, opt)), InputError);
 }
 
 // --map detail: a flat sheet whose texture is a fine checker on its left half and one flat

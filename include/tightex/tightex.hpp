@@ -57,6 +57,34 @@ class Plan {
 /// progress callback asks.
 Plan plan_charts(const TexturedMesh& input, const Options& options);
 
+/// The part of plan_charts that needs neither the texture pixels nor the map's options: the repair
+/// (§4.1), the connected components, each one's texture seams and handle removal. The detail map and
+/// the shape choice need the pixels before the rest of the plan; a caller can make this from the
+/// geometry alone (pixels absent) while it decodes the textures. Opaque: made by prepare_mesh, used up
+/// by plan_charts.
+class PreparedMesh {
+ public:
+  struct State;
+  PreparedMesh();
+  explicit PreparedMesh(std::unique_ptr<State> state);
+  PreparedMesh(PreparedMesh&&) noexcept;
+  PreparedMesh& operator=(PreparedMesh&&) noexcept;
+  ~PreparedMesh();
+
+  std::unique_ptr<State> take();  // for plan_charts; empty afterwards
+
+ private:
+  std::unique_ptr<State> state_;
+};
+
+/// Prepares `geometry` (see PreparedMesh); throws as plan_charts does.
+PreparedMesh prepare_mesh(const TexturedMesh& geometry, const Options& options);
+
+/// plan_charts(input, options) with its first part taken from `prepared`, which must have been made
+/// from the same mesh (same triangles, texture coordinates and materials), now with its pixels where
+/// the plan needs them; another mesh, or a preparation used already, is an InputError.
+Plan plan_charts(const TexturedMesh& input, const Options& options, PreparedMesh&& prepared);
+
 /// The texture half: output model, bake (§4.3), metrics. `input` must be the mesh the plan was made
 /// from (same triangles, texture coordinates and materials), now with its textures loaded; another
 /// mesh is an InputError.

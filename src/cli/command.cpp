@@ -363,8 +363,9 @@ struct PlannedModel {
 
 /// Reads the textures and plans the charts. The geometric stages need no pixels, so the textures are
 /// decoded beside them, unless the plan needs the pixels (the detail map places texels by them, the
-/// auto aspect compares its shapes with them): then textures first. A texture error is thrown before a
-/// plan error: a bad texture is the user's first problem.
+/// auto aspect compares its shapes with them): then only the preparation (repair, components, seams,
+/// handles) is made beside them, and the rest after. A texture error is thrown before a plan error: a
+/// bad texture is the user's first problem.
 PlannedModel read_textures_and_plan(const std::string& input, const TexturedMesh& geometry, const Options& opt,
                                     std::chrono::steady_clock::time_point t0) {
   PlannedModel r;
@@ -385,8 +386,21 @@ PlannedModel read_textures_and_plan(const std::string& input, const TexturedMesh
     }
   };
   if (opt.map == MapKind::kDetail || (opt.aspect == 0 && opt.map != MapKind::kHarmonic && opt.layout == Layout::kAtlas)) {
-    read_textures();
-    if (!texture_error) plan_from(r.mesh);
+    PreparedMesh prepared;
+    tbb::parallel_invoke(read_textures, [&] {
+      try {
+        prepared = prepare_mesh(geometry, opt);
+      } catch (...) {
+        plan_error = std::current_exception();
+      }
+    });
+    if (!texture_error && !plan_error) {
+      try {
+        r.plan = plan_charts(r.mesh, opt, std::move(prepared));
+      } catch (...) {
+        plan_error = std::current_exception();
+      }
+    }
   } else {
     tbb::parallel_invoke(read_textures, [&] { plan_from(geometry); });
   }

@@ -19,17 +19,6 @@ namespace {
 /// less: the estimate is a simulation, and a square texture is the simpler one to use.
 constexpr double kAspectMinGain = 0.95;
 
-/// The probes share the dominant component's seams and handle search. Where that search meets a bug
-/// (InternalError), none is shared: each probe then meets it again inside map_component, which reports
-/// it as that map's fallback.
-std::optional<CutInputs> shared_cut_inputs(const MapContext& ctx, size_t c) {
-  try {
-    return cut_inputs(ctx.input, ctx.components[c]);
-  } catch (const InternalError&) {
-    return std::nullopt;
-  }
-}
-
 /// Whether the square's map leaves room for another shape to do better: its texels are longer on the
 /// surface along one axis than along the other by more than kAspectProbeStretch (`stretch` < 0: the
 /// square has no map).
@@ -82,11 +71,11 @@ size_t aspect_probe_component(const MapContext& ctx, const std::vector<double>& 
   return kNone;
 }
 
-ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const std::vector<double>& shares, int size, AtlasShares mode) {
+ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const CutInputs* shared, const std::vector<double>& shares, int size,
+                          AtlasShares mode) {
   const size_t n = std::size(kAspectProbes);
   std::vector<std::optional<Mapped>> probe(n);
   std::vector<double> mse(n, -1);
-  const std::optional<CutInputs> shared = shared_cut_inputs(ctx, dominant);
   // The component's rectangle in each shape's texture; none where the shape is not probed.
   std::vector<std::optional<Rect>> rect(n);
   for (size_t i = 0; i < n; ++i) {
@@ -97,7 +86,7 @@ ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const std::vec
     if (rects) rect[i] = (*rects)[dominant];  // else this shape cannot hold every component
   }
   auto run_probe = [&](size_t i, CapChoice choice) {
-    if (rect[i]) probe[i] = map_component(ctx, dominant, *rect[i], shared ? &*shared : nullptr, choice, true);
+    if (rect[i]) probe[i] = map_component(ctx, dominant, *rect[i], shared, choice, true);
   };
   // The square first: where the longest hole is small both its cuts are mapped (side by side), and the
   // other shapes take its choice. Where its probe is multilevel, the square's own map (what the probe
@@ -107,7 +96,7 @@ ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const std::vec
   std::optional<Mapped> square_own;
   if (!compare_cuts && rect[0] && ctx.components[dominant].num_faces() > 2 * kProbeMultilevelFrom)
     tbb::parallel_invoke([&] { run_probe(0, CapChoice::kKeep); },
-                         [&] { square_own = map_component(ctx, dominant, *rect[0], shared ? &*shared : nullptr, CapChoice::kKeep); });
+                         [&] { square_own = map_component(ctx, dominant, *rect[0], shared, CapChoice::kKeep); });
   else
     run_probe(0, compare_cuts ? CapChoice::kCompare : CapChoice::kKeep);
   const CutStats square = probe[0] ? probe[0]->cut : CutStats{};
@@ -146,7 +135,7 @@ ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const std::vec
     const CutStats& cut = choice.dominant_map->cut;
     const CapChoice kept = cut.longest_loop_capped && !cut.compared_mse.empty() ? CapChoice::kCap : CapChoice::kKeep;
     const std::vector<double> compared = cut.compared_mse;
-    choice.dominant_map = map_component(ctx, dominant, *rect[chosen], shared ? &*shared : nullptr, kept);
+    choice.dominant_map = map_component(ctx, dominant, *rect[chosen], shared, kept);
     if (choice.dominant_map->cut.compared_mse.empty()) choice.dominant_map->cut.compared_mse = compared;
     if (chosen != 0 && square_own) confirm_on_own_maps(ctx, chosen, std::move(*square_own), choice);
   }

@@ -45,6 +45,9 @@ double texel_stretch_ratio(const Mapped& m);
 size_t aspect_probe_component(const MapContext& ctx, const std::vector<double>& shares);
 
 /// Maps component `dominant` into its rectangle of each probe's texture (size^2 texels) and chooses.
-ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const std::vector<double>& shares, int size, AtlasShares mode);
+/// `shared`: the component's cut_inputs, which every probe and map of it shares (nullptr where their
+/// search met an InternalError: each map then meets it again and reports it as its fallback).
+ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const CutInputs* shared, const std::vector<double>& shares, int size,
+                          AtlasShares mode);
 
 }  // namespace tightex

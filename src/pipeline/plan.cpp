@@ -187,10 +187,12 @@ void lay_out(const Options& options, const std::vector<double>& shares, int size
   for (const Rect& r : plan.rects) plan.image_size.push_back({r.w, r.h});
 }
 
-/// Every component cut and mapped into its rectangle (the probed one reuses its chosen probe's map);
-/// each one's cut and map statistics for the report.
-void map_components(const MapContext& ctx, std::optional<Mapped>& probed, size_t probed_component, Plan::State& plan,
-                    std::vector<CutStats>& cuts, std::vector<SquareMapStats>& maps) {
+/// Every component cut and mapped into its rectangle (the probed one reuses its chosen probe's map),
+/// each from its prepared cut inputs, released once it is mapped; each one's cut and map statistics
+/// for the report.
+void map_components(const MapContext& ctx, std::optional<Mapped>& probed, size_t probed_component,
+                    std::vector<std::optional<CutInputs>>& cut_inputs, Plan::State& plan, std::vector<CutStats>& cuts,
+                    std::vector<SquareMapStats>& maps) {
   const size_t nc = plan.components.size();
   plan.disks.resize(nc);
   plan.uv.resize(nc);
@@ -201,7 +203,8 @@ void map_components(const MapContext& ctx, std::optional<Mapped>& probed, size_t
     const Rect& rect = plan.rects[c];
     Mapped m = c == probed_component && probed && rect.w == probed->rect.w && rect.h == probed->rect.h
                    ? std::move(*probed)
-                   : map_component(ctx, c, rect, nullptr, CapChoice::kAuto);
+                   : map_component(ctx, c, rect, cut_inputs[c] ? &*cut_inputs[c] : nullptr, CapChoice::kAuto);
+    cut_inputs[c].reset();
     plan.disks[c] = std::move(m.disk);
     plan.uv[c] = std::move(m.uv);
     cuts[c] = std::move(m.cut);
@@ -230,31 +233,72 @@ uint64_t input_fingerprint(const TexturedMesh& input) {
   return h;
 }
 
-Plan plan_charts(const TexturedMesh& input, const Options& options) { return plan_charts(input, options, PlanHooks{}); }
+std::vector<std::optional<CutInputs>> prepare_cut_inputs(const TexturedMesh& input, const std::vector<Surface>& components) {
+  std::vector<std::optional<CutInputs>> out(components.size());
+  tbb::parallel_for(size_t(0), components.size(), [&](size_t c) {
+    try {
+      out[c] = cut_inputs(input, components[c]);
+    } catch (const InternalError&) {
+      out[c].reset();
+    }
+  });
+  return out;
+}
 
-Plan plan_charts(const TexturedMesh& input, const Options& options, const PlanHooks& hooks) {
-  validate_mesh(input);
+std::unique_ptr<PreparedMesh::State> prepare_state(const TexturedMesh& geometry, const Options& options) {
+  validate_mesh(geometry);
+  requested_size(geometry, options);
+  const StageProgress progress(options.progress);
+  auto prepared = std::make_unique<PreparedMesh::State>();
+  prepared->input_fingerprint = input_fingerprint(geometry);
+  StageClock clock(prepared->timings);
+
+  // 1. Preparation (§4.1): weld, drop degenerate and duplicate triangles, orient, slice non-manifold
+  //    elements.
+  progress("repair", 0);
+  const RepairStats& rs = prepared->repair;
+  const Surface surface = prepare_surface(geometry, &prepared->repair);
+  if (surface.num_faces() == 0)
+    fail_input("{}: no triangle with non-zero area ({} zero-area, {} duplicate)", geometry.source, rs.zero_area_triangles,
+               rs.duplicate_triangles);
+  clock.done("repair");
+
+  // 2. Connected components, each one's texture seams (the cut prefers them) and handles removed.
+  progress("components", 0);
+  prepared->components = split_components(surface);
+  prepared->cut_inputs = prepare_cut_inputs(geometry, prepared->components);
+  clock.done("seams+handles");
+  return prepared;
+}
+
+PreparedMesh::PreparedMesh() = default;
+PreparedMesh::PreparedMesh(std::unique_ptr<State> state) : state_(std::move(state)) {}
+PreparedMesh::PreparedMesh(PreparedMesh&&) noexcept = default;
+PreparedMesh& PreparedMesh::operator=(PreparedMesh&&) noexcept = default;
+PreparedMesh::~PreparedMesh() = default;
+std::unique_ptr<PreparedMesh::State> PreparedMesh::take() { return std::move(state_); }
+
+PreparedMesh prepare_mesh(const TexturedMesh& geometry, const Options& options) { return PreparedMesh(prepare_state(geometry, options)); }
+
+namespace {
+
+/// The rest of plan_charts after the preparation.
+Plan plan_prepared(const TexturedMesh& input, const Options& options, const PlanHooks& hooks,
+                   std::unique_ptr<PreparedMesh::State> prepared) {
   const StageProgress progress(options.progress);
   auto plan = std::make_unique<Plan::State>();
   Report& rep = plan->report;
   rep.options = options_used(options, requested_size(input, options));
   int& size = rep.options.size;
-  plan->input_fingerprint = input_fingerprint(input);
+  plan->input_fingerprint = prepared->input_fingerprint;
+  rep.preparation.repair = prepared->repair;
+  rep.timings = std::move(prepared->timings);
   StageClock clock(rep.timings);
 
-  // 1. Preparation (§4.1): weld, drop degenerate and duplicate triangles, orient, slice non-manifold
-  //    elements.
-  progress("repair", 0);
-  const RepairStats& rs = rep.preparation.repair;
-  const Surface surface = prepare_surface(input, &rep.preparation.repair);
-  if (surface.num_faces() == 0)
-    fail_input("{}: no triangle with non-zero area ({} zero-area, {} duplicate)", input.source, rs.zero_area_triangles,
-               rs.duplicate_triangles);
-  clock.done("repair");
-
-  // 2. Connected components, the budget they need, and where the texels go on them.
-  progress("components", 0);
-  plan->components = split_components(surface);
+  // 2. The components (prepared), the budget they need, and where the texels go on them.
+  plan->components = std::move(prepared->components);
+  std::vector<std::optional<CutInputs>> cut_inputs = std::move(prepared->cut_inputs);
+  prepared.reset();
   std::vector<double> areas = component_areas(plan->components);
   if (options.layout == Layout::kAtlas && (options.size == 0 || options.default_budget)) {
     const int side = atlas_side_holding(areas, size);
@@ -269,6 +313,7 @@ Plan plan_charts(const TexturedMesh& input, const Options& options, const PlanHo
     areas = component_areas(plan->components);
     shares = plan_density(input, options, plan->components, areas, size, density);
   }
+  if (!split_piece.empty()) cut_inputs = prepare_cut_inputs(input, plan->components);  // the pieces' own
 
   // 3. The texture's shape (auto: probed on the component that dominates the texture), then 4. each
   //    component cut to a disk and mapped onto its rectangle (§4.2).
@@ -281,7 +326,8 @@ Plan plan_charts(const TexturedMesh& input, const Options& options, const PlanHo
   rep.aspect.chosen = options.aspect > 0 ? options.aspect : 1.0;
   std::optional<Mapped> probed;
   if (rep.aspect.probed_component != kNone) {
-    ShapeChoice choice = choose_aspect(ctx, rep.aspect.probed_component, shares, size,
+    const std::optional<CutInputs>& dominant_cut = cut_inputs[rep.aspect.probed_component];
+    ShapeChoice choice = choose_aspect(ctx, rep.aspect.probed_component, dominant_cut ? &*dominant_cut : nullptr, shares, size,
                                        options.map == MapKind::kArea ? AtlasShares::kExact : AtlasShares::kLeastError);
     rep.aspect.chosen = choice.aspect;
     rep.aspect.probes = std::move(choice.probes);
@@ -291,12 +337,29 @@ Plan plan_charts(const TexturedMesh& input, const Options& options, const PlanHo
   lay_out(options, shares, size, rep.aspect.chosen, *plan);
   std::vector<CutStats> cuts;
   std::vector<SquareMapStats> maps;
-  map_components(ctx, probed, rep.aspect.probed_component, *plan, cuts, maps);
+  map_components(ctx, probed, rep.aspect.probed_component, cut_inputs, *plan, cuts, maps);
   clock.done("cut+map");
 
   fill_plan_report(input, *plan, areas, cuts, maps, rep);
   plan->report_json = to_json(rep);
   return Plan(std::move(plan));
+}
+
+}  // namespace
+
+Plan plan_charts(const TexturedMesh& input, const Options& options) { return plan_charts(input, options, PlanHooks{}); }
+
+Plan plan_charts(const TexturedMesh& input, const Options& options, const PlanHooks& hooks) {
+  return plan_prepared(input, options, hooks, prepare_state(input, options));
+}
+
+Plan plan_charts(const TexturedMesh& input, const Options& options, PreparedMesh&& prepared) {
+  std::unique_ptr<PreparedMesh::State> state = prepared.take();
+  if (!state) fail_input("{}: the preparation is empty (made by prepare_mesh? used already?)", input.source);
+  validate_mesh(input);
+  if (state->input_fingerprint != input_fingerprint(input))
+    fail_input("{}: not the mesh the preparation was made from (its triangles, texture coordinates or materials differ)", input.source);
+  return plan_prepared(input, options, PlanHooks{}, std::move(state));
 }
 
 }  // namespace tightex

@@ -2,6 +2,8 @@
 // its disk and map onto the unit square, its rectangle of texture, and the report so far.
 #pragma once
 #include <cstdint>
+#include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -10,6 +12,7 @@
 #include "cut/cut.hpp"
 #include "layout/layout.hpp"
 #include "pipeline/map_component.hpp"
+#include "prepare/repair.hpp"
 #include "report/report.hpp"
 #include "tightex/tightex.hpp"
 
@@ -33,6 +36,23 @@ struct Plan::State {
 /// A hash of what the plan depends on in the input (vertex and triangle counts, triangles, texture
 /// coordinates, materials), so bake_plan can refuse another mesh.
 uint64_t input_fingerprint(const TexturedMesh& input);
+
+/// What prepare_mesh made: the repaired mesh's components (Surface::input_face -> input triangle) and,
+/// per component, its seams and handle removal (nullopt where that search met an InternalError:
+/// map_component meets it again and reports it as the map's fallback).
+struct PreparedMesh::State {
+  uint64_t input_fingerprint = 0;  // input_fingerprint() of the mesh prepared
+  RepairStats repair;
+  std::vector<Surface> components;
+  std::vector<std::optional<CutInputs>> cut_inputs;
+  std::vector<StageTiming> timings;  // "repair", "seams+handles"
+};
+
+/// Each component's cut_inputs, computed in parallel (nullopt where it throws InternalError).
+std::vector<std::optional<CutInputs>> prepare_cut_inputs(const TexturedMesh& input, const std::vector<Surface>& components);
+
+/// prepare_mesh's work, without the wrapper.
+std::unique_ptr<PreparedMesh::State> prepare_state(const TexturedMesh& geometry, const Options& options);
 
 /// plan_charts with test hooks (tests only).
 Plan plan_charts(const TexturedMesh& input, const Options& options, const PlanHooks& hooks);
