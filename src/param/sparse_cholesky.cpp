@@ -1,6 +1,7 @@
 #include "param/sparse_cholesky.hpp"
 
 #include <dlfcn.h>
+#include <sys/mman.h>
 
 #include <algorithm>
 
@@ -39,6 +40,14 @@ namespace detail {
 namespace {
 /// Factors smaller than this many entries (32 MB) are left to their factorisation's own faults.
 constexpr size_t kTouchInParallelFrom = size_t(1) << 22;
+
+/// Advises the whole 2 MiB pages inside [p, p + bytes) as transparent huge pages.
+void advise_huge_pages(void* p, size_t bytes) {
+  constexpr uintptr_t kHuge = uintptr_t(2) << 20;
+  const uintptr_t begin = (reinterpret_cast<uintptr_t>(p) + kHuge - 1) & ~(kHuge - 1);
+  const uintptr_t end = (reinterpret_cast<uintptr_t>(p) + bytes) & ~(kHuge - 1);
+  if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
+}
 }  // namespace
 
 void OrderedCholmod::allocate_supernodal_factor() {
@@ -46,6 +55,7 @@ void OrderedCholmod::allocate_supernodal_factor() {
   if (!factor || !factor->is_super || factor->xtype != CHOLMOD_PATTERN || factor->xsize < kTouchInParallelFrom) return;
   if (!cholmod_change_factor(CHOLMOD_REAL, true, true, true, true, factor, &cholmod()) || !factor->x) return;
   double* x = static_cast<double*>(factor->x);
+  advise_huge_pages(x, factor->xsize * sizeof(double));
   tbb::parallel_for(tbb::blocked_range<size_t>(0, factor->xsize, size_t(1) << 18),
                     [&](const tbb::blocked_range<size_t>& r) { std::fill(x + r.begin(), x + r.end(), 0.0); });
 }
