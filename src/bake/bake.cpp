@@ -35,7 +35,7 @@ struct BakeCounters {
 /// What every step of one bake reads, and where it counts.
 struct BakeContext {
   const std::vector<BakeTriangle>& triangles;
-  const std::vector<TriangleSampler>& samplers;  // one per triangle
+  const Samplers& samplers;  // one per triangle
   const BakeOptions& options;
   int max_samples;  // options.max_footprint_samples, at least 1
   BakeCounters& counters;
@@ -44,15 +44,16 @@ struct BakeContext {
 
 /// The sampler of every triangle: its material's texture where it has one with pixels, else the
 /// material's flat colour (white without a material); `linear_light`: filtered in linear light.
-std::vector<TriangleSampler> make_samplers(const TexturedMesh& input, const std::vector<BakeTriangle>& triangles, bool linear_light) {
+Samplers make_samplers(const TexturedMesh& input, const std::vector<BakeTriangle>& triangles, bool linear_light) {
   std::vector<Rgba8> flat_colour(input.materials.size());
   for (size_t m = 0; m < input.materials.size(); ++m) {
     const auto& kd = input.materials[m].kd;
     flat_colour[m] = to_rgba({float(kd[0] * 255), float(kd[1] * 255), float(kd[2] * 255), 255.f});
   }
-  std::vector<TriangleSampler> samplers(triangles.size());
+  Samplers samplers(triangles.size());  // constructed below
   tbb::parallel_for(size_t(0), triangles.size(), [&](size_t t) {
     const BakeTriangle& tri = triangles[t];
+    TriangleSampler& smp = *::new (&samplers[t]) TriangleSampler();
     const Image* src = nullptr;
     Rgba8 flat{255, 255, 255, 255};
     bool from_vertex_colours = false;
@@ -65,28 +66,28 @@ std::vector<TriangleSampler> make_samplers(const TexturedMesh& input, const std:
         flat = flat_colour[size_t(tri.material)];
       }
     }
-    samplers[t].init(tri, src, flat);
-    samplers[t].corner_samples = from_vertex_colours;
-    if (linear_light) samplers[t].encoding = MapEncoding::kSrgbColour;
+    smp.init(tri, src, flat);
+    smp.corner_samples = from_vertex_colours;
+    if (linear_light) smp.encoding = MapEncoding::kSrgbColour;
   });
   return samplers;
 }
 
 /// The sampler of every triangle for `map`: its material's texture for the map where it has one with
 /// pixels, else the map's flat value; with the map's encoding and the triangle's frames.
-std::vector<TriangleSampler> make_map_samplers(const TexturedMesh& input, const MapSource& map,
-                                               const std::vector<BakeTriangle>& triangles) {
-  std::vector<TriangleSampler> samplers(triangles.size());
+Samplers make_map_samplers(const TexturedMesh& input, const MapSource& map, const std::vector<BakeTriangle>& triangles) {
+  Samplers samplers(triangles.size());  // constructed below
   tbb::parallel_for(size_t(0), triangles.size(), [&](size_t t) {
     const BakeTriangle& tri = triangles[t];
+    TriangleSampler& smp = *::new (&samplers[t]) TriangleSampler();
     const Image* src = nullptr;
     if (tri.material >= 0 && size_t(tri.material) < map.texture_of_material.size()) {
       const int tex = map.texture_of_material[size_t(tri.material)];
       if (tex >= 0 && !input.textures[size_t(tex)].image.empty()) src = &input.textures[size_t(tex)].image;
     }
-    samplers[t].init(tri, src, map.flat);
-    samplers[t].encoding = map.encoding;
-    if (map.encoding == MapEncoding::kTangentNormal) samplers[t].frames = &(*map.frames)[t];
+    smp.init(tri, src, map.flat);
+    smp.encoding = map.encoding;
+    if (map.encoding == MapEncoding::kTangentNormal) smp.frames = &(*map.frames)[t];
   });
   return samplers;
 }
@@ -253,7 +254,7 @@ void dilate_uncovered(const std::vector<Rect>& rects, const std::vector<size_t>&
 /// Whether a tile's fit can change anything: some textured triangle does not magnify the input by 2 or
 /// more (where all do, the bilinear bake is already right), or samples its corners (the bilinear
 /// bake flattens the peaks of a vertex-coloured input's colours at its vertices).
-bool worth_fitting(const std::vector<uint32_t>& bin, const std::vector<TriangleSampler>& samplers) {
+bool worth_fitting(const std::vector<uint32_t>& bin, const Samplers& samplers) {
   bool worth = false;
   for (uint32_t t : bin) {
     const TriangleSampler& smp = samplers[t];
@@ -294,8 +295,8 @@ void fit_tiles(const BakeContext& ctx, const TileBins& grid, Image& out) {
 }
 
 /// The bake of every image through the given samplers (one per triangle).
-void bake_with_samplers(const std::vector<TriangleSampler>& samplers, const std::vector<BakeTriangle>& triangles,
-                        const std::vector<Rect>& rects, std::vector<Image>& images, BakeStats* stats, const BakeOptions& options) {
+void bake_with_samplers(const Samplers& samplers, const std::vector<BakeTriangle>& triangles, const std::vector<Rect>& rects,
+                        std::vector<Image>& images, BakeStats* stats, const BakeOptions& options) {
   BakeCounters counters;
   ProgressCounter progress(options.progress, bake_progress_units(images, options.fit), options.progress_interval_s);
   const BakeContext ctx{triangles, samplers, options, std::max(1, options.max_footprint_samples), counters, progress};
