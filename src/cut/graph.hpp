@@ -179,7 +179,7 @@ inline void build_fixed_arrays(const Surface& s, const EdgeGraph& g, const std::
 }
 
 /// Builds scratch's fixed arrays once, for a caller that runs tree_cotree many times on one surface,
-/// graph and loops (the handle search: 80 roots at 854k faces, each of which rebuilt them).
+/// graph and loops (the handle search: about 80 roots at 854k faces).
 inline void keep_fixed_arrays(const Surface& s, const EdgeGraph& g, const std::vector<std::vector<uint32_t>>& loops,
                               TreeCotreeScratch& scratch) {
   build_fixed_arrays(s, g, loops, scratch);

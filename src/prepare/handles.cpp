@@ -1,6 +1,10 @@
 #include "prepare/handles.hpp"
 
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "core/error.hpp"
@@ -18,17 +22,10 @@ struct Loop {
   double cost = std::numeric_limits<double>::infinity();  // g.cost: what the search minimises
 };
 
-/// The shortest generator loop through `root`: the leftover edge with the smallest loop cost, with
-/// the two tree paths trimmed where they share a prefix (so the loop is a simple cycle). Searches only
-/// within `radius` of the root (see tree_cotree): a loop costing up to twice that is found. Empty
-/// (cost infinite) when there is none: the surface has genus 0, or every loop through root costs more.
-/// `scratch` and `tc`: tree_cotree's arrays, reused from root to root.
-Loop shortest_loop_through(const Surface& s, const EdgeGraph& g, uint32_t root, const std::vector<std::vector<uint32_t>>& loops,
-                           double radius, TreeCotreeScratch& scratch, TreeCotree& tc) {
-  tree_cotree(s, g, {root}, loops, radius, scratch, tc);
+/// The loop of leftover edge e of tree-cotree tc: e and the two tree paths from its ends, trimmed where
+/// they share a prefix (so the loop is a simple cycle).
+Loop loop_of(const Surface& s, const EdgeGraph& g, const TreeCotree& tc, uint32_t e) {
   Loop loop;
-  if (tc.leftover.empty()) return loop;
-  const uint32_t e = tc.leftover.front();
   const uint32_t h = g.edge_halfedge[e];
   std::vector<uint32_t> pu, pv;  // vertex paths to the root
   for (uint32_t v = s.from(h);; v = other_end(s, g, tc.pred[v], v)) {
@@ -51,6 +48,17 @@ Loop shortest_loop_through(const Surface& s, const EdgeGraph& g, uint32_t root, 
   return loop;
 }
 
+/// The shortest generator loop through `root`: the leftover edge with the smallest loop cost
+/// (loop_of). Searches only within `radius` of the root (see tree_cotree): a loop costing up to twice
+/// that is found. Empty (cost infinite) when there is none: the surface has genus 0, or every loop
+/// through root costs more. `scratch` and `tc`: tree_cotree's arrays, reused from root to root.
+Loop shortest_loop_through(const Surface& s, const EdgeGraph& g, uint32_t root, const std::vector<std::vector<uint32_t>>& loops,
+                           double radius, TreeCotreeScratch& scratch, TreeCotree& tc) {
+  tree_cotree(s, g, {root}, loops, radius, scratch, tc);
+  if (tc.leftover.empty()) return Loop{};
+  return loop_of(s, g, tc, tc.leftover.front());
+}
+
 /// Loop tightening: roots per move and round, rounds at most, and the least gain for another round.
 constexpr size_t kTightenRoots = 8;
 constexpr int kTightenRounds = 16;
@@ -66,39 +74,79 @@ uint64_t splitmix64(uint64_t x) {
   return x ^ (x >> 31);
 }
 
+/// Roots searched at once (at most; fewer on fewer cores): each holds tree_cotree's arrays, the size of
+/// the surface.
+constexpr size_t kParallelRoots = 4;
+
 /// The search for the cheapest non-separating loop of one surface: the best loop so far, and the
 /// radius a root's search needs to find a cheaper one.
 class LoopSearch {
  public:
   LoopSearch(const Surface& s, const EdgeGraph& g, const std::vector<std::vector<uint32_t>>& loops)
-      : s_(s), g_(g), loops_(loops), longest_edge_(g.cost.empty() ? 0.0 : *std::max_element(g.cost.begin(), g.cost.end())) {
-    keep_fixed_arrays(s, g, loops, scratch_);
+      : s_(s),
+        g_(g),
+        loops_(loops),
+        longest_edge_(g.cost.empty() ? 0.0 : *std::max_element(g.cost.begin(), g.cost.end())),
+        workers_(std::clamp<size_t>(size_t(tbb::this_task_arena::max_concurrency()), 1, kParallelRoots)) {
+    keep_fixed_arrays(s, g, loops, workers_[0].scratch);
+    for (size_t k = 1; k < workers_.size(); ++k) workers_[k].scratch = workers_[0].scratch;
   }
 
-  /// Searches the loops through `root`; keeps the cheapest (ties to the earlier root). A loop through
-  /// the root cheaper than the best reaches no vertex farther than half the best's cost plus half its
-  /// leftover edge: that is the radius searched.
-  void try_root(uint32_t root) {
-    Loop l = shortest_loop_through(s_, g_, root, loops_, (best_.cost + longest_edge_) / 2, scratch_, tree_);
+  /// Searches the loops through each root in turn and keeps the cheapest (ties to the earlier root).
+  /// A loop through a root cheaper than the best reaches no vertex farther than half the best's cost
+  /// plus half its leftover edge: that is the radius searched. Several roots are searched at once with
+  /// the radius the best so far gives; their loops are taken in order up to the first cheaper one, and
+  /// the roots after it are searched again with the new, smaller radius. So every root is searched
+  /// with the radius it would get one at a time, and the loop kept is the one that would be.
+  /// The first root, while no loop is known: its whole surface would be searched. Where its loop is
+  /// cheaper than `bound` (the cost of some loop of the surface), a search within the radius that bound
+  /// gives finds it; only where it is not is the whole surface searched.
+  void try_first_root(uint32_t root, double bound) {
+    Worker& w = workers_[0];
+    Loop l = shortest_loop_through(s_, g_, root, loops_, (bound + longest_edge_) / 2, w.scratch, w.tree);
+    if (!(l.cost < bound)) l = shortest_loop_through(s_, g_, root, loops_, std::numeric_limits<double>::infinity(), w.scratch, w.tree);
     if (l.cost < best_.cost * (1 - 1e-12)) best_ = std::move(l);
+  }
+
+  void try_roots(const std::vector<uint32_t>& roots) {
+    std::vector<Loop> found(workers_.size());
+    for (size_t i = 0; i < roots.size();) {
+      // Before any loop is known the radius is unbounded: one root then, not a batch of whole-surface searches.
+      const size_t n = std::isfinite(best_.cost) ? std::min(workers_.size(), roots.size() - i) : 1;
+      const double radius = (best_.cost + longest_edge_) / 2;
+      tbb::parallel_for(size_t(0), n, [&](size_t k) {
+        found[k] = shortest_loop_through(s_, g_, roots[i + k], loops_, radius, workers_[k].scratch, workers_[k].tree);
+      });
+      size_t k = 0;
+      while (k < n && !(found[k].cost < best_.cost * (1 - 1e-12))) ++k;
+      if (k < n) best_ = std::move(found[k]);
+      i += std::min(k + 1, n);
+    }
   }
   const Loop& best() const { return best_; }
 
  private:
+  struct Worker {
+    TreeCotreeScratch scratch;
+    TreeCotree tree;
+  };
   const Surface& s_;
   const EdgeGraph& g_;
   const std::vector<std::vector<uint32_t>>& loops_;
   const double longest_edge_;
   Loop best_;
-  TreeCotreeScratch scratch_;
-  TreeCotree tree_;
+  std::vector<Worker> workers_;
 };
 
 /// Candidate roots: a global tree-cotree from one vertex; its leftover edges sit on the handles, so
-/// roots at their ends find each handle's own short loop. Empty where there is no handle.
-std::vector<uint32_t> candidate_roots(const Surface& s, const EdgeGraph& g, const std::vector<std::vector<uint32_t>>& loops) {
+/// roots at their ends find each handle's own short loop. Empty where there is no handle. `bound`: the
+/// cost of the global tree's shortest loop (infinite where there is none), a loop the search's first
+/// root can be measured against.
+std::vector<uint32_t> candidate_roots(const Surface& s, const EdgeGraph& g, const std::vector<std::vector<uint32_t>>& loops,
+                                      double& bound) {
   const TreeCotree global = tree_cotree(s, g, {s.triangles[0][0]}, loops);
   std::vector<uint32_t> roots;
+  bound = global.leftover.empty() ? std::numeric_limits<double>::infinity() : loop_of(s, g, global, global.leftover.front()).cost;
   for (uint32_t e : global.leftover) {
     for (uint32_t v : {s.from(g.edge_halfedge[e]), s.to(g.edge_halfedge[e])})
       if (std::find(roots.begin(), roots.end(), v) == roots.end()) roots.push_back(v);
@@ -131,7 +179,7 @@ void tighten(const Surface& s, const EdgeGraph& g, LoopSearch& search) {
     std::sort(outer.begin(), outer.end(), [](uint32_t a, uint32_t b) { return splitmix64(a) < splitmix64(b); });
     for (size_t i = 0; i < std::min(kTightenRoots, outer.size()); ++i) tries.push_back(outer[i]);
     const double before = best.cost;
-    for (uint32_t r : tries) search.try_root(r);
+    search.try_roots(tries);
     if (!(search.best().cost < before * (1 - kTightenGain))) break;
   }
 }
@@ -144,10 +192,12 @@ Surface remove_handles(const Surface& component, std::vector<double>* loop_lengt
   for (long k = 0; k < genus; ++k) {
     const EdgeGraph g(cur, seams);
     const auto loops = boundary_loops(cur);
-    const std::vector<uint32_t> roots = candidate_roots(cur, g, loops);
+    double bound = 0;
+    const std::vector<uint32_t> roots = candidate_roots(cur, g, loops, bound);
     if (roots.empty()) break;
     LoopSearch search(cur, g, loops);
-    for (uint32_t r : roots) search.try_root(r);
+    search.try_first_root(roots.front(), bound);
+    search.try_roots(std::vector<uint32_t>(roots.begin() + 1, roots.end()));
     if (search.best().edges.empty()) break;
     tighten(cur, g, search);
     // Cut along the loop: its two sides become boundary loops.
