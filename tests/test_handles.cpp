@@ -1,6 +1,7 @@
 // Handle loops: the radius-limited tree-cotree behind the loop search keeps its promises, and
 // remove_handles tightens a loop found off a handle's waist down to the waist.
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <cmath>
 #include <numbers>
@@ -92,6 +93,30 @@ TEST(RemoveHandles, TightensTheLoopToTheWaist) {
   const double waist = 2 * nv * 0.12 * std::sin(std::numbers::pi / nv);  // the polygon at the waist
   EXPECT_GE(loops[0], waist * (1 - 1e-9));
   EXPECT_LE(loops[0], waist * 1.02);  // measured: 0.752037 for a waist of 0.751831; 0.914767 untightened
+}
+
+// The search tries its roots several at a time where there are cores for it (LoopSearch::try_roots),
+// each with the radius it would get one at a time: the loops cut and the surface left must be those of
+// the search on one thread.
+TEST(RemoveHandles, TheSameLoopsWhateverTheRootsSearchedAtOnce) {
+  const std::vector<std::pair<std::string, TexturedMesh>> meshes = {
+      {"double_torus", cat::double_torus()}, {"plate_g8", cat::perforated_plate(8)}, {"arches_g5", cat::arched_block(5)}};
+  for (const auto& [name, m] : meshes) {
+    SCOPED_TRACE(name);
+    const Surface s = split_components(prepare_surface(m, nullptr))[0];
+    auto search_on = [&](int threads, std::vector<double>& loops) {
+      Surface out;
+      tbb::task_arena(threads).execute([&] { out = remove_handles(s, &loops); });
+      return out;
+    };
+    std::vector<double> one_loops, four_loops;
+    const Surface one = search_on(1, one_loops), four = search_on(4, four_loops);
+    ASSERT_EQ(one_loops.size(), size_t(topology_of(s).genus()));
+    EXPECT_EQ(four_loops, one_loops);
+    EXPECT_EQ(four.triangles, one.triangles);
+    EXPECT_EQ(four.vertex_parent, one.vertex_parent);
+    EXPECT_EQ(topology_of(four).genus(), 0);
+  }
 }
 
 }  // namespace
