@@ -323,7 +323,7 @@ Plan plan_prepared(const TexturedMesh& input, const Options& options, const Plan
     areas = component_areas(plan->components);
     shares = plan_density(input, options, plan->components, areas, size, density);
   }
-  if (!split_piece.empty()) cut_inputs = prepare_cut_inputs(input, plan->components);  // the pieces' own
+  if (rep.pages.components_split > 0) cut_inputs = prepare_cut_inputs(input, plan->components);  // the pieces' own
 
   // 3. The texture's shape (auto: probed on the component that dominates the texture), then 4. each
   //    component cut to a disk and mapped onto its rectangle (§4.2).
