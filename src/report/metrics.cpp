@@ -133,34 +133,45 @@ namespace {
 std::vector<uint32_t> chart_ids(const TexturedMesh& m, double* seam) {
   const auto vid = weld_positions(m);
   const size_t nh = 3 * m.num_triangles();
-  std::vector<std::pair<uint64_t, uint32_t>> keyed(nh);  // halfedges keyed by welded endpoints
-  for (uint32_t h = 0; h < nh; ++h) {
-    const uint64_t a = vid[m.triangles[h / 3][h % 3]], b = vid[m.triangles[h / 3][(h % 3 + 1) % 3]];
-    keyed[h] = {std::min(a, b) << 32 | std::max(a, b), h};
+  const uint32_t welded = vid.empty() ? 0 : *std::max_element(vid.begin(), vid.end()) + 1;
+  auto end_of = [&](uint32_t h, int k) { return vid[m.triangles[h / 3][(h % 3 + k) % 3]]; };
+  auto low = [&](uint32_t h) { return std::min(end_of(h, 0), end_of(h, 1)); };
+  auto high = [&](uint32_t h) { return std::max(end_of(h, 0), end_of(h, 1)); };
+  // Half-edges grouped by their welded endpoints: bucketed by the lower end (a counting sort, half-edges
+  // ascending in each bucket), each bucket then ordered by the higher end. Runs of equal ends come in
+  // the order a sort of (lower, higher, half-edge) gives, without sorting all 3 x triangles.
+  std::vector<uint32_t> start(size_t(welded) + 1, 0), by_ends(nh);
+  for (uint32_t h = 0; h < nh; ++h) ++start[size_t(low(h)) + 1];
+  for (uint32_t v = 0; v < welded; ++v) start[v + 1] += start[v];
+  {
+    std::vector<uint32_t> next(start.begin(), start.end() - 1);
+    for (uint32_t h = 0; h < nh; ++h) by_ends[next[low(h)]++] = h;
   }
-  tbb::parallel_sort(keyed.begin(), keyed.end());
+  tbb::parallel_for(uint32_t(0), welded, [&](uint32_t v) {
+    std::stable_sort(by_ends.begin() + start[v], by_ends.begin() + start[v + 1], [&](uint32_t x, uint32_t y) { return high(x) < high(y); });
+  });
   detail::UnionFind uf(m.num_triangles());
-  auto uv_at = [&](uint32_t h, uint64_t v) {
+  auto uv_at = [&](uint32_t h, uint32_t v) {
     const uint32_t t = h / 3;
     for (int k = 0; k < 3; ++k)
       if (vid[m.triangles[t][k]] == v) return m.corner_uv[3 * t + size_t(k)];
     return Vec2(NAN, NAN);
   };
   for (size_t i = 0; i < nh;) {
+    const uint32_t a = low(by_ends[i]), b = high(by_ends[i]);
     size_t j = i + 1;
-    while (j < nh && keyed[j].first == keyed[i].first) ++j;
-    const uint64_t a = keyed[i].first >> 32, b = keyed[i].first & 0xffffffffu;
+    while (j < nh && low(by_ends[j]) == a && high(by_ends[j]) == b) ++j;
     bool differs = false;
     for (size_t k0 = i; k0 < j; ++k0)
       for (size_t k = k0 + 1; k < j; ++k) {
-        const uint32_t h0 = keyed[k0].second, h1 = keyed[k].second;
+        const uint32_t h0 = by_ends[k0], h1 = by_ends[k];
         if (uv_at(h0, a) == uv_at(h1, a) && uv_at(h0, b) == uv_at(h1, b) && texture_of(m, h0 / 3) == texture_of(m, h1 / 3))
           uf.unite(h0 / 3, h1 / 3);
         else
           differs = true;
       }
     if (differs && seam) {
-      const uint32_t h = keyed[i].second;
+      const uint32_t h = by_ends[i];
       *seam += (m.positions[m.triangles[h / 3][h % 3]] - m.positions[m.triangles[h / 3][(h % 3 + 1) % 3]]).norm();
     }
     i = j;
