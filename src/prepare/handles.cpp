@@ -92,12 +92,6 @@ class LoopSearch {
     for (size_t k = 1; k < workers_.size(); ++k) workers_[k].scratch = workers_[0].scratch;
   }
 
-  /// Searches the loops through each root in turn and keeps the cheapest (ties to the earlier root).
-  /// A loop through a root cheaper than the best reaches no vertex farther than half the best's cost
-  /// plus half its leftover edge: that is the radius searched. Several roots are searched at once with
-  /// the radius the best so far gives; their loops are taken in order up to the first cheaper one, and
-  /// the roots after it are searched again with the new, smaller radius. So every root is searched
-  /// with the radius it would get one at a time, and the loop kept is the one that would be.
   /// The first root, while no loop is known: its whole surface would be searched. Where its loop is
   /// cheaper than `bound` (the cost of some loop of the surface), a search within the radius that bound
   /// gives finds it; only where it is not is the whole surface searched.
@@ -108,6 +102,12 @@ class LoopSearch {
     if (l.cost < best_.cost * (1 - 1e-12)) best_ = std::move(l);
   }
 
+  /// Searches the loops through each root in turn and keeps the cheapest (ties to the earlier root).
+  /// A loop through a root cheaper than the best reaches no vertex farther than half the best's cost
+  /// plus half its leftover edge: that is the radius searched. Several roots are searched at once with
+  /// the radius the best so far gives; their loops are taken in order up to the first cheaper one, and
+  /// the roots after it are searched again with the new, smaller radius. So every root is searched
+  /// with the radius it would get one at a time, and the loop kept is the one that would be.
   void try_roots(const std::vector<uint32_t>& roots) {
     std::vector<Loop> found(workers_.size());
     for (size_t i = 0; i < roots.size();) {
