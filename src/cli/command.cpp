@@ -378,31 +378,19 @@ PlannedModel read_textures_and_plan(const std::string& input, const TexturedMesh
       texture_error = std::current_exception();
     }
   };
-  auto plan_from = [&](const TexturedMesh& model) {
+  auto planning = [&](auto&& step) {  // a step of the plan, its error kept for after the textures'
     try {
-      r.plan = plan_charts(model, opt);
+      step();
     } catch (...) {
       plan_error = std::current_exception();
     }
   };
   if (opt.map == MapKind::kDetail || (opt.aspect == 0 && opt.map != MapKind::kHarmonic && opt.layout == Layout::kAtlas)) {
     PreparedMesh prepared;
-    tbb::parallel_invoke(read_textures, [&] {
-      try {
-        prepared = prepare_mesh(geometry, opt);
-      } catch (...) {
-        plan_error = std::current_exception();
-      }
-    });
-    if (!texture_error && !plan_error) {
-      try {
-        r.plan = plan_charts(r.mesh, opt, std::move(prepared));
-      } catch (...) {
-        plan_error = std::current_exception();
-      }
-    }
+    tbb::parallel_invoke(read_textures, [&] { planning([&] { prepared = prepare_mesh(geometry, opt); }); });
+    if (!texture_error && !plan_error) planning([&] { r.plan = plan_charts(r.mesh, opt, std::move(prepared)); });
   } else {
-    tbb::parallel_invoke(read_textures, [&] { plan_from(geometry); });
+    tbb::parallel_invoke(read_textures, [&] { planning([&] { r.plan = plan_charts(geometry, opt); }); });
   }
   if (texture_error) std::rethrow_exception(texture_error);
   if (plan_error) std::rethrow_exception(plan_error);

@@ -99,7 +99,7 @@ class LoopSearch {
     Worker& w = workers_[0];
     Loop l = shortest_loop_through(s_, g_, root, loops_, (bound + longest_edge_) / 2, w.scratch, w.tree);
     if (!(l.cost < bound)) l = shortest_loop_through(s_, g_, root, loops_, std::numeric_limits<double>::infinity(), w.scratch, w.tree);
-    if (l.cost < best_.cost * (1 - 1e-12)) best_ = std::move(l);
+    if (improves(l)) best_ = std::move(l);
   }
 
   /// Searches the loops through each root in turn and keeps the cheapest (ties to the earlier root).
@@ -118,7 +118,7 @@ class LoopSearch {
         found[k] = shortest_loop_through(s_, g_, roots[i + k], loops_, radius, workers_[k].scratch, workers_[k].tree);
       });
       size_t k = 0;
-      while (k < n && !(found[k].cost < best_.cost * (1 - 1e-12))) ++k;
+      while (k < n && !improves(found[k])) ++k;
       if (k < n) best_ = std::move(found[k]);
       i += std::min(k + 1, n);
     }
@@ -126,6 +126,9 @@ class LoopSearch {
   const Loop& best() const { return best_; }
 
  private:
+  /// Whether `l` replaces the best loop: cheaper beyond rounding (a tie keeps the earlier root's).
+  bool improves(const Loop& l) const { return l.cost < best_.cost * (1 - 1e-12); }
+
   struct Worker {
     TreeCotreeScratch scratch;
     TreeCotree tree;
