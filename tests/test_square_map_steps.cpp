@@ -73,5 +73,40 @@ TEST(SquareMapSteps, FallbackWeightsAreFoldFreeOnAConvexBoundary) {
   EXPECT_EQ(h.folds_per_attempt.back(), 0u);
 }
 
+// A solver prepared ahead for one set of held vertices, then asked to solve with another (the
+// multilevel map prepares for the coarse copy it tries first, and may settle on another): it builds
+// the system it is asked for, and gives a fresh solver's solution, bit for bit.
+TEST(SquareMapSteps, APreparedSolverAskedForOtherHeldVerticesSolvesThose) {
+  const auto comps = split_components(prepare_surface(cat::sphere_with_holes(), nullptr));
+  ASSERT_FALSE(comps.empty());
+  const Disk disk = cut_to_disk(comps[0], CutOptions{}, nullptr);
+  const Surface& m = disk.mesh;
+  const SquareBoundary b = map_boundary_to_square(disk, SquareMapOptions{});
+  const std::vector<double> w = edge_weights(m, EdgeWeights::kClamped);
+  std::vector<Vec2> start(m.num_vertices(), Vec2::Zero());
+  for (size_t i = 0; i < disk.boundary.size(); ++i) start[disk.boundary[i]] = b.uv[i];
+  const std::vector<char> boundary = boundary_mask(m.num_vertices(), disk.boundary);
+  uint32_t interior = 0;
+  while (boundary[interior]) ++interior;
+  std::vector<char> held_too = boundary;  // one interior vertex held too, where the start puts it
+  held_too[interior] = 1;
+  const std::vector<char>& more = held_too;
+  start[interior] = Vec2(0.5, 0.5);
+  for (const std::vector<char>* held : {&boundary, &more}) {
+    DirichletSolver fresh;
+    std::vector<Vec2> expected = start;
+    ASSERT_TRUE(fresh.solve(m, w, *held, expected));
+    DirichletSolver prepared;
+    prepared.prepare(m, held == &boundary ? more : boundary);
+    std::vector<Vec2> uv = start;
+    ASSERT_TRUE(prepared.solve(m, w, *held, uv));
+    for (size_t v = 0; v < uv.size(); ++v) EXPECT_EQ(uv[v], expected[v]) << "vertex " << v;
+    if (held == &more)
+      EXPECT_EQ(uv[interior], Vec2(0.5, 0.5)) << "held where the start put it";
+    else
+      EXPECT_NE(uv[interior], Vec2(0.5, 0.5)) << "solved, not held";
+  }
+}
+
 }  // namespace
 }  // namespace tightex

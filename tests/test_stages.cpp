@@ -1242,6 +1242,39 @@ TEST(RefineMap, AVertexWithoutTargetFramesStaysWhileTheRestIsRefined) {
   for (size_t f = 0; f < g.mesh.num_faces(); ++f) EXPECT_GT(uv_area(g, f), 0.0) << "face " << f;
 }
 
+// refine_map with a system made ahead (prepare_refinement) or by an earlier refinement gives the map
+// it gives alone, bit for bit, and keeps that system; one made for other free coordinates (another
+// vertex held) is replaced, and the map is still the one for refine_map's own coordinates.
+TEST(RefineMap, APreparedSystemGivesTheSameMapAndOneForOtherCoordinatesIsReplaced) {
+  GridDisk g = grid_disk();
+  for (size_t w = 0; w < g.uv.size(); ++w)
+    if (!g.fixed[w]) g.uv[w] += Vec2(0.02 * std::sin(3.0 * g.uv[w].y()), 0.01 * std::cos(2.0 * g.uv[w].x()));
+  for (size_t f = 0; f < g.mesh.num_faces(); ++f) ASSERT_GT(uv_area(g, f), 0.0);
+  std::vector<Vec2> alone = g.uv;
+  const SlimStats expected = refine_map(g.mesh, g.fixed, g.target, 3, alone);
+  ASSERT_GT(expected.iterations, 0);
+  std::shared_ptr<RefinementSystem> system = prepare_refinement(g.mesh, g.fixed, g.target);
+  ASSERT_NE(system, nullptr);
+  const RefinementSystem* made = system.get();
+  for (int run = 0; run < 2; ++run) {  // prepared, then left by the first run
+    std::vector<Vec2> uv = g.uv;
+    const SlimStats st = refine_map(g.mesh, g.fixed, g.target, 3, uv, kSupernodalFrom, {}, nullptr, nullptr, &system);
+    EXPECT_EQ(st.iterations, expected.iterations);
+    EXPECT_EQ(st.energy, expected.energy);
+    EXPECT_EQ(uv, alone);
+    EXPECT_EQ(system.get(), made) << "run " << run << ": the system was made again";
+  }
+  std::vector<char> other = g.fixed;
+  other[3 * 8 + 3] = 3;
+  system = prepare_refinement(g.mesh, other, g.target);
+  made = system.get();
+  std::vector<Vec2> uv = g.uv;
+  refine_map(g.mesh, g.fixed, g.target, 3, uv, kSupernodalFrom, {}, nullptr, nullptr, &system);
+  EXPECT_EQ(uv, alone);
+  EXPECT_NE(system.get(), made);
+  EXPECT_NE(system, nullptr);
+}
+
 // The density-equalising flow (flow_density) on a flat 24 x 24 grid whose left half asks for 4x the
 // texels of its right half, from the identity map (log2(area / target) -0.68 / +1.32): it evens the
 // density out to within +-0.3 (the faces along the step in the targets stay a little off), folds

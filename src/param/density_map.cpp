@@ -41,7 +41,8 @@ SlimStats refine_in_rectangle(const DensityConstraints& c, const std::vector<dou
                               const std::function<void(int)>& on_step, std::vector<Vec2>& uv,
                               const std::vector<FaceShape>* shapes = nullptr) {
   if (c.aspect == 1.0)
-    return refine_map(c.mesh, c.fixed, target, iterations, uv, c.options.supernodal_from, on_step, shapes, c.vertex_order.get());
+    return refine_map(c.mesh, c.fixed, target, iterations, uv, c.options.supernodal_from, on_step, shapes, c.vertex_order.get(),
+                      &c.refinement);
   const double sx = std::sqrt(c.aspect);
   const std::vector<Vec2> before = uv;
   for (Vec2& p : uv) p = Vec2(p.x() * sx, p.y() / sx);
@@ -52,7 +53,7 @@ SlimStats refine_in_rectangle(const DensityConstraints& c, const std::vector<dou
       for (Vec2& p : s) p = Vec2(p.x() * sx, p.y() / sx);
   }
   const SlimStats r = refine_map(c.mesh, c.fixed, target, iterations, uv, c.options.supernodal_from, on_step,
-                                 shapes ? &scaled_shapes : nullptr, c.vertex_order.get());
+                                 shapes ? &scaled_shapes : nullptr, c.vertex_order.get(), &c.refinement);
   for (Vec2& p : uv) p = Vec2(p.x() / sx, p.y() * sx);
   // Held coordinates come back exactly (x * sx / sx may miss 1 by an ulp: a side's texel centres
   // would fall outside the chart).

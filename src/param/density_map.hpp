@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "param/boundary.hpp"
+#include "param/slim.hpp"
 #include "param/square_map_options.hpp"
 
 namespace tightex {
@@ -18,6 +19,9 @@ struct DensityConstraints {
   std::vector<char> fixed;                               // for the refinement: corners, bumps and a bump's two side neighbours stay
   std::vector<char> flow_fixed;                          // for the flow: only the corners stay
   std::shared_ptr<const std::vector<int>> vertex_order;  // the systems' fill-reducing order (optional)
+  /// The refinements' system (refine_map's `system`): made by the first, or ahead by the caller
+  /// (prepare_refinement with `fixed`), and reused by every refinement that frees the same coordinates.
+  mutable std::shared_ptr<RefinementSystem> refinement = {};
 };
 
 /// The constraints for a disk whose boundary map_boundary_to_square placed. Every other boundary

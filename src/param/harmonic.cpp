@@ -88,6 +88,14 @@ struct DirichletSolver::Laplacian {
     for (int i = 0; i < n; ++i) diagonal_slot[size_t(i)] = slot(i, i);
   }
 
+  /// Whether this system holds exactly the vertices on_boundary marks.
+  bool holds(const std::vector<char>& on_boundary) const {
+    if (on_boundary.size() != unknown.size()) return false;
+    for (size_t v = 0; v < unknown.size(); ++v)
+      if ((on_boundary[v] != 0) != (unknown[v] < 0)) return false;
+    return true;
+  }
+
   /// Calls f(halfedge, row, col) for every edge joining two unknowns, once (on its first halfedge).
   template <class F>
   void for_each_entry(const Surface& m, F&& f) const {
@@ -134,16 +142,18 @@ DirichletSolver::DirichletSolver(long supernodal_from, std::shared_ptr<const std
 
 DirichletSolver::~DirichletSolver() = default;
 
+void DirichletSolver::prepare(const Surface& m, const std::vector<char>& on_boundary) {
+  const size_t nv = m.num_vertices();
+  laplacian_ = std::make_unique<Laplacian>(m, on_boundary);
+  if (laplacian_->n == 0) return;
+  const std::vector<int> order =
+      vertex_order_ && vertex_order_->size() == nv ? order_of_unknowns(*vertex_order_, laplacian_->unknown, 1) : std::vector<int>{};
+  cholesky_->analyzePattern(laplacian_->a, order.empty() ? nullptr : &order);
+}
+
 bool DirichletSolver::solve(const Surface& m, const std::vector<double>& w, const std::vector<char>& on_boundary, std::vector<Vec2>& uv) {
   const size_t nv = m.num_vertices();
-  if (!laplacian_) {
-    laplacian_ = std::make_unique<Laplacian>(m, on_boundary);
-    if (laplacian_->n > 0) {
-      const std::vector<int> order =
-          vertex_order_ && vertex_order_->size() == nv ? order_of_unknowns(*vertex_order_, laplacian_->unknown, 1) : std::vector<int>{};
-      cholesky_->analyzePattern(laplacian_->a, order.empty() ? nullptr : &order);
-    }
-  }
+  if (!laplacian_ || !laplacian_->holds(on_boundary)) prepare(m, on_boundary);
   Laplacian& lap = *laplacian_;
   if (lap.n == 0) return true;
   Eigen::MatrixX2d rhs;

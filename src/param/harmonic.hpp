@@ -43,6 +43,11 @@ class DirichletSolver {
   /// uv unchanged, if the factorisation or the solve failed numerically.
   bool solve(const Surface& mesh, const std::vector<double>& weights, const std::vector<char>& on_boundary, std::vector<Vec2>& uv);
 
+  /// Builds the system's pattern for `mesh` with `on_boundary` held, and analyses it: what the first
+  /// solve with them would do, done ahead (for a caller with a core to spare). A solve with other
+  /// vertices held builds its own again.
+  void prepare(const Surface& mesh, const std::vector<char>& on_boundary);
+
  private:
   struct Laplacian;
   std::unique_ptr<SparseCholesky> cholesky_;

@@ -9,29 +9,36 @@
 #include <malloc.h>
 #endif
 
+#include "param/boundary.hpp"
 #include "param/coarsen.hpp"
 #include "param/density_map.hpp"
 #include "param/density_reweighting.hpp"
 #include "param/folds.hpp"
 #include "param/harmonic.hpp"
 #include "param/map_to_square.hpp"
+#include "param/slim.hpp"
 #include "param/sparse_cholesky.hpp"
 
 namespace tightex {
 
 namespace {
 
+/// Per vertex of the full mesh, whether it is one of the coarse copy's.
+std::vector<char> coarse_vertices(const Surface& m, const CoarseDisk& coarse) {
+  std::vector<char> held(m.num_vertices(), 0);
+  for (uint32_t v : coarse.fine_vertex) held[v] = 1;
+  return held;
+}
+
 /// The harmonic map between the coarse vertices (held where coarse_uv puts them): a target close to the
 /// coarse map, with its own detail between the coarse vertices, but which may fold where the held
 /// vertices enclose a concave patch.
-std::vector<Vec2> harmonic_between(const Disk& disk, const CoarseDisk& coarse, const std::vector<Vec2>& coarse_uv, long supernodal_from,
-                                   const std::shared_ptr<const std::vector<int>>& order) {
+std::vector<Vec2> harmonic_between(const Disk& disk, const CoarseDisk& coarse, const std::vector<Vec2>& coarse_uv,
+                                   DirichletSolver& solver) {
   const Surface& m = disk.mesh;
   std::vector<Vec2> uv(m.num_vertices(), Vec2::Zero());
-  std::vector<char> held(m.num_vertices(), 0);
-  for (size_t c = 0; c < coarse.fine_vertex.size(); ++c) uv[coarse.fine_vertex[c]] = coarse_uv[c], held[coarse.fine_vertex[c]] = 1;
-  DirichletSolver solver(supernodal_from, order);
-  if (!solver.solve(m, edge_weights(m, EdgeWeights::kClamped), held, uv)) return {};
+  for (size_t c = 0; c < coarse.fine_vertex.size(); ++c) uv[coarse.fine_vertex[c]] = coarse_uv[c];
+  if (!solver.solve(m, edge_weights(m, EdgeWeights::kClamped), coarse_vertices(m, coarse), uv)) return {};
   return uv;
 }
 
@@ -63,18 +70,26 @@ std::vector<double> target_cotangent_weights(const Surface& m, const std::vector
   return w;
 }
 
+/// The full mesh's systems, built and analysed ahead (prepare_fine_systems): the Laplacian with the
+/// coarse vertices held (the harmonic fill), the one with the boundary held (the Tutte fill and the
+/// reweighting), and the symmetric Dirichlet steps'.
+struct FineSystems {
+  std::unique_ptr<DirichletSolver> between, tutte;
+  std::shared_ptr<RefinementSystem> steps;
+};
+
 /// Step 2 of multilevel_map: the Tutte map (only the boundary held) with the weights of the harmonic
-/// target between the coarse vertices (target_cotangent_weights), which `weights` gets; `solver` has
-/// its pattern. Empty if a solve fails or the result folds numerically.
-std::vector<Vec2> fill_between(const Disk& disk, const CoarseDisk& coarse, const std::vector<Vec2>& coarse_uv, long supernodal_from,
-                               const std::shared_ptr<const std::vector<int>>& order, DirichletSolver& solver,
+/// target between the coarse vertices (target_cotangent_weights), which `weights` gets. The harmonic
+/// target's solver is freed once it is solved. Empty if a solve fails or the result folds numerically.
+std::vector<Vec2> fill_between(const Disk& disk, const CoarseDisk& coarse, const std::vector<Vec2>& coarse_uv, FineSystems& systems,
                                std::vector<double>& weights) {
   const Surface& m = disk.mesh;
-  const std::vector<Vec2> target = harmonic_between(disk, coarse, coarse_uv, supernodal_from, order);
+  const std::vector<Vec2> target = harmonic_between(disk, coarse, coarse_uv, *systems.between);
+  systems.between.reset();
   if (target.empty()) return {};
   std::vector<Vec2> uv = target;
   weights = target_cotangent_weights(m, target);
-  if (!solver.solve(m, weights, boundary_mask(m.num_vertices(), disk.boundary), uv)) return {};
+  if (!systems.tutte->solve(m, weights, boundary_mask(m.num_vertices(), disk.boundary), uv)) return {};
   if (count_folds(m, uv) > 0) return {};
   return uv;
 }
@@ -92,24 +107,44 @@ std::vector<size_t> coarse_sizes(const Disk& disk, const SquareMapOptions& optio
   return sizes;
 }
 
-/// Step 1 of multilevel_map: a coarse copy and its map (the boundary as `placed`), with stats in `st`.
-/// A copy whose map folds (decimation can leave a narrow neck, which even the uniform harmonic map
-/// crowds below floating-point precision: esp32cam subdivided three times, at 30k of 1.7M vertices) is
-/// replaced by a finer one (the copies come from one run of collapses). nullopt where no copy maps
-/// fold-free or the disk cannot be coarsened enough.
-std::optional<std::pair<CoarseDisk, std::vector<Vec2>>> coarse_map(const Disk& disk, const SquareMapOptions& options, SquareMapStats& st,
-                                                                   SquareBoundary& placed) {
-  std::vector<CoarseDisk> copies = coarsen_disk_in_steps(disk, options.face_target, coarse_sizes(disk, options));
+/// coarse_map's options for `coarse`: its own face targets, its density steps despite any crowding.
+SquareMapOptions coarse_options(const SquareMapOptions& options, const CoarseDisk& coarse) {
+  SquareMapOptions o = options;
+  o.face_target = coarse.face_target;
+  o.density_despite_crowding = true;
+  return o;
+}
+
+/// Step 1 of multilevel_map: the first of the coarse copies (coarsen_disk_in_steps', tried smallest
+/// first) whose map folds nothing, and that map (the boundary as `placed`), with stats in `st`. A copy
+/// whose map folds (decimation can leave a narrow neck, which even the uniform harmonic map crowds below
+/// floating-point precision: esp32cam subdivided three times, at 30k of 1.7M vertices) is replaced by
+/// a finer one. nullopt where no copy maps fold-free or the disk cannot be coarsened enough.
+std::optional<std::pair<CoarseDisk, std::vector<Vec2>>> coarse_map(std::vector<CoarseDisk>& copies, const SquareMapOptions& options,
+                                                                   SquareMapStats& st, SquareBoundary& placed) {
   for (auto coarse = copies.rbegin(); coarse != copies.rend(); ++coarse) {
     if (coarse->fine_vertex.size() > options.multilevel_from) return std::nullopt;  // it could not be coarsened enough
-    SquareMapOptions coarse_options = options;
-    coarse_options.face_target = coarse->face_target;
-    coarse_options.density_despite_crowding = true;
     st = SquareMapStats{};
-    std::vector<Vec2> uv = map_disk(coarse->disk, coarse_options, st, &placed);
+    std::vector<Vec2> uv = map_disk(coarse->disk, coarse_options(options, *coarse), st, &placed);
     if (st.flipped == 0) return std::pair{std::move(*coarse), std::move(uv)};
   }
   return std::nullopt;
+}
+
+/// The full mesh's systems for the coarse copy coarse_map tries first, `coarse`: its vertices held for
+/// the harmonic fill, and the symmetric Dirichlet steps' constraints from the boundary that map places.
+/// Where coarse_map settles on another copy, the solves that differ make their own.
+FineSystems prepare_fine_systems(const Disk& disk, const CoarseDisk& coarse, const SquareMapOptions& options,
+                                 const std::shared_ptr<const std::vector<int>>& order) {
+  const Surface& m = disk.mesh;
+  FineSystems systems{std::make_unique<DirichletSolver>(options.supernodal_from, order),
+                      std::make_unique<DirichletSolver>(options.supernodal_from, order), nullptr};
+  systems.between->prepare(m, coarse_vertices(m, coarse));
+  systems.tutte->prepare(m, boundary_mask(m.num_vertices(), disk.boundary));
+  const SquareBoundary placed = map_boundary_to_square(coarse.disk, coarse_options(options, coarse));
+  const DensityConstraints constraints = density_constraints(disk, placed, options, order);
+  systems.steps = prepare_refinement(m, constraints.fixed, options.face_target, options.supernodal_from, order.get());
+  return systems;
 }
 
 }  // namespace
@@ -119,18 +154,24 @@ std::optional<std::vector<Vec2>> multilevel_map(const Disk& disk, const SquareMa
   if (options.face_target.empty() || options.balance != 1.0 || m.num_vertices() <= options.multilevel_from) return std::nullopt;
   SquareMapStats st;
   SquareBoundary placed;
-  std::optional<std::pair<CoarseDisk, std::vector<Vec2>>> coarse_and_map;
-  // One fill-reducing order for every system on the full mesh, found beside the coarse copy and its
-  // map, which do not need it (each runs on one thread: METIS's 2 s at 425k vertices then cost no
-  // wall time).
+  // One fill-reducing order for every system on the full mesh, found beside the coarse copies (each
+  // runs on one thread: METIS's 2 s at 425k vertices then cost no wall time).
+  std::vector<CoarseDisk> copies;
   std::shared_ptr<const std::vector<int>> order;
-  tbb::parallel_invoke([&] { coarse_and_map = coarse_map(disk, options, st, placed); },
+  tbb::parallel_invoke([&] { copies = coarsen_disk_in_steps(disk, options.face_target, coarse_sizes(disk, options)); },
                        [&] { order = vertex_order_from(m, options.vertex_order_from); });
 #ifdef __GLIBC__
   // What METIS freed stays in its thread's malloc arena, out of reach of the fine stage's
   // factorisations (peak 1706 -> 1779 MiB at 854k faces); handed back to the system here.
   malloc_trim(0);
 #endif
+  if (copies.empty() || copies.back().fine_vertex.size() > options.multilevel_from) return std::nullopt;
+  // The full mesh's systems are built and analysed beside the coarse map, which does not need them.
+  std::optional<std::pair<CoarseDisk, std::vector<Vec2>>> coarse_and_map;
+  FineSystems systems;
+  tbb::parallel_invoke([&] { coarse_and_map = coarse_map(copies, options, st, placed); },
+                       [&] { systems = prepare_fine_systems(disk, copies.back(), options, order); });
+  copies.clear();
   if (!coarse_and_map) return std::nullopt;
   const CoarseDisk& coarse = coarse_and_map->first;
   const std::vector<Vec2>& coarse_uv = coarse_and_map->second;
@@ -142,21 +183,24 @@ std::optional<std::vector<Vec2>> multilevel_map(const Disk& disk, const SquareMa
   fine_options.progress = nullptr;
   SquareMapStats fine;
   std::vector<Vec2> uv;
-  {
-    // The Laplacian's factor is freed before the symmetric Dirichlet steps factorise a system of
-    // twice the unknowns (the peak of the run).
-    DirichletSolver solver(options.supernodal_from, order);
-    std::vector<double> weights;
-    uv = fill_between(disk, coarse, coarse_uv, options.supernodal_from, order, solver, weights);
-    if (uv.empty()) return std::nullopt;
-    // The density on the full mesh (the coarse map's holds only on average over each coarse triangle).
-    reweight_towards_density(m, disk.boundary, fine_options, nullptr, weights, solver, uv, fine);
-  }
+  std::vector<double> weights;
+  uv = fill_between(disk, coarse, coarse_uv, systems, weights);
+  if (uv.empty()) return std::nullopt;
+  // The density on the full mesh (the coarse map's holds only on average over each coarse triangle).
+  reweight_towards_density(m, disk.boundary, fine_options, nullptr, weights, *systems.tutte, uv, fine);
+  // The Laplacian's factor is freed before the symmetric Dirichlet steps factorise a system of twice
+  // the unknowns (the peak of the run), and handed back to the system: the steps' system, built
+  // already, would not reuse it.
+  systems.tutte.reset();
+#ifdef __GLIBC__
+  malloc_trim(0);
+#endif
   // The symmetric Dirichlet steps, in the constraints the coarse boundary had (its vertices are the fine
   // boundary's, in the same order).
   fine_options.refine_iterations = options.fine_steps;
   fine_options.correction_rounds = 0;
   const DensityConstraints constraints = density_constraints(disk, placed, fine_options, order);
+  constraints.refinement = std::move(systems.steps);
   refine_towards_targets(constraints, uv, fine);
   st.fine_reweighting = fine.iterations;
   st.fine_steps = fine.refine_iterations;

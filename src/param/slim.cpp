@@ -8,6 +8,7 @@
 #include <Eigen/Sparse>
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -141,11 +142,13 @@ double max_step(const Surface& m, const std::vector<Vec2>& uv, const std::vector
 /// in the start map) has no energy term: its row of the system would be zero and the factorisation
 /// fail, leaving the whole map unrefined, so it stays where it is (the line search still keeps its
 /// faces from collapsing).
-std::vector<int> free_coordinates(const Surface& m, const std::vector<TargetFrame>& fr, const std::vector<char>& fixed, int& n) {
+/// has_frame(f): whether face f has one.
+template <class HasFrame>
+std::vector<int> free_coordinates(const Surface& m, HasFrame&& has_frame, const std::vector<char>& fixed, int& n) {
   const size_t nv = m.num_vertices();
   std::vector<char> framed(nv, 0);
   for (size_t f = 0; f < m.num_faces(); ++f)
-    if (fr[f].area > 0)
+    if (has_frame(f))
       for (uint32_t v : m.triangles[f]) framed[v] = 1;
   std::vector<int> index(2 * nv, -1);
   n = 0;
@@ -196,8 +199,9 @@ class SlimSystem {
   SpMat A;
   Eigen::VectorXd rhs;
 
-  SlimSystem(const Surface& m, const std::vector<TargetFrame>& fr, const std::vector<int>& index, int n)
-      : A(n, n), rhs(n), m_(m), fr_(fr), index_(index), slot_(m.num_faces() * kPairs, -1) {
+  /// index: free_coordinates' numbering of the n unknowns.
+  SlimSystem(const Surface& m, std::vector<int> index, int n)
+      : A(n, n), rhs(n), m_(m), index_(std::move(index)), slot_(m.num_faces() * kPairs, -1) {
     build_pattern();
     tbb::parallel_for(tbb::blocked_range<size_t>(0, m.num_faces(), 4096), [&](const tbb::blocked_range<size_t>& faces) {
       for (size_t face = faces.begin(); face != faces.end(); ++face)
@@ -209,13 +213,15 @@ class SlimSystem {
     });
   }
 
-  /// The SLIM system at map uv, its squared weights at most max_weight.
-  void assemble(const std::vector<Vec2>& uv, double max_weight) {
+  /// The SLIM system at map uv against the faces' target frames, its squared weights at most max_weight.
+  void assemble(const std::vector<TargetFrame>& fr, const std::vector<Vec2>& uv, double max_weight) {
     std::fill(A.valuePtr(), A.valuePtr() + A.nonZeros(), 0.0);
     rhs.setZero();
     for (size_t f = 0; f < m_.num_faces(); ++f)
-      if (fr_[f].area > 0) add_face(f, uv, max_weight);
+      if (fr[f].area > 0) add_face(fr[f], f, uv, max_weight);
   }
+
+  const std::vector<int>& index() const { return index_; }
 
  private:
   /// A face's six coordinates (corner i's a-th: 2i + a) make 21 unordered pairs, each one entry of
@@ -281,9 +287,8 @@ class SlimSystem {
     std::fill(A.valuePtr(), A.valuePtr() + A.nonZeros(), 0.0);
   }
 
-  void add_face(size_t f, const std::vector<Vec2>& uv, double max_weight) {
+  void add_face(const TargetFrame& F, size_t f, const std::vector<Vec2>& uv, double max_weight) {
     double* values = A.valuePtr();
-    const TargetFrame& F = fr_[f];
     const Tri& t = m_.triangles[f];
     const Mat2 J = jacobian(F, uv[t[0]], uv[t[1]], uv[t[2]]);
     Mat2 U, V;
@@ -319,54 +324,71 @@ class SlimSystem {
   }
 
   const Surface& m_;
-  const std::vector<TargetFrame>& fr_;
-  const std::vector<int>& index_;
+  std::vector<int> index_;
   std::vector<int> slot_;
 };
 
-/// Solves the system assembled at uv; where it fails (weights of 1e28 and more, from a sliver in the
-/// start map), again with its weights capped at kMaxWeight. False if that fails too.
-bool solve_step(SlimSystem& system, SparseCholesky& solver, bool& analyzed, const std::vector<int>& order, const std::vector<Vec2>& uv,
-                Eigen::VectorXd& x, SlimStats& st) {
-  system.assemble(uv, INFINITY);
-  if (!analyzed) {
-    solver.analyzePattern(system.A, order.empty() ? nullptr : &order);
-    analyzed = true;
-  }
-  if (solver.factorize(system.A) && solver.solve(system.A, system.rhs, x)) return true;
-  system.assemble(uv, kMaxWeight);
-  if (!solver.factorize(system.A) || !solver.solve(system.A, system.rhs, x)) return false;
-  ++st.capped_steps;
-  return true;
-}
-
 }  // namespace
+
+class RefinementSystem {
+ public:
+  RefinementSystem(const Surface& m, std::vector<int> index, int n, long supernodal_from, const std::vector<int>* vertex_order)
+      : system(m, std::move(index), n), solver(supernodal_from) {
+    const std::vector<int> order =
+        vertex_order && vertex_order->size() == m.num_vertices() ? order_of_unknowns(*vertex_order, system.index(), 2) : std::vector<int>{};
+    solver.analyzePattern(system.A, order.empty() ? nullptr : &order);
+  }
+
+  /// Solves the system assembled at uv; where it fails (weights of 1e28 and more, from a sliver in the
+  /// start map), again with its weights capped at kMaxWeight. False if that fails too.
+  bool solve_step(const std::vector<TargetFrame>& fr, const std::vector<Vec2>& uv, Eigen::VectorXd& x, SlimStats& st) {
+    system.assemble(fr, uv, INFINITY);
+    if (solver.factorize(system.A) && solver.solve(system.A, system.rhs, x)) return true;
+    system.assemble(fr, uv, kMaxWeight);
+    if (!solver.factorize(system.A) || !solver.solve(system.A, system.rhs, x)) return false;
+    ++st.capped_steps;
+    return true;
+  }
+
+  SlimSystem system;
+  SparseCholesky solver;
+};
+
+std::shared_ptr<RefinementSystem> prepare_refinement(const Surface& m, const std::vector<char>& fixed, const std::vector<double>& target,
+                                                     long supernodal_from, const std::vector<int>* vertex_order) {
+  int n = 0;
+  std::vector<int> index = free_coordinates(
+      m, [&](size_t f) { return target[f] > 0 && std::isfinite(target[f]); }, fixed, n);
+  if (n == 0) return nullptr;
+  return std::make_shared<RefinementSystem>(m, std::move(index), n, supernodal_from, vertex_order);
+}
 
 SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,
                      std::vector<Vec2>& uv, long supernodal_from, const std::function<void(int step)>& on_step,
-                     const std::vector<FaceShape>* shapes, const std::vector<int>* vertex_order) {
+                     const std::vector<FaceShape>* shapes, const std::vector<int>* vertex_order,
+                     std::shared_ptr<RefinementSystem>* system) {
   SlimStats st;
   const size_t nv = m.num_vertices();
   const auto fr = target_frames(m, target, uv, shapes);
   int n = 0;
-  const std::vector<int> index = free_coordinates(m, fr, fixed, n);
+  std::vector<int> index = free_coordinates(
+      m, [&](size_t f) { return fr[f].area > 0; }, fixed, n);
   st.energy_before = st.energy = energy(m, fr, uv);
   if (n == 0 || !std::isfinite(st.energy)) return st;
-  SparseCholesky solver(supernodal_from);
-  bool analyzed = false;
-  SlimSystem system(m, fr, index, n);
-  const std::vector<int> order =
-      vertex_order && vertex_order->size() == nv ? order_of_unknowns(*vertex_order, index, 2) : std::vector<int>{};
+  std::shared_ptr<RefinementSystem> own;
+  std::shared_ptr<RefinementSystem>& sys = system ? *system : own;
+  if (!sys || sys->system.index() != index) sys = std::make_shared<RefinementSystem>(m, std::move(index), n, supernodal_from, vertex_order);
+  const std::vector<int>& free = sys->system.index();
   std::vector<Vec2> d(nv), trial(nv);
   for (int it = 0; it < iterations; ++it) {
     Eigen::VectorXd x;
-    if (!solve_step(system, solver, analyzed, order, uv, x, st)) {
+    if (!sys->solve_step(fr, uv, x, st)) {
       st.stopped = "solver";
       break;
     }
     for (size_t v = 0; v < nv; ++v)
       for (int a = 0; a < 2; ++a) {
-        const int k = index[2 * v + size_t(a)];
+        const int k = free[2 * v + size_t(a)];
         d[v](a) = k < 0 ? 0.0 : x(k) - uv[v](a);
       }
     // Line search: from 0.9 of the longest step that folds nothing, halved until the energy drops.

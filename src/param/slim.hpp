@@ -2,6 +2,7 @@
 #pragma once
 #include <array>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,11 @@ struct SlimStats {
   int capped_steps = 0;                  // steps whose system solved only with its weights capped
 };
 
+/// refine_map's linear system over one mesh's free coordinates: its pattern (where each face's entries
+/// land) and CHOLMOD's analysis, the same for every step and for every refinement of that mesh that
+/// frees the same coordinates.
+class RefinementSystem;
+
 /// A triangle's shape in the plane (its corners in the face's order; position and rotation do not matter).
 using FaceShape = std::array<Vec2, 3>;
 
@@ -29,8 +35,20 @@ using FaceShape = std::array<Vec2, 3>;
 /// Requires uv fold-free, one target per face. Guarantees uv stays fold-free (the line search stops
 /// short of any triangle's collapse) and its energy never rises. Stops after `iterations` steps, when a
 /// step gains less than 0.1%, or when no step lowers the energy; on_step (optional) hears each step.
+/// `system` (optional): the system of an earlier refinement of this mesh, or prepare_refinement's,
+/// used where its free coordinates are this refinement's (their pattern and analysis are then not made
+/// again), replaced otherwise; it must have been made with the same supernodal_from and vertex_order.
 SlimStats refine_map(const Surface& mesh, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,
                      std::vector<Vec2>& uv, long supernodal_from = kSupernodalFrom, const std::function<void(int step)>& on_step = {},
-                     const std::vector<FaceShape>* shapes = nullptr, const std::vector<int>* vertex_order = nullptr);
+                     const std::vector<FaceShape>* shapes = nullptr, const std::vector<int>* vertex_order = nullptr,
+                     std::shared_ptr<RefinementSystem>* system = nullptr);
+
+/// The system refine_map(mesh, fixed, target, ..., supernodal_from, ..., vertex_order) solves from a
+/// fold-free start map, built and analysed before that map exists (every face with a positive target
+/// then has a frame): for a caller with a core to spare while it makes the start. Null where no
+/// coordinate is free.
+std::shared_ptr<RefinementSystem> prepare_refinement(const Surface& mesh, const std::vector<char>& fixed, const std::vector<double>& target,
+                                                     long supernodal_from = kSupernodalFrom,
+                                                     const std::vector<int>* vertex_order = nullptr);
 
 }  // namespace tightex
