@@ -5,6 +5,7 @@
 #include <utility>
 
 #include <tbb/parallel_invoke.h>
+#include <tbb/task_group.h>
 #ifdef __GLIBC__
 #include <malloc.h>
 #endif
@@ -131,20 +132,37 @@ std::optional<std::pair<CoarseDisk, std::vector<Vec2>>> coarse_map(std::vector<C
   return std::nullopt;
 }
 
-/// The full mesh's systems for the coarse copy coarse_map tries first, `coarse`: its vertices held for
-/// the harmonic fill, and the symmetric Dirichlet steps' constraints from the boundary that map places.
-/// Where coarse_map settles on another copy, the solves that differ make their own.
-FineSystems prepare_fine_systems(const Disk& disk, const CoarseDisk& coarse, const SquareMapOptions& options,
-                                 const std::shared_ptr<const std::vector<int>>& order) {
+/// The full mesh's Laplacians for the coarse copy coarse_map tries first, `coarse`: its vertices held
+/// for the harmonic fill, the boundary for the Tutte fill. Where coarse_map settles on another copy,
+/// the harmonic fill makes its own.
+FineSystems prepare_fills(const Disk& disk, const CoarseDisk& coarse, const SquareMapOptions& options,
+                          const std::shared_ptr<const std::vector<int>>& order) {
   const Surface& m = disk.mesh;
   FineSystems systems{std::make_unique<DirichletSolver>(options.supernodal_from, order),
                       std::make_unique<DirichletSolver>(options.supernodal_from, order), nullptr};
   systems.between->prepare(m, coarse_vertices(m, coarse));
   systems.tutte->prepare(m, boundary_mask(m.num_vertices(), disk.boundary));
-  const SquareBoundary placed = map_boundary_to_square(coarse.disk, coarse_options(options, coarse));
-  const DensityConstraints constraints = density_constraints(disk, placed, options, order);
-  systems.steps = prepare_refinement(m, constraints.fixed, options.face_target, options.supernodal_from, order.get());
   return systems;
+}
+
+/// The symmetric Dirichlet steps' system on the full mesh, in the constraints of the boundary the
+/// coarse map placed.
+std::shared_ptr<RefinementSystem> prepare_steps(const Disk& disk, const SquareBoundary& placed, const SquareMapOptions& options,
+                                                const std::shared_ptr<const std::vector<int>>& order) {
+  const DensityConstraints constraints = density_constraints(disk, placed, options, order);
+  return prepare_refinement(disk.mesh, constraints.fixed, options.face_target, options.supernodal_from, order.get());
+}
+
+/// Steps 2 and 3 but the symmetric Dirichlet steps: the coarse map carried to the full mesh, then the
+/// reweighting there. Empty where the fill fails.
+std::vector<Vec2> fill_and_reweight(const Disk& disk, const CoarseDisk& coarse, const std::vector<Vec2>& coarse_uv,
+                                    const SquareMapOptions& fine_options, FineSystems& systems, SquareMapStats& fine) {
+  std::vector<double> weights;
+  std::vector<Vec2> uv = fill_between(disk, coarse, coarse_uv, systems, weights);
+  if (uv.empty()) return uv;
+  // The density on the full mesh (the coarse map's holds only on average over each coarse triangle).
+  reweight_towards_density(disk.mesh, disk.boundary, fine_options, nullptr, weights, *systems.tutte, uv, fine);
+  return uv;
 }
 
 }  // namespace
@@ -166,11 +184,12 @@ std::optional<std::vector<Vec2>> multilevel_map(const Disk& disk, const SquareMa
   malloc_trim(0);
 #endif
   if (copies.empty() || copies.back().fine_vertex.size() > options.multilevel_from) return std::nullopt;
-  // The full mesh's systems are built and analysed beside the coarse map, which does not need them.
+  // The full mesh's Laplacians are built and analysed beside the coarse map, which does not need them,
+  // and the symmetric Dirichlet steps' system beside the fill and the reweighting.
   std::optional<std::pair<CoarseDisk, std::vector<Vec2>>> coarse_and_map;
   FineSystems systems;
   tbb::parallel_invoke([&] { coarse_and_map = coarse_map(copies, options, st, placed); },
-                       [&] { systems = prepare_fine_systems(disk, copies.back(), options, order); });
+                       [&] { systems = prepare_fills(disk, copies.back(), options, order); });
   copies.clear();
   if (!coarse_and_map) return std::nullopt;
   const CoarseDisk& coarse = coarse_and_map->first;
@@ -182,12 +201,11 @@ std::optional<std::vector<Vec2>> multilevel_map(const Disk& disk, const SquareMa
   fine_options.max_iterations = options.fine_reweighting;
   fine_options.progress = nullptr;
   SquareMapStats fine;
-  std::vector<Vec2> uv;
-  std::vector<double> weights;
-  uv = fill_between(disk, coarse, coarse_uv, systems, weights);
+  tbb::task_group steps_ahead;
+  steps_ahead.run([&] { systems.steps = prepare_steps(disk, placed, options, order); });
+  std::vector<Vec2> uv = fill_and_reweight(disk, coarse, coarse_uv, fine_options, systems, fine);
+  steps_ahead.wait();
   if (uv.empty()) return std::nullopt;
-  // The density on the full mesh (the coarse map's holds only on average over each coarse triangle).
-  reweight_towards_density(m, disk.boundary, fine_options, nullptr, weights, *systems.tutte, uv, fine);
   // The Laplacian's factor is freed before the symmetric Dirichlet steps factorise a system of twice
   // the unknowns (the peak of the run), and handed back to the system: the steps' system, built
   // already, would not reuse it.

@@ -12,8 +12,9 @@ namespace tightex {
 /// 1. coarsen_disk to at most options.coarse_vertices (boundary, cut and chords kept) and map that with
 ///    map_disk (the same steps as a small disk gets; its crowding does not stop the density steps);
 ///    where that map folds, again from a copy of twice the vertices (up to three copies, each within
-///    multilevel_from and a quarter of the disk); the full mesh's systems of steps 2 and 3 (their
-///    patterns and CHOLMOD's analyses) are made beside that map, which does not need them;
+///    multilevel_from and a quarter of the disk); the full mesh's Laplacians of steps 2 and 3 (their
+///    patterns and CHOLMOD's analyses) are made beside that map, which does not need them, and the
+///    symmetric Dirichlet steps' system beside step 2 and the reweighting;
 /// 2. carry it to the full mesh: the harmonic map between the coarse vertices (held where the coarse
 ///    map put them) is a target that follows the coarse map but may fold; the Tutte map with that
 ///    target's own cotangent weights (clamped positive) and only the boundary held reproduces it where
