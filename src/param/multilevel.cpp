@@ -71,8 +71,8 @@ std::vector<double> target_cotangent_weights(const Surface& m, const std::vector
   return w;
 }
 
-/// The full mesh's systems, built and analysed ahead (prepare_fine_systems): the Laplacian with the
-/// coarse vertices held (the harmonic fill), the one with the boundary held (the Tutte fill and the
+/// The full mesh's systems, built and analysed ahead (prepare_fills, prepare_steps): the Laplacian with
+/// the coarse vertices held (the harmonic fill), the one with the boundary held (the Tutte fill and the
 /// reweighting), and the symmetric Dirichlet steps'.
 struct FineSystems {
   std::unique_ptr<DirichletSolver> between, tutte;
