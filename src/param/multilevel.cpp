@@ -132,15 +132,15 @@ std::optional<std::pair<CoarseDisk, std::vector<Vec2>>> coarse_map(std::vector<C
   return std::nullopt;
 }
 
-/// The full mesh's Laplacians for the coarse copy coarse_map tries first, `coarse`: its vertices held
-/// for the harmonic fill, the boundary for the Tutte fill. Where coarse_map settles on another copy,
-/// the harmonic fill makes its own.
-FineSystems prepare_fills(const Disk& disk, const CoarseDisk& coarse, const SquareMapOptions& options,
+/// The full mesh's Laplacians: `held` (the vertices of the coarse copy coarse_map tries first) held for
+/// the harmonic fill, the boundary for the Tutte fill. Where coarse_map settles on another copy, the
+/// harmonic fill makes its own.
+FineSystems prepare_fills(const Disk& disk, const std::vector<char>& held, const SquareMapOptions& options,
                           const std::shared_ptr<const std::vector<int>>& order) {
   const Surface& m = disk.mesh;
   FineSystems systems{std::make_unique<DirichletSolver>(options.supernodal_from, order),
                       std::make_unique<DirichletSolver>(options.supernodal_from, order), nullptr};
-  systems.between->prepare(m, coarse_vertices(m, coarse));
+  systems.between->prepare(m, held);
   systems.tutte->prepare(m, boundary_mask(m.num_vertices(), disk.boundary));
   return systems;
 }
@@ -185,11 +185,13 @@ std::optional<std::vector<Vec2>> multilevel_map(const Disk& disk, const SquareMa
 #endif
   if (copies.empty() || copies.back().fine_vertex.size() > options.multilevel_from) return std::nullopt;
   // The full mesh's Laplacians are built and analysed beside the coarse map, which does not need them,
-  // and the symmetric Dirichlet steps' system beside the fill and the reweighting.
+  // for the copy coarse_map tries first (its vertices taken before the map may move it); the symmetric
+  // Dirichlet steps' system beside the fill and the reweighting.
+  const std::vector<char> first_held = coarse_vertices(m, copies.back());
   std::optional<std::pair<CoarseDisk, std::vector<Vec2>>> coarse_and_map;
   FineSystems systems;
   tbb::parallel_invoke([&] { coarse_and_map = coarse_map(copies, options, st, placed); },
-                       [&] { systems = prepare_fills(disk, copies.back(), options, order); });
+                       [&] { systems = prepare_fills(disk, first_held, options, order); });
   copies.clear();
   if (!coarse_and_map) return std::nullopt;
   const CoarseDisk& coarse = coarse_and_map->first;
