@@ -71,12 +71,11 @@ std::vector<double> target_cotangent_weights(const Surface& m, const std::vector
   return w;
 }
 
-/// The full mesh's systems, built and analysed ahead (prepare_fills, prepare_steps): the Laplacian with
-/// the coarse vertices held (the harmonic fill), the one with the boundary held (the Tutte fill and the
-/// reweighting), and the symmetric Dirichlet steps'.
+/// The full mesh's Laplacians, built and analysed ahead (prepare_fills): the one with the coarse
+/// vertices held (the harmonic fill), the one with the boundary held (the Tutte fill and the
+/// reweighting).
 struct FineSystems {
   std::unique_ptr<DirichletSolver> between, tutte;
-  std::shared_ptr<RefinementSystem> steps;
 };
 
 /// Step 2 of multilevel_map: the Tutte map (only the boundary held) with the weights of the harmonic
@@ -93,6 +92,14 @@ std::vector<Vec2> fill_between(const Disk& disk, const CoarseDisk& coarse, const
   if (!systems.tutte->solve(m, weights, boundary_mask(m.num_vertices(), disk.boundary), uv)) return {};
   if (count_folds(m, uv) > 0) return {};
   return uv;
+}
+
+/// Hands the memory the process's allocator holds free back to the system (glibc), where a thread's
+/// arena keeps what it freed out of reach of the next large allocation.
+void release_free_memory() {
+#ifdef __GLIBC__
+  malloc_trim(0);
+#endif
 }
 
 /// Coarse copies tried, each twice the vertices of the one before, while it stays within
@@ -139,18 +146,10 @@ FineSystems prepare_fills(const Disk& disk, const std::vector<char>& held, const
                           const std::shared_ptr<const std::vector<int>>& order) {
   const Surface& m = disk.mesh;
   FineSystems systems{std::make_unique<DirichletSolver>(options.supernodal_from, order),
-                      std::make_unique<DirichletSolver>(options.supernodal_from, order), nullptr};
+                      std::make_unique<DirichletSolver>(options.supernodal_from, order)};
   systems.between->prepare(m, held);
   systems.tutte->prepare(m, boundary_mask(m.num_vertices(), disk.boundary));
   return systems;
-}
-
-/// The symmetric Dirichlet steps' system on the full mesh, in the constraints of the boundary the
-/// coarse map placed.
-std::shared_ptr<RefinementSystem> prepare_steps(const Disk& disk, const SquareBoundary& placed, const SquareMapOptions& options,
-                                                const std::shared_ptr<const std::vector<int>>& order) {
-  const DensityConstraints constraints = density_constraints(disk, placed, options, order);
-  return prepare_refinement(disk.mesh, constraints.fixed, options.face_target, options.supernodal_from, order.get());
 }
 
 /// Steps 2 and 3 but the symmetric Dirichlet steps: the coarse map carried to the full mesh, then the
@@ -178,11 +177,9 @@ std::optional<std::vector<Vec2>> multilevel_map(const Disk& disk, const SquareMa
   std::shared_ptr<const std::vector<int>> order;
   tbb::parallel_invoke([&] { copies = coarsen_disk_in_steps(disk, options.face_target, coarse_sizes(disk, options)); },
                        [&] { order = vertex_order_from(m, options.vertex_order_from); });
-#ifdef __GLIBC__
   // What METIS freed stays in its thread's malloc arena, out of reach of the fine stage's
-  // factorisations (peak 1706 -> 1779 MiB at 854k faces); handed back to the system here.
-  malloc_trim(0);
-#endif
+  // factorisations (peak 1706 -> 1779 MiB at 854k faces).
+  release_free_memory();
   if (copies.empty() || copies.back().fine_vertex.size() > options.multilevel_from) return std::nullopt;
   // The full mesh's Laplacians are built and analysed beside the coarse map, which does not need them,
   // for the copy coarse_map tries first (its vertices taken before the map may move it); the symmetric
@@ -201,10 +198,17 @@ std::optional<std::vector<Vec2>> multilevel_map(const Disk& disk, const SquareMa
   st.coarse_vertices = coarse.fine_vertex.size();
   SquareMapOptions fine_options = options;
   fine_options.max_iterations = options.fine_reweighting;
+  fine_options.refine_iterations = options.fine_steps;
+  fine_options.correction_rounds = 0;
   fine_options.progress = nullptr;
+  // The symmetric Dirichlet steps' constraints are the coarse boundary's (its vertices are the fine
+  // boundary's, in the same order); their system is made beside the fill and the reweighting.
+  const DensityConstraints constraints = density_constraints(disk, placed, fine_options, order);
   SquareMapStats fine;
   tbb::task_group steps_ahead;
-  steps_ahead.run([&] { systems.steps = prepare_steps(disk, placed, options, order); });
+  steps_ahead.run([&] {
+    constraints.refinement = prepare_refinement(m, constraints.fixed, options.face_target, options.supernodal_from, order.get());
+  });
   std::vector<Vec2> uv = fill_and_reweight(disk, coarse, coarse_uv, fine_options, systems, fine);
   steps_ahead.wait();
   if (uv.empty()) return std::nullopt;
@@ -212,15 +216,7 @@ std::optional<std::vector<Vec2>> multilevel_map(const Disk& disk, const SquareMa
   // the unknowns (the peak of the run), and handed back to the system: the steps' system, built
   // already, would not reuse it.
   systems.tutte.reset();
-#ifdef __GLIBC__
-  malloc_trim(0);
-#endif
-  // The symmetric Dirichlet steps, in the constraints the coarse boundary had (its vertices are the fine
-  // boundary's, in the same order).
-  fine_options.refine_iterations = options.fine_steps;
-  fine_options.correction_rounds = 0;
-  const DensityConstraints constraints = density_constraints(disk, placed, fine_options, order);
-  constraints.refinement = std::move(systems.steps);
+  release_free_memory();
   refine_towards_targets(constraints, uv, fine);
   st.fine_reweighting = fine.iterations;
   st.fine_steps = fine.refine_iterations;
