@@ -249,10 +249,10 @@ TEST(RealDataMaps, DefaultMapBeatsHarmonicByThreeDecibelsOnTheMustardBottle) {
   EXPECT_EQ(def["metrics"]["flipped"].get<size_t>(), 0u);
 }
 
-// --map area on the Meshroom scan: the shape probes' multilevel maps estimate 2:1 clearly closer to the
-// input than the square (39.68 against 38.48 dB), but on the two shapes' own maps the square is as
-// close (40.23 against 40.09), and its texture gives 42.07 dB at the surface where 2:1 gave 41.68: the
-// probes' choice is made again on the own maps, and the square kept.
+// --map area on the Meshroom scan: the shape probes' multilevel maps choose 2:1 (the area map's first
+// criterion, the density spread, prefers it), but on the two shapes' own maps the square is estimated
+// closer to the input (41.63 against 41.44 dB): the probes' choice is made again on the own maps, and
+// the square kept (43.66 dB at the surface).
 TEST(RealDataMaps, ProbesChoiceIsConfirmedOnTheShapesOwnMaps) {
   const fs::path input = fs::path(TIGHTEX_SHARED_DATA) / "meshroom_esp32cam" / "texturedMesh.obj";
   if (!fs::exists(input)) GTEST_SKIP() << "../shared/data/meshroom_esp32cam not present";
@@ -263,19 +263,18 @@ TEST(RealDataMaps, ProbesChoiceIsConfirmedOnTheShapesOwnMaps) {
   ASSERT_TRUE(r.contains("metrics"));
   const nlohmann::json& probes = r["aspect"]["probes"];
   ASSERT_EQ(probes.size(), 3u);
-  // What the probes alone would have chosen: another shape, estimated at least 5% (0.22 dB) closer.
+  // What the probes alone chose: the other shape whose own map was made and estimated beside the square's.
   size_t by_probes = 0;
   for (size_t i = 1; i < probes.size(); ++i)
-    if (probes[i]["estimated_psnr_db"].get<double>() > probes[by_probes]["estimated_psnr_db"].get<double>()) by_probes = i;
-  ASSERT_NE(by_probes, 0u);
-  EXPECT_GT(probes[by_probes]["estimated_psnr_db"].get<double>(), probes[0]["estimated_psnr_db"].get<double>() + 0.22);
+    if (!probes[i]["full_map_estimated_psnr_db"].is_null()) by_probes = i;
+  ASSERT_NE(by_probes, 0u) << "the probes kept the square: the confirmation is not reached";
   // Both own maps estimated; the choice follows them.
   ASSERT_FALSE(probes[0]["full_map_estimated_psnr_db"].is_null());
   ASSERT_FALSE(probes[by_probes]["full_map_estimated_psnr_db"].is_null());
   const double own_square = probes[0]["full_map_estimated_psnr_db"], own_other = probes[by_probes]["full_map_estimated_psnr_db"];
   const double chosen = r["aspect"]["chosen"];
   EXPECT_EQ(chosen, own_other > own_square + 0.22 ? probes[by_probes]["aspect"].get<double>() : 1.0);
-  // Measured 42.07 dB in the square, 41.68 at 2:1 (--aspect 2).
-  EXPECT_GT(r["metrics"]["surface_psnr_db"].get<double>(), 41.9);
+  // Measured 43.66 dB in the square.
+  EXPECT_GT(r["metrics"]["surface_psnr_db"].get<double>(), 43.4);
   EXPECT_EQ(r["metrics"]["flipped"].get<size_t>(), 0u);
 }

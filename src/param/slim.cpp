@@ -1,8 +1,10 @@
 // The symmetric Dirichlet refinement (slim.hpp): from a fold-free map, minimise the symmetric
 // Dirichlet energy of each triangle against its target shape (the 3D triangle scaled to its target UV
-// area), with the boundary held. Scalable Locally Injective Maps (Rabinovich, Lipman, Sorkine-Hornung
-// 2017): each step solves a reweighted Laplacian-like proxy, then a line search that never lets a
-// triangle reach zero area.
+// area), with the boundary held. Each step solves the energy's projected Newton system (every face's
+// Hessian made positive semi-definite in closed form), then a line search that never lets a triangle
+// reach zero area. Where that system does not solve, the step is SLIM's (Scalable Locally Injective
+// Maps, Rabinovich, Lipman, Sorkine-Hornung 2017: a reweighted Laplacian-like proxy), which has the
+// same pattern. SLIM's steps alone stall short of the minimum: docs/maps.md.
 #include "param/slim.hpp"
 
 #include <Eigen/Sparse>
@@ -109,9 +111,9 @@ double energy(const Surface& m, const std::vector<TargetFrame>& fr, const std::v
   return e;
 }
 
-/// Largest t in (0, 1] such that no triangle's signed area reaches zero on uv + s d, s in [0, t).
-double max_step(const Surface& m, const std::vector<Vec2>& uv, const std::vector<Vec2>& d) {
-  double t_max = 1.0;
+/// Largest t in (0, limit] such that no triangle's signed area reaches zero on uv + s d, s in [0, t).
+double max_step(const Surface& m, const std::vector<Vec2>& uv, const std::vector<Vec2>& d, double limit) {
+  double t_max = limit;
   for (const Tri& t : m.triangles) {
     const Vec2 a = uv[t[1]] - uv[t[0]], b = uv[t[2]] - uv[t[0]];
     const Vec2 da = d[t[1]] - d[t[0]], db = d[t[2]] - d[t[0]];
@@ -192,8 +194,9 @@ HigherNeighbours higher_neighbours(const Surface& m) {
   return r;
 }
 
-/// The SLIM system over the free coordinates. Its pattern is the same every step: it is built once,
-/// with where each face's 2x2 blocks land in the value array, so a step only overwrites values.
+/// A step's system over the free coordinates, Newton's or SLIM's. Its pattern is the same every step:
+/// it is built once, with where each face's 2x2 blocks land in the value array, so a step only
+/// overwrites values.
 class SlimSystem {
  public:
   SpMat A;
@@ -219,6 +222,16 @@ class SlimSystem {
     rhs.setZero();
     for (size_t f = 0; f < m_.num_faces(); ++f)
       if (fr[f].area > 0) add_face(fr[f], f, uv, max_weight);
+  }
+
+  /// The projected Newton system at map uv: each face's Hessian of its symmetric Dirichlet energy
+  /// with its negative eigenvalues clamped to zero (in the closed form of its four modes), and the
+  /// negative gradient; its solution is the step of the free coordinates.
+  void assemble_newton(const std::vector<TargetFrame>& fr, const std::vector<Vec2>& uv) {
+    std::fill(A.valuePtr(), A.valuePtr() + A.nonZeros(), 0.0);
+    rhs.setZero();
+    for (size_t f = 0; f < m_.num_faces(); ++f)
+      if (fr[f].area > 0) add_face_newton(fr[f], f, uv);
   }
 
   const std::vector<int>& index() const { return index_; }
@@ -287,13 +300,18 @@ class SlimSystem {
     std::fill(A.valuePtr(), A.valuePtr() + A.nonZeros(), 0.0);
   }
 
+  /// The singular value decomposition of face f's Jacobian at uv.
+  void face_svd(const TargetFrame& F, size_t f, const std::vector<Vec2>& uv, Mat2& U, Vec2& sigma, Mat2& V) const {
+    const Tri& t = m_.triangles[f];
+    svd2(jacobian(F, uv[t[0]], uv[t[1]], uv[t[2]]), U, sigma, V);
+  }
+
   void add_face(const TargetFrame& F, size_t f, const std::vector<Vec2>& uv, double max_weight) {
     double* values = A.valuePtr();
     const Tri& t = m_.triangles[f];
-    const Mat2 J = jacobian(F, uv[t[0]], uv[t[1]], uv[t[2]]);
     Mat2 U, V;
     Vec2 sigma;
-    svd2(J, U, sigma, V);
+    face_svd(F, f, uv, U, sigma, V);
     const Mat2 R = U * V.transpose();
     Vec2 w2;
     for (int k = 0; k < 2; ++k) {
@@ -323,6 +341,50 @@ class SlimSystem {
     }
   }
 
+  /// Face f's projected Hessian and negative gradient. With J = U diag(s1, s2) V^T, the energy's
+  /// Hessian in J has the eigenvectors U D V^T for D = diag(1, 0), diag(0, 1), the twist [0 -1; 1 0]
+  /// and the flip [0 1; 1 0] (the last two over sqrt 2), with the eigenvalues 2 + 6 / s1^4,
+  /// 2 + 6 / s2^4, (f1 + f2) / (s1 + s2) and (f1 - f2) / (s1 - s2), f_k = 2 s_k - 2 / s_k^3 (Smith,
+  /// De Goes and Kim 2019; the flip's in a form without the division, which s1 = s2 would make 0 / 0);
+  /// only the twist's can be negative.
+  void add_face_newton(const TargetFrame& F, size_t f, const std::vector<Vec2>& uv) {
+    double* values = A.valuePtr();
+    const Tri& t = m_.triangles[f];
+    Mat2 U, V;
+    Vec2 s;
+    face_svd(F, f, uv, U, s, V);
+    const double s1 = s(0), s2 = s(1);
+    const double f1 = 2 * s1 - 2 / (s1 * s1 * s1), f2 = 2 * s2 - 2 / (s2 * s2 * s2);
+    const Mat2 gradient = F.area * U * Vec2(f1, f2).asDiagonal() * V.transpose();
+    Mat2 scale1, scale2, twist, flip;
+    scale1 << 1, 0, 0, 0;
+    scale2 << 0, 0, 0, 1;
+    twist << 0, -M_SQRT1_2, M_SQRT1_2, 0;
+    flip << 0, M_SQRT1_2, M_SQRT1_2, 0;
+    const double flip_value = 2 + 2 * (s1 * s1 + s1 * s2 + s2 * s2) / (s1 * s1 * s1 * s2 * s2 * s2);
+    const std::array<double, 4> lambda = {2 + 6 / (s1 * s1 * s1 * s1), 2 + 6 / (s2 * s2 * s2 * s2), std::max(0.0, (f1 + f2) / (s1 + s2)),
+                                          flip_value};
+    const std::array<Mat2, 4> mode = {U * scale1 * V.transpose(), U * scale2 * V.transpose(), U * twist * V.transpose(),
+                                      U * flip * V.transpose()};
+    std::array<std::array<Vec2, 3>, 4> q;  // q[k][i]: mode k's derivative in corner i's coordinates
+    for (int k = 0; k < 4; ++k)
+      for (int i = 0; i < 3; ++i) q[size_t(k)][size_t(i)] = mode[size_t(k)] * F.g[size_t(i)];
+    for (int i = 0; i < 3; ++i)
+      for (int a = 0; a < 2; ++a) {
+        const int row = index_[2 * t[i] + size_t(a)];
+        if (row < 0) continue;
+        rhs(row) -= (gradient * F.g[size_t(i)])(a);
+        for (int j = 0; j < 3; ++j)
+          for (int b = 0; b < 2; ++b) {
+            const int col = index_[2 * t[j] + size_t(b)];
+            if (col < 0 || row < col) continue;
+            double h = 0;
+            for (size_t k = 0; k < 4; ++k) h += lambda[k] * q[k][size_t(i)](a) * q[k][size_t(j)](b);
+            values[slot_[f * kPairs + pair(2 * i + a, 2 * j + b)]] += F.area * h;
+          }
+      }
+  }
+
   const Surface& m_;
   std::vector<int> index_;
   std::vector<int> slot_;
@@ -339,9 +401,19 @@ class RefinementSystem {
     solver.analyzePattern(system.A, order.empty() ? nullptr : &order);
   }
 
-  /// Solves the system assembled at uv; where it fails (weights of 1e28 and more, from a sliver in the
-  /// start map), again with its weights capped at kMaxWeight. False if that fails too.
+  /// The free coordinates' next positions x from uv: the projected Newton step; where its system does
+  /// not solve (curvatures of 1e28 and more, from a sliver in the start map), SLIM's proxy, then that
+  /// with its weights capped at kMaxWeight. False if none solves.
   bool solve_step(const std::vector<TargetFrame>& fr, const std::vector<Vec2>& uv, Eigen::VectorXd& x, SlimStats& st) {
+    system.assemble_newton(fr, uv);
+    if (solver.factorize(system.A) && solver.solve(system.A, system.rhs, x)) {
+      const std::vector<int>& index = system.index();
+      for (size_t v = 0; v < uv.size(); ++v)
+        for (int a = 0; a < 2; ++a)
+          if (const int k = index[2 * v + size_t(a)]; k >= 0) x(k) += uv[v](a);
+      return true;
+    }
+    ++st.proxy_steps;
     system.assemble(fr, uv, INFINITY);
     if (solver.factorize(system.A) && solver.solve(system.A, system.rhs, x)) return true;
     system.assemble(fr, uv, kMaxWeight);
@@ -391,8 +463,9 @@ SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std
         const int k = free[2 * v + size_t(a)];
         d[v](a) = k < 0 ? 0.0 : x(k) - uv[v](a);
       }
-    // Line search: from 0.9 of the longest step that folds nothing, halved until the energy drops.
-    double t = std::min(1.0, 0.9 * max_step(m, uv, d));
+    // Line search: from the whole step, or 0.9 of the longest that folds nothing where that is
+    // shorter, halved until the energy drops.
+    double t = 0.9 * max_step(m, uv, d, 1 / 0.9);
     double e_new = INFINITY;
     for (int tries = 0; tries < 40; ++tries, t *= 0.5) {
       for (size_t v = 0; v < nv; ++v) trial[v] = uv[v] + t * d[v];

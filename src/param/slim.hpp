@@ -14,7 +14,8 @@ struct SlimStats {
   int iterations = 0;
   double energy_before = 0, energy = 0;  // area-weighted symmetric Dirichlet energy (2 per unit area = isometric)
   std::string stopped;                   // "converged", "iterations", "no descent" or "solver"
-  int capped_steps = 0;                  // steps whose system solved only with its weights capped
+  int proxy_steps = 0;                   // steps whose Newton system did not solve: SLIM's proxy instead
+  int capped_steps = 0;                  // of those, steps whose proxy solved only with its weights capped
 };
 
 /// refine_map's linear system over one mesh's free coordinates: its pattern (where each face's entries
@@ -29,9 +30,9 @@ using FaceShape = std::array<Vec2, 3>;
 /// shape (the 3D triangle scaled to area target[f]; a face of zero 3D area keeps its start shape and
 /// area; `shapes`, optional: face f's shapes[f] instead, where that has a positive area), weighted by
 /// target area; fixed[v] bit 0 holds the vertex's u, bit 1 its v (3: the vertex stays; 1 or 2: it
-/// slides along a side). SLIM (Rabinovich, Lipman and Sorkine-Hornung 2017): each step solves a
-/// reweighted proxy with CHOLMOD (pattern analysed once; in `vertex_order`, nested_dissection_order's, where
-/// given), then a line search.
+/// slides along a side). Each step solves the projected Newton system (SLIM's reweighted proxy,
+/// Rabinovich, Lipman and Sorkine-Hornung 2017, where that fails) with CHOLMOD (pattern analysed once;
+/// in `vertex_order`, nested_dissection_order's, where given), then a line search.
 /// Requires uv fold-free, one target per face. Guarantees uv stays fold-free (the line search stops
 /// short of any triangle's collapse) and its energy never rises. Stops after `iterations` steps, when a
 /// step gains less than 0.1%, or when no step lowers the energy; on_step (optional) hears each step.

@@ -19,8 +19,9 @@ constexpr double kAspectProbes[] = {1.0, 0.5, 2.0};
 /// The other shapes are probed only where the square's map has texels longer on the surface along one
 /// axis than along the other by more than this, in squared length (texel_stretch_ratio outside
 /// [1/k, k]): the best shape is about sqrt(ratio) wide per high, and where that is near 1 neither 1:2
-/// nor 2:1 wins. On ../shared/data every shape that won had a ratio of at most 0.68 or at least 1.80,
-/// and skipping below 1.35 left every choice as it was (BENCHMARKS.md, "Options").
+/// nor 2:1 wins. On ../shared/data every shape that won had a ratio of at most 0.68 or at least 2.34
+/// (detail and area maps, every shape probed), and skipping below 1.35 leaves every choice as it was
+/// (BENCHMARKS.md, "Options").
 constexpr double kAspectProbeStretch = 1.35;
 
 /// The shape chosen, what each probe was estimated to give (estimated_mse < 0: not probed, since the
