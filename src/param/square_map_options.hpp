@@ -72,7 +72,7 @@ struct SquareMapOptions {
   /// symmetric Dirichlet steps there. Chosen by measurement: BENCHMARKS.md, "Scale".
   size_t multilevel_from = 100000;
   size_t coarse_vertices = 30000;
-  int fine_reweighting = 8, fine_steps = 4;
+  int fine_reweighting = 4, fine_steps = 2;
   /// The density steps start from whichever weighting gave a fold-free harmonic map, even where the
   /// clamped cotangent weights crowded a region (which otherwise stops the map there, for the caller
   /// to slit): multilevel_map's coarse copy, whose crowding is no reason to re-cut the full mesh.
