@@ -249,6 +249,24 @@ TEST(RealDataMaps, DefaultMapBeatsHarmonicByThreeDecibelsOnTheMustardBottle) {
   EXPECT_EQ(def["metrics"]["flipped"].get<size_t>(), 0u);
 }
 
+// --map area on the potted meat can: its refinement's 4 Newton steps together widen the density
+// error past the 0.1 slack, its first alone does not. Step by step, that one is kept (45.19 dB); the
+// whole refinement undone gave 44.82.
+TEST(RealDataMaps, AreaMapKeepsTheRefinementStepsWithinTheDensitySlack) {
+  const fs::path input = fs::path(TIGHTEX_SHARED_DATA) / "ycb_010_potted_meat_can" / "010_potted_meat_can_textured.obj";
+  if (!fs::exists(input)) GTEST_SKIP() << "../shared/data/ycb_010_potted_meat_can not present";
+#ifdef __SANITIZE_ADDRESS__
+  GTEST_SKIP() << "figures only: the first CI pass measures them";
+#endif
+  const nlohmann::json r = run_cli(input.string(), "--map area --no-html", "area_slack");
+  ASSERT_TRUE(r.contains("metrics"));
+  const nlohmann::json& map = r["components"][0];
+  EXPECT_GE(map["refine_iterations"].get<int>(), 1);
+  EXPECT_EQ(map["refine_stopped"], "density");
+  EXPECT_GT(r["metrics"]["surface_psnr_db"].get<double>(), 45.0);
+  EXPECT_EQ(r["metrics"]["flipped"].get<size_t>(), 0u);
+}
+
 // --map area on the Meshroom scan: the shape probes' multilevel maps choose 2:1 (the area map's first
 // criterion, the density spread, prefers it), but on the two shapes' own maps the square is estimated
 // closer to the input (41.63 against 41.44 dB): the probes' choice is made again on the own maps, and

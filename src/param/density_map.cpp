@@ -211,28 +211,54 @@ void flow_towards_targets(const DensityConstraints& c, std::vector<Vec2>& uv, Sq
   }
 }
 
+namespace {
+
+/// The refinement of a map whose promise is its density (refine_keeps_density): one step at a time,
+/// each kept while the density error stays within kRefineSlack of the reweighted map's; the first step
+/// that widens it further is undone and ends the refinement ("density"). Newton's steps lower the
+/// energy fast enough that all of a map's steps would widen it too far where the first few do not.
+SlimStats refine_keeping_density(const DensityConstraints& c, const std::function<void(int)>& on_step, std::vector<Vec2>& uv,
+                                 SquareMapStats& st) {
+  const double allowed = worst_error(st.spread_p5, st.spread_p95) + kRefineSlack;
+  SlimStats total;
+  std::vector<Vec2> kept = uv;
+  for (int step = 0; step < c.options.refine_iterations && total.stopped.empty(); ++step) {
+    const SlimStats one = refine_in_rectangle(c, st.blended_target, 1, {}, uv);
+    if (step == 0) total.energy_before = total.energy = one.energy_before;
+    if (one.iterations == 0) {
+      total.stopped = one.stopped;
+      break;
+    }
+    measure_density_error(c.mesh, uv, st);
+    if (worst_error(st.spread_p5, st.spread_p95) > allowed) {
+      uv = kept;
+      measure_density_error(c.mesh, uv, st);
+      total.stopped = "density";
+      break;
+    }
+    kept = uv;
+    total.energy = one.energy;
+    on_step(++total.iterations);
+    if (one.stopped == "converged") total.stopped = one.stopped;
+  }
+  if (total.stopped.empty()) total.stopped = "iterations";
+  return total;
+}
+
+}  // namespace
+
 void refine_towards_targets(const DensityConstraints& c, std::vector<Vec2>& uv, SquareMapStats& st) {
   if (c.options.refine_iterations <= 0) return;
-  const std::vector<Vec2> reweighted = uv;
-  const double reweighted_p5 = st.spread_p5, reweighted_p95 = st.spread_p95;
-  const SlimStats ss = refine_in_rectangle(
-      c, st.blended_target, c.options.refine_iterations,
-      [&](int step) {
-        if (c.options.progress) c.options.progress(0.4 + 0.6 * std::min(1.0, step / 15.0));
-      },
-      uv);
+  const auto on_step = [&](int step) {
+    if (c.options.progress) c.options.progress(0.4 + 0.6 * std::min(1.0, step / 15.0));
+  };
+  const SlimStats ss = c.options.refine_keeps_density ? refine_keeping_density(c, on_step, uv, st)
+                                                      : refine_in_rectangle(c, st.blended_target, c.options.refine_iterations, on_step, uv);
   st.refine_iterations = ss.iterations;
   st.refine_energy_before = ss.energy_before;
   st.refine_energy = ss.energy;
   st.refine_stopped = ss.stopped;
-  std::vector<double> log_ratio = measure_density_error(c.mesh, uv, st);
-  if (c.options.refine_keeps_density &&
-      worst_error(st.spread_p5, st.spread_p95) > worst_error(reweighted_p5, reweighted_p95) + kRefineSlack) {
-    uv = reweighted;
-    st.refine_stopped = "reverted";
-    log_ratio = measure_density_error(c.mesh, uv, st);
-  }
-  correct_targets(c, std::move(log_ratio), uv, st);
+  correct_targets(c, measure_density_error(c.mesh, uv, st), uv, st);
 }
 
 }  // namespace tightex
