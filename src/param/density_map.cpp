@@ -213,10 +213,31 @@ void flow_towards_targets(const DensityConstraints& c, std::vector<Vec2>& uv, Sq
 
 namespace {
 
+/// A refinement step from `kept` to uv that widened the density error past `allowed`: the longest of
+/// 1/2, 1/4 and 1/8 of it that does not, where its energy is below `kept_energy` (every point of a
+/// step is fold-free: the line search stops short of any collapse). True with uv there and `energy`
+/// its energy; false with uv back at kept.
+bool shorten_within_density(const DensityConstraints& c, const std::vector<Vec2>& kept, double allowed, double kept_energy, double& energy,
+                            std::vector<Vec2>& uv, SquareMapStats& st) {
+  const std::vector<Vec2> whole = uv;
+  for (double t : {0.5, 0.25, 0.125}) {
+    for (size_t v = 0; v < uv.size(); ++v) uv[v] = kept[v] + t * (whole[v] - kept[v]);
+    measure_density_error(c.mesh, uv, st);
+    if (worst_error(st.spread_p5, st.spread_p95) > allowed) continue;
+    energy = refine_in_rectangle(c, st.blended_target, 0, {}, uv).energy_before;  // no step: the energy at uv
+    if (energy < kept_energy) return true;
+    break;
+  }
+  uv = kept;
+  measure_density_error(c.mesh, uv, st);
+  return false;
+}
+
 /// The refinement of a map whose promise is its density (refine_keeps_density): one step at a time,
 /// each kept while the density error stays within kRefineSlack of the reweighted map's; the first step
-/// that widens it further is undone and ends the refinement ("density"). Newton's steps lower the
-/// energy fast enough that all of a map's steps would widen it too far where the first few do not.
+/// that widens it further is shortened until it does not (shorten_within_density), or undone, and ends
+/// the refinement ("density"). Newton's steps lower the energy fast enough that all of a map's steps
+/// would widen it too far where the first few, or part of the first, do not.
 SlimStats refine_keeping_density(const DensityConstraints& c, const std::function<void(int)>& on_step, std::vector<Vec2>& uv,
                                  SquareMapStats& st) {
   const double allowed = worst_error(st.spread_p5, st.spread_p95) + kRefineSlack;
@@ -230,16 +251,15 @@ SlimStats refine_keeping_density(const DensityConstraints& c, const std::functio
       break;
     }
     measure_density_error(c.mesh, uv, st);
+    double energy = one.energy;
     if (worst_error(st.spread_p5, st.spread_p95) > allowed) {
-      uv = kept;
-      measure_density_error(c.mesh, uv, st);
       total.stopped = "density";
-      break;
+      if (!shorten_within_density(c, kept, allowed, total.energy, energy, uv, st)) break;
     }
     kept = uv;
-    total.energy = one.energy;
+    total.energy = energy;
     on_step(++total.iterations);
-    if (one.stopped == "converged") total.stopped = one.stopped;
+    if (total.stopped.empty() && one.stopped == "converged") total.stopped = one.stopped;
   }
   if (total.stopped.empty()) total.stopped = "iterations";
   return total;
