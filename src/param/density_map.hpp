@@ -52,9 +52,9 @@ void flow_towards_targets(const DensityConstraints& constraints, std::vector<Vec
 
 /// The symmetric Dirichlet refinement towards stats.blended_target (options.refine_iterations steps
 /// of refine_map in the rectangle's proportions; with options.refine_keeps_density a step at a time,
-/// ending before the first that widens the density error by more than 0.1 (log2) beyond the start
-/// map's); then options.correction_rounds rounds of target
-/// correction. Requires uv fold-free and stats.blended_target set. Guarantees uv stays fold-free.
+/// the first that would widen the density error by more than 0.1 (log2) beyond the start map's
+/// shortened until it does not, or undone, and the last); then options.correction_rounds rounds of
+/// target correction. Requires uv fold-free and stats.blended_target set. Guarantees uv stays fold-free.
 /// Reports refine_*, correction_rounds and the density error. Calls options.progress from 0.4 on.
 void refine_towards_targets(const DensityConstraints& constraints, std::vector<Vec2>& uv, SquareMapStats& stats);
 
