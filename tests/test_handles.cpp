@@ -1,4 +1,4 @@
-// Handle loops: the radius-limited tree-cotree behind the loop search keeps its promises, and
+// Handle loops: the loop classes and the per-root search behind the loop search keep their promises, and
 // remove_handles tightens a loop found off a handle's waist down to the waist.
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
@@ -11,6 +11,7 @@
 #include "mesh_catalogue.hpp"
 #include "prepare/components.hpp"
 #include "prepare/handles.hpp"
+#include "prepare/loop_classes.hpp"
 #include "prepare/repair.hpp"
 
 namespace tightex {
@@ -18,12 +19,11 @@ namespace {
 
 namespace cat = tightex::testing;
 
-/// The loop closed by tree_cotree's first leftover edge: that edge plus both tree paths to the root.
-std::vector<uint32_t> first_loop(const Surface& s, const EdgeGraph& g, const TreeCotree& tc) {
-  const uint32_t e = tc.leftover.front();
+/// The loop closed by edge e in the tree `pred`: e plus both tree paths to the root.
+std::vector<uint32_t> loop_edges(const Surface& s, const EdgeGraph& g, const std::vector<uint32_t>& pred, uint32_t e) {
   std::vector<uint32_t> edges{e};
   for (uint32_t v : {s.from(g.edge_halfedge[e]), s.to(g.edge_halfedge[e])})
-    for (; tc.pred[v] != kNone; v = other_end(s, g, tc.pred[v], v)) edges.push_back(tc.pred[v]);
+    for (; pred[v] != kNone; v = other_end(s, g, pred[v], v)) edges.push_back(pred[v]);
   return edges;
 }
 
@@ -38,36 +38,94 @@ bool non_separating(const Surface& s, const EdgeGraph& g, const std::vector<uint
   return face_components(cut, label) == 1 && topology_of(cut).genus() < topology_of(s).genus();
 }
 
-// With radius (c + longest edge) / 2 the limited search finds the same cheapest loop cost c as the
-// unlimited one; with a smaller radius every loop it leaves over is still non-separating (and below
-// (c - longest edge) / 2 there is none, as none cheaper than c exists).
-TEST(TreeCotree, RadiusKeepsTheCheapestLoopAndNeverSeparates) {
-  const std::vector<std::pair<std::string, TexturedMesh>> meshes = {
-      {"torus", cat::torus()}, {"double_torus", cat::double_torus()}, {"arches_g5", cat::arched_block(5)}};
-  for (const auto& [name, m] : meshes) {
-    const Surface s = split_components(prepare_surface(m, nullptr))[0];
+/// Whether the classes call the closed path `edges` separating: the xor of its edges' classes is 0.
+bool classes_say_separating(const LoopClasses& c, const std::vector<uint32_t>& edges) {
+  std::vector<uint64_t> sum(c.words, 0);
+  for (uint32_t e : edges)
+    for (size_t w = 0; w < c.words; ++w) sum[w] ^= c.of_edge(e)[w];
+  return std::all_of(sum.begin(), sum.end(), [](uint64_t x) { return x == 0; });
+}
+
+/// A double torus with three triangles far apart taken out: genus 2 and three holes.
+TexturedMesh holed_double_torus() {
+  cat::Geometry g = cat::double_torus_geometry();
+  const size_t n = g.triangles.size();
+  for (size_t k : {2 * n / 3, n / 3, size_t(0)}) g.triangles.erase(g.triangles.begin() + long(k));
+  return cat::make_textured("holed_double_torus", g.positions, g.triangles);
+}
+
+/// The test surfaces: closed ones of genus 1 to 38 (more than 64 classes' bits), one with holes.
+std::vector<std::pair<std::string, Surface>> handle_surfaces() {
+  std::vector<std::pair<std::string, Surface>> out;
+  for (auto [name, m] : std::vector<std::pair<std::string, TexturedMesh>>{{"torus", cat::torus()},
+                                                                          {"holed_double_torus", holed_double_torus()},
+                                                                          {"double_torus", cat::double_torus()},
+                                                                          {"holey_slab", cat::holey_slab()},
+                                                                          {"arches_g5", cat::arched_block(5)},
+                                                                          {"arches_g38", cat::arched_block(38)}})
+    out.push_back({name, split_components(prepare_surface(m, nullptr))[0]});
+  return out;
+}
+
+// The classes call a loop separating exactly where cutting along it leaves the genus as it was: every
+// loop the tree-cotree leaves over (2g, none separating) and loops closed by other edges off its tree,
+// some of each kind.
+TEST(LoopClasses, SayWhichLoopsSeparateAsCuttingAlongThemDoes) {
+  for (const auto& [name, s] : handle_surfaces()) {
+    SCOPED_TRACE(name);
     const EdgeGraph g(s);
+    const auto loops = boundary_loops(s);
+    const TreeCotree tc = tree_cotree(s, g, {s.triangles[0][0]}, loops);
+    const LoopClasses c = loop_classes(s, g, loops, tc.pred);
+    ASSERT_GT(topology_of(s).genus(), 0);
+    ASSERT_EQ(tc.leftover.size(), size_t(2 * topology_of(s).genus()));
+    for (uint32_t e : tc.leftover) EXPECT_FALSE(classes_say_separating(c, loop_edges(s, g, tc.pred, e)));
+    std::vector<char> in_tree(g.num_edges(), 0);
+    for (uint32_t e : tc.pred)
+      if (e != kNone) in_tree[e] = 1;
+    size_t seen[2] = {0, 0};  // separating, not
+    const size_t step = std::max<size_t>(1, g.num_edges() / 80);
+    for (uint32_t e = 0; e < g.num_edges(); e += uint32_t(step)) {
+      if (in_tree[e] || s.opposite[g.edge_halfedge[e]] == kNone) continue;
+      const std::vector<uint32_t> loop = loop_edges(s, g, tc.pred, e);
+      const bool separating = !non_separating(s, g, loop);
+      EXPECT_EQ(classes_say_separating(c, loop), separating) << "edge " << e;
+      ++seen[separating ? 0 : 1];
+    }
+    EXPECT_GT(seen[0], 0u);
+    EXPECT_GT(seen[1], 0u);
+  }
+}
+
+// A root's search finds the cheapest non-separating loop the whole surface's tree-cotree from that
+// root gives (its first leftover edge, the same one where loops tie), with the radius (c + longest edge) / 2, and none below (c - longest
+// edge) / 2; whatever the radius, a loop it returns does not separate the surface.
+TEST(RootLoopSearch, FindsTheTreeCotreesCheapestLoopWithinHalfItsCost) {
+  for (const auto& [name, s] : handle_surfaces()) {
+    const EdgeGraph g(s);
+    const auto loops = boundary_loops(s);
     const double longest = *std::max_element(g.cost.begin(), g.cost.end());
+    const LoopClasses c = loop_classes(s, g, loops, tree_cotree(s, g, {0}, loops).pred);
+    const std::vector<double> weight = costs_with_free_boundary(s, g);
+    RootLoopSearch search(s, g, c, weight);
     size_t checked = 0;
     for (uint32_t root = 0; root < s.num_vertices(); root += 17) {
       SCOPED_TRACE(name + " root " + std::to_string(root));
-      const TreeCotree full = tree_cotree(s, g, {root}, {});
-      ASSERT_EQ(full.leftover.size(), size_t(2 * topology_of(s).genus()));
-      const double c = full.loop_length(s, g, full.leftover.front());
-      const TreeCotree near = tree_cotree(s, g, {root}, {}, (c + longest) / 2);
-      ASSERT_FALSE(near.leftover.empty());
-      EXPECT_NEAR(near.loop_length(s, g, near.leftover.front()), c, 1e-12 * c);
-      EXPECT_TRUE(tree_cotree(s, g, {root}, {}, (c - longest) / 2 * 0.999).leftover.empty());
-      for (double f : {0.55, 0.8, 1.2}) {
-        const TreeCotree part = tree_cotree(s, g, {root}, {}, f * c);
-        for (size_t i = 0; i < part.leftover.size(); ++i) {
-          ASSERT_TRUE(std::isfinite(part.loop_length(s, g, part.leftover[i])));
-          TreeCotree one = part;
-          one.leftover = {part.leftover[i]};
-          EXPECT_TRUE(non_separating(s, g, first_loop(s, g, one))) << "radius " << f << " c, leftover " << i;
-          ++checked;
-        }
+      const TreeCotree full = tree_cotree(s, g, {root}, loops);
+      const double cheapest = full.loop_length(s, g, full.leftover.front());
+      const uint32_t e = search.search(root, (cheapest + longest) / 2);
+      ASSERT_NE(e, kNone);
+      EXPECT_NEAR(search.loop_cost(), cheapest, 1e-12 * cheapest);
+      EXPECT_EQ(e, full.leftover.front());  // ties too: the same loop
+      EXPECT_TRUE(non_separating(s, g, loop_edges(s, g, search.pred(), e)));
+      EXPECT_EQ(search.search(root, (cheapest - longest) / 2 * 0.999), kNone);
+      for (double f : {0.55, 0.8}) {
+        const uint32_t part = search.search(root, f * cheapest);
+        if (part == kNone) continue;
+        EXPECT_GE(search.loop_cost(), cheapest * (1 - 1e-12));
+        EXPECT_TRUE(non_separating(s, g, loop_edges(s, g, search.pred(), part))) << "radius " << f;
       }
+      ++checked;
     }
     EXPECT_GT(checked, 0u) << name;
   }

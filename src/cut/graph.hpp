@@ -128,18 +128,20 @@ inline uint32_t double_sweep(const Surface& s, const EdgeGraph& g, uint32_t* a, 
   return farthest(dist);
 }
 
+/// g.cost with every boundary edge free: a shortest path may run along a hole at no cost, so every
+/// hole acts as one point (the tree-cotree's and the handle search's distances).
+inline std::vector<double> costs_with_free_boundary(const Surface& s, const EdgeGraph& g) {
+  std::vector<double> weight(g.cost.begin(), g.cost.end());
+  for (uint32_t e = 0; e < g.num_edges(); ++e)
+    if (s.opposite[g.edge_halfedge[e]] == kNone) weight[e] = 0;
+  return weight;
+}
+
 /// Tree-cotree (Eppstein; greedy form of Erickson & Whittlesey 2005): a shortest-path tree T (g.cost) from
 /// `sources` (boundary edges cost nothing, so every hole acts as one point), then a dual spanning tree
 /// over the edges not in T (faces plus one node per boundary loop) that keeps the edges whose loops are
 /// longest. The edges left over close the generator loops: 2g of them on a genus-g surface, each loop
 /// (leftover edge + tree paths to the root) non-separating, the shortest ones first.
-/// `radius`: the tree covers only the vertices within this cost of the sources; edges beyond it join
-/// the dual tree first (in edge order) and close no loop. The loops left over are still all
-/// non-separating (a dual path joining the two sides of such a loop crosses no tree edge, and every
-/// edge of the loop is a tree edge inside the radius, or the leftover edge itself), and the shortest
-/// of them is the shortest non-separating loop through the sources whenever that one costs at most
-/// 2 x radius: every edge the unlimited search would cross before it, this one may cross too. So a
-/// search for a loop cheaper than a known one costs only the ball of half its cost.
 struct TreeCotree {
   std::vector<double> dist;
   std::vector<uint32_t> pred;      // tree edge towards the root, per vertex
@@ -151,55 +153,18 @@ struct TreeCotree {
   }
 };
 
-/// The arrays tree_cotree works in. A caller that runs it many times on one surface (the handle search:
-/// hundreds of roots) keeps one, so each run reuses them instead of allocating arrays the size of the
-/// surface: at 3.4M faces their page faults were a quarter of the process's.
-struct TreeCotreeScratch {
-  std::vector<double> weight;  // g.cost, boundary edges free
-  std::vector<char> in_tree;
-  std::vector<uint32_t> hole_node;  // per boundary halfedge, its hole's node of the dual graph
-  detail::UnionFind dual{0};
-  std::vector<std::pair<double, uint32_t>> order;
-  /// weight and hole_node hold one surface's, graph's and loops' (keep_fixed_arrays): every run with
-  /// this scratch must be on those, and none builds them again.
-  bool fixed_arrays = false;
-};
-
-/// The arrays of tree_cotree that depend on the surface, graph and loops alone (not on the sources or
-/// the radius), into scratch.
-inline void build_fixed_arrays(const Surface& s, const EdgeGraph& g, const std::vector<std::vector<uint32_t>>& loops,
-                               TreeCotreeScratch& scratch) {
-  scratch.weight.assign(g.cost.begin(), g.cost.end());
-  for (uint32_t e = 0; e < g.num_edges(); ++e)
-    if (s.opposite[g.edge_halfedge[e]] == kNone) scratch.weight[e] = 0;
-  const uint32_t nf = uint32_t(s.num_faces());
-  scratch.hole_node.assign(s.opposite.size(), kNone);
-  for (size_t i = 0; i < loops.size(); ++i)
-    for (uint32_t h : loops[i]) scratch.hole_node[h] = nf + uint32_t(i);
-}
-
-/// Builds scratch's fixed arrays once, for a caller that runs tree_cotree many times on one surface,
-/// graph and loops (the handle search: about 80 roots at 854k faces).
-inline void keep_fixed_arrays(const Surface& s, const EdgeGraph& g, const std::vector<std::vector<uint32_t>>& loops,
-                              TreeCotreeScratch& scratch) {
-  build_fixed_arrays(s, g, loops, scratch);
-  scratch.fixed_arrays = true;
-}
-
-/// tree_cotree into `tc`, its arrays and scratch's reused.
-inline void tree_cotree(const Surface& s, const EdgeGraph& g, const std::vector<uint32_t>& sources,
-                        const std::vector<std::vector<uint32_t>>& loops, double radius, TreeCotreeScratch& scratch, TreeCotree& tc) {
-  if (!scratch.fixed_arrays) build_fixed_arrays(s, g, loops, scratch);
-  dijkstra(g, s.num_vertices(), sources, scratch.weight, tc.dist, tc.pred, radius);
-  std::vector<char>& in_tree = scratch.in_tree;
-  in_tree.assign(g.num_edges(), 0);
+inline TreeCotree tree_cotree(const Surface& s, const EdgeGraph& g, const std::vector<uint32_t>& sources,
+                              const std::vector<std::vector<uint32_t>>& loops) {
+  TreeCotree tc;
+  dijkstra(g, s.num_vertices(), sources, costs_with_free_boundary(s, g), tc.dist, tc.pred);
+  std::vector<char> in_tree(g.num_edges(), 0);
   for (uint32_t v = 0; v < s.num_vertices(); ++v)
     if (tc.pred[v] != kNone) in_tree[tc.pred[v]] = 1;
   const uint32_t nf = uint32_t(s.num_faces());
-  const std::vector<uint32_t>& hole_node = scratch.hole_node;
-  detail::UnionFind& dual = scratch.dual;
-  dual.parent.resize(nf + loops.size());
-  std::iota(dual.parent.begin(), dual.parent.end(), 0u);
+  std::vector<uint32_t> hole_node(s.opposite.size(), kNone);  // per boundary halfedge, its hole's node
+  for (size_t i = 0; i < loops.size(); ++i)
+    for (uint32_t h : loops[i]) hole_node[h] = nf + uint32_t(i);
+  detail::UnionFind dual(nf + loops.size());
   auto join = [&](uint32_t e) {  // false: its two sides are joined already
     const uint32_t h = g.edge_halfedge[e], o = s.opposite[h];
     const uint32_t a = dual.find(h / 3), b = dual.find(o == kNone ? hole_node[h] : o / 3);
@@ -207,10 +172,9 @@ inline void tree_cotree(const Surface& s, const EdgeGraph& g, const std::vector<
     dual.unite(a, b);
     return true;
   };
-  // Longest loop first (edges beyond the radius: infinitely long); ties by edge id, so the result does
-  // not depend on the sort's stability.
-  std::vector<std::pair<double, uint32_t>>& order = scratch.order;
-  order.clear();
+  // Longest loop first (an edge no source reaches: infinitely long); ties by edge id, so the result
+  // does not depend on the sort's stability.
+  std::vector<std::pair<double, uint32_t>> order;
   for (uint32_t e = 0; e < g.num_edges(); ++e) {
     if (in_tree[e]) continue;
     const double len = tc.loop_length(s, g, e);
@@ -220,17 +184,9 @@ inline void tree_cotree(const Surface& s, const EdgeGraph& g, const std::vector<
       join(e);
   }
   std::sort(order.begin(), order.end());
-  tc.leftover.clear();
   for (auto [neg_len, e] : order)
     if (!join(e) && s.opposite[g.edge_halfedge[e]] != kNone) tc.leftover.push_back(e);
   std::reverse(tc.leftover.begin(), tc.leftover.end());
-}
-
-inline TreeCotree tree_cotree(const Surface& s, const EdgeGraph& g, const std::vector<uint32_t>& sources,
-                              const std::vector<std::vector<uint32_t>>& loops, double radius = std::numeric_limits<double>::infinity()) {
-  TreeCotreeScratch scratch;
-  TreeCotree tc;
-  tree_cotree(s, g, sources, loops, radius, scratch, tc);
   return tc;
 }
 

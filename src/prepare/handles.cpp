@@ -10,6 +10,7 @@
 #include "core/error.hpp"
 #include "cut/cut_along_edges.hpp"
 #include "cut/graph.hpp"
+#include "prepare/loop_classes.hpp"
 
 namespace tightex {
 
@@ -22,25 +23,26 @@ struct Loop {
   double cost = std::numeric_limits<double>::infinity();  // g.cost: what the search minimises
 };
 
-/// The loop of leftover edge e of tree-cotree tc: e and the two tree paths from its ends, trimmed where
-/// they share a prefix (so the loop is a simple cycle).
-Loop loop_of(const Surface& s, const EdgeGraph& g, const TreeCotree& tc, uint32_t e) {
+/// The loop closed by edge e in the shortest-path tree `pred` (per vertex, its edge towards the root):
+/// e and the two tree paths from its ends, trimmed where they share a prefix (so the loop is a simple
+/// cycle).
+Loop loop_of(const Surface& s, const EdgeGraph& g, const std::vector<uint32_t>& pred, uint32_t e) {
   Loop loop;
   const uint32_t h = g.edge_halfedge[e];
   std::vector<uint32_t> pu, pv;  // vertex paths to the root
-  for (uint32_t v = s.from(h);; v = other_end(s, g, tc.pred[v], v)) {
+  for (uint32_t v = s.from(h);; v = other_end(s, g, pred[v], v)) {
     pu.push_back(v);
-    if (tc.pred[v] == kNone) break;
+    if (pred[v] == kNone) break;
   }
-  for (uint32_t v = s.to(h);; v = other_end(s, g, tc.pred[v], v)) {
+  for (uint32_t v = s.to(h);; v = other_end(s, g, pred[v], v)) {
     pv.push_back(v);
-    if (tc.pred[v] == kNone) break;
+    if (pred[v] == kNone) break;
   }
   // Trim the common suffix (shared path near the root) down to the branching vertex.
   while (pu.size() > 1 && pv.size() > 1 && pu[pu.size() - 2] == pv[pv.size() - 2]) pu.pop_back(), pv.pop_back();
   loop.edges.push_back(e);
   for (const auto* path : {&pu, &pv})
-    for (size_t i = 0; i + 1 < path->size(); ++i) loop.edges.push_back(tc.pred[(*path)[i]]);
+    for (size_t i = 0; i + 1 < path->size(); ++i) loop.edges.push_back(pred[(*path)[i]]);
   loop.vertices = pu;  // u .. branching vertex, then back along pv to v
   loop.vertices.insert(loop.vertices.end(), pv.rbegin() + 1, pv.rend());
   loop.length = loop.cost = 0;
@@ -48,15 +50,11 @@ Loop loop_of(const Surface& s, const EdgeGraph& g, const TreeCotree& tc, uint32_
   return loop;
 }
 
-/// The shortest generator loop through `root`: the leftover edge with the smallest loop cost
-/// (loop_of). Searches only within `radius` of the root (see tree_cotree): a loop costing up to twice
-/// that is found. Empty (cost infinite) when there is none: the surface has genus 0, or every loop
-/// through root costs more. `scratch` and `tc`: tree_cotree's arrays, reused from root to root.
-Loop shortest_loop_through(const Surface& s, const EdgeGraph& g, uint32_t root, const std::vector<std::vector<uint32_t>>& loops,
-                           double radius, TreeCotreeScratch& scratch, TreeCotree& tc) {
-  tree_cotree(s, g, {root}, loops, radius, scratch, tc);
-  if (tc.leftover.empty()) return Loop{};
-  return loop_of(s, g, tc, tc.leftover.front());
+/// The cheapest non-separating loop through `root` that reaches no farther than `radius` (a loop
+/// costing up to twice that is found); empty (cost infinite) where there is none.
+Loop shortest_loop_through(const Surface& s, const EdgeGraph& g, uint32_t root, double radius, RootLoopSearch& search) {
+  const uint32_t e = search.search(root, radius);
+  return e == kNone ? Loop{} : loop_of(s, g, search.pred(), e);
 }
 
 /// Loop tightening: roots per move and round, rounds at most, and the least gain for another round.
@@ -74,31 +72,32 @@ uint64_t splitmix64(uint64_t x) {
   return x ^ (x >> 31);
 }
 
-/// Roots searched at once (at most; fewer on fewer cores): each holds tree_cotree's arrays, the size of
-/// the surface.
+/// Roots searched at once (at most; fewer on fewer cores): each holds a RootLoopSearch's arrays, the
+/// size of the surface.
 constexpr size_t kParallelRoots = 4;
 
 /// The search for the cheapest non-separating loop of one surface: the best loop so far, and the
 /// radius a root's search needs to find a cheaper one.
 class LoopSearch {
  public:
-  LoopSearch(const Surface& s, const EdgeGraph& g, const std::vector<std::vector<uint32_t>>& loops)
+  /// `classes`: loop_classes of s, which decide which loops separate.
+  LoopSearch(const Surface& s, const EdgeGraph& g, LoopClasses classes)
       : s_(s),
         g_(g),
-        loops_(loops),
-        longest_edge_(g.cost.empty() ? 0.0 : *std::max_element(g.cost.begin(), g.cost.end())),
-        workers_(std::clamp<size_t>(size_t(tbb::this_task_arena::max_concurrency()), 1, kParallelRoots)) {
-    keep_fixed_arrays(s, g, loops, workers_[0].scratch);
-    for (size_t k = 1; k < workers_.size(); ++k) workers_[k].scratch = workers_[0].scratch;
+        classes_(std::move(classes)),
+        weight_(costs_with_free_boundary(s, g)),
+        longest_edge_(g.cost.empty() ? 0.0 : *std::max_element(g.cost.begin(), g.cost.end())) {
+    const size_t n = std::clamp<size_t>(size_t(tbb::this_task_arena::max_concurrency()), 1, kParallelRoots);
+    for (size_t k = 0; k < n; ++k) workers_.emplace_back(s, g, classes_, weight_);
   }
 
   /// The first root, while no loop is known: its whole surface would be searched. Where its loop is
   /// cheaper than `bound` (the cost of some loop of the surface), a search within the radius that bound
   /// gives finds it; only where it is not is the whole surface searched.
   void try_first_root(uint32_t root, double bound) {
-    Worker& w = workers_[0];
-    Loop l = shortest_loop_through(s_, g_, root, loops_, (bound + longest_edge_) / 2, w.scratch, w.tree);
-    if (!(l.cost < bound)) l = shortest_loop_through(s_, g_, root, loops_, std::numeric_limits<double>::infinity(), w.scratch, w.tree);
+    RootLoopSearch& w = workers_[0];
+    Loop l = shortest_loop_through(s_, g_, root, (bound + longest_edge_) / 2, w);
+    if (!(l.cost < bound)) l = shortest_loop_through(s_, g_, root, std::numeric_limits<double>::infinity(), w);
     if (improves(l)) best_ = std::move(l);
   }
 
@@ -114,9 +113,7 @@ class LoopSearch {
       // Before any loop is known the radius is unbounded: one root then, not a batch of whole-surface searches.
       const size_t n = std::isfinite(best_.cost) ? std::min(workers_.size(), roots.size() - i) : 1;
       const double radius = (best_.cost + longest_edge_) / 2;
-      tbb::parallel_for(size_t(0), n, [&](size_t k) {
-        found[k] = shortest_loop_through(s_, g_, roots[i + k], loops_, radius, workers_[k].scratch, workers_[k].tree);
-      });
+      tbb::parallel_for(size_t(0), n, [&](size_t k) { found[k] = shortest_loop_through(s_, g_, roots[i + k], radius, workers_[k]); });
       size_t k = 0;
       while (k < n && !improves(found[k])) ++k;
       if (k < n) best_ = std::move(found[k]);
@@ -129,27 +126,22 @@ class LoopSearch {
   /// Whether `l` replaces the best loop: cheaper beyond rounding (a tie keeps the earlier root's).
   bool improves(const Loop& l) const { return l.cost < best_.cost * (1 - 1e-12); }
 
-  struct Worker {
-    TreeCotreeScratch scratch;
-    TreeCotree tree;
-  };
   const Surface& s_;
   const EdgeGraph& g_;
-  const std::vector<std::vector<uint32_t>>& loops_;
+  const LoopClasses classes_;
+  const std::vector<double> weight_;  // g.cost, boundary edges free
   const double longest_edge_;
   Loop best_;
-  std::vector<Worker> workers_;
+  std::vector<RootLoopSearch> workers_;
 };
 
-/// Candidate roots: a global tree-cotree from one vertex; its leftover edges sit on the handles, so
+/// Candidate roots: the leftover edges of `global` (a tree-cotree from one vertex) sit on the handles, so
 /// roots at their ends find each handle's own short loop. Empty where there is no handle. `bound`: the
 /// cost of the global tree's shortest loop (infinite where there is none), a loop the search's first
 /// root can be measured against.
-std::vector<uint32_t> candidate_roots(const Surface& s, const EdgeGraph& g, const std::vector<std::vector<uint32_t>>& loops,
-                                      double& bound) {
-  const TreeCotree global = tree_cotree(s, g, {s.triangles[0][0]}, loops);
+std::vector<uint32_t> candidate_roots(const Surface& s, const EdgeGraph& g, const TreeCotree& global, double& bound) {
   std::vector<uint32_t> roots;
-  bound = global.leftover.empty() ? std::numeric_limits<double>::infinity() : loop_of(s, g, global, global.leftover.front()).cost;
+  bound = global.leftover.empty() ? std::numeric_limits<double>::infinity() : loop_of(s, g, global.pred, global.leftover.front()).cost;
   for (uint32_t e : global.leftover) {
     for (uint32_t v : {s.from(g.edge_halfedge[e]), s.to(g.edge_halfedge[e])})
       if (std::find(roots.begin(), roots.end(), v) == roots.end()) roots.push_back(v);
@@ -195,10 +187,11 @@ Surface remove_handles(const Surface& component, std::vector<double>* loop_lengt
   for (long k = 0; k < genus; ++k) {
     const EdgeGraph g(cur, seams);
     const auto loops = boundary_loops(cur);
+    const TreeCotree global = tree_cotree(cur, g, {cur.triangles[0][0]}, loops);
     double bound = 0;
-    const std::vector<uint32_t> roots = candidate_roots(cur, g, loops, bound);
+    const std::vector<uint32_t> roots = candidate_roots(cur, g, global, bound);
     if (roots.empty()) break;
-    LoopSearch search(cur, g, loops);
+    LoopSearch search(cur, g, loop_classes(cur, g, loops, global.pred));
     search.try_first_root(roots.front(), bound);
     search.try_roots(std::vector<uint32_t>(roots.begin() + 1, roots.end()));
     if (search.best().edges.empty()) break;

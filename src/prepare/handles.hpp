@@ -9,8 +9,10 @@
 namespace tightex {
 
 /// Cuts the handles of a component along short loops (paper §4.1, topological denoising): while the
-/// component has genus g > 0, finds a short non-separating loop (the cheapest tree-cotree generator loop
-/// over roots placed on the handles; edges on `seams` cost kSeamCost of their length), tightens it
+/// component has genus g > 0, finds a short non-separating loop (the cheapest non-separating loop
+/// through each of a few roots placed on the handles by a global tree-cotree, each root's search
+/// reaching only as far as a cheaper loop could, its loops told apart by loop_classes; edges on
+/// `seams` cost kSeamCost of their length), tightens it
 /// (roots along the loop and in a band beside it, while the loop gets cheaper) and cuts along it, which
 /// leaves two new boundary loops. The hole stage then treats those like any hole.
 /// Requires: `component` connected and manifold (`opposite` built); `seams` empty or one flag per
