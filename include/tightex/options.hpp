@@ -113,8 +113,9 @@ struct Options {
   bool default_budget = false;
   /// Width/height of the texture, which then holds about size x size texels (sides multiples of 4).
   /// 0 (default): chosen per model for the area, texel and detail maps in the atlas layout: the
-  /// component that holds most of the texture is mapped into a square, a 1:2 and a 2:1 texture, each
-  /// map's colour error estimated, and the square kept unless another shape's is at least 5% lower
+  /// component that holds most of the texture is mapped into a square and, where its texels are
+  /// stretched along one axis, into the 2:1 or 1:2 texture the stretch points to, each map's colour
+  /// error estimated, and the square kept unless the other shape's is at least 5% lower
   /// (report "aspect"; not probed beyond 100k triangles). Otherwise 1, the paper's square.
   double aspect = 0;
   Layout layout = Layout::kAtlas;

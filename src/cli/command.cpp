@@ -157,8 +157,9 @@ CLI::Option* define_options(CLI::App& app, CommandLine& line, ChoiceNames& names
       ->check(CLI::IsMember(names_of(kMapKinds)));
   app.add_option("--aspect", line.aspect,
                  "width/height of the texture, which holds as many texels as a square would: auto (default, area/texel/detail "
-                 "maps): the component holding most of the texture is mapped at 1:2, 1:1 and 2:1 and the shape whose "
-                 "texels keep the most of the input is chosen (the square unless another is clearly better); a number "
+                 "maps): the component holding most of the texture is mapped at 1:1 and, where its texels are stretched, at "
+                 "the 2:1 or 1:2 the stretch points to, and the shape whose texels keep the most of the input is chosen "
+                 "(the square unless the other is clearly better); a number "
                  "(e.g. 2) fixes it. With --size the default is 1, a square of that side")
       ->check(check_aspect);
   app.add_option("--max-size", line.max_size,

@@ -90,29 +90,37 @@ ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const CutInput
     if (rect[i]) probe[i] = map_component(ctx, dominant, *rect[i], shared, choice, true);
   };
   // The square first: where the longest hole is small both its cuts are mapped (side by side), and the
-  // other shapes take its choice. Where its probe is multilevel, the square's own map (what the probe
-  // stands for, made again if the square is chosen) is made beside it, on the core the lone probe
-  // leaves idle.
+  // other shape takes its choice. Then, where the square's texels are stretched, the shape they point
+  // to, beside the square's estimate (the square alone needs none).
   const bool compare_cuts = shared && small_longest_hole(ctx, dominant, *shared);
+  const double faces = double(ctx.components[dominant].num_faces());
+  double stretch = -1;
+  auto probe_shapes = [&] {
+    run_probe(0, compare_cuts ? CapChoice::kCompare : CapChoice::kKeep);
+    const CutStats square = probe[0] ? probe[0]->cut : CutStats{};
+    const CapChoice decided = !square.compared_mse.empty() && square.longest_loop_capped ? CapChoice::kCap : CapChoice::kKeep;
+    stretch = probe[0] && probe[0]->kept.empty() ? texel_stretch_ratio(*probe[0]) : -1;
+    if (!worth_probing_other_shapes(stretch)) {
+      ctx.progress.advance(faces * double(n - 1));  // the maps not made
+      return;
+    }
+    const size_t other = stretch > 1 ? 2 : 1;  // kAspectProbes: 2:1 where texels are long along x, else 1:2
+    tbb::parallel_invoke(
+        [&] {
+          run_probe(other, decided);
+          if (probe[other] && compare_cuts) probe[other]->cut.compared_mse = square.compared_mse;  // the report's: the square's
+          if (probe[other] && probe[other]->kept.empty()) mse[other] = estimate_mse(ctx.input, *probe[other]);
+        },
+        [&] { mse[0] = estimate_mse(ctx.input, *probe[0]); });
+    ctx.progress.advance(faces * double(n - 2));  // the shape the texels do not point to
+  };
+  // Where the square's probe is multilevel, the square's own map (what the probe stands for, made again
+  // if the square is chosen) is made beside the probes, on the core their chain leaves idle.
   std::optional<Mapped> square_own;
   if (!compare_cuts && rect[0] && ctx.components[dominant].num_faces() > 2 * kProbeMultilevelFrom)
-    tbb::parallel_invoke([&] { run_probe(0, CapChoice::kKeep); },
-                         [&] { square_own = map_component(ctx, dominant, *rect[0], shared, CapChoice::kKeep); });
+    tbb::parallel_invoke(probe_shapes, [&] { square_own = map_component(ctx, dominant, *rect[0], shared, CapChoice::kKeep); });
   else
-    run_probe(0, compare_cuts ? CapChoice::kCompare : CapChoice::kKeep);
-  const CutStats square = probe[0] ? probe[0]->cut : CutStats{};
-  const CapChoice decided = !square.compared_mse.empty() && square.longest_loop_capped ? CapChoice::kCap : CapChoice::kKeep;
-  const double stretch = probe[0] && probe[0]->kept.empty() ? texel_stretch_ratio(*probe[0]) : -1;
-  if (worth_probing_other_shapes(stretch)) {
-    // The other shapes mapped beside the square's estimate; each estimated (the square alone needs none).
-    tbb::parallel_for(size_t(0), n, [&](size_t i) {
-      if (i > 0) run_probe(i, decided);
-      if (i > 0 && probe[i] && compare_cuts) probe[i]->cut.compared_mse = square.compared_mse;  // the report's: the square's
-      if (probe[i] && probe[i]->kept.empty()) mse[i] = estimate_mse(ctx.input, *probe[i]);
-    });
-  } else {
-    ctx.progress.advance(double(ctx.components[dominant].num_faces()) * double(n - 1));  // the maps not made
-  }
+    probe_shapes();
   // The area map's density promise first, then the estimate, where another shape must beat the square
   // by kAspectMinGain.
   const SquareMapStats none{};

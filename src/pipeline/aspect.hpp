@@ -1,6 +1,7 @@
 // The texture's shape (Options::aspect 0): the component that holds most of the texture is mapped into
-// a square and, where that map's texels are stretched along one axis, into a 1:2 and a 2:1 texture of
-// the same budget; the shape whose map keeps the most of the input's colour (better_map on
+// a square and, where that map's texels are stretched along one axis, into the texture of the same
+// budget that the stretch points to (2:1 where texels are long along x, else 1:2); the shape whose map
+// keeps the most of the input's colour (better_map on
 // resampling_mse) is chosen, the square unless another is clearly better. Where the probes are
 // multilevel maps and choose another shape, the choice is made again on the two shapes' own maps.
 #pragma once
@@ -16,12 +17,14 @@ namespace tightex {
 /// shape's estimated error is at most kAspectMinGain of it.
 constexpr double kAspectProbes[] = {1.0, 0.5, 2.0};
 
-/// The other shapes are probed only where the square's map has texels longer on the surface along one
+/// Another shape is probed only where the square's map has texels longer on the surface along one
 /// axis than along the other by more than this, in squared length (texel_stretch_ratio outside
 /// [1/k, k]): the best shape is about sqrt(ratio) wide per high, and where that is near 1 neither 1:2
-/// nor 2:1 wins. On ../shared/data every shape that won had a ratio of at most 0.68 or at least 2.34
-/// (detail and area maps, every shape probed), and skipping below 1.35 leaves every choice as it was
-/// (BENCHMARKS.md, "Options").
+/// nor 2:1 wins; beyond it only the shape on the stretch's side (2:1 above k, 1:2 below 1/k). On
+/// ../shared/data every shape that won had a ratio of at most 0.68 or at least 2.34 (detail and area
+/// maps, every shape probed), skipping below 1.35 leaves every choice as it was, and in every run
+/// beyond it (detail, area and texel maps) the shape on the stretch's side was estimated closer than
+/// the other (BENCHMARKS.md, "Options").
 constexpr double kAspectProbeStretch = 1.35;
 
 /// The shape chosen, what each probe was estimated to give (estimated_mse < 0: not probed, since the

@@ -47,8 +47,9 @@ struct OptionsUsed {
 struct AspectProbe {
   double aspect = 1.0;        // width / height
   int width = 0, height = 0;  // the texture's size at that shape
-  /// resampling_mse of the probed map; written as "estimated_psnr_db". < 0: not estimated (not mapped, or
-  /// the square alone was: the other shapes were not worth probing, see square_texel_stretch).
+  /// resampling_mse of the probed map; written as "estimated_psnr_db". < 0: not estimated (not mapped:
+  /// the square's texels were not stretched, or stretched towards the other shape; see
+  /// square_texel_stretch).
   double estimated_mse = -1;
   /// resampling_mse of the shape's own (full) map, where the probes chose a shape other than the square
   /// on multilevel maps and the choice was confirmed on both shapes' own maps; written as
