@@ -1,5 +1,5 @@
 // Per-stage benchmarks on generated meshes of 10k..1M triangles: a bumpy sphere (closed, genus 0,
-// cut along one path) and the same with holes, its coarse copy for the multilevel map, and reading it
+// cut along one path) and the same with holes, a bumpy torus for the handle search, its coarse copy for the multilevel map, and reading it
 // back from an OBJ (in stretches on every core, and as one stretch). Speed is measured here, never asserted in tests.
 // Run: build/bench/tightex_bench --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
@@ -18,6 +18,7 @@
 #include "param/coarsen.hpp"
 #include "param/param.hpp"
 #include "prepare/components.hpp"
+#include "prepare/handles.hpp"
 #include "prepare/repair.hpp"
 
 using namespace tightex;
@@ -79,6 +80,30 @@ const TexturedMesh& mesh_for(int triangles) {
   return it->second;
 }
 
+/// A bumpy torus of about `triangles` triangles: one handle for the handle search, prepared as one
+/// component.
+Surface bumpy_torus(int triangles) {
+  const int n = std::max(8, int(std::sqrt(triangles / 2.0)));
+  TexturedMesh m;
+  m.source = "bench";
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const double u = 2 * std::numbers::pi * i / n, v = 2 * std::numbers::pi * j / n;
+      const double r = 0.3 * (1 + 0.1 * std::sin(5 * u) * std::cos(3 * v));
+      m.positions.push_back(Vec3((1 + r * std::cos(v)) * std::cos(u), (1 + r * std::cos(v)) * std::sin(u), r * std::sin(v)));
+    }
+  auto index = [&](int i, int j) { return uint32_t((i % n) * n + (j % n)); };
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      m.triangles.push_back({index(i, j), index(i + 1, j), index(i + 1, j + 1)});
+      m.triangles.push_back({index(i, j), index(i + 1, j + 1), index(i, j + 1)});
+    }
+  m.corner_uv.assign(3 * m.triangles.size(), Vec2::Zero());
+  m.face_material.assign(m.triangles.size(), 0);
+  m.materials.push_back(Material{});
+  return split_components(prepare_surface(m, nullptr))[0];
+}
+
 /// The bumpy sphere of `triangles` written as an OBJ (once per size, removed at exit).
 const std::string& obj_for(int triangles) {
   struct Folders {
@@ -116,6 +141,13 @@ void BM_PrepareSurface(benchmark::State& state) {
   const TexturedMesh& m = mesh_for(int(state.range(0)));
   for (auto _ : state) benchmark::DoNotOptimize(prepare_surface(m, nullptr));
   state.counters["triangles"] = double(m.num_triangles());
+}
+
+/// The handle search and cut (remove_handles) on a torus of range(0) triangles.
+void BM_RemoveHandles(benchmark::State& state) {
+  const Surface s = bumpy_torus(int(state.range(0)));
+  for (auto _ : state) benchmark::DoNotOptimize(remove_handles(s, nullptr));
+  state.counters["triangles"] = double(s.num_faces());
 }
 
 void BM_CutToDisk(benchmark::State& state) {
@@ -172,6 +204,7 @@ void BM_BakeTexture(benchmark::State& state) {
 
 BENCHMARK(BM_ReadObj)->Args({1000000, 0})->Args({1000000, 1})->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_PrepareSurface)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_RemoveHandles)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CutToDisk)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_MapToSquare)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CoarsenDisk)->Arg(200000)->Arg(1000000)->Unit(benchmark::kMillisecond);

@@ -69,17 +69,19 @@ std::vector<std::pair<std::string, Surface>> handle_surfaces() {
 
 // The classes call a loop separating exactly where cutting along it leaves the genus as it was: every
 // loop the tree-cotree leaves over (2g, none separating) and loops closed by other edges off its tree,
-// some of each kind.
+// some of each kind; with the classes made on the tree-cotree's shortest-path tree and on a
+// breadth-first tree alike.
 TEST(LoopClasses, SayWhichLoopsSeparateAsCuttingAlongThemDoes) {
   for (const auto& [name, s] : handle_surfaces()) {
     SCOPED_TRACE(name);
     const EdgeGraph g(s);
     const auto loops = boundary_loops(s);
     const TreeCotree tc = tree_cotree(s, g, {s.triangles[0][0]}, loops);
-    const LoopClasses c = loop_classes(s, g, loops, tc.pred);
+    const LoopClasses on_paths = loop_classes(s, g, loops, tc.pred), on_bfs = loop_classes(s, g, loops, breadth_first_tree(s, g, 0));
     ASSERT_GT(topology_of(s).genus(), 0);
     ASSERT_EQ(tc.leftover.size(), size_t(2 * topology_of(s).genus()));
-    for (uint32_t e : tc.leftover) EXPECT_FALSE(classes_say_separating(c, loop_edges(s, g, tc.pred, e)));
+    for (uint32_t e : tc.leftover)
+      for (const LoopClasses* c : {&on_paths, &on_bfs}) EXPECT_FALSE(classes_say_separating(*c, loop_edges(s, g, tc.pred, e)));
     std::vector<char> in_tree(g.num_edges(), 0);
     for (uint32_t e : tc.pred)
       if (e != kNone) in_tree[e] = 1;
@@ -89,7 +91,8 @@ TEST(LoopClasses, SayWhichLoopsSeparateAsCuttingAlongThemDoes) {
       if (in_tree[e] || s.opposite[g.edge_halfedge[e]] == kNone) continue;
       const std::vector<uint32_t> loop = loop_edges(s, g, tc.pred, e);
       const bool separating = !non_separating(s, g, loop);
-      EXPECT_EQ(classes_say_separating(c, loop), separating) << "edge " << e;
+      EXPECT_EQ(classes_say_separating(on_paths, loop), separating) << "edge " << e;
+      EXPECT_EQ(classes_say_separating(on_bfs, loop), separating) << "edge " << e;
       ++seen[separating ? 0 : 1];
     }
     EXPECT_GT(seen[0], 0u);

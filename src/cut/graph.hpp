@@ -104,6 +104,18 @@ inline void dijkstra(const EdgeGraph& g, size_t nv, const std::vector<uint32_t>&
   }
 }
 
+/// A breadth-first spanning tree of the vertices `root` reaches: per vertex its tree edge towards the
+/// root (kNone at the root and where not reached).
+inline std::vector<uint32_t> breadth_first_tree(const Surface& s, const EdgeGraph& g, uint32_t root) {
+  std::vector<uint32_t> pred(s.num_vertices(), kNone), queue{root};
+  std::vector<char> seen(s.num_vertices(), 0);
+  seen[root] = 1;
+  for (size_t k = 0; k < queue.size(); ++k)
+    for (uint32_t i = g.offset[queue[k]]; i < g.offset[queue[k] + 1]; ++i)
+      if (!seen[g.neighbor[i]]) seen[g.neighbor[i]] = 1, pred[g.neighbor[i]] = g.via_edge[i], queue.push_back(g.neighbor[i]);
+  return pred;
+}
+
 /// The end of edge e that is not v.
 inline uint32_t other_end(const Surface& s, const EdgeGraph& g, uint32_t e, uint32_t v) {
   const uint32_t h = g.edge_halfedge[e];

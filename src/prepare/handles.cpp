@@ -1,6 +1,7 @@
 #include "prepare/handles.hpp"
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -183,15 +184,19 @@ void tighten(const Surface& s, const EdgeGraph& g, LoopSearch& search) {
 
 Surface remove_handles(const Surface& component, std::vector<double>* loop_lengths, std::span<const char> seams) {
   Surface cur = with_identity_parents(component);
-  const long genus = topology_of(cur).genus();
-  for (long k = 0; k < genus; ++k) {
+  long genus = topology_of(cur).genus();
+  while (genus > 0) {
     const EdgeGraph g(cur, seams);
     const auto loops = boundary_loops(cur);
-    const TreeCotree global = tree_cotree(cur, g, {cur.triangles[0][0]}, loops);
+    // The tree-cotree that places the roots, and the classes on a tree of their own, side by side.
+    TreeCotree global;
+    LoopClasses classes;
+    tbb::parallel_invoke([&] { global = tree_cotree(cur, g, {cur.triangles[0][0]}, loops); },
+                         [&] { classes = loop_classes(cur, g, loops, breadth_first_tree(cur, g, cur.triangles[0][0])); });
     double bound = 0;
     const std::vector<uint32_t> roots = candidate_roots(cur, g, global, bound);
     if (roots.empty()) break;
-    LoopSearch search(cur, g, loop_classes(cur, g, loops, global.pred));
+    LoopSearch search(cur, g, std::move(classes));
     search.try_first_root(roots.front(), bound);
     search.try_roots(std::vector<uint32_t>(roots.begin() + 1, roots.end()));
     if (search.best().edges.empty()) break;
@@ -203,8 +208,9 @@ Surface remove_handles(const Surface& component, std::vector<double>* loop_lengt
     Surface cut = cut_along_edges(cur, g, on_loop);
     for (uint32_t& p : cut.vertex_parent) p = cur.vertex_parent[p];
     for (uint32_t& p : cut.face_parent) p = cur.face_parent[p];
-    if (topology_of(cut).genus() >= topology_of(cur).genus())
-      fail_internal("remove_handles: cutting a loop of {} edges did not lower the genus", best.edges.size());
+    const long cut_genus = topology_of(cut).genus();
+    if (cut_genus >= genus) fail_internal("remove_handles: cutting a loop of {} edges did not lower the genus", best.edges.size());
+    genus = cut_genus;
     if (loop_lengths) loop_lengths->push_back(best.length);
     cur = std::move(cut);
   }

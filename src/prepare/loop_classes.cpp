@@ -63,9 +63,11 @@ LoopClasses loop_classes(const Surface& s, const EdgeGraph& g, const std::vector
   const DualNodes dual(s, loops);
   std::vector<uint32_t> parent_edge, order;
   dual_tree(dual, g, in_tree, parent_edge, order);
-  if (tree_edges + 1 != s.num_vertices() || order.size() != dual.size())
-    fail_internal("loop_classes: the trees do not span the surface ({} of {} vertices, {} of {} faces and caps)", tree_edges + 1,
-                  s.num_vertices(), order.size(), dual.size());
+  size_t vertices = 0;  // those on an edge: a vertex no triangle uses is in no loop
+  for (uint32_t v = 0; v < s.num_vertices(); ++v) vertices += g.offset[v + 1] > g.offset[v];
+  if (tree_edges + 1 != vertices || order.size() != dual.size())
+    fail_internal("loop_classes: the trees do not span the surface ({} of {} vertices, {} of {} faces and caps)", tree_edges + 1, vertices,
+                  order.size(), dual.size());
   std::vector<char> in_dual(g.num_edges(), 0);
   for (uint32_t e : parent_edge)
     if (e != kNone) in_dual[e] = 1;

@@ -20,8 +20,9 @@ struct LoopClasses {
   std::span<const uint64_t> of_edge(uint32_t e) const { return {bits.data() + size_t(e) * words, words}; }
 };
 
-/// The classes of `s`'s edges. `tree_pred`: a spanning tree of s's vertices, per vertex its tree edge
-/// towards the root (kNone at the root); every tree edge gets class 0. `loops`: s's boundary loops
+/// The classes of `s`'s edges. `tree_pred`: any spanning tree of s's vertices (breadth_first_tree, a
+/// shortest-path tree), per vertex its tree edge towards the root (kNone at the root); every tree edge
+/// gets class 0. The classes differ from tree to tree, which loops they call separating does not. `loops`: s's boundary loops
 /// (boundary_loops), each capped by one face.
 /// Construction: a spanning tree of the dual graph (faces and caps) over the edges off the primal tree;
 /// the 2g edges in neither tree each own one bit, and the dual tree's edges are solved leaf first so
