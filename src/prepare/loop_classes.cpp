@@ -99,7 +99,7 @@ RootLoopSearch::RootLoopSearch(const Surface& s, const EdgeGraph& g, const LoopC
       dist_(s.num_vertices(), std::numeric_limits<double>::infinity()),
       pred_(s.num_vertices(), kNone),
       settled_(s.num_vertices(), 0),
-      vertex_class_(s.num_vertices() * classes.words, 0) {}
+      vertex_class_(std::make_unique_for_overwrite<uint64_t[]>(s.num_vertices() * classes.words)) {}
 
 void RootLoopSearch::reset() {
   for (uint32_t v : reached_) dist_[v] = std::numeric_limits<double>::infinity(), pred_[v] = kNone, settled_[v] = 0;
@@ -112,12 +112,12 @@ void RootLoopSearch::reset() {
 void RootLoopSearch::settle(uint32_t v) {
   settled_[v] = 1;
   const size_t W = classes_.words;
-  uint64_t* mine = vertex_class_.data() + size_t(v) * W;
+  uint64_t* mine = vertex_class_.get() + size_t(v) * W;
   const uint32_t up = pred_[v];
   if (up == kNone) {
     std::fill(mine, mine + W, 0);
   } else {
-    const uint64_t* parent = vertex_class_.data() + size_t(other_end(s_, g_, up, v)) * W;
+    const uint64_t* parent = vertex_class_.get() + size_t(other_end(s_, g_, up, v)) * W;
     const auto edge = classes_.of_edge(up);
     for (size_t w = 0; w < W; ++w) mine[w] = parent[w] ^ edge[w];
   }
@@ -125,13 +125,13 @@ void RootLoopSearch::settle(uint32_t v) {
 
 void RootLoopSearch::close_loops_at(uint32_t v) {
   const size_t W = classes_.words;
-  const uint64_t* mine = vertex_class_.data() + size_t(v) * W;
+  const uint64_t* mine = vertex_class_.get() + size_t(v) * W;
   for (uint32_t i = g_.offset[v]; i < g_.offset[v + 1]; ++i) {
     const uint32_t w = g_.neighbor[i], e = g_.via_edge[i];
     if (!settled_[w] || e == pred_[v] || s_.opposite[g_.edge_halfedge[e]] == kNone) continue;
     const double cost = dist_[v] + dist_[w] + g_.cost[e];
     if (cost > loop_cost_ || (cost == loop_cost_ && closing_edge_ != kNone && e < closing_edge_)) continue;
-    const uint64_t* theirs = vertex_class_.data() + size_t(w) * W;
+    const uint64_t* theirs = vertex_class_.get() + size_t(w) * W;
     const auto edge = classes_.of_edge(e);
     bool separating = true;
     for (size_t k = 0; k < W && separating; ++k) separating = (mine[k] ^ theirs[k] ^ edge[k]) == 0;

@@ -5,6 +5,7 @@
 // loop's reach, without a tree-cotree over the whole surface per root.
 #pragma once
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -13,7 +14,8 @@
 
 namespace tightex {
 
-/// One class per edge: `words` 64-bit words, bit i the value of basis cocycle i on the edge.
+/// One class per edge: `words` 64-bit words, bit i the value of basis cocycle i on the edge (2g bits:
+/// 8 bytes an edge up to genus 32, 64 at genus 256).
 struct LoopClasses {
   size_t words = 0;            // ceil(2g / 64); 0 on a genus-0 surface
   std::vector<uint64_t> bits;  // per edge, `words` words
@@ -61,7 +63,10 @@ class RootLoopSearch {
   std::vector<double> dist_;
   std::vector<uint32_t> pred_;
   std::vector<char> settled_;
-  std::vector<uint64_t> vertex_class_;  // per settled vertex, the xor of the classes along its tree path
+  // Per settled vertex, the xor of the classes along its tree path: written when the vertex settles,
+  // never read before, so left uninitialised and only the pages of the ball searched are ever touched
+  // (words x 8 bytes a vertex, per root searched at once).
+  std::unique_ptr<uint64_t[]> vertex_class_;
   std::vector<uint32_t> reached_;
   std::vector<std::pair<double, uint32_t>> heap_;
   uint32_t closing_edge_ = kNone;
