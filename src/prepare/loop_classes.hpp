@@ -24,14 +24,14 @@ struct LoopClasses {
 
 /// The classes of `s`'s edges. `tree_pred`: any spanning tree of s's vertices (breadth_first_tree, a
 /// shortest-path tree), per vertex its tree edge towards the root (kNone at the root); every tree edge
-/// gets class 0. The classes differ from tree to tree, which loops they call separating does not. `loops`: s's boundary loops
-/// (boundary_loops), each capped by one face.
+/// gets class 0. The classes differ from tree to tree; which loops they call separating does not.
+/// `loops`: s's boundary loops (boundary_loops), each capped by one face.
 /// Construction: a spanning tree of the dual graph (faces and caps) over the edges off the primal tree;
 /// the 2g edges in neither tree each own one bit, and the dual tree's edges are solved leaf first so
 /// that the xor over every face's and cap's edges is 0 (a cocycle). The loop of leftover edge i (it and
 /// the tree paths to the root) then has exactly bit i, so the 2g cocycles are independent and span the
 /// cohomology: a closed path is null-homologous (separating) iff every bit of its xor is 0.
-/// Throws: InternalError if the edges left in neither tree are not 2g (s not a connected manifold).
+/// Throws: InternalError if the trees do not span s (s not connected, or tree_pred not a spanning tree).
 LoopClasses loop_classes(const Surface& s, const EdgeGraph& g, const std::vector<std::vector<uint32_t>>& loops,
                          const std::vector<uint32_t>& tree_pred);
 
@@ -44,8 +44,9 @@ class RootLoopSearch {
  public:
   RootLoopSearch(const Surface& s, const EdgeGraph& g, const LoopClasses& classes, std::span<const double> weight);
   /// The closing edge of the cheapest non-separating loop through `root` that reaches no vertex
-  /// farther than `radius` (ties: the higher edge id, as the tree-cotree's first leftover edge), or kNone. Its loop: the edge and the tree
-  /// paths (pred) from its ends to the root; its cost dist(from) + dist(to) + g.cost[e] (loop_cost).
+  /// farther than `radius` (ties: the higher edge id, as the tree-cotree's first leftover edge), or
+  /// kNone. Its loop: the edge and the tree paths (pred) from its ends to the root; its cost
+  /// dist(from) + dist(to) + g.cost[e] (loop_cost).
   uint32_t search(uint32_t root, double radius);
   double loop_cost() const { return loop_cost_; }
   /// Per vertex, the tree edge towards the last search's root (kNone where it did not reach).
