@@ -123,20 +123,16 @@ void RootLoopSearch::settle(uint32_t v) {
   }
 }
 
-void RootLoopSearch::close_loops_at(uint32_t v) {
+void RootLoopSearch::try_closing(uint32_t v, uint32_t w, uint32_t e) {
+  if (e == pred_[v] || s_.opposite[g_.edge_halfedge[e]] == kNone) return;
+  const double cost = dist_[v] + dist_[w] + g_.cost[e];
+  if (cost > loop_cost_ || (cost == loop_cost_ && closing_edge_ != kNone && e < closing_edge_)) return;
   const size_t W = classes_.words;
-  const uint64_t* mine = vertex_class_.get() + size_t(v) * W;
-  for (uint32_t i = g_.offset[v]; i < g_.offset[v + 1]; ++i) {
-    const uint32_t w = g_.neighbor[i], e = g_.via_edge[i];
-    if (!settled_[w] || e == pred_[v] || s_.opposite[g_.edge_halfedge[e]] == kNone) continue;
-    const double cost = dist_[v] + dist_[w] + g_.cost[e];
-    if (cost > loop_cost_ || (cost == loop_cost_ && closing_edge_ != kNone && e < closing_edge_)) continue;
-    const uint64_t* theirs = vertex_class_.get() + size_t(w) * W;
-    const auto edge = classes_.of_edge(e);
-    bool separating = true;
-    for (size_t k = 0; k < W && separating; ++k) separating = (mine[k] ^ theirs[k] ^ edge[k]) == 0;
-    if (!separating) loop_cost_ = cost, closing_edge_ = e;
-  }
+  const uint64_t *mine = vertex_class_.get() + size_t(v) * W, *theirs = vertex_class_.get() + size_t(w) * W;
+  const auto edge = classes_.of_edge(e);
+  bool separating = true;
+  for (size_t k = 0; k < W && separating; ++k) separating = (mine[k] ^ theirs[k] ^ edge[k]) == 0;
+  if (!separating) loop_cost_ = cost, closing_edge_ = e;
 }
 
 uint32_t RootLoopSearch::search(uint32_t root, double radius) {
@@ -158,11 +154,14 @@ uint32_t RootLoopSearch::search(uint32_t root, double radius) {
     // A loop closed at v or later costs at least 2 d (dist[v] <= dist[w] + cost of (v, w)).
     if (d > radius || 2 * d > loop_cost_) break;
     settle(v);
-    close_loops_at(v);
     for (uint32_t i = g_.offset[v]; i < g_.offset[v + 1]; ++i) {
       const uint32_t w = g_.neighbor[i], e = g_.via_edge[i];
+      if (settled_[w]) {
+        try_closing(v, w, e);
+        continue;
+      }
       const double nd = d + weight_[e];
-      if (settled_[w] || !(nd < dist_[w])) continue;
+      if (!(nd < dist_[w])) continue;
       if (std::isinf(dist_[w])) reached_.push_back(w);
       dist_[w] = nd;
       pred_[w] = e;

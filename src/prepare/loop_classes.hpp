@@ -55,7 +55,7 @@ class RootLoopSearch {
  private:
   void reset();
   void settle(uint32_t v);          // v's distance is final: its class, from its parent's
-  void close_loops_at(uint32_t v);  // each edge from v to a settled vertex closes a loop
+  void try_closing(uint32_t v, uint32_t w, uint32_t e);  // edge e from v to settled w closes a loop: the cheapest yet?
 
   const Surface& s_;
   const EdgeGraph& g_;
