@@ -10,11 +10,14 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <random>
+#include <set>
 #include <string>
 
 #include "core/error.hpp"
 #include "io/image_io.hpp"
 #include "io/obj_reader.hpp"
+#include "io/obj_writer.hpp"
 
 namespace tightex {
 namespace {
@@ -502,6 +505,79 @@ TEST_F(ObjReaderTest, TheFirstProblemInFileOrderIsReportedHoweverTheFileIsCut) {
   EXPECT_EQ(error_of(vertex_first), vertex_first + ":1: 'v' needs 3 coordinates, got 2");
   const std::string relative = write("e.obj", "v 0 0 0\nv 1 0 0\nvt 0 0\nv 0 1 0\nvt 1 0\nvt 0 1\nf -3/-3 -2/-2 -1/-1\nf -4/1 1/1 2/2\n");
   EXPECT_EQ(error_of(relative), relative + ":8: vertex index -4 out of range (only 3 vertices defined before this line)");
+}
+
+// The writer formats its lines in blocks on every core: the file it writes must still read back corner
+// for corner, with each distinct texture coordinate and normal written once, in order of first use, and
+// a usemtl line wherever the material changes. Three blocks of triangles and a few hundred distinct
+// coordinates, -0 among them (a coordinate of its own as text).
+TEST_F(ObjReaderTest, WrittenModelReadsBackCornerForCorner) {
+  constexpr uint32_t kSide = 130;  // 2 x 129^2 = 33282 triangles
+  TexturedMesh mesh;
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (uint32_t i = 0; i < kSide * kSide; ++i) mesh.positions.push_back(Vec3(unit(rng), unit(rng), unit(rng) * 1e-7));
+  auto coordinate = [&](int steps) {
+    const int k = int(rng() % uint64_t(steps));
+    return k == 0 ? -0.0 : double(k) / double(steps - 1) / 3.0;
+  };
+  for (uint32_t y = 0; y + 1 < kSide; ++y)
+    for (uint32_t x = 0; x + 1 < kSide; ++x) {
+      const uint32_t v = y * kSide + x;
+      for (const Tri& t : {Tri{v, v + 1, v + kSide + 1}, Tri{v, v + kSide + 1, v + kSide}}) {
+        mesh.triangles.push_back(t);
+        // Runs of each material, some longer than a block, and the first triangles without one.
+        const size_t n = mesh.triangles.size();
+        mesh.face_material.push_back(n < 5 ? -1 : int32_t((n / 20011 + n / 7 % 3) % 3));
+        for (int k = 0; k < 3; ++k) {
+          mesh.corner_uv.push_back(Vec2(coordinate(20), coordinate(17)));
+          mesh.corner_normal.push_back(Vec3(coordinate(3), coordinate(4), 1.0));
+        }
+      }
+    }
+  for (const char* name : {"stone", "moss", "rust"}) mesh.materials.push_back(Material{name});
+  write_obj(mesh, dir_.string(), "model", ImageFormat::kPng);
+  const TexturedMesh back = read((dir_ / "model.obj").string(), no_textures());
+  EXPECT_EQ(back.positions, mesh.positions);
+  EXPECT_EQ(back.triangles, mesh.triangles);
+  EXPECT_EQ(back.face_material, mesh.face_material);
+  ASSERT_EQ(back.corner_uv.size(), mesh.corner_uv.size());
+  ASSERT_EQ(back.corner_normal.size(), mesh.corner_normal.size());
+  for (size_t c = 0; c < mesh.corner_uv.size(); ++c) {
+    ASSERT_EQ(std::signbit(back.corner_uv[c].x()), std::signbit(mesh.corner_uv[c].x())) << c;
+    ASSERT_EQ(back.corner_uv[c], mesh.corner_uv[c]) << c;
+    ASSERT_EQ(std::signbit(back.corner_normal[c].x()), std::signbit(mesh.corner_normal[c].x())) << c;
+    ASSERT_EQ(back.corner_normal[c], mesh.corner_normal[c]) << c;
+  }
+  // The vt and vn lines: each distinct text once, in order of first use; usemtl at every change.
+  std::ifstream file(dir_ / "model.obj");
+  std::vector<std::string> vt, vn;
+  size_t usemtl = 0;
+  for (std::string line; std::getline(file, line);) {
+    if (line.rfind("vt ", 0) == 0) vt.push_back(line);
+    if (line.rfind("vn ", 0) == 0) vn.push_back(line);
+    usemtl += line.rfind("usemtl ", 0) == 0;
+  }
+  auto first_use = [](size_t n, auto line_of) {
+    std::vector<std::string> lines;
+    std::set<std::string> seen;
+    for (size_t i = 0; i < n; ++i)
+      if (seen.insert(line_of(i)).second) lines.push_back(line_of(i));
+    return lines;
+  };
+  EXPECT_EQ(vt, first_use(mesh.corner_uv.size(), [&](size_t c) {
+              return "vt " + format_double(mesh.corner_uv[c].x()) + " " + format_double(mesh.corner_uv[c].y());
+            }));
+  EXPECT_EQ(vn, first_use(mesh.corner_normal.size(), [&](size_t c) {
+              const Vec3& n = mesh.corner_normal[c];
+              return "vn " + format_double(n.x()) + " " + format_double(n.y()) + " " + format_double(n.z());
+            }));
+  EXPECT_GT(vt.size(), 300u);
+  size_t changes = 0;
+  for (size_t t = 0; t < mesh.face_material.size(); ++t)
+    changes += mesh.face_material[t] >= 0 && (t == 0 || mesh.face_material[t - 1] != mesh.face_material[t]);
+  EXPECT_EQ(usemtl, changes);
+  EXPECT_GT(changes, 3000u);
 }
 
 TEST_F(ObjReaderTest, MeshroomScan) {

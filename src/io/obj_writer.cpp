@@ -1,9 +1,14 @@
 #include "io/obj_writer.hpp"
 
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <array>
 #include <charconv>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
-#include <unordered_map>
+#include <limits>
 
 #include "core/error.hpp"
 #include "io/output_files.hpp"
@@ -20,9 +25,6 @@ std::string format_double(double value) {
 
 namespace {
 
-struct Vec2Hash {
-  size_t operator()(const std::pair<uint64_t, uint64_t>& k) const { return size_t(k.first * 0x9E3779B97F4A7C15ull ^ k.second); }
-};
 std::pair<uint64_t, uint64_t> key(const Vec2& v) {
   uint64_t a, b;
   std::memcpy(&a, &v.x(), 8);
@@ -99,67 +101,127 @@ void append_vec3(std::string& out, const char* tag, const Vec3& p) {
   append(out, p.z());
 }
 
-/// The "vt" lines, each distinct texture coordinate once; returns each corner's vt index.
-std::vector<uint32_t> append_texture_coordinates(const TexturedMesh& mesh, std::string& obj) {
-  std::unordered_map<std::pair<uint64_t, uint64_t>, uint32_t, Vec2Hash> uv_index;
-  std::vector<uint32_t> corner_vt(mesh.corner_uv.size());
-  for (size_t c = 0; c < mesh.corner_uv.size(); ++c) {
-    auto [it, inserted] = uv_index.try_emplace(key(mesh.corner_uv[c]), uint32_t(uv_index.size()));
-    if (inserted) {
-      obj += "vt ";
-      append(obj, mesh.corner_uv[c].x());
-      obj += ' ';
-      append(obj, mesh.corner_uv[c].y());
-      obj += '\n';
-    }
-    corner_vt[c] = it->second;
-  }
+void append(std::string& s, uint32_t v) {
+  char buf[16];
+  auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
+  s.append(buf, end);
+}
+
+/// The text of items [0, n) as pieces of about kBlock items each, each piece made by calling
+/// `append_item(i, piece)` for its items in order, on every core: the pieces in order are the text one
+/// loop over the items would give.
+template <typename AppendItem>
+void append_pieces(std::vector<std::string>& pieces, size_t n, AppendItem&& append_item) {
+  constexpr size_t kBlock = size_t(1) << 14;
+  const size_t first = pieces.size(), blocks = (n + kBlock - 1) / kBlock;
+  pieces.resize(first + blocks);
+  tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
+    std::string& piece = pieces[first + b];
+    for (size_t i = b * kBlock, end = std::min(n, i + kBlock); i < end; ++i) append_item(i, piece);
+  });
+}
+
+/// Items numbered by their key the way a map filled in item order numbers them: the items whose key
+/// no earlier item has get 0, 1, 2, ... in item order, every other item its key's first item's number.
+/// `firsts` gets those first items, in order. A parallel sort by (key, item) instead of n lookups one
+/// after the other.
+template <typename Key, typename KeyOf>
+std::vector<uint32_t> number_by_first_occurrence(size_t n, KeyOf&& key_of, std::vector<uint32_t>& firsts) {
+  std::vector<std::pair<Key, uint32_t>> keyed(n);
+  tbb::parallel_for(size_t(0), n, [&](size_t i) { keyed[i] = {key_of(i), uint32_t(i)}; });
+  tbb::parallel_sort(keyed.begin(), keyed.end());
+  // Each run of equal keys starts with its first item.
+  std::vector<uint32_t> first_of(n);
+  tbb::parallel_for(size_t(0), n, [&](size_t i) {
+    if (i > 0 && keyed[i].first == keyed[i - 1].first) return;
+    for (size_t j = i; j < n && keyed[j].first == keyed[i].first; ++j) first_of[keyed[j].second] = keyed[i].second;
+  });
+  std::vector<uint32_t> number(n);
+  firsts.clear();
+  for (uint32_t i = 0; i < n; ++i)
+    if (first_of[i] == i) number[i] = uint32_t(firsts.size()), firsts.push_back(i);
+  tbb::parallel_for(size_t(0), n, [&](size_t i) { number[i] = number[first_of[i]]; });
+  return number;
+}
+
+/// The "vt" lines, each distinct texture coordinate once (in order of first use); returns each
+/// corner's vt index.
+std::vector<uint32_t> append_texture_coordinates(const TexturedMesh& mesh, std::vector<std::string>& pieces) {
+  std::vector<uint32_t> firsts;
+  std::vector<uint32_t> corner_vt = number_by_first_occurrence<std::pair<uint64_t, uint64_t>>(
+      mesh.corner_uv.size(), [&](size_t c) { return key(mesh.corner_uv[c]); }, firsts);
+  append_pieces(pieces, firsts.size(), [&](size_t i, std::string& text) {
+    const Vec2& uv = mesh.corner_uv[firsts[i]];
+    text += "vt ";
+    append(text, uv.x());
+    text += ' ';
+    append(text, uv.y());
+    text += '\n';
+  });
   return corner_vt;
 }
 
-/// The "vn" lines, each distinct normal once; returns each corner's vn index.
-std::vector<uint32_t> append_normals(const TexturedMesh& mesh, std::string& obj) {
-  std::unordered_map<std::string, uint32_t> vn_index;
-  std::vector<uint32_t> corner_vn(mesh.corner_normal.size());
-  for (size_t c = 0; c < mesh.corner_normal.size(); ++c) {
-    std::string line;
-    append_vec3(line, "vn ", mesh.corner_normal[c]);
-    auto [it, inserted] = vn_index.try_emplace(line, uint32_t(vn_index.size()));
-    if (inserted) obj += line + '\n';
-    corner_vn[c] = it->second;
-  }
+/// The bits of a coordinate as its shortest text tells it: every NaN of one sign is the same text.
+uint64_t text_bits(double d) {
+  if (std::isnan(d)) d = std::signbit(d) ? -std::numeric_limits<double>::quiet_NaN() : std::numeric_limits<double>::quiet_NaN();
+  uint64_t b;
+  std::memcpy(&b, &d, 8);
+  return b;
+}
+
+/// The "vn" lines, each distinct normal text once (in order of first use); returns each corner's vn index.
+std::vector<uint32_t> append_normals(const TexturedMesh& mesh, std::vector<std::string>& pieces) {
+  std::vector<uint32_t> firsts;
+  std::vector<uint32_t> corner_vn = number_by_first_occurrence<std::array<uint64_t, 3>>(
+      mesh.corner_normal.size(),
+      [&](size_t c) {
+        const Vec3& n = mesh.corner_normal[c];
+        return std::array<uint64_t, 3>{text_bits(n.x()), text_bits(n.y()), text_bits(n.z())};
+      },
+      firsts);
+  append_pieces(pieces, firsts.size(), [&](size_t i, std::string& text) {
+    append_vec3(text, "vn ", mesh.corner_normal[firsts[i]]);
+    text += '\n';
+  });
   return corner_vn;
 }
 
-/// The OBJ file: positions, texture coordinates, normals (when every corner has one), faces by material.
-std::string obj_text(const TexturedMesh& mesh, const std::string& name) {
-  std::string obj;
-  obj.reserve(mesh.num_vertices() * 40 + mesh.num_triangles() * 60);
-  obj += fmt::format("# written by tightex: {} vertices, {} triangles\nmtllib {}.mtl\n", mesh.num_vertices(), mesh.num_triangles(), name);
-  for (const Vec3& p : mesh.positions) {
-    append_vec3(obj, "v ", p);
-    obj += '\n';
-  }
-  const std::vector<uint32_t> corner_vt = append_texture_coordinates(mesh, obj);
-  const bool normals = mesh.corner_normal.size() == mesh.corner_uv.size() && !mesh.corner_normal.empty();
-  const std::vector<uint32_t> corner_vn = normals ? append_normals(mesh, obj) : std::vector<uint32_t>{};
-  int32_t current = -2;
-  for (size_t t = 0; t < mesh.num_triangles(); ++t) {
-    if (mesh.face_material[t] != current) {
-      current = mesh.face_material[t];
-      if (current >= 0) obj += fmt::format("usemtl {}\n", mesh.materials[size_t(current)].name);
-    }
-    obj += 'f';
+/// The "f" lines, each after a "usemtl" line where the triangle's material differs from the one before.
+void append_faces(const TexturedMesh& mesh, const std::vector<uint32_t>& corner_vt, const std::vector<uint32_t>& corner_vn,
+                  std::vector<std::string>& pieces) {
+  append_pieces(pieces, mesh.num_triangles(), [&](size_t t, std::string& text) {
+    const int32_t material = mesh.face_material[t];
+    if ((t == 0 || mesh.face_material[t - 1] != material) && material >= 0)
+      text += fmt::format("usemtl {}\n", mesh.materials[size_t(material)].name);
+    text += 'f';
     for (int k = 0; k < 3; ++k) {
       const size_t c = 3 * t + size_t(k);
-      if (normals)
-        obj += fmt::format(" {}/{}/{}", mesh.triangles[t][k] + 1, corner_vt[c] + 1, corner_vn[c] + 1);
-      else
-        obj += fmt::format(" {}/{}", mesh.triangles[t][k] + 1, corner_vt[c] + 1);
+      text += ' ';
+      append(text, mesh.triangles[t][k] + 1);
+      text += '/';
+      append(text, corner_vt[c] + 1);
+      if (corner_vn.empty()) continue;
+      text += '/';
+      append(text, corner_vn[c] + 1);
     }
-    obj += '\n';
-  }
-  return obj;
+    text += '\n';
+  });
+}
+
+/// The OBJ file, in pieces written one after the other: positions, texture coordinates, normals (when
+/// every corner has one), faces by material. Each part is formatted in blocks on every core.
+std::vector<std::string> obj_pieces(const TexturedMesh& mesh, const std::string& name) {
+  std::vector<std::string> pieces{
+      fmt::format("# written by tightex: {} vertices, {} triangles\nmtllib {}.mtl\n", mesh.num_vertices(), mesh.num_triangles(), name)};
+  append_pieces(pieces, mesh.num_vertices(), [&](size_t v, std::string& text) {
+    append_vec3(text, "v ", mesh.positions[v]);
+    text += '\n';
+  });
+  const std::vector<uint32_t> corner_vt = append_texture_coordinates(mesh, pieces);
+  const bool normals = mesh.corner_normal.size() == mesh.corner_uv.size() && !mesh.corner_normal.empty();
+  const std::vector<uint32_t> corner_vn = normals ? append_normals(mesh, pieces) : std::vector<uint32_t>{};
+  append_faces(mesh, corner_vt, corner_vn, pieces);
+  return pieces;
 }
 
 }  // namespace
@@ -170,7 +232,7 @@ std::vector<std::string> write_obj(const TexturedMesh& mesh, const std::string& 
   std::vector<std::string> texture_file;
   for (const OutputFile& f : files) texture_file.push_back(f.name);
   files.push_back({name + ".mtl", [&](const fs::path& tmp) { write_whole_file(tmp, mtl_text(mesh, texture_file)); }});
-  files.push_back({name + ".obj", [&](const fs::path& tmp) { write_whole_file(tmp, obj_text(mesh, name)); }});
+  files.push_back({name + ".obj", [&](const fs::path& tmp) { write_whole_file(tmp, obj_pieces(mesh, name)); }});
   write_files_atomically(outdir, files);
   return unbound_maps(mesh, map_written, "MTL has no statement for it");
 }

@@ -46,10 +46,12 @@ void check_output_folder(const std::string& folder) {
     fail_input("{}: cannot create output directory ({}: {})", folder, existing.string(), std::strerror(errno));
 }
 
-void write_whole_file(const fs::path& path, const std::string& bytes) {
+void write_whole_file(const fs::path& path, const std::string& bytes) { write_whole_file(path, std::span<const std::string>(&bytes, 1)); }
+
+void write_whole_file(const fs::path& path, std::span<const std::string> pieces) {
   std::ofstream f(path, std::ios::binary);
   if (!f) fail_input("{}: cannot write ({})", path.string(), std::strerror(errno));
-  f.write(bytes.data(), std::streamsize(bytes.size()));
+  for (const std::string& bytes : pieces) f.write(bytes.data(), std::streamsize(bytes.size()));
   f.close();
   if (!f) fail_input("{}: write failed ({})", path.string(), std::strerror(errno));
 }

@@ -3,6 +3,7 @@
 #pragma once
 #include <filesystem>
 #include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -32,6 +33,10 @@ void check_output_folder(const std::string& folder);
 
 /// Writes `bytes` to `path` as they are. Throws InputError naming the path (and the system's reason).
 void write_whole_file(const std::filesystem::path& path, const std::string& bytes);
+
+/// Writes `pieces` to `path` one after the other (a text made in pieces on every core, never joined
+/// in memory). Throws InputError naming the path (and the system's reason).
+void write_whole_file(const std::filesystem::path& path, std::span<const std::string> pieces);
 
 /// The name a texture is written under: Texture::path (the file stem inside the output folder) and the
 /// extension of `format` (.png or .jpg).
