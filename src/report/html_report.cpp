@@ -1,6 +1,7 @@
 #include "report/html_report.hpp"
 
 #include <tbb/parallel_invoke.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <bit>
@@ -94,7 +95,7 @@ std::vector<uint32_t> welded_vertices(const TexturedMesh& mesh) {
   std::vector<uint32_t> order(mesh.num_vertices());
   std::iota(order.begin(), order.end(), 0u);
   auto key = [&](uint32_t v) { return std::tuple(mesh.positions[v].x(), mesh.positions[v].y(), mesh.positions[v].z(), v); };
-  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
+  tbb::parallel_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
   std::vector<uint32_t> canonical(mesh.num_vertices());
   for (size_t i = 0; i < order.size(); ++i) {
     const bool same = i > 0 && mesh.positions[order[i]] == mesh.positions[order[i - 1]];
@@ -121,7 +122,7 @@ std::vector<uint8_t> seam_bits(const TexturedMesh& mesh) {
       const uint32_t a = canonical[mesh.triangles[t][k]], b = canonical[mesh.triangles[t][(k + 1) % 3]];
       edges.push_back({(uint64_t(std::min(a, b)) << 32) | std::max(a, b), uint32_t(3 * t + k)});
     }
-  std::sort(edges.begin(), edges.end());
+  tbb::parallel_sort(edges.begin(), edges.end());
   std::vector<uint8_t> bits(mesh.num_triangles(), 0);
   // The texture coordinate of corner c's triangle at canonical vertex v (one of the edge's two ends).
   auto uv_at = [&](uint32_t c, uint32_t v) {

@@ -1,7 +1,9 @@
 #include "report/metrics.hpp"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
+#include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 
 #include <Eigen/Geometry>
@@ -10,9 +12,9 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <random>
 #include <tuple>
-#include <unordered_map>
 
 #include "core/raster.hpp"
 #include "core/statistics.hpp"
@@ -299,15 +301,14 @@ Correspondence match_triangles(const TexturedMesh& in, const TexturedMesh& out) 
 /// (`chart`: chart_ids of out).
 void count_flips(const TexturedMesh& out, const std::vector<uint32_t>& chart, size_t* flipped, size_t* degenerate) {
   std::vector<double> sa(out.num_triangles());
-  std::unordered_map<uint32_t, long> balance;
-  for (uint32_t t = 0; t < out.num_triangles(); ++t) {
-    sa[t] = signed_area(out.corner_uv[3 * t], out.corner_uv[3 * t + 1], out.corner_uv[3 * t + 2]);
+  tbb::parallel_for(size_t(0), sa.size(),
+                    [&](size_t t) { sa[t] = signed_area(out.corner_uv[3 * t], out.corner_uv[3 * t + 1], out.corner_uv[3 * t + 2]); });
+  std::vector<long> balance(out.num_triangles(), 0);  // per chart (its root triangle)
+  for (uint32_t t = 0; t < out.num_triangles(); ++t)
     if (sa[t] != 0) balance[chart[t]] += sa[t] > 0 ? 1 : -1;
-  }
   for (uint32_t t = 0; t < out.num_triangles(); ++t) {
-    const double a3 = triangle_area(out.positions, out.triangles[t]);
     if (sa[t] == 0) {
-      *degenerate += a3 > 0;
+      *degenerate += triangle_area(out.positions, out.triangles[t]) > 0;
       continue;
     }
     const long b = balance[chart[t]];
@@ -356,31 +357,32 @@ struct DensityFigures {
 
 /// METRICS.md "density spread" and "detail loss area" over the matched input triangles of non-zero area.
 DensityFigures measure_density(const TexturedMesh& in, const TexturedMesh& out, const Correspondence& c) {
-  double sum_at = 0, sum_a3 = 0, loss = 0, area_total = 0;
-  std::vector<double> dens(in.num_triangles(), 0), din(in.num_triangles(), 0);
-  for (uint32_t t = 0; t < in.num_triangles(); ++t) {
-    if (c.match[t] == kNone || c.area3[t] <= 0) continue;
+  // Each triangle's densities on every core; the sums in triangle order, as one loop adds them.
+  std::vector<double> dens(in.num_triangles(), 0), din(in.num_triangles(), 0), texels(in.num_triangles(), 0);
+  auto counted = [&](uint32_t t) { return c.match[t] != kNone && c.area3[t] > 0; };
+  tbb::parallel_for(uint32_t(0), uint32_t(in.num_triangles()), [&](uint32_t t) {
+    if (!counted(t)) return;
     const uint32_t o = c.match[t];
     const Image* ii = image_of(in, t);
     const auto [Wo, Ho] = texel_scale(out, o);
-    const double at = std::abs(signed_area(out.sampled_uv(o, 0), out.sampled_uv(o, 1), out.sampled_uv(o, 2))) * Wo * Ho;
-    dens[t] = at / c.area3[t];
+    texels[t] = std::abs(signed_area(out.sampled_uv(o, 0), out.sampled_uv(o, 1), out.sampled_uv(o, 2))) * Wo * Ho;
+    dens[t] = texels[t] / c.area3[t];
     if (ii)
       din[t] = std::abs(signed_area(in.sampled_uv(t, 0), in.sampled_uv(t, 1), in.sampled_uv(t, 2))) * ii->width * ii->height / c.area3[t];
-    sum_at += at;
-    sum_a3 += c.area3[t];
-    area_total += c.area3[t];
-  }
+  });
+  double sum_at = 0, sum_a3 = 0, loss = 0;
+  for (uint32_t t = 0; t < in.num_triangles(); ++t)
+    if (counted(t)) sum_at += texels[t], sum_a3 += c.area3[t];
   const double mean = sum_a3 > 0 ? sum_at / sum_a3 : 1;
   std::vector<std::pair<double, double>> logd;
   for (uint32_t t = 0; t < in.num_triangles(); ++t) {
-    if (c.match[t] == kNone || c.area3[t] <= 0) continue;
+    if (!counted(t)) continue;
     logd.push_back({dens[t] > 0 ? std::log2(dens[t] / mean) : -60.0, c.area3[t]});
     if (din[t] > 0 && dens[t] < 0.5 * din[t]) loss += c.area3[t];
   }
   DensityFigures f;
   f.spread = {weighted_quantile(logd, 0.05), weighted_quantile(logd, 0.5), weighted_quantile(logd, 0.95)};
-  f.detail_loss_area = area_total > 0 ? loss / area_total : 0;
+  f.detail_loss_area = sum_a3 > 0 ? loss / sum_a3 : 0;
   return f;
 }
 
@@ -405,14 +407,18 @@ double singular_value_ratio(const TexturedMesh& in, size_t t, const TexturedMesh
 /// METRICS.md "angle distortion": area-weighted mean and P95 of the singular value ratio over the
 /// matched input triangles of non-zero area (the mean is over all of their area).
 std::pair<double, double> measure_angle_distortion(const TexturedMesh& in, const TexturedMesh& out, const Correspondence& c) {
+  // The ratios on every core; the sums in triangle order.
+  std::vector<double> ratio(in.num_triangles(), 0);
+  tbb::parallel_for(uint32_t(0), uint32_t(in.num_triangles()), [&](uint32_t t) {
+    if (c.match[t] != kNone && c.area3[t] > 0) ratio[t] = singular_value_ratio(in, t, out, c.match[t], c.corner_map[t]);
+  });
   std::vector<std::pair<double, double>> angle;
   double area_total = 0, angle_sum = 0;
   for (uint32_t t = 0; t < in.num_triangles(); ++t) {
     if (c.match[t] == kNone || c.area3[t] <= 0) continue;
-    const double ratio = singular_value_ratio(in, t, out, c.match[t], c.corner_map[t]);
-    if (std::isfinite(ratio)) {
-      angle.push_back({ratio, c.area3[t]});
-      angle_sum += ratio * c.area3[t];
+    if (std::isfinite(ratio[t])) {
+      angle.push_back({ratio[t], c.area3[t]});
+      angle_sum += ratio[t] * c.area3[t];
     }
     area_total += c.area3[t];
   }
@@ -453,24 +459,29 @@ std::vector<SurfacePoint> surface_points(const TexturedMesh& in, const Correspon
 /// and the number of points.
 std::pair<double, size_t> measure_surface_psnr(const TexturedMesh& in, const TexturedMesh& out, const Correspondence& c,
                                                const std::vector<SurfacePoint>& points) {
-  double se = 0;
-  size_t n = 0;
-  for (const SurfacePoint& p : points) {
-    const uint32_t t = p.t;
-    const double* b = p.b;
-    const Vec2 uin = b[0] * in.sampled_uv(t, 0) + b[1] * in.sampled_uv(t, 1) + b[2] * in.sampled_uv(t, 2);
-    const auto ci = colour_at(in, t, uin);
-    std::array<uint8_t, 3> co{0, 0, 0};
-    if (c.match[t] != kNone) {
-      const uint32_t o = c.match[t];
-      const auto& cm = c.corner_map[t];
-      const Vec2 uout = b[0] * out.sampled_uv(o, cm[0]) + b[1] * out.sampled_uv(o, cm[1]) + b[2] * out.sampled_uv(o, cm[2]);
-      co = colour_at(out, o, uout);
-    }
-    for (int k = 0; k < 3; ++k) se += double(int(ci[size_t(k)]) - int(co[size_t(k)])) * double(int(ci[size_t(k)]) - int(co[size_t(k)]));
-    n += 3;
-  }
-  const double mse = n ? se / double(n) : 0;
+  // Integer squared errors, summed exactly in any order (below 2^53): the points on every core.
+  const uint64_t se = tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, points.size()), uint64_t(0),
+      [&](const tbb::blocked_range<size_t>& r, uint64_t sum) {
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+          const uint32_t t = points[i].t;
+          const double* b = points[i].b;
+          const Vec2 uin = b[0] * in.sampled_uv(t, 0) + b[1] * in.sampled_uv(t, 1) + b[2] * in.sampled_uv(t, 2);
+          const auto ci = colour_at(in, t, uin);
+          std::array<uint8_t, 3> co{0, 0, 0};
+          if (c.match[t] != kNone) {
+            const uint32_t o = c.match[t];
+            const auto& cm = c.corner_map[t];
+            const Vec2 uout = b[0] * out.sampled_uv(o, cm[0]) + b[1] * out.sampled_uv(o, cm[1]) + b[2] * out.sampled_uv(o, cm[2]);
+            co = colour_at(out, o, uout);
+          }
+          for (size_t k = 0; k < 3; ++k) sum += uint64_t((int(ci[k]) - int(co[k])) * (int(ci[k]) - int(co[k])));
+        }
+        return sum;
+      },
+      std::plus<uint64_t>());
+  const size_t n = 3 * points.size();
+  const double mse = n ? double(se) / double(n) : 0;
   return {mse > 0 ? 10 * std::log10(255.0 * 255.0 / mse) : 99.0, n / 3};
 }
 
