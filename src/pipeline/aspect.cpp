@@ -19,27 +19,48 @@ namespace {
 /// less: the estimate is a simulation, and a square texture is the simpler one to use.
 constexpr double kAspectMinGain = 0.95;
 
+/// The coarse copy whose map tells a large component's texel stretch (choose_on_own_maps): on
+/// meshroom_esp32cam and its paged copy, with every map, copies of 2k, 4k and 8k vertices gave a
+/// stretch of 1.45-1.86, always on the 2:1 side, and 2k takes 0.14-0.3 s of the 8k copy's 0.42-1.6 s.
+constexpr size_t kShapeLookVertices = 2000;
+
 /// Whether the square's map leaves room for another shape to do better: its texels are longer on the
 /// surface along one axis than along the other by more than kAspectProbeStretch (`stretch` < 0: the
 /// square has no map).
 bool worth_probing_other_shapes(double stretch) { return stretch > kAspectProbeStretch || stretch < 1 / kAspectProbeStretch; }
 
-/// The probes' multilevel maps chose another shape than the square (choice.probes[chosen]), whose own
-/// map is choice.dominant_map; the square's own map was made beside its probe. The two own maps are
-/// estimated and the choice made again on them, by the same rule: the probes' coarse maps can misrank
-/// the shapes (meshroom_esp32cam, `--map texel`: the probes estimated 2:1 closer, 36.35 against
-/// 35.59 dB, where the square's own map is estimated closer, 41.62 against 41.45). Each estimate goes
-/// into its probe's full_map_estimated_mse.
-void confirm_on_own_maps(const MapContext& ctx, size_t chosen, Mapped square_own, ShapeChoice& choice) {
-  Mapped& other = *choice.dominant_map;
-  if (!other.kept.empty() || !square_own.kept.empty()) return;  // an input's own UVs: nothing to estimate
-  double mse_square = -1, mse_other = -1;
-  tbb::parallel_invoke([&] { mse_square = estimate_mse(ctx.input, square_own); }, [&] { mse_other = estimate_mse(ctx.input, other); });
-  choice.probes[0].full_map_estimated_mse = mse_square;
-  choice.probes[chosen].full_map_estimated_mse = mse_other;
-  if (better_map(ctx.options.map, other.map, mse_other, square_own.map, mse_square, kAspectMinGain)) return;
-  choice.aspect = kAspectProbes[0];
-  choice.dominant_map = std::move(square_own);
+/// The shape chosen on own maps, for a component whose probes would be multilevel: the square's own map
+/// on one core; on the other, a coarse copy's map in the square (map_coarse_copy, a fifth of a probe's
+/// time) for the texel stretch, then, where the stretch calls for it, the own map of the shape it points
+/// to. Both own maps are estimated and the choice made on them by the probes' rule. A multilevel probe
+/// cost nearly an own map, and the shape it chose had to be mapped again; and probes could misrank
+/// the shapes (meshroom_esp32cam, `--map texel`: its probes estimated 2:1 closer, 36.35 against
+/// 35.59 dB, its own maps the square, 41.62 against 41.45). `rect`: the component's rectangle in each
+/// shape's texture (none where the shape is not probed); `choice`: the probes' shapes and sizes.
+ShapeChoice choose_on_own_maps(const MapContext& ctx, size_t dominant, const CutInputs* shared,
+                               const std::vector<std::optional<Rect>>& rect, ShapeChoice choice) {
+  const size_t n = std::size(kAspectProbes);
+  std::vector<std::optional<Mapped>> own(n);
+  std::vector<double> mse(n, -1);
+  size_t other = kNone;
+  tbb::parallel_invoke([&] { own[0] = map_component(ctx, dominant, *rect[0], shared, CapChoice::kKeep); },
+                       [&] {
+                         const Mapped look = map_coarse_copy(ctx, dominant, *rect[0], shared, kShapeLookVertices);
+                         choice.square_texel_stretch = look.kept.empty() ? texel_stretch_ratio(look) : -1;
+                         if (!worth_probing_other_shapes(choice.square_texel_stretch)) return;
+                         other = choice.square_texel_stretch > 1 ? 2 : 1;  // kAspectProbes: 2:1 where texels are long along x
+                         if (rect[other]) own[other] = map_component(ctx, dominant, *rect[other], shared, CapChoice::kKeep);
+                       });
+  if (other == kNone || !own[other]) ctx.progress.advance(double(ctx.components[dominant].num_faces()));  // the map not made
+  size_t chosen = 0;
+  if (other != kNone && own[other] && own[other]->kept.empty() && own[0]->kept.empty()) {
+    tbb::parallel_invoke([&] { mse[0] = estimate_mse(ctx.input, *own[0]); }, [&] { mse[other] = estimate_mse(ctx.input, *own[other]); });
+    if (better_map(ctx.options.map, own[other]->map, mse[other], own[0]->map, mse[0], kAspectMinGain)) chosen = other;
+  }
+  choice.aspect = kAspectProbes[chosen];
+  for (size_t i = 0; i < n; ++i) choice.probes[i].full_map_estimated_mse = mse[i];
+  choice.dominant_map = std::move(own[chosen]);
+  return choice;
 }
 
 }  // namespace
@@ -86,13 +107,22 @@ ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const CutInput
     const auto rects = try_layout_atlas(shares, W, H, 4, mode);
     if (rects) rect[i] = (*rects)[dominant];  // else this shape cannot hold every component
   }
-  auto run_probe = [&](size_t i, CapChoice choice) {
-    if (rect[i]) probe[i] = map_component(ctx, dominant, *rect[i], shared, choice, true);
+  ShapeChoice choice;
+  for (size_t i = 0; i < n; ++i) {
+    const auto [W, H] = atlas_size(size, kAspectProbes[i]);
+    choice.probes.push_back({kAspectProbes[i], W, H, -1});
+  }
+  // A component whose probes would be multilevel (about 2 faces a vertex) is chosen on own maps, unless
+  // its longest hole is small: then its two cuts are compared on the square's probe, as below.
+  const bool compare_cuts = shared && small_longest_hole(ctx, dominant, *shared);
+  if (!compare_cuts && rect[0] && ctx.components[dominant].num_faces() > 2 * kProbeMultilevelFrom)
+    return choose_on_own_maps(ctx, dominant, shared, rect, std::move(choice));
+  auto run_probe = [&](size_t i, CapChoice cap) {
+    if (rect[i]) probe[i] = map_component(ctx, dominant, *rect[i], shared, cap, true);
   };
   // The square first: where the longest hole is small both its cuts are mapped (side by side), and the
   // other shape takes its choice. Then, where the square's texels are stretched, the shape they point
   // to, beside the square's estimate (the square alone needs none).
-  const bool compare_cuts = shared && small_longest_hole(ctx, dominant, *shared);
   const double faces = double(ctx.components[dominant].num_faces());
   double stretch = -1;
   auto probe_shapes = [&] {
@@ -114,13 +144,7 @@ ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const CutInput
         [&] { mse[0] = estimate_mse(ctx.input, *probe[0]); });
     ctx.progress.advance(faces * double(n - 2));  // the shape the texels do not point to
   };
-  // Where the square's probe is multilevel, the square's own map (what the probe stands for, made again
-  // if the square is chosen) is made beside the probes, on the core their chain leaves idle.
-  std::optional<Mapped> square_own;
-  if (!compare_cuts && rect[0] && ctx.components[dominant].num_faces() > 2 * kProbeMultilevelFrom)
-    tbb::parallel_invoke(probe_shapes, [&] { square_own = map_component(ctx, dominant, *rect[0], shared, CapChoice::kKeep); });
-  else
-    probe_shapes();
+  probe_shapes();
   // The area map's density promise first, then the estimate, where another shape must beat the square
   // by kAspectMinGain.
   const SquareMapStats none{};
@@ -128,16 +152,10 @@ ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const CutInput
   size_t chosen = 0;
   for (size_t i = 1; i < n; ++i)
     if (better_map(ctx.options.map, stats(i), mse[i], stats(chosen), mse[chosen], chosen == 0 ? kAspectMinGain : 1.0)) chosen = i;
-  ShapeChoice choice;
   choice.aspect = kAspectProbes[chosen];
   choice.square_texel_stretch = stretch;
-  for (size_t i = 0; i < n; ++i) {
-    const auto [W, H] = atlas_size(size, kAspectProbes[i]);
-    choice.probes.push_back({kAspectProbes[i], W, H, mse[i]});
-  }
+  for (size_t i = 0; i < n; ++i) choice.probes[i].estimated_mse = mse[i];
   choice.dominant_map = std::move(probe[chosen]);
-  if (chosen == 0 && square_own && choice.dominant_map && choice.dominant_map->map.coarse_vertices > 0)
-    choice.dominant_map = std::move(square_own);  // the map the square's probe would be made again as
   if (choice.dominant_map && choice.dominant_map->map.coarse_vertices > 0) {
     // A probe's multilevel map chose the shape; the component gets its own map for it, with the cut the
     // probe kept (the estimates of a small hole's two cuts stay in the report).
@@ -146,7 +164,6 @@ ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const CutInput
     const std::vector<double> compared = cut.compared_mse;
     choice.dominant_map = map_component(ctx, dominant, *rect[chosen], shared, kept);
     if (choice.dominant_map->cut.compared_mse.empty()) choice.dominant_map->cut.compared_mse = compared;
-    if (chosen != 0 && square_own) confirm_on_own_maps(ctx, chosen, std::move(*square_own), choice);
   }
   return choice;
 }

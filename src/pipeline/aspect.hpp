@@ -2,8 +2,9 @@
 // a square and, where that map's texels are stretched along one axis, into the texture of the same
 // budget that the stretch points to (2:1 where texels are long along x, else 1:2); the shape whose map
 // keeps the most of the input's colour (better_map on
-// resampling_mse) is chosen, the square unless another is clearly better. Where the probes are
-// multilevel maps and choose another shape, the choice is made again on the two shapes' own maps.
+// resampling_mse) is chosen, the square unless another is clearly better. A component whose probes would
+// be multilevel maps is not probed: the stretch is read off a small coarse copy's map, and the square's
+// and the other shape's own maps are made side by side and chosen between.
 #pragma once
 #include <optional>
 #include <vector>
@@ -28,12 +29,13 @@ constexpr double kAspectProbes[] = {1.0, 0.5, 2.0};
 constexpr double kAspectProbeStretch = 1.35;
 
 /// The shape chosen, what each probe was estimated to give (estimated_mse < 0: not probed, since the
-/// shape cannot hold every component, or not mapped), and the probed component's map in that shape.
+/// shape cannot hold every component, or not mapped; full_map_estimated_mse where own maps were
+/// compared instead), and the probed component's map in that shape.
 struct ShapeChoice {
   double aspect = 1.0;
   std::vector<AspectProbe> probes;
   std::optional<Mapped> dominant_map;  // the probed component's map in the chosen shape
-  double square_texel_stretch = -1;    // texel_stretch_ratio of the square's map; < 0: not mapped
+  double square_texel_stretch = -1;    // texel_stretch_ratio of the square's probe (or coarse copy's) map; < 0: not mapped
 };
 
 /// How much longer a texel of the map is on the surface along the texture's x axis than along its y

@@ -7,6 +7,7 @@
 
 #include "bake/resampling_error.hpp"
 #include "core/error.hpp"
+#include "param/coarsen.hpp"
 
 namespace tightex {
 
@@ -254,6 +255,26 @@ Mapped map_component(const MapContext& ctx, size_t c, const Rect& rect, const Cu
     }
   }
   ctx.progress.advance((1 - reported) * faces);
+  return out;
+}
+
+Mapped map_coarse_copy(const MapContext& ctx, size_t c, const Rect& rect, const CutInputs* pre, size_t vertices) {
+  Mapped out;
+  out.rect = rect;
+  out.kept = run_attempt([&] {
+    const CutInputs own = pre ? CutInputs{} : cut_inputs(ctx.input, ctx.components[c]);
+    const CutInputs& ci = pre ? *pre : own;
+    const Disk disk = cut_to_disk(ctx.components[c], full_cut_options(ctx, ci, kCapBudget), &out.cut);
+    SquareMapOptions mo = map_options(ctx, c, rect);
+    set_face_targets(disk, ctx.density[c], ctx.options.map, ctx.options.balance, mo);
+    CoarseDisk coarse = coarsen_disk(disk, mo.face_target, vertices);
+    // As multilevel_map maps its coarse copy: its own targets, its density steps despite any crowding.
+    mo.face_target = std::move(coarse.face_target);
+    mo.density_despite_crowding = true;
+    out.disk = std::move(coarse.disk);
+    out.uv = map_to_square(out.disk, mo, &out.map);
+    return out.map.flipped > 0 ? fmt::format("the coarse copy's map folds {} triangles", out.map.flipped) : std::string();
+  });
   return out;
 }
 

@@ -73,6 +73,12 @@ constexpr size_t kProbeMultilevelFrom = 16000, kProbeCoarseVertices = 8000;
 /// component whose full method and fallback both fail is returned with Mapped::kept saying why.
 Mapped map_component(const MapContext& ctx, size_t c, const Rect& rect, const CutInputs* pre, CapChoice choice, bool probe = false);
 
+/// Component c cut as map_component cuts it (the longest hole kept), its disk coarsened to at most
+/// `vertices` vertices (coarsen_disk) and that copy mapped for `rect`, as multilevel_map maps its coarse
+/// copy: a cheap look at the shape the component's map takes (its texel stretch), not a map to bake.
+/// Mapped::disk is the coarse copy; Mapped::kept says why there is no map (the cut or the map failed).
+Mapped map_coarse_copy(const MapContext& ctx, size_t c, const Rect& rect, const CutInputs* pre, size_t vertices);
+
 /// Whether component c is also to be mapped with its longest hole capped: that hole has fewer than
 /// kSmallKeptLoop edges and its cap fits the budget; not for the paper's map, which keeps the paper's
 /// cut; only where the texture's pixels are known (the estimate needs them), and not beyond

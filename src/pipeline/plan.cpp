@@ -59,9 +59,11 @@ double faces_to_map(const std::vector<Surface>& components, size_t probed) {
   double faces = 0;
   for (const Surface& comp : components) faces += double(comp.num_faces());
   if (probed == kNone) return faces;
-  // The other shapes; where the probes are multilevel (about 2 faces a vertex), the chosen one again.
-  const size_t faces_probed = components[probed].num_faces(), again = faces_probed > 2 * kProbeMultilevelFrom ? 1 : 0;
-  return faces + double(faces_probed) * double(std::size(kAspectProbes) - 1 + again);
+  // The other shapes' probes; where the probes would be multilevel (about 2 faces a vertex), the one
+  // other shape's own map (choose_aspect's own maps).
+  const size_t faces_probed = components[probed].num_faces();
+  const size_t others = faces_probed > 2 * kProbeMultilevelFrom ? 1 : std::size(kAspectProbes) - 1;
+  return faces + double(faces_probed) * double(others);
 }
 
 bool have_pixels(const TexturedMesh& input) {

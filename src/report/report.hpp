@@ -51,9 +51,10 @@ struct AspectProbe {
   /// the square's texels were not stretched, or stretched towards the other shape; see
   /// square_texel_stretch).
   double estimated_mse = -1;
-  /// resampling_mse of the shape's own (full) map, where the probes chose a shape other than the square
-  /// on multilevel maps and the choice was confirmed on both shapes' own maps; written as
-  /// "full_map_estimated_psnr_db". < 0: not made (null).
+  /// resampling_mse of the shape's own (full) map, where the component is large enough for its probes
+  /// to be multilevel: the shapes are then chosen on own maps (the square's and the one its coarse
+  /// copy's texel stretch points to), not probed; written as "full_map_estimated_psnr_db". < 0: not
+  /// made (null).
   double full_map_estimated_mse = -1;
 };
 
