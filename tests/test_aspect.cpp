@@ -10,6 +10,7 @@
 #include "mesh_catalogue.hpp"
 #include "param/param.hpp"
 #include "pipeline/aspect.hpp"
+#include "pipeline/map_component.hpp"
 #include "prepare/components.hpp"
 #include "prepare/repair.hpp"
 #include "report/metrics.hpp"
@@ -168,6 +169,37 @@ TEST(Aspect, AutoShapeFollowsTheSurfaceAndKeepsMoreOfTheTexture) {
   Options h;
   h.map = MapKind::kHarmonic;
   EXPECT_EQ(optimize(longsheet, h).report["aspect"]["chosen"].get<double>(), 1.0);
+}
+
+// A component whose probes would be multilevel (over 32k triangles) is not probed: a coarse copy's map
+// gives the stretch, and the square's and the stretch-side shape's own maps are estimated and chosen
+// between. A 3:1 sheet of 38k triangles takes the long texture on its own map's estimate.
+TEST(Aspect, ALargeComponentsShapeIsChosenBetweenOwnMaps) {
+  const TexturedMesh longsheet = noisy_sheet(241, 81, 0.9 / 240);
+  ASSERT_GT(longsheet.num_triangles(), 2 * kProbeMultilevelFrom);
+  const Result r = optimize(longsheet, Options{});
+  const nlohmann::json& aspect = r.report["aspect"];
+  const double stretch = aspect["square_texel_stretch"];
+  ASSERT_GT(std::max(stretch, 1 / stretch), kAspectProbeStretch);
+  double square = -1, side = -1;
+  for (const auto& p : aspect["probes"]) {
+    EXPECT_EQ(p["estimated_psnr_db"].get<double>(), -1.0) << p;  // no probe
+    const double a = p["aspect"];
+    if (a != 1.0 && (a > 1) != (stretch > 1)) {
+      EXPECT_TRUE(p["full_map_estimated_psnr_db"].is_null()) << p;  // the shape the stretch does not point to
+      continue;
+    }
+    ASSERT_FALSE(p["full_map_estimated_psnr_db"].is_null()) << p;
+    (a == 1.0 ? square : side) = p["full_map_estimated_psnr_db"].get<double>();
+  }
+  EXPECT_GT(side, square + 0.22);
+  const double chosen = aspect["chosen"];
+  EXPECT_EQ(chosen > 1, stretch > 1);
+  EXPECT_NE(chosen, 1.0);
+  const Image& img = r.output.textures.at(0).image;
+  EXPECT_EQ(chosen > 1, img.width > img.height);
+  EXPECT_EQ(r.report["metrics"]["flipped"].get<size_t>(), 0u);
+  EXPECT_EQ(r.report["metrics"]["lost_triangles"].get<size_t>(), 0u);
 }
 
 // At tiny sizes a long shape rounds to the square (sides are multiples of 4, at least 8): such a probe
