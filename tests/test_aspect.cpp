@@ -176,7 +176,7 @@ TEST(Aspect, AutoShapeFollowsTheSurfaceAndKeepsMoreOfTheTexture) {
 // between. A 3:1 sheet of 38k triangles takes the long texture on its own map's estimate.
 TEST(Aspect, ALargeComponentsShapeIsChosenBetweenOwnMaps) {
   const TexturedMesh longsheet = noisy_sheet(241, 81, 0.9 / 240);
-  ASSERT_GT(longsheet.num_triangles(), 2 * kProbeMultilevelFrom);
+  ASSERT_TRUE(probes_would_be_multilevel(longsheet.num_triangles()));
   const Result r = optimize(longsheet, Options{});
   const nlohmann::json& aspect = r.report["aspect"];
   const double stretch = aspect["square_texel_stretch"];

@@ -115,14 +115,6 @@ std::vector<size_t> coarse_sizes(const Disk& disk, const SquareMapOptions& optio
   return sizes;
 }
 
-/// coarse_map's options for `coarse`: its own face targets, its density steps despite any crowding.
-SquareMapOptions coarse_options(const SquareMapOptions& options, const CoarseDisk& coarse) {
-  SquareMapOptions o = options;
-  o.face_target = coarse.face_target;
-  o.density_despite_crowding = true;
-  return o;
-}
-
 /// Step 1 of multilevel_map: the first of the coarse copies (coarsen_disk_in_steps', tried smallest
 /// first) whose map folds nothing, and that map (the boundary as `placed`), with stats in `st`. A copy
 /// whose map folds (decimation can leave a narrow neck, which even the uniform harmonic map crowds below
@@ -165,6 +157,13 @@ std::vector<Vec2> fill_and_reweight(const Disk& disk, const CoarseDisk& coarse, 
 }
 
 }  // namespace
+
+SquareMapOptions coarse_options(const SquareMapOptions& options, const CoarseDisk& coarse) {
+  SquareMapOptions o = options;
+  o.face_target = coarse.face_target;
+  o.density_despite_crowding = true;
+  return o;
+}
 
 std::optional<std::vector<Vec2>> multilevel_map(const Disk& disk, const SquareMapOptions& options, SquareMapStats& stats) {
   const Surface& m = disk.mesh;

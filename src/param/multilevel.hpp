@@ -4,9 +4,14 @@
 #include <optional>
 #include <vector>
 
+#include "param/coarsen.hpp"
 #include "param/square_map_options.hpp"
 
 namespace tightex {
+
+/// The options a coarse copy of a disk is mapped with (step 1 below): `options` with the copy's own face
+/// targets, its density steps made despite any crowding (no reason to re-cut the full mesh).
+SquareMapOptions coarse_options(const SquareMapOptions& options, const CoarseDisk& coarse);
 
 /// Where options ask for it (a density target, balance 1, more than options.multilevel_from vertices):
 /// 1. coarsen_disk to at most options.coarse_vertices (boundary, cut and chords kept) and map that with

@@ -112,10 +112,10 @@ ShapeChoice choose_aspect(const MapContext& ctx, size_t dominant, const CutInput
     const auto [W, H] = atlas_size(size, kAspectProbes[i]);
     choice.probes.push_back({kAspectProbes[i], W, H, -1});
   }
-  // A component whose probes would be multilevel (about 2 faces a vertex) is chosen on own maps, unless
-  // its longest hole is small: then its two cuts are compared on the square's probe, as below.
+  // A component whose probes would be multilevel is chosen on own maps, unless its longest hole is
+  // small: then its two cuts are compared on the square's probe, as below.
   const bool compare_cuts = shared && small_longest_hole(ctx, dominant, *shared);
-  if (!compare_cuts && rect[0] && ctx.components[dominant].num_faces() > 2 * kProbeMultilevelFrom)
+  if (!compare_cuts && rect[0] && probes_would_be_multilevel(ctx.components[dominant].num_faces()))
     return choose_on_own_maps(ctx, dominant, shared, rect, std::move(choice));
   auto run_probe = [&](size_t i, CapChoice cap) {
     if (rect[i]) probe[i] = map_component(ctx, dominant, *rect[i], shared, cap, true);

@@ -7,7 +7,7 @@
 
 #include "bake/resampling_error.hpp"
 #include "core/error.hpp"
-#include "param/coarsen.hpp"
+#include "param/multilevel.hpp"
 
 namespace tightex {
 
@@ -268,11 +268,9 @@ Mapped map_coarse_copy(const MapContext& ctx, size_t c, const Rect& rect, const 
     SquareMapOptions mo = map_options(ctx, c, rect);
     set_face_targets(disk, ctx.density[c], ctx.options.map, ctx.options.balance, mo);
     CoarseDisk coarse = coarsen_disk(disk, mo.face_target, vertices);
-    // As multilevel_map maps its coarse copy: its own targets, its density steps despite any crowding.
-    mo.face_target = std::move(coarse.face_target);
-    mo.density_despite_crowding = true;
+    const SquareMapOptions coarse_mo = coarse_options(mo, coarse);  // as multilevel_map maps its copy
     out.disk = std::move(coarse.disk);
-    out.uv = map_to_square(out.disk, mo, &out.map);
+    out.uv = map_to_square(out.disk, coarse_mo, &out.map);
     return out.map.flipped > 0 ? fmt::format("the coarse copy's map folds {} triangles", out.map.flipped) : std::string();
   });
   return out;

@@ -68,6 +68,10 @@ struct MapContext {
 /// as any component is. Chosen by measurement: BENCHMARKS.md.
 constexpr size_t kProbeMultilevelFrom = 16000, kProbeCoarseVertices = 8000;
 
+/// Whether a component of `faces` faces would be probed multilevel (a disk has about half as many
+/// vertices as faces): such a component's shape is chosen on own maps instead (choose_aspect).
+inline bool probes_would_be_multilevel(size_t faces) { return faces > 2 * kProbeMultilevelFrom; }
+
 /// Cuts and maps component c for `rect` (see the file comment). `pre`: cut_inputs(c) if known. `probe`:
 /// a shape probe's map (multilevel from kProbeMultilevelFrom vertices). Never throws InternalError: a
 /// component whose full method and fallback both fail is returned with Mapped::kept saying why.

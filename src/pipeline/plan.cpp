@@ -59,10 +59,9 @@ double faces_to_map(const std::vector<Surface>& components, size_t probed) {
   double faces = 0;
   for (const Surface& comp : components) faces += double(comp.num_faces());
   if (probed == kNone) return faces;
-  // The other shapes' probes; where the probes would be multilevel (about 2 faces a vertex), the one
-  // other shape's own map (choose_aspect's own maps).
+  // The other shapes' probes; where they would be multilevel, the one other shape's own map.
   const size_t faces_probed = components[probed].num_faces();
-  const size_t others = faces_probed > 2 * kProbeMultilevelFrom ? 1 : std::size(kAspectProbes) - 1;
+  const size_t others = probes_would_be_multilevel(faces_probed) ? 1 : std::size(kAspectProbes) - 1;
   return faces + double(faces_probed) * double(others);
 }
 
