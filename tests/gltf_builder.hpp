@@ -10,6 +10,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include <unistd.h>
+
 #include "io/image_io.hpp"
 #include "tightex/io.hpp"
 
@@ -48,10 +50,17 @@ inline std::string gradient_png(int size = 16) {
   Image img(size, size);
   for (int y = 0; y < size; ++y)
     for (int x = 0; x < size; ++x) img.at(x, y) = {uint8_t(x * 255 / size), uint8_t(y * 255 / size), 96, 255};
-  const std::filesystem::path tmp = std::filesystem::temp_directory_path() / ("tightex_gradient_" + std::to_string(size) + ".png");
+  // One file per process: test shards run side by side, and save_image truncates the file it writes.
+  const std::filesystem::path tmp =
+      std::filesystem::temp_directory_path() / ("tightex_gradient_" + std::to_string(size) + "_" + std::to_string(::getpid()) + ".png");
   save_image(tmp.string(), img, ImageFormat::kPng);
-  std::ifstream in(tmp, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
+  std::string bytes;
+  {
+    std::ifstream in(tmp, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  std::filesystem::remove(tmp);
+  return bytes;
 }
 
 /// The grid's document and its buffer: an n x n grid of quads (two triangles each) in z = 0 with
