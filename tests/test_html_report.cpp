@@ -16,6 +16,7 @@
 
 #include "mesh_catalogue.hpp"
 #include "report/html_report.hpp"
+#include "report/metrics.hpp"
 #include "tightex/tightex.hpp"
 
 namespace tightex {
@@ -78,6 +79,20 @@ TEST(HtmlReport, SeamsAreWhereTheTextureCoordinatesJump) {
   const std::vector<uint8_t> split_seams = array_of<uint8_t>(model_data(split, split, 100)["models"][0], "seams");
   EXPECT_EQ(split_seams[0], 0b111);
   EXPECT_EQ(split_seams[1], 0b111);
+}
+
+TEST(HtmlReport, ChartCountsAreTheMeasures) {
+  // The command line takes the page's chart counts from the measure: the same data as counted here.
+  const TexturedMesh split = square({{0, 0}, {1, 0}, {0, 1}, {0.5, 1}, {1.5, 0}, {1.5, 1}});
+  const TexturedMesh joined = square({{0, 0}, {1, 0}, {0, 1}, {0, 1}, {1, 0}, {1, 1}});
+  const Metrics m = measure(split, joined, 1000);
+  EXPECT_EQ(m.charts_input, 2u);
+  EXPECT_EQ(m.charts, 1u);
+  const std::string counted = html_model_data(split, joined);
+  EXPECT_EQ(html_model_data(html_model_data_without_charts(split, joined), m.charts_input, m.charts), counted);
+  const nlohmann::json data = nlohmann::json::parse(counted);
+  EXPECT_EQ(data["models"][0]["charts"], 2);
+  EXPECT_EQ(data["models"][1]["charts"], 1);
 }
 
 TEST(HtmlReport, DensityIsRelativeToTheMean) {

@@ -448,6 +448,7 @@ WrittenAndMeasured write_and_measure(const CommandLine& line, const TexturedMesh
                                      const std::string& name, CliTimings& timings) {
   const auto tw = std::chrono::steady_clock::now();
   WrittenAndMeasured r;
+  nlohmann::json html_data;
   tbb::parallel_invoke(
       [&] {
         r.removed = write_model(line, output, name);
@@ -459,9 +460,11 @@ WrittenAndMeasured write_and_measure(const CommandLine& line, const TexturedMesh
       },
       [&] {
         if (line.no_html) return;
-        r.html_data = html_model_data(input, output);
+        html_data = html_model_data_without_charts(input, output);
         timings.html_s = seconds_since(tw);
       });
+  // The page's chart counts are the measure's.
+  if (!line.no_html) r.html_data = html_model_data(std::move(html_data), r.metrics.charts_input, r.metrics.charts);
   return r;
 }
 

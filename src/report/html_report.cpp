@@ -233,7 +233,6 @@ json model_json(const TexturedMesh& mesh, const std::string& name, double keep_f
   return {{"name", name},
           {"triangles", mesh.num_triangles()},
           {"shown", shown.size()},
-          {"charts", count_charts(mesh, nullptr)},
           {"positions", base64_array(positions)},
           {"indices", base64_array(indices)},
           {"uv", base64_array(uv)},
@@ -287,14 +286,27 @@ std::string filled(std::string_view page, std::vector<Filling> fillings) {
 }  // namespace
 
 std::string html_model_data(const TexturedMesh& input, const TexturedMesh& output, const HtmlReportOptions& options) {
+  size_t input_charts = 0, output_charts = 0;
+  json data;
+  tbb::parallel_invoke([&] { data = html_model_data_without_charts(input, output, options); },
+                       [&] { input_charts = count_charts(input, nullptr); }, [&] { output_charts = count_charts(output, nullptr); });
+  return html_model_data(std::move(data), input_charts, output_charts);
+}
+
+std::string html_model_data(json data, size_t input_charts, size_t output_charts) {
+  data["models"][0]["charts"] = input_charts;
+  data["models"][1]["charts"] = output_charts;
+  return data.dump();
+}
+
+json html_model_data_without_charts(const TexturedMesh& input, const TexturedMesh& output, const HtmlReportOptions& options) {
   // The input's count sets the fraction for both, so that both show the same surface triangles.
   const double keep_fraction =
       input.num_triangles() > options.max_triangles ? double(options.max_triangles) / double(input.num_triangles()) : 1.0;
   json in, out;  // side by side: each encodes its own textures
   tbb::parallel_invoke([&] { in = model_json(input, "input", keep_fraction, options); },
                        [&] { out = model_json(output, "output", keep_fraction, options); });
-  json data = {{"max_triangles", options.max_triangles}, {"models", json::array({std::move(in), std::move(out)})}};
-  return data.dump();
+  return {{"max_triangles", options.max_triangles}, {"models", json::array({std::move(in), std::move(out)})}};
 }
 
 std::string html_report_page(const std::string& report_json, const std::string& model_data) {

@@ -5,6 +5,7 @@
 // data-URI images), so it opens from the file system, offline, and fetches nothing.
 #pragma once
 #include <cstddef>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "core/mesh.hpp"
@@ -22,12 +23,17 @@ struct HtmlReportOptions {
   int jpeg_quality = 85;
 };
 
-/// What the page shows of the two models, as JSON text: per model its triangle count, the shown
-/// triangles' positions, indices, texture coordinates, texture index, seam edges and log2 texel density
-/// relative to the model's mean (base64 of little-endian typed arrays), and its textures as data-URI
-/// JPEGs with their full sizes. Requires two valid meshes (as read_model returns them) with their
-/// pixels; `output` is `input` re-textured. Throws only std::bad_alloc.
+/// What the page shows of the two models, as JSON text: per model its triangle count, chart count, the
+/// shown triangles' positions, indices, texture coordinates, texture index, seam edges and log2 texel
+/// density relative to the model's mean (base64 of little-endian typed arrays), and its textures as
+/// data-URI JPEGs with their full sizes. Requires two valid meshes (as read_model returns them) with
+/// their pixels; `output` is `input` re-textured. Throws only std::bad_alloc.
 std::string html_model_data(const TexturedMesh& input, const TexturedMesh& output, const HtmlReportOptions& options = {});
+
+/// html_model_data in two steps, for a caller that counts the charts anyway (measure does): the data
+/// without the chart counts, then the text with them.
+nlohmann::json html_model_data_without_charts(const TexturedMesh& input, const TexturedMesh& output, const HtmlReportOptions& options = {});
+std::string html_model_data(nlohmann::json data, size_t input_charts, size_t output_charts);
 
 /// The page: the embedded template with its style, three.js and script, `report_json` (report.json's
 /// text) and `model_data` (html_model_data's text) packed in. Never throws but for allocation.

@@ -580,7 +580,8 @@ Metrics measure(const TexturedMesh& in, const TexturedMesh& out, size_t psnr_sam
   Metrics r;
   std::vector<uint32_t> out_chart;
   tbb::parallel_invoke([&] { r.input = measure_texture_space(in); }, [&] { r.output = measure_texture_space(out); },
-                       [&] { count_charts(in, &r.seam_length_input); }, [&] { r.charts = count_charts(out, &r.seam_length, &out_chart); });
+                       [&] { r.charts_input = count_charts(in, &r.seam_length_input); },
+                       [&] { r.charts = count_charts(out, &r.seam_length, &out_chart); });
   const Correspondence c = match_triangles(in, out);
   r.lost_triangles = c.lost_triangles;
   const std::vector<SurfacePoint> points = surface_points(in, c, psnr_samples);

@@ -36,6 +36,7 @@ struct Metrics {
   size_t degenerate = 0;
   double overlap = 0;
   size_t charts = 0;
+  size_t charts_input = 0;  // shown on report.html, not written by to_json
   double seam_length_input = 0, seam_length = 0;
   Quantiles density_spread;  // log2(d / mean d), area-weighted
   double detail_loss_area = 0;
