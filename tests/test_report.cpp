@@ -5,6 +5,8 @@
 #include <set>
 #include <string>
 
+#include "mesh_catalogue.hpp"
+#include "report/metrics.hpp"
 #include "report/report.hpp"
 
 namespace tightex {
@@ -249,6 +251,61 @@ TEST(Report, EstimatedPsnrOfNoErrorAndOfNoEstimate) {
   EXPECT_EQ(estimated_psnr_db(0.0), 99.0);
   EXPECT_EQ(estimated_psnr_db(-1.0), -1.0);
   EXPECT_DOUBLE_EQ(estimated_psnr_db(255.0 * 255.0), 0.0);
+}
+
+using namespace tightex::testing;
+
+/// `input` as a writer might give it back: each triangle's corners rotated, the vertices numbered
+/// backwards, the same corner texture coordinates; the triangles in reverse order where `reverse`.
+TexturedMesh rewritten(const TexturedMesh& input, bool reverse) {
+  TexturedMesh output = input;
+  const size_t n = input.num_triangles(), nv = input.num_vertices();
+  for (size_t t = 0; t < n; ++t) {
+    const size_t from = reverse ? n - 1 - t : t;
+    const Tri& f = input.triangles[from];
+    output.triangles[t] = {uint32_t(nv - 1 - f[1]), uint32_t(nv - 1 - f[2]), uint32_t(nv - 1 - f[0])};
+    for (size_t k = 0; k < 3; ++k) output.corner_uv[3 * t + k] = input.corner_uv[3 * from + (k + 1) % 3];
+  }
+  for (size_t v = 0; v < nv; ++v) output.positions[nv - 1 - v] = input.positions[v];
+  return output;
+}
+
+/// `m` with `copies` more copies of triangle t at its end, each sampling another part of the texture.
+TexturedMesh with_copies(TexturedMesh m, size_t t, int copies) {
+  for (int c = 1; c <= copies; ++c) {
+    m.triangles.push_back(m.triangles[t]);
+    m.face_material.push_back(m.face_material[t]);
+    for (size_t k = 0; k < 3; ++k) m.corner_uv.push_back(m.corner_uv[3 * t + k] + Vec2(0, 0.2 * c));
+  }
+  return m;
+}
+
+TEST(Metrics, TrianglesCorrespondByTheirCornerPositions) {
+  // Found whatever the order of the triangles, their corners and the vertices: the same colours.
+  const Metrics same = measure(sphere(), rewritten(sphere(), true), 20000);
+  EXPECT_EQ(same.lost_triangles, 0u);
+  EXPECT_EQ(same.surface_psnr, 99.0);
+  // Copies of a triangle match the output's copies in triangle order, the k-th the k-th.
+  const TexturedMesh input = with_copies(sphere(), 5, 2);
+  const TexturedMesh output = rewritten(input, false);
+  EXPECT_EQ(measure(input, output, 20000).surface_psnr, 99.0);
+  TexturedMesh crossed = output;  // the last two copies in the other order
+  const size_t n = crossed.num_triangles();
+  std::swap(crossed.triangles[n - 2], crossed.triangles[n - 1]);
+  for (size_t k = 0; k < 3; ++k) std::swap(crossed.corner_uv[3 * (n - 2) + k], crossed.corner_uv[3 * (n - 1) + k]);
+  EXPECT_EQ(measure(input, crossed, 20000).lost_triangles, 0u);
+  EXPECT_LT(measure(input, crossed, 20000).surface_psnr, 99.0);
+  // Fewer copies in the output: the extra input copies match its last one.
+  const Metrics fewer = measure(input, rewritten(with_copies(sphere(), 5, 1), true), 20000);
+  EXPECT_EQ(fewer.lost_triangles, 0u);
+  EXPECT_LT(fewer.surface_psnr, 99.0);
+  // A moved vertex loses the triangles around it, and only those.
+  TexturedMesh moved = rewritten(sphere(), true);
+  moved.positions[0] += Vec3(1e-9, 0, 0);
+  const auto around = size_t(
+      std::count_if(moved.triangles.begin(), moved.triangles.end(), [](const Tri& f) { return f[0] == 0 || f[1] == 0 || f[2] == 0; }));
+  ASSERT_GT(around, 2u);
+  EXPECT_EQ(measure(sphere(), moved, 20000).lost_triangles, around);
 }
 
 }  // namespace

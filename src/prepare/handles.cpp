@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "core/error.hpp"
+#include "core/hash.hpp"
 #include "cut/cut_along_edges.hpp"
 #include "cut/graph.hpp"
 #include "prepare/loop_classes.hpp"
@@ -64,14 +65,6 @@ constexpr int kTightenRounds = 16;
 constexpr double kTightenGain = 0.002;
 /// Candidate roots taken from the ends of the global tree-cotree's leftover edges.
 constexpr size_t kCandidateRoots = 8;
-
-/// A fixed pseudo-random order (splitmix64).
-uint64_t splitmix64(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
 
 /// Roots searched at once (at most; fewer on fewer cores): each holds a RootLoopSearch's arrays, the
 /// size of the surface.

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/hash.hpp"
 #include "io/image_io.hpp"
 #include "report/metrics.hpp"
 #include "report/preview.hpp"
@@ -59,23 +60,16 @@ std::string base64_array(const std::vector<T>& values) {
   return base64(values.data(), values.size() * sizeof(T));
 }
 
-/// splitmix64's finaliser: a well-mixed 64-bit hash of `x`.
-uint64_t mix(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
-
 /// A hash of a triangle's three corner positions that does not depend on the corners' order or the
 /// vertices' numbering: the same surface triangle hashes the same in the input and the output.
 uint64_t triangle_hash(const TexturedMesh& mesh, size_t t) {
   uint64_t sum = 0;
   for (int k = 0; k < 3; ++k) {
     const Vec3& p = mesh.positions[mesh.triangles[t][k]];
-    sum += mix(std::bit_cast<uint64_t>(p.x()) ^ mix(std::bit_cast<uint64_t>(p.y()) ^ mix(std::bit_cast<uint64_t>(p.z()))));
+    sum += splitmix64(std::bit_cast<uint64_t>(p.x()) ^
+                      splitmix64(std::bit_cast<uint64_t>(p.y()) ^ splitmix64(std::bit_cast<uint64_t>(p.z()))));
   }
-  return mix(sum);
+  return splitmix64(sum);
 }
 
 /// The triangles shown: all of them when `keep_fraction` is 1, else those whose hash falls below that

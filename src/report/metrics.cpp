@@ -14,8 +14,10 @@
 #include <cstring>
 #include <functional>
 #include <random>
+#include <span>
 #include <tuple>
 
+#include "core/hash.hpp"
 #include "core/raster.hpp"
 #include "core/statistics.hpp"
 #include "core/surface.hpp"
@@ -253,24 +255,18 @@ struct Correspondence {
   size_t lost_triangles = 0;                   // input triangles of non-zero area without a match
 };
 
-/// Positions compare exactly; where one model stores float32 (glTF) and the other does not, both are
-/// rounded to float32 first.
-Correspondence match_triangles(const TexturedMesh& in, const TexturedMesh& out) {
-  // Both models' triangles sorted by key (then index), on every core, and merged: the k-th of an input
-  // triangle's copies matches the k-th copy in the output (the last where the output has fewer).
-  const bool as_float32 = has_float32_positions(in) != has_float32_positions(out);
-  auto sorted_keys = [&](const TexturedMesh& m) {
-    std::vector<std::pair<CornerKey, uint32_t>> keys(m.num_triangles());
-    tbb::parallel_for(uint32_t(0), uint32_t(m.num_triangles()), [&](uint32_t t) { keys[t] = {corner_key(m, t, as_float32, nullptr), t}; });
-    tbb::parallel_sort(keys.begin(), keys.end());
-    return keys;
-  };
-  std::vector<std::pair<CornerKey, uint32_t>> in_keys, out_keys;
-  tbb::parallel_invoke([&] { in_keys = sorted_keys(in); }, [&] { out_keys = sorted_keys(out); });
-  Correspondence c;
-  c.match.assign(in.num_triangles(), kNone);
-  c.corner_map.resize(in.num_triangles());
-  c.area3.resize(in.num_triangles());
+using KeyedTriangle = std::pair<CornerKey, uint32_t>;
+using HashedTriangle = std::pair<uint64_t, uint32_t>;  // (hash of its CornerKey, triangle)
+
+uint64_t hash_of(const CornerKey& k) {
+  uint64_t h = 0;
+  for (uint64_t word : k.v) h = splitmix64(h ^ word);
+  return h;
+}
+
+/// Matches input triangles to output triangles, both sorted by (key, triangle): the k-th of an input
+/// triangle's copies matches the k-th copy in the output (the last where the output has fewer).
+void match_sorted(std::span<const KeyedTriangle> in_keys, std::span<const KeyedTriangle> out_keys, std::vector<uint32_t>& match) {
   for (size_t i = 0, o = 0; i < in_keys.size();) {
     size_t i_end = i + 1;
     while (i_end < in_keys.size() && in_keys[i_end].first == in_keys[i].first) ++i_end;
@@ -278,20 +274,80 @@ Correspondence match_triangles(const TexturedMesh& in, const TexturedMesh& out) 
     size_t o_end = o;
     while (o_end < out_keys.size() && out_keys[o_end].first == in_keys[i].first) ++o_end;
     if (o_end > o)
-      for (size_t k = i; k < i_end; ++k) c.match[in_keys[k].second] = out_keys[std::min(o + (k - i), o_end - 1)].second;
+      for (size_t k = i; k < i_end; ++k) match[in_keys[k].second] = out_keys[std::min(o + (k - i), o_end - 1)].second;
     i = i_end, o = o_end;
   }
+}
+
+/// match_sorted for the input and output triangles whose keys hash alike (`in_run`, `out_run`, each in
+/// triangle order). One and one, the usual case, are matched without comparing their keys: match_triangles
+/// compares them after.
+void match_hash_run(const TexturedMesh& in, const TexturedMesh& out, bool as_float32, std::span<const HashedTriangle> in_run,
+                    std::span<const HashedTriangle> out_run, std::vector<uint32_t>& match) {
+  if (in_run.size() == 1 && out_run.size() == 1) {
+    match[in_run[0].second] = out_run[0].second;
+    return;
+  }
+  auto keyed = [&](const TexturedMesh& m, std::span<const HashedTriangle> run) {
+    std::vector<KeyedTriangle> keys;
+    keys.reserve(run.size());
+    for (const auto& [hash, t] : run) keys.push_back({corner_key(m, t, as_float32, nullptr), t});
+    std::sort(keys.begin(), keys.end());
+    return keys;
+  };
+  match_sorted(keyed(in, in_run), keyed(out, out_run), match);
+}
+
+/// Positions compare exactly; where one model stores float32 (glTF) and the other does not, both are
+/// rounded to float32 first.
+Correspondence match_triangles(const TexturedMesh& in, const TexturedMesh& out) {
+  // Both models' triangles sorted by the hash of their key (then index), on every core; each input run
+  // of a hash is matched with the output's run of that hash, blocks of input runs on every core.
+  const bool as_float32 = has_float32_positions(in) != has_float32_positions(out);
+  auto sorted_hashes = [&](const TexturedMesh& m) {
+    std::vector<HashedTriangle> hashes(m.num_triangles());
+    tbb::parallel_for(uint32_t(0), uint32_t(m.num_triangles()), [&](uint32_t t) {
+      hashes[t] = {hash_of(corner_key(m, t, as_float32, nullptr)), t};
+    });
+    tbb::parallel_sort(hashes.begin(), hashes.end());
+    return hashes;
+  };
+  std::vector<HashedTriangle> in_h, out_h;
+  tbb::parallel_invoke([&] { in_h = sorted_hashes(in); }, [&] { out_h = sorted_hashes(out); });
+  Correspondence c;
+  c.match.assign(in.num_triangles(), kNone);
+  c.corner_map.resize(in.num_triangles());
+  c.area3.resize(in.num_triangles());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, in_h.size(), 16384), [&](const tbb::blocked_range<size_t>& r) {
+    size_t i = r.begin();
+    while (i > 0 && i < r.end() && in_h[i - 1].first == in_h[i].first) ++i;  // a run begun before the block is the earlier block's
+    if (i >= r.end()) return;
+    auto before = [](const HashedTriangle& a, uint64_t h) { return a.first < h; };
+    size_t o = size_t(std::lower_bound(out_h.begin(), out_h.end(), in_h[i].first, before) - out_h.begin());
+    while (i < r.end()) {
+      const uint64_t h = in_h[i].first;
+      size_t i_end = i + 1;
+      while (i_end < in_h.size() && in_h[i_end].first == h) ++i_end;
+      while (o < out_h.size() && out_h[o].first < h) ++o;
+      size_t o_end = o;
+      while (o_end < out_h.size() && out_h[o_end].first == h) ++o_end;
+      if (o_end > o)
+        match_hash_run(in, out, as_float32, std::span(in_h).subspan(i, i_end - i), std::span(out_h).subspan(o, o_end - o), c.match);
+      i = i_end, o = o_end;
+    }
+  });
   std::vector<char> lost(in.num_triangles(), 0);
   tbb::parallel_for(uint32_t(0), uint32_t(in.num_triangles()), [&](uint32_t t) {
     c.area3[t] = triangle_area(in.positions, in.triangles[t]);
-    if (c.match[t] == kNone) {
-      lost[t] = c.area3[t] > 0;
-      return;
+    if (c.match[t] != kNone) {
+      // Equal keys, unless the hashes of two different keys met (then no output triangle has t's key).
+      std::array<int, 3> oi, oo;
+      if (corner_key(in, t, as_float32, &oi) == corner_key(out, c.match[t], as_float32, &oo))
+        for (size_t i = 0; i < 3; ++i) c.corner_map[t][size_t(oi[i])] = oo[i];
+      else
+        c.match[t] = kNone;
     }
-    std::array<int, 3> oi, oo;
-    corner_key(in, t, as_float32, &oi);
-    corner_key(out, c.match[t], as_float32, &oo);
-    for (int i = 0; i < 3; ++i) c.corner_map[t][size_t(oi[size_t(i)])] = oo[size_t(i)];
+    lost[t] = c.match[t] == kNone && c.area3[t] > 0;
   });
   c.lost_triangles = size_t(std::count(lost.begin(), lost.end(), 1));
   return c;
