@@ -1,11 +1,14 @@
 // The tightex command: a thin shell over the library and the command (cli/command.hpp). Exit codes: 0 ok, 1 bad input (the message names
 // the file and element), 2 internal error.
 #include <malloc.h>
+#include <unistd.h>
 #include <CLI/CLI.hpp>
+#include <cstdlib>
 #include <iostream>
 #include <limits>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "cli/command.hpp"
 #include "core/error.hpp"
@@ -48,16 +51,33 @@ int run_main(int argc, char** argv) {
 /// kernel: the run allocates and frees arrays the size of the surface at every step, and each page taken
 /// again from the kernel costs a page fault and its zeroing. Blocks up to 32 MiB (glibc's largest
 /// threshold) come from the heap, which is never trimmed and grows 256 MiB at a time (address space,
-/// not memory, until written). 854k faces: page faults 0.57 M -> 0.40 M, sys 4.5 -> 3.5 s (BENCHMARKS.md).
+/// not memory, until written). Figures: BENCHMARKS.md, "Where the default run's time goes".
 void keep_freed_memory_for_reuse() {
   mallopt(M_MMAP_THRESHOLD, 32 << 20);
   mallopt(M_TRIM_THRESHOLD, std::numeric_limits<int>::max());
   mallopt(M_TOP_PAD, 256 << 20);
 }
 
+/// Starts this program again with glibc's allocator told to ask for transparent huge pages
+/// (GLIBC_TUNABLES glibc.malloc.hugetlb=1, which only the environment of a starting process can set):
+/// the heap and the blocks mapped on their own are advised as 2 MiB pages, so that a surface-sized
+/// array costs one page fault per 2 MiB instead of per 4 KiB, and the solvers' scattered reads miss
+/// the TLB less (BENCHMARKS.md). Not done where GLIBC_TUNABLES already says how (as it does in the new
+/// process); where execv fails the run goes on as it is.
+void restart_with_huge_pages(char** argv) {
+  constexpr std::string_view kHugePages = "glibc.malloc.hugetlb";
+  const char* tunables = std::getenv("GLIBC_TUNABLES");
+  if (tunables != nullptr && std::string_view(tunables).find(kHugePages) != std::string_view::npos) return;
+  std::string value = std::string(kHugePages) + "=1";
+  if (tunables != nullptr && *tunables != '\0') value += std::string(":") + tunables;
+  if (::setenv("GLIBC_TUNABLES", value.c_str(), 1) != 0) return;
+  ::execv("/proc/self/exe", argv);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  restart_with_huge_pages(argv);
   keep_freed_memory_for_reuse();
   try {
     if (argc > 1 && std::string(argv[1]) == "measure") return run_measure(argc - 1, argv + 1);
