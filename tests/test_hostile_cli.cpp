@@ -208,6 +208,37 @@ TEST(HostileCliOutput, OutputIntoTheInputsOwnFolderIsRefusedAndTheInputUntouched
   fs::remove_all(dir);
 }
 
+// The command restarts itself with glibc's huge-page tunable unless GLIBC_TUNABLES names it or the
+// dynamic loader was named to start it: the same texture whichever way it ran.
+TEST(HostileCliOutput, TheSameTextureWhicheverWayTheCommandStarts) {
+  const fs::path dir = fs::temp_directory_path() / ("tightex_starts_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "in.obj", std::ios::binary) << grid_obj();
+  std::ofstream(dir / "m.mtl", std::ios::binary) << kMtl;
+  Image img(16, 16);
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 16; ++x) img.at(x, y) = {uint8_t(x * 16), uint8_t(y * 16), 128, 255};
+  save_image((dir / "t.png").string(), img, ImageFormat::kPng);
+  std::vector<std::string> starts = {"", "GLIBC_TUNABLES=glibc.malloc.hugetlb=0 ", "GLIBC_TUNABLES=glibc.malloc.check=0 "};
+  const fs::path loader = "/lib64/ld-linux-x86-64.so.2";
+  if (fs::exists(loader)) starts.push_back(loader.string() + " ");
+  std::vector<std::string> textures;
+  for (size_t i = 0; i < starts.size(); ++i) {
+    SCOPED_TRACE(starts[i]);
+    const fs::path out = dir / ("out" + std::to_string(i));
+    const std::string cmd = starts[i] + TIGHTEX_CLI + " '" + (dir / "in.obj").string() + "' -o '" + out.string() + "' --size 64 --quiet";
+    const int status = std::system(cmd.c_str());
+    ASSERT_TRUE(WIFEXITED(status));
+    ASSERT_EQ(WEXITSTATUS(status), 0);
+    std::ifstream png(out / "in_tightex.png", std::ios::binary);
+    textures.push_back(std::string((std::istreambuf_iterator<char>(png)), {}));
+    EXPECT_FALSE(textures.back().empty());
+    EXPECT_EQ(textures.back(), textures.front());
+  }
+  fs::remove_all(dir);
+}
+
 TEST(HostileCliOutput, AnOutputFolderThatCannotBeCreatedIsRefusedBeforeAnyWorkAndNothingIsCreated) {
   const fs::path dir = fs::temp_directory_path() / ("tightex_outcheck_" + std::to_string(::getpid()));
   fs::remove_all(dir);

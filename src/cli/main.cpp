@@ -1,6 +1,7 @@
 // The tightex command: a thin shell over the library and the command (cli/command.hpp). Exit codes: 0 ok, 1 bad input (the message names
 // the file and element), 2 internal error.
 #include <malloc.h>
+#include <sys/auxv.h>
 #include <unistd.h>
 #include <CLI/CLI.hpp>
 #include <cstdlib>
@@ -63,8 +64,11 @@ void keep_freed_memory_for_reuse() {
 /// the heap and the blocks mapped on their own are advised as 2 MiB pages, so that a surface-sized
 /// array costs one page fault per 2 MiB instead of per 4 KiB, and the solvers' scattered reads miss
 /// the TLB less (BENCHMARKS.md). Not done where GLIBC_TUNABLES already says how (as it does in the new
-/// process); where execv fails the run goes on as it is.
+/// process); where execv fails the run goes on as it is. Not done either where the program was started
+/// by naming the dynamic loader (`ld-linux-x86-64.so.2 tightex ...`: /proc/self/exe is then the loader,
+/// and the kernel gives no interpreter base) or is linked statically.
 void restart_with_huge_pages(char** argv) {
+  if (::getauxval(AT_BASE) == 0) return;
   constexpr std::string_view kHugePages = "glibc.malloc.hugetlb";
   const char* tunables = std::getenv("GLIBC_TUNABLES");
   if (tunables != nullptr && std::string_view(tunables).find(kHugePages) != std::string_view::npos) return;
