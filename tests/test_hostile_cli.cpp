@@ -222,7 +222,9 @@ TEST(HostileCliOutput, TheSameTextureWhicheverWayTheCommandStarts) {
   save_image((dir / "t.png").string(), img, ImageFormat::kPng);
   std::vector<std::string> starts = {"", "GLIBC_TUNABLES=glibc.malloc.hugetlb=0 ", "GLIBC_TUNABLES=glibc.malloc.check=0 "};
   const fs::path loader = "/lib64/ld-linux-x86-64.so.2";
-  if (fs::exists(loader)) starts.push_back(loader.string() + " ");
+  // Started through the loader, LeakSanitizer (the sanitizer build) reports the loader's own
+  // bookkeeping (dl-open's global scope) as a leak: not tightex's, so not checked there.
+  if (fs::exists(loader)) starts.push_back("ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" " + loader.string() + " ");
   std::vector<std::string> textures;
   for (size_t i = 0; i < starts.size(); ++i) {
     SCOPED_TRACE(starts[i]);
