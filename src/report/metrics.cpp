@@ -264,19 +264,28 @@ uint64_t hash_of(const CornerKey& k) {
   return h;
 }
 
+/// Both sorted by their first members: for each run of equal first members in `in` that begins at i or
+/// after and before `stop`, with the run of the same value in `out` (searched from o on), where there
+/// is one, fn(in_begin, in_end, out_begin, out_end).
+template <typename Pair, typename Fn>
+void for_each_shared_run(std::span<const Pair> in, std::span<const Pair> out, size_t i, size_t stop, size_t o, Fn&& fn) {
+  while (i < stop) {
+    size_t i_end = i + 1;
+    while (i_end < in.size() && in[i_end].first == in[i].first) ++i_end;
+    while (o < out.size() && out[o].first < in[i].first) ++o;
+    size_t o_end = o;
+    while (o_end < out.size() && out[o_end].first == in[i].first) ++o_end;
+    if (o_end > o) fn(i, i_end, o, o_end);
+    i = i_end, o = o_end;
+  }
+}
+
 /// Matches input triangles to output triangles, both sorted by (key, triangle): the k-th of an input
 /// triangle's copies matches the k-th copy in the output (the last where the output has fewer).
 void match_sorted(std::span<const KeyedTriangle> in_keys, std::span<const KeyedTriangle> out_keys, std::vector<uint32_t>& match) {
-  for (size_t i = 0, o = 0; i < in_keys.size();) {
-    size_t i_end = i + 1;
-    while (i_end < in_keys.size() && in_keys[i_end].first == in_keys[i].first) ++i_end;
-    while (o < out_keys.size() && out_keys[o].first < in_keys[i].first) ++o;
-    size_t o_end = o;
-    while (o_end < out_keys.size() && out_keys[o_end].first == in_keys[i].first) ++o_end;
-    if (o_end > o)
-      for (size_t k = i; k < i_end; ++k) match[in_keys[k].second] = out_keys[std::min(o + (k - i), o_end - 1)].second;
-    i = i_end, o = o_end;
-  }
+  for_each_shared_run(in_keys, out_keys, 0, in_keys.size(), 0, [&](size_t i, size_t i_end, size_t o, size_t o_end) {
+    for (size_t k = i; k < i_end; ++k) match[in_keys[k].second] = out_keys[std::min(o + (k - i), o_end - 1)].second;
+  });
 }
 
 /// match_sorted for the input and output triangles whose keys hash alike (`in_run`, `out_run`, each in
@@ -323,18 +332,11 @@ Correspondence match_triangles(const TexturedMesh& in, const TexturedMesh& out) 
     while (i > 0 && i < r.end() && in_h[i - 1].first == in_h[i].first) ++i;  // a run begun before the block is the earlier block's
     if (i >= r.end()) return;
     auto before = [](const HashedTriangle& a, uint64_t h) { return a.first < h; };
-    size_t o = size_t(std::lower_bound(out_h.begin(), out_h.end(), in_h[i].first, before) - out_h.begin());
-    while (i < r.end()) {
-      const uint64_t h = in_h[i].first;
-      size_t i_end = i + 1;
-      while (i_end < in_h.size() && in_h[i_end].first == h) ++i_end;
-      while (o < out_h.size() && out_h[o].first < h) ++o;
-      size_t o_end = o;
-      while (o_end < out_h.size() && out_h[o_end].first == h) ++o_end;
-      if (o_end > o)
-        match_hash_run(in, out, as_float32, std::span(in_h).subspan(i, i_end - i), std::span(out_h).subspan(o, o_end - o), c.match);
-      i = i_end, o = o_end;
-    }
+    const auto o = size_t(std::lower_bound(out_h.begin(), out_h.end(), in_h[i].first, before) - out_h.begin());
+    const std::span<const HashedTriangle> in_s(in_h), out_s(out_h);
+    for_each_shared_run(in_s, out_s, i, r.end(), o, [&](size_t i0, size_t i1, size_t o0, size_t o1) {
+      match_hash_run(in, out, as_float32, in_s.subspan(i0, i1 - i0), out_s.subspan(o0, o1 - o0), c.match);
+    });
   });
   std::vector<char> lost(in.num_triangles(), 0);
   tbb::parallel_for(uint32_t(0), uint32_t(in.num_triangles()), [&](uint32_t t) {
