@@ -914,6 +914,25 @@ TEST(SparseCholesky, OpenMpRegionsRunOnTheCallingThreadOnlyWhereTeamsAreOff) {
   }).join();
 }
 
+// METIS (which finds the nested dissection) draws from the C library's rand(), one sequence for the
+// process: orders found on two threads at once are each the order found alone (metis_mutex), so a
+// model whose pieces are mapped side by side gives the same output every run.
+TEST(SparseCholesky, NestedDissectionOrdersFoundAtOnceAreEachTheOrderFoundAlone) {
+  const auto g = testing::param_grid(160, 120, false, false, [](int i, int j) { return Vec3(i, j, 0.1 * std::sin(0.3 * i)); });
+  const Surface m = split_components(prepare_surface(testing::make_textured("sheet", g.positions, g.triangles), nullptr)).at(0);
+  const std::vector<int> alone = nested_dissection_order(m);
+  ASSERT_EQ(alone.size(), m.num_vertices());
+  std::atomic<int> differing{0};
+  auto find_orders = [&] {
+    for (int k = 0; k < 6; ++k)
+      if (nested_dissection_order(m) != alone) ++differing;
+  };
+  std::thread other(find_orders);
+  find_orders();
+  other.join();
+  EXPECT_EQ(differing.load(), 0);
+}
+
 // One fill-reducing order of a mesh's vertices (nested dissection) serves every system over them:
 // it is a permutation of the vertices, and restricted to a Laplacian's unknowns (boundary held) the
 // factorisation in that order solves the system as CHOLMOD's own order does.

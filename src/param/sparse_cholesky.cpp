@@ -15,6 +15,11 @@ std::mutex& blas_mutex() {
   return m;
 }
 
+std::mutex& metis_mutex() {
+  static std::mutex m;
+  return m;
+}
+
 namespace {
 /// Whether use_serial_dense_kernels() has run on this thread: libgomp opens no team on it any more.
 thread_local bool omp_serial = false;
@@ -81,7 +86,11 @@ std::vector<int> nested_dissection_order(const Surface& mesh) {
   const Eigen::SparseMatrix<double>& lower = pattern;
   cholmod_sparse view = Eigen::viewAsCholmod(lower.selfadjointView<Eigen::Lower>());
   std::vector<int> order(static_cast<size_t>(n));
-  const bool ok = cholmod_metis(&view, nullptr, 0, 0, order.data(), &common);
+  bool ok = false;
+  {
+    const std::lock_guard<std::mutex> lock(metis_mutex());
+    ok = cholmod_metis(&view, nullptr, 0, 0, order.data(), &common);
+  }
   cholmod_finish(&common);
   if (!ok) order.clear();
   return order;

@@ -83,6 +83,13 @@ std::vector<int> order_of_unknowns(const std::vector<int>& vertex_order, const s
 /// threaded BLAS uses every core within the call.
 std::mutex& blas_mutex();
 
+/// Serialises the calls that may reach METIS: its nested dissection and CHOLMOD's analyses in an order
+/// of its own choosing (which try METIS where minimum degree leaves much fill). Debian's METIS draws
+/// from the C library's rand(), one sequence for the whole process, reseeded at each call: two orders
+/// found at once interleave their draws, and each then follows the other's timing (a 10M-face model
+/// cut into two pieces mapped side by side gave other texture coordinates from run to run).
+std::mutex& metis_mutex();
+
 /// Makes the dense kernels under CHOLMOD run on the calling thread only: OpenBLAS's thread pool (for
 /// the process, once) and libgomp's teams (for this thread: libgomp keeps those settings per thread).
 /// The components and shape probes are mapped in parallel already, and the BLAS calls are serialised (blas_mutex), so the kernels' own
@@ -113,10 +120,12 @@ class SparseCholesky {
       solver_.cholmod().final_ll = 1;
     }
     const auto analyse = [&] {
-      if (order && order->size() == size_t(a.rows()))
+      if (order && order->size() == size_t(a.rows())) {
         solver_.analyzePatternInOrder(a, *order);
-      else
+      } else {
+        const std::lock_guard<std::mutex> lock(metis_mutex());
         solver_.analyzePattern(a);
+      }
     };
     analyse();
     permutation_.clear();
