@@ -2,8 +2,9 @@
 # How tightex's default run grows with the input: a real scan (meshroom_esp32cam, 53k faces) subdivided
 # 1:4 LEVEL times (tools/subdivide_obj.py: same surface, same texture), each run once with
 # /usr/bin/time. Prints per size the process's wall, user and sys time and peak memory, each stage's
-# wall time and peak memory from report.json, the surface PSNR and flipped count, and the log-log
-# slope of wall and CPU time against faces between consecutive sizes and over all.
+# wall time, the process's CPU time while it ran (user + sys, and sys) and peak memory from
+# report.json, the surface PSNR and flipped count, and the log-log slope of wall and CPU time against
+# faces between consecutive sizes and over all.
 # Usage: bench/scale.sh [LEVELS="0 1 2"] [extra tightex options...]
 #   LEVELS 3 (3.4M faces) and 4 (13.7M) take minutes to generate and to run.
 # Subdivided copies are kept in ${TIGHTEX_SCALE_CACHE:-/tmp/tightex_scale}.
@@ -34,13 +35,17 @@ for level in $levels; do
 import json, sys
 r = json.load(open(sys.argv[1])); m = r["metrics"]
 wall, user, sys_, rss = map(float, sys.argv[2].split())
-stages = "; ".join(f"{t['stage'].split(' (')[0]} {t['seconds']:.2f}" + (f" ({t['peak_rss_mib']:.0f} MiB)" if 'peak_rss_mib' in t else "")
-                   for t in r["timings"])
+def stage(t):
+    s = f"{t['stage'].split(' (')[0]} {t['seconds']:.2f}"
+    if 'user_seconds' in t:
+        s += f" [CPU {t['user_seconds'] + t['sys_seconds']:.2f}, sys {t['sys_seconds']:.2f}]"
+    return s + (f" ({t['peak_rss_mib']:.0f} MiB)" if 'peak_rss_mib' in t else "")
+stages = "; ".join(stage(t) for t in r["timings"])
 print(f"{r['input']['triangles']}|{wall}|{user}|{sys_}|{rss / 1024:.0f}|{m['surface_psnr_db']:.2f}|{m['flipped']}|{stages}")
 PY
 )")
 done
-echo "| faces | wall s | user s | sys s | sys share | peak MiB | surface PSNR dB | flipped | stages: wall s (peak MiB) |"
+echo "| faces | wall s | user s | sys s | sys share | peak MiB | surface PSNR dB | flipped | stages: wall s [process CPU s while it ran, of it sys] (peak MiB) |"
 echo "|---|---|---|---|---|---|---|---|---|"
 for row in "${rows[@]}"; do
   IFS='|' read -r faces wall user sys rss psnr flipped stages <<<"$row"

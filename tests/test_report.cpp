@@ -1,11 +1,14 @@
 // The typed report's JSON: every key of report.json's schema, with the value of the field it comes from.
 #include <gtest/gtest.h>
 
+#include <time.h>
+
 #include <cmath>
 #include <set>
 #include <string>
 
 #include "mesh_catalogue.hpp"
+#include "pipeline/stage_clock.hpp"
 #include "report/metrics.hpp"
 #include "report/report.hpp"
 
@@ -100,7 +103,7 @@ Report filled_report() {
   kept.kept_reason = "the map folds";
   r.components.push_back(kept);
 
-  r.timings = {{"repair", 0.5, 14.0}, {"read geometry", 0.25, std::nullopt}};
+  r.timings = {{"repair", 0.5, 14.0, 0.75, 0.125}, {"read geometry", 0.25, std::nullopt, std::nullopt, std::nullopt}};
   BakeStats bake;
   bake.texels_filled = 10, bake.texels_dilated = 11, bake.texels_footprint_filtered = 12, bake.tiles_fitted = 13, bake.tiles = 14;
   r.bake = bake;
@@ -143,7 +146,7 @@ TEST(Report, HasEveryKeyOfTheSchema) {
   for (const auto& c : j["components"]) EXPECT_EQ(keys_of(c), component_keys);
   EXPECT_EQ(keys_of(j["components"][0]["rect"]), (std::set<std::string>{"image", "x", "y", "w", "h"}));
   EXPECT_EQ(keys_of(j["components"][0]["multilevel"]), (std::set<std::string>{"coarse_vertices", "fine_reweighting", "fine_steps"}));
-  EXPECT_EQ(keys_of(j["timings"][0]), (std::set<std::string>{"stage", "seconds", "peak_rss_mib"}));
+  EXPECT_EQ(keys_of(j["timings"][0]), (std::set<std::string>{"stage", "seconds", "peak_rss_mib", "user_seconds", "sys_seconds"}));
   EXPECT_EQ(keys_of(j["timings"][1]), (std::set<std::string>{"stage", "seconds"}));
   EXPECT_EQ(keys_of(j["bake"]),
             (std::set<std::string>{"texels_filled", "texels_dilated", "texels_footprint_filtered", "tiles_fitted", "tiles"}));
@@ -206,6 +209,8 @@ TEST(Report, WritesEachFieldsValue) {
 
   EXPECT_EQ(j["timings"][0]["stage"], "repair");
   EXPECT_EQ(j["timings"][0]["peak_rss_mib"], 14.0);
+  EXPECT_EQ(j["timings"][0]["user_seconds"], 0.75);
+  EXPECT_EQ(j["timings"][0]["sys_seconds"], 0.125);
   EXPECT_EQ(j["bake"]["tiles"], 14);
   EXPECT_EQ(j["peak_rss_mib"], 18.5);
   EXPECT_EQ(j["wall_seconds"], 0.875);
@@ -306,6 +311,33 @@ TEST(Metrics, TrianglesCorrespondByTheirCornerPositions) {
       std::count_if(moved.triangles.begin(), moved.triangles.end(), [](const Tri& f) { return f[0] == 0 || f[1] == 0 || f[2] == 0; }));
   ASSERT_GT(around, 2u);
   EXPECT_EQ(measure(sphere(), moved, 20000).lost_triangles, around);
+}
+
+/// The calling thread's CPU time so far, in seconds.
+double thread_cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
+
+// A stage's CPU time is the process's while it ran: at least what one of its threads spent in it, and
+// none of what came before it.
+TEST(StageClock, AStagesCpuTimeIsTheProcesssWhileItRan) {
+  std::vector<StageTiming> timings;
+  StageClock clock(timings);
+  volatile double sink = 0;
+  const double start = thread_cpu_seconds();
+  while (thread_cpu_seconds() - start < 0.05) sink = sink + std::sqrt(sink + 1.0);
+  const double spent = thread_cpu_seconds() - start;
+  clock.done("work");
+  clock.done("nothing");
+  ASSERT_EQ(timings.size(), 2u);
+  ASSERT_TRUE(timings[0].user_seconds && timings[0].sys_seconds);
+  EXPECT_GE(*timings[0].user_seconds + *timings[0].sys_seconds, spent - 0.002);
+  EXPECT_GE(*timings[0].sys_seconds, 0.0);
+  EXPECT_GT(timings[0].seconds, 0.0);
+  ASSERT_TRUE(timings[1].user_seconds && timings[1].sys_seconds);
+  EXPECT_LT(*timings[1].user_seconds + *timings[1].sys_seconds, spent / 2);
 }
 
 }  // namespace

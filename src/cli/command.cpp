@@ -412,9 +412,12 @@ void print_notes(const Plan& plan, const nlohmann::json& report) {
                report["preparation"]["components"].get<size_t>(), grown.get<int>(), report["options"]["size"].get<int>());
 }
 
-/// How long the CLI's own stages took, in seconds (read_s, textures_s from the start).
+/// How long the CLI's own stages took, in seconds (read_s, textures_s from the start), and the process's
+/// CPU time while they ran (read: from the start; write, measure and the page's data: each from the
+/// start of the three to its own end).
 struct CliTimings {
   double read_s = 0, textures_s = 0, write_s = 0, measure_s = 0, html_s = 0;
+  CpuTimes read_cpu, write_cpu, measure_cpu, html_cpu;
 };
 
 /// What the run's last stage gives: the output's metrics, what the writer left out, and report.html's
@@ -447,21 +450,29 @@ std::vector<std::string> write_model(const CommandLine& line, const TexturedMesh
 WrittenAndMeasured write_and_measure(const CommandLine& line, const TexturedMesh& input, const TexturedMesh& output,
                                      const std::string& name, CliTimings& timings) {
   const auto tw = std::chrono::steady_clock::now();
+  const CpuTimes cpu_before = process_cpu_times();
+  const auto cpu_since = [&] {
+    const CpuTimes now = process_cpu_times();
+    return CpuTimes{now.user - cpu_before.user, now.sys - cpu_before.sys};
+  };
   WrittenAndMeasured r;
   nlohmann::json html_data;
   tbb::parallel_invoke(
       [&] {
         r.removed = write_model(line, output, name);
         timings.write_s = seconds_since(tw);
+        timings.write_cpu = cpu_since();
       },
       [&] {
         r.metrics = measure(input, output);
         timings.measure_s = seconds_since(tw);
+        timings.measure_cpu = cpu_since();
       },
       [&] {
         if (line.no_html) return;
         html_data = html_model_data_without_charts(input, output);
         timings.html_s = seconds_since(tw);
+        timings.html_cpu = cpu_since();
       });
   // The page's chart counts are the measure's.
   if (!line.no_html) r.html_data = html_model_data(std::move(html_data), r.metrics.charts_input, r.metrics.charts);
@@ -474,12 +485,15 @@ void add_cli_figures(nlohmann::json& rep, const Metrics& metrics, const CliTimin
                      const OutputFiles& files) {
   rep["metrics"] = to_json(metrics);
   nlohmann::json& timings = rep["timings"];
-  timings.push_back(to_json(StageTiming{"write (beside measure)", t.write_s, std::nullopt}));
-  timings.push_back(to_json(StageTiming{"measure (beside write)", t.measure_s, std::nullopt}));
-  if (t.html_s > 0) timings.push_back(to_json(StageTiming{"report.html data (beside write and measure)", t.html_s, std::nullopt}));
-  timings.insert(timings.begin(), to_json(StageTiming{"read geometry", t.read_s, std::nullopt}));
-  timings.insert(timings.begin() + 1,
-                 to_json(StageTiming{"read textures (beside the geometric stages, from start)", t.textures_s, std::nullopt}));
+  auto timing = [](const char* stage, double seconds, const CpuTimes& cpu) {
+    return to_json(StageTiming{stage, seconds, std::nullopt, cpu.user, cpu.sys});
+  };
+  timings.push_back(timing("write (beside measure)", t.write_s, t.write_cpu));
+  timings.push_back(timing("measure (beside write)", t.measure_s, t.measure_cpu));
+  if (t.html_s > 0) timings.push_back(timing("report.html data (beside write and measure)", t.html_s, t.html_cpu));
+  timings.insert(timings.begin(), timing("read geometry", t.read_s, t.read_cpu));
+  timings.insert(timings.begin() + 1, to_json(StageTiming{"read textures (beside the geometric stages, from start)", t.textures_s,
+                                                          std::nullopt, std::nullopt, std::nullopt}));
   rep["wall_seconds"] = wall_seconds;
   rep["peak_rss_mib"] = peak_rss_mib();
   rep["input"].update(reader_json(read_stats));
@@ -605,6 +619,7 @@ nlohmann::json run_command(const CommandLine& line, const CommandHooks& hooks) {
   ObjReadStats read_stats;
   TexturedMesh geometry = read_geometry(line, &read_stats);
   timings.read_s = seconds_since(t0);
+  timings.read_cpu = process_cpu_times();
   const int size = texture_side(line, geometry);
   const bool printing = hooks.print && !line.quiet;
   const bool show_progress = !hooks.progress && printing && isatty(STDERR_FILENO);

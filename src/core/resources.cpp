@@ -10,4 +10,11 @@ double peak_rss_mib() {
   return double(u.ru_maxrss) / 1024.0;
 }
 
+CpuTimes process_cpu_times() {
+  rusage u{};
+  if (getrusage(RUSAGE_SELF, &u) != 0) return {};
+  auto seconds = [](const timeval& t) { return double(t.tv_sec) + 1e-6 * double(t.tv_usec); };
+  return {seconds(u.ru_utime), seconds(u.ru_stime)};
+}
+
 }  // namespace tightex

@@ -105,6 +105,9 @@ struct StageTiming {
   std::string stage;
   double seconds = 0;
   std::optional<double> peak_rss_mib;  // peak RSS at the stage's end; not written when unset
+  // The process's CPU time while the stage ran (all threads: what ran beside it counts too), in the
+  // program and in the kernel; not written when unset.
+  std::optional<double> user_seconds, sys_seconds;
 };
 
 /// "maps": one output map besides the base colour (bake_other_maps).

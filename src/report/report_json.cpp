@@ -151,6 +151,8 @@ double estimated_psnr_db(double mse) { return mse > 0 ? 10 * std::log10(255.0 * 
 json to_json(const StageTiming& timing) {
   json j = {{"stage", timing.stage}, {"seconds", timing.seconds}};
   if (timing.peak_rss_mib) j["peak_rss_mib"] = *timing.peak_rss_mib;
+  if (timing.user_seconds) j["user_seconds"] = *timing.user_seconds;
+  if (timing.sys_seconds) j["sys_seconds"] = *timing.sys_seconds;
   return j;
 }
 

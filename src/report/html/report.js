@@ -148,9 +148,11 @@
   function fillTimings() {
     const body = document.querySelector('#timing-table tbody');
     (report.timings || []).forEach((t, i) => {
-      const rss = typeof t.peak_rss_mib === 'number' ? reportNumber('timings.' + i + '.peak_rss_mib', 1) : '';
-      body.append(el('tr', {}, [el('td', { text: t.stage }), el('td', { class: 'n' }, [reportNumber('timings.' + i + '.seconds', 3)]),
-        el('td', { class: 'n' }, [rss])]));
+      const cell = (key, digits) =>
+          el('td', {class: 'n'}, [typeof t[key] === 'number' ? reportNumber('timings.' + i + '.' + key, digits) : '']);
+      body.append(
+          el('tr', {},
+             [el('td', {text: t.stage}), cell('seconds', 3), cell('user_seconds', 3), cell('sys_seconds', 3), cell('peak_rss_mib', 1)]));
     });
   }
 
