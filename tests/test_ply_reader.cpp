@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -410,6 +411,84 @@ TEST_F(PlyReaderTest, BodyErrorsNameTheElementEntryAndAsciiLine) {
   b.put(0.f).put(0.f).put(0.f).put(1.f).put(std::numeric_limits<float>::infinity()).put(0.f);
   const std::string binary = write("b.ply", b.str() + std::string(8, '\0'));
   EXPECT_EQ(error_of(binary), binary + ": vertex 1: NaN or infinite coordinate");
+}
+
+// ---- large ascii files: vertices and faces read in blocks of lines on every core ----
+
+/// A sheet of n x n vertices in `format`, per-face texcoords, every 7th cell a quad and the others two
+/// triangles (dyadic values: exact in float32 and in text). `irregular` (ascii): in the middle of each
+/// element one entry split over two lines and two entries on one line, which the blocks cannot take.
+/// `bad_face`: that face names a vertex past the last.
+std::string large_sheet(Format format, int n, bool irregular, int64_t bad_face = -1) {
+  const int cells = (n - 1) * (n - 1), quads = (cells + 6) / 7;
+  PlyBuilder b(format);
+  b.header("comment TextureFile page.png").header(fmt::format("element vertex {}", n * n));
+  b.header("property float x").header("property float y").header("property float z");
+  b.header(fmt::format("element face {}", quads + 2 * (cells - quads)));
+  b.header("property list uchar int vertex_indices").header("property list uchar float texcoord");
+  // A float32 value: in text the double's digits (a float's shortest digits read as a double are not
+  // always the float's value).
+  auto put_float = [&](double x) -> PlyBuilder& { return format == Format::kAscii ? b.put(x) : b.put(float(x)); };
+  const int middle = n * n / 2;
+  for (int v = 0; v < n * n; ++v) {
+    put_float((v % n) * 0.25);
+    put_float((v / n) * 0.5);
+    if (irregular && v == middle) b.end();  // the vertex's z on the next line
+    put_float((v % 3) * 0.125).end();
+  }
+  int64_t face = 0;
+  auto put_face = [&](std::initializer_list<int> corners) {
+    b.put(uint8_t(corners.size()));
+    for (int c : corners) b.put(int32_t(face == bad_face ? n * n + 5 : c));
+    b.put(uint8_t(2 * corners.size()));
+    for (int c : corners) put_float((c % n) / 1024.0), put_float((c / n) / 2048.0);
+    if (!(irregular && face == cells / 2)) b.end();  // the next face on the same line
+    ++face;
+  };
+  for (int cell = 0; cell < cells; ++cell) {
+    const int i = cell % (n - 1), j = cell / (n - 1), v = j * n + i;
+    if (cell % 7 == 0) {
+      put_face({v, v + 1, v + n + 1, v + n});
+    } else {
+      put_face({v, v + 1, v + n + 1});
+      put_face({v, v + n + 1, v + n});
+    }
+  }
+  return b.str();
+}
+
+// A large ascii file reads as the same model in binary does, whether each entry is a line of its own
+// (read in blocks) or not (read in one pass), and counts the same lines either way.
+TEST_F(PlyReaderTest, LargeAsciiFilesReadAsTheirBinaryTwin) {
+  write_image("page.png", 4, 4);
+  const int n = 200;  // 40000 vertices, 73544 faces: more than two blocks of each
+  ModelReadOptions options;
+  options.load_textures = false;
+  ModelReadStats binary_stats, ascii_stats, irregular_stats;
+  const TexturedMesh binary = read_ply(write("binary.ply", large_sheet(Format::kLittle, n, false)), options, &binary_stats);
+  const TexturedMesh ascii = read_ply(write("ascii.ply", large_sheet(Format::kAscii, n, false)), options, &ascii_stats);
+  const TexturedMesh irregular = read_ply(write("irregular.ply", large_sheet(Format::kAscii, n, true)), options, &irregular_stats);
+  ASSERT_EQ(binary.positions.size(), size_t(n * n));
+  for (const TexturedMesh* m : {&ascii, &irregular}) {
+    EXPECT_EQ(m->positions, binary.positions);
+    EXPECT_EQ(m->triangles, binary.triangles);
+    EXPECT_EQ(m->corner_uv, binary.corner_uv);
+    EXPECT_EQ(m->face_material, binary.face_material);
+  }
+  EXPECT_EQ(ascii_stats.polygons_triangulated, binary_stats.polygons_triangulated);
+  EXPECT_EQ(irregular_stats.polygons_triangulated, binary_stats.polygons_triangulated);
+  EXPECT_EQ(irregular_stats.lines, ascii_stats.lines);  // one line more in the vertices, one fewer in the faces
+}
+
+// An error deep in a large ascii file names its line, as in a small one.
+TEST_F(PlyReaderTest, AnErrorDeepInALargeAsciiFileNamesItsLine) {
+  const int n = 200;
+  const int64_t bad = 50001;
+  const std::string text = large_sheet(Format::kAscii, n, false, bad);
+  const size_t header_lines = size_t(std::count(text.begin(), text.begin() + std::ptrdiff_t(text.find("end_header\n")), '\n')) + 1;
+  const std::string path = write("bad.ply", text);
+  EXPECT_EQ(error_of(path), fmt::format("{}:{}: face {}: vertex index {} out of range (the file has {} vertices)", path,
+                                        header_lines + size_t(n * n) + size_t(bad) + 1, bad, n * n + 5, n * n));
 }
 
 // ---- end to end: a catalogue mesh written as PLY ----

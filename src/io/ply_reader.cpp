@@ -1,7 +1,9 @@
 // PLY reader. The whole file is read into memory; the header is parsed and checked first
 // (io/ply_header.cpp), then the body is read element by element in the header's order, each value
 // converted to double (exact for every PLY type), with every problem reported on one line naming the
-// file, the element and the entry (and, in ascii, the line).
+// file, the element and the entry (and, in ascii, the line). An ascii file's vertices and faces, one
+// entry a line as writers put them, are read in blocks of lines on every core; where a block does not
+// hold exactly its entries, or has an error, the element is read again in one pass, which reports it.
 #include <algorithm>
 #include <array>
 #include <bit>
@@ -13,6 +15,8 @@
 #include <string_view>
 #include <utility>
 #include <vector>
+
+#include <tbb/parallel_for.h>
 
 #include "core/error.hpp"
 #include "io/model_files.hpp"
@@ -29,6 +33,9 @@ constexpr double kAbsurdCoordinate = 1e15;
 // Corners of one polygon: more than any scan's faces, few enough that a lying list size cannot make
 // the scratch arrays large.
 constexpr size_t kMaxCorners = 1024;
+// Entries of an ascii element read as one block on one core; an element of fewer than two blocks is
+// read in one pass.
+constexpr uint64_t kBlockEntries = 16384;
 
 bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
 
@@ -54,6 +61,19 @@ class PlyBody {
   void skip(const PlyProperty& p);
   /// Text lines of the body read so far (0 for binary).
   size_t lines_read(size_t header_lines) const { return format_ == PlyFormat::kAscii ? line_ - header_lines - 1 : 0; }
+  /// Where the next value is read from, and where the body ends.
+  const char* position() const { return p_; }
+  const char* end() const { return end_; }
+  /// Moves on to `p` (at or after position(), within the body), counting the lines passed.
+  void advance_to(const char* p) {
+    line_ += size_t(std::count(p_, p, '\n'));
+    p_ = p;
+  }
+  /// Whether only blanks are left (ascii).
+  bool only_blanks_left() {
+    while (p_ < end_ && is_space(*p_)) ++p_;
+    return p_ == end_;
+  }
 
   template <typename... Args>
   [[noreturn]] void fail(fmt::format_string<Args...> f, Args&&... args) const {
@@ -166,6 +186,13 @@ void PlyBody::skip(const PlyProperty& p) {
   p_ += size_t(n) * type_size(p.type);
 }
 
+/// One vertex as read.
+struct VertexEntry {
+  Vec3 position = Vec3::Zero();
+  Vec2 uv = Vec2::Zero();
+  std::array<float, 4> colour{0.0f, 0.0f, 0.0f, 1.0f};
+};
+
 /// One face as read, before it is triangulated.
 struct FaceEntry {
   std::vector<uint32_t> corners;
@@ -194,6 +221,51 @@ double integer_full_scale(PlyType type) {
   }
 }
 
+/// Faces as read, triangulated: each triangle with what its face carries.
+struct FaceArrays {
+  std::vector<Tri> triangles;
+  std::vector<Vec2> corner_uv;                    // 3 per triangle, from the faces' texcoord lists
+  std::vector<int32_t> face_texture;              // per triangle: texnumber, -1 for none
+  std::vector<std::array<float, 4>> face_colour;  // per triangle, when the face element has colours
+  size_t polygons_triangulated = 0;
+
+  /// Room for all of `parts` at once, so that appending them copies each once.
+  void reserve_for(const std::vector<FaceArrays>& parts) {
+    size_t t = 0, uv = 0, colours = 0;
+    for (const FaceArrays& p : parts) t += p.triangles.size(), uv += p.corner_uv.size(), colours += p.face_colour.size();
+    triangles.reserve(triangles.size() + t);
+    face_texture.reserve(face_texture.size() + t);
+    corner_uv.reserve(corner_uv.size() + uv);
+    face_colour.reserve(face_colour.size() + colours);
+  }
+  void append(const FaceArrays& more) {
+    triangles.insert(triangles.end(), more.triangles.begin(), more.triangles.end());
+    corner_uv.insert(corner_uv.end(), more.corner_uv.begin(), more.corner_uv.end());
+    face_texture.insert(face_texture.end(), more.face_texture.begin(), more.face_texture.end());
+    face_colour.insert(face_colour.end(), more.face_colour.begin(), more.face_colour.end());
+    polygons_triangulated += more.polygons_triangulated;
+  }
+};
+
+/// Where the blocks of an ascii element of `count` entries would start if each entry is a line of its
+/// own from `from` on: at `from`, then every kBlockEntries-th line after the line of the first value,
+/// and last where the count-th line ends. Empty where the text has fewer lines.
+std::vector<const char*> block_bounds(const char* from, const char* end, uint64_t count) {
+  const char* line = from;
+  while (line < end && is_space(*line)) ++line;
+  std::vector<const char*> bounds{from};
+  for (uint64_t entry = 1; entry <= count; ++entry) {
+    const char* newline = static_cast<const char*>(std::memchr(line, '\n', size_t(end - line)));
+    if (newline == nullptr) {
+      if (entry < count) return {};
+      newline = end;
+    }
+    line = entry < count ? newline + 1 : newline;
+    if (entry % kBlockEntries == 0 || entry == count) bounds.push_back(line);
+  }
+  return bounds;
+}
+
 class PlyReader {
  public:
   PlyReader(const std::string& path, const ModelReadOptions& options) : path_(path), options_(options) {}
@@ -201,12 +273,16 @@ class PlyReader {
 
  private:
   void read_vertices(PlyBody& body, const PlyElement& e);
+  void read_vertex(PlyBody& body, const PlyElement& e, VertexEntry& vertex) const;
+  void keep_vertex(size_t index, const VertexEntry& vertex);
   void read_faces(PlyBody& body, const PlyElement& e);
-  void read_face(PlyBody& body, const PlyElement& e, FaceEntry& face);
-  void add_face(PlyBody& body, const FaceEntry& face);
+  void read_face(PlyBody& body, const PlyElement& e, FaceEntry& face) const;
+  void add_face(PlyBody& body, const FaceEntry& face, FaceArrays& out) const;
+  template <class ReadBlock>
+  bool read_in_blocks(PlyBody& body, uint64_t count, ReadBlock&& read_block) const;
   void skip_element(PlyBody& body, const PlyElement& e);
-  double coordinate(PlyBody& body, PlyType type, std::string_view what);
-  float colour_value(PlyBody& body, PlyType type);
+  static double coordinate(PlyBody& body, PlyType type, std::string_view what);
+  static float colour_value(PlyBody& body, PlyType type);
   void assemble_colours(TexturedMesh& mesh);
   void assemble_uvs(TexturedMesh& mesh);
   void assemble_materials(TexturedMesh& mesh);
@@ -218,11 +294,7 @@ class PlyReader {
   std::vector<Vec3> positions_;
   std::vector<Vec2> vertex_uv_;                      // per vertex, when the vertex element has a pair
   std::vector<std::array<float, 4>> vertex_colour_;  // per vertex, when the vertex element has colours
-  std::vector<std::array<float, 4>> face_colour_;    // per triangle, when the face element has colours
-  std::vector<Tri> triangles_;
-  std::vector<Vec2> corner_uv_;        // 3 per triangle, from the faces' texcoord lists
-  std::vector<int32_t> face_texture_;  // per triangle: texnumber, -1 for none
-  size_t polygons_triangulated_ = 0;
+  FaceArrays faces_;
   std::vector<std::string> paths_found_;
 };
 
@@ -241,45 +313,88 @@ float PlyReader::colour_value(PlyBody& body, PlyType type) {
   return float(std::clamp(is_integer(type) ? v / integer_full_scale(type) : v, 0.0, 1.0));
 }
 
-void PlyReader::read_vertices(PlyBody& body, const PlyElement& e) {
-  if (e.count >= uint64_t(kNone)) body.fail("too many vertices ({})", e.count);
-  // The header's counts were weighed against the file's size: these fit in memory.
-  positions_.reserve(size_t(e.count));
-  if (header_.vertex_uv) vertex_uv_.reserve(size_t(e.count));
-  if (header_.vertex_color) vertex_colour_.reserve(size_t(e.count));
-  for (uint64_t i = 0; i < e.count; ++i) {
-    body.at(e.name, i);
-    Vec3 p = Vec3::Zero();
-    Vec2 uv = Vec2::Zero();
-    std::array<float, 4> colour{0.0f, 0.0f, 0.0f, 1.0f};
-    for (const PlyProperty& prop : e.properties) {
-      switch (prop.role) {
-        case PlyRole::kX:
-        case PlyRole::kY:
-        case PlyRole::kZ:
-          p[int(prop.role) - int(PlyRole::kX)] = coordinate(body, prop.type, "coordinate");
-          break;
-        case PlyRole::kU:
-        case PlyRole::kV:
-          uv[int(prop.role) - int(PlyRole::kU)] = coordinate(body, prop.type, "texture coordinate");
-          break;
-        case PlyRole::kRed:
-        case PlyRole::kGreen:
-        case PlyRole::kBlue:
-        case PlyRole::kAlpha:
-          colour[size_t(int(prop.role) - int(PlyRole::kRed))] = colour_value(body, prop.type);
-          break;
-        default:
-          body.skip(prop);
-      }
+/// Reads an ascii element of `count` entries in blocks of lines side by side: read_block(block_body,
+/// first, end) reads entries [first, end) from a body over its block's text and returns where its last
+/// value ended. True, with `body` moved past the element, where every block read exactly its entries;
+/// false, `body` untouched, otherwise (the caller then reads the element in one pass).
+template <class ReadBlock>
+bool PlyReader::read_in_blocks(PlyBody& body, uint64_t count, ReadBlock&& read_block) const {
+  if (header_.format != PlyFormat::kAscii || count < 2 * kBlockEntries) return false;
+  const std::vector<const char*> bounds = block_bounds(body.position(), body.end(), count);
+  if (bounds.empty()) return false;
+  const size_t blocks = bounds.size() - 1;
+  std::vector<char> exact(blocks, 0);
+  const char* last_value_end = nullptr;
+  tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
+    try {
+      PlyBody block(path_, std::string_view(bounds[b], size_t(bounds[b + 1] - bounds[b])), PlyFormat::kAscii, 0);
+      const char* value_end = read_block(block, uint64_t(b) * kBlockEntries, std::min(count, uint64_t(b + 1) * kBlockEntries));
+      if (b + 1 == blocks) last_value_end = value_end;
+      exact[b] = block.only_blanks_left();
+    } catch (const std::exception&) {
+      exact[b] = 0;
     }
-    positions_.push_back(p);
-    if (header_.vertex_uv) vertex_uv_.push_back(uv);
-    if (header_.vertex_color) vertex_colour_.push_back(colour);
+  });
+  if (std::find(exact.begin(), exact.end(), 0) != exact.end()) return false;
+  body.advance_to(last_value_end);
+  return true;
+}
+
+void PlyReader::read_vertex(PlyBody& body, const PlyElement& e, VertexEntry& vertex) const {
+  vertex = VertexEntry{};
+  for (const PlyProperty& prop : e.properties) {
+    switch (prop.role) {
+      case PlyRole::kX:
+      case PlyRole::kY:
+      case PlyRole::kZ:
+        vertex.position[int(prop.role) - int(PlyRole::kX)] = coordinate(body, prop.type, "coordinate");
+        break;
+      case PlyRole::kU:
+      case PlyRole::kV:
+        vertex.uv[int(prop.role) - int(PlyRole::kU)] = coordinate(body, prop.type, "texture coordinate");
+        break;
+      case PlyRole::kRed:
+      case PlyRole::kGreen:
+      case PlyRole::kBlue:
+      case PlyRole::kAlpha:
+        vertex.colour[size_t(int(prop.role) - int(PlyRole::kRed))] = colour_value(body, prop.type);
+        break;
+      default:
+        body.skip(prop);
+    }
   }
 }
 
-void PlyReader::read_face(PlyBody& body, const PlyElement& e, FaceEntry& face) {
+void PlyReader::keep_vertex(size_t index, const VertexEntry& vertex) {
+  positions_[index] = vertex.position;
+  if (header_.vertex_uv) vertex_uv_[index] = vertex.uv;
+  if (header_.vertex_color) vertex_colour_[index] = vertex.colour;
+}
+
+void PlyReader::read_vertices(PlyBody& body, const PlyElement& e) {
+  if (e.count >= uint64_t(kNone)) body.fail("too many vertices ({})", e.count);
+  // The header's counts were weighed against the file's size: these fit in memory.
+  positions_.resize(size_t(e.count));
+  if (header_.vertex_uv) vertex_uv_.resize(size_t(e.count));
+  if (header_.vertex_color) vertex_colour_.resize(size_t(e.count));
+  const bool in_blocks = read_in_blocks(body, e.count, [&](PlyBody& block, uint64_t first, uint64_t end) {
+    VertexEntry vertex;
+    for (uint64_t i = first; i < end; ++i) {
+      read_vertex(block, e, vertex);
+      keep_vertex(size_t(i), vertex);
+    }
+    return block.position();
+  });
+  if (in_blocks) return;
+  VertexEntry vertex;
+  for (uint64_t i = 0; i < e.count; ++i) {
+    body.at(e.name, i);
+    read_vertex(body, e, vertex);
+    keep_vertex(size_t(i), vertex);
+  }
+}
+
+void PlyReader::read_face(PlyBody& body, const PlyElement& e, FaceEntry& face) const {
   face.texnumber = 0;
   face.colour = {0.0f, 0.0f, 0.0f, 1.0f};
   const uint64_t vertices = header_.elements[header_.vertex].count;
@@ -310,32 +425,47 @@ void PlyReader::read_face(PlyBody& body, const PlyElement& e, FaceEntry& face) {
   }
 }
 
-void PlyReader::add_face(PlyBody& body, const FaceEntry& face) {
+void PlyReader::add_face(PlyBody& body, const FaceEntry& face, FaceArrays& out) const {
   const size_t n = face.corners.size();
   if (header_.face_texcoord && face.texcoord.size() != 2 * n)
     body.fail("texcoord list of {} values for a face of {} corners (needs {})", face.texcoord.size(), n, 2 * n);
-  if (n > 3) ++polygons_triangulated_;
+  if (n > 3) ++out.polygons_triangulated;
   const int32_t texture = header_.texture_files.empty() ? -1 : face.texnumber;
   // Fan around the first corner, as the OBJ reader: exact for the convex polygons exporters write.
   for (size_t i = 1; i + 1 < n; ++i) {
-    triangles_.push_back({face.corners[0], face.corners[i], face.corners[i + 1]});
-    face_texture_.push_back(texture);
-    if (header_.face_color) face_colour_.push_back(face.colour);
+    out.triangles.push_back({face.corners[0], face.corners[i], face.corners[i + 1]});
+    out.face_texture.push_back(texture);
+    if (header_.face_color) out.face_colour.push_back(face.colour);
     if (!header_.face_texcoord) continue;
-    for (const size_t k : {size_t(0), i, i + 1}) corner_uv_.emplace_back(face.texcoord[2 * k], face.texcoord[2 * k + 1]);
+    for (const size_t k : {size_t(0), i, i + 1}) out.corner_uv.emplace_back(face.texcoord[2 * k], face.texcoord[2 * k + 1]);
   }
 }
 
 void PlyReader::read_faces(PlyBody& body, const PlyElement& e) {
+  std::vector<FaceArrays> blocks(size_t((e.count + kBlockEntries - 1) / kBlockEntries));
+  const bool in_blocks = read_in_blocks(body, e.count, [&](PlyBody& block, uint64_t first, uint64_t end) {
+    FaceArrays& out = blocks[size_t(first / kBlockEntries)];
+    FaceEntry face;
+    for (uint64_t i = first; i < end; ++i) {
+      read_face(block, e, face);
+      add_face(block, face, out);
+    }
+    return block.position();
+  });
+  if (in_blocks) {
+    for (const FaceArrays& b : blocks) faces_.append(b);
+    return;
+  }
   // One triangle per face is exact for the triangle meshes scanners write; polygons grow the arrays.
-  triangles_.reserve(size_t(e.count));
-  face_texture_.reserve(size_t(e.count));
-  if (header_.face_texcoord) corner_uv_.reserve(3 * size_t(e.count));
+  faces_ = FaceArrays{};
+  faces_.triangles.reserve(size_t(e.count));
+  faces_.face_texture.reserve(size_t(e.count));
+  if (header_.face_texcoord) faces_.corner_uv.reserve(3 * size_t(e.count));
   FaceEntry face;
   for (uint64_t i = 0; i < e.count; ++i) {
     body.at(e.name, i);
     read_face(body, e, face);
-    add_face(body, face);
+    add_face(body, face, faces_);
   }
 }
 
@@ -349,27 +479,27 @@ void PlyReader::skip_element(PlyBody& body, const PlyElement& e) {
 
 void PlyReader::assemble_uvs(TexturedMesh& mesh) {
   if (header_.face_texcoord) {
-    mesh.corner_uv = std::move(corner_uv_);
+    mesh.corner_uv = std::move(faces_.corner_uv);
     return;
   }
   if (!header_.vertex_uv) {  // a vertex-coloured model: its texture comes from the colours
-    mesh.corner_uv.assign(3 * triangles_.size(), Vec2::Zero());
+    mesh.corner_uv.assign(3 * faces_.triangles.size(), Vec2::Zero());
     return;
   }
   // Per-vertex coordinates, copied to each corner (read after the vertices, whatever the order).
-  mesh.corner_uv.reserve(3 * triangles_.size());
-  for (const Tri& t : triangles_)
+  mesh.corner_uv.reserve(3 * faces_.triangles.size());
+  for (const Tri& t : faces_.triangles)
     for (const uint32_t v : t) mesh.corner_uv.push_back(vertex_uv_[v]);
 }
 
 /// Per corner: the face's colour where faces have one, else the vertex's.
 void PlyReader::assemble_colours(TexturedMesh& mesh) {
   if (header_.face_color) {
-    mesh.corner_color.reserve(3 * face_colour_.size());
-    for (const std::array<float, 4>& c : face_colour_) mesh.corner_color.insert(mesh.corner_color.end(), 3, c);
+    mesh.corner_color.reserve(3 * faces_.face_colour.size());
+    for (const std::array<float, 4>& c : faces_.face_colour) mesh.corner_color.insert(mesh.corner_color.end(), 3, c);
   } else if (header_.vertex_color) {
-    mesh.corner_color.reserve(3 * triangles_.size());
-    for (const Tri& t : triangles_)
+    mesh.corner_color.reserve(3 * faces_.triangles.size());
+    for (const Tri& t : faces_.triangles)
       for (const uint32_t v : t) mesh.corner_color.push_back(vertex_colour_[v]);
   }
 }
@@ -415,18 +545,18 @@ TexturedMesh PlyReader::read(ModelReadStats* stats) {
     else
       skip_element(body, e);
   }
-  if (triangles_.empty()) fail_input("{}: no faces", path_);
+  if (faces_.triangles.empty()) fail_input("{}: no faces", path_);
 
   TexturedMesh mesh;
   mesh.source = path_;
   mesh.positions = std::move(positions_);
   assemble_uvs(mesh);
   assemble_colours(mesh);
-  mesh.triangles = std::move(triangles_);
-  mesh.face_material = std::move(face_texture_);
+  mesh.triangles = std::move(faces_.triangles);
+  mesh.face_material = std::move(faces_.face_texture);
   assemble_materials(mesh);
   if (stats != nullptr) {
-    stats->polygons_triangulated = polygons_triangulated_;
+    stats->polygons_triangulated = faces_.polygons_triangulated;
     stats->lines = header_.lines + body.lines_read(header_.lines);
     stats->paths_found = paths_found_;
   }
