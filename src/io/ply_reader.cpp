@@ -457,7 +457,6 @@ void PlyReader::read_faces(PlyBody& body, const PlyElement& e) {
     return;
   }
   // One triangle per face is exact for the triangle meshes scanners write; polygons grow the arrays.
-  faces_ = FaceArrays{};
   faces_.triangles.reserve(size_t(e.count));
   faces_.face_texture.reserve(size_t(e.count));
   if (header_.face_texcoord) faces_.corner_uv.reserve(3 * size_t(e.count));
