@@ -116,6 +116,43 @@ TEST(GltfReader, ReadsGltfWithABinFileOrADataUriAsTheGlb) {
   }
 }
 
+// A model read without pixels keeps its document, from which load_texture_pixels decodes the images
+// later (as the CLI does beside the geometric stages): the pixels a read with them gives, and for an
+// image that does not decode the error that read gives.
+TEST(GltfReader, ImagesDecodedAfterTheReadAreThoseTheReadGives) {
+  const fs::path dir = scratch("later");
+  const fs::path glb = grid_glb(dir);
+  ModelReadOptions geometry_only;
+  geometry_only.load_textures = false;
+  const TexturedMesh geometry = read_gltf(glb.string(), geometry_only);
+  const TexturedMesh full = read_gltf(glb.string());
+  ASSERT_EQ(geometry.textures.size(), 2u);
+  EXPECT_TRUE(geometry.textures[0].image.empty());
+  const std::vector<Texture> decoded = load_texture_pixels(geometry);
+  ASSERT_EQ(decoded.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) EXPECT_EQ(decoded[i].image.pixels, full.textures[i].image.pixels) << i;
+  // An image whose header is whole and whose data is cut short: sized at the read, refused at the decode.
+  GridGltf g = testing::grid_gltf();
+  save_image((dir / "whole.png").string(), Image(16, 16, Rgba8{9, 8, 7, 255}), ImageFormat::kPng);
+  write_file(dir / "cut.png", read_file(dir / "whole.png").substr(0, 40));
+  g.doc["images"][0] = {{"uri", "cut.png"}};
+  const fs::path cut = grid_glb(dir, g);
+  std::string message;
+  try {
+    read_gltf(cut.string());
+  } catch (const InputError& e) {
+    message = e.what();
+  }
+  EXPECT_EQ(message.rfind(cut.string() + ": images[0]", 0), 0u) << message;
+  const TexturedMesh cut_geometry = read_gltf(cut.string(), geometry_only);
+  try {
+    load_texture_pixels(cut_geometry);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), message);
+  }
+}
+
 TEST(GltfReader, AppliesTextureTransformAndRefusesItsRotation) {
   const fs::path dir = scratch("transform");
   GridGltf g = testing::grid_gltf();

@@ -412,6 +412,13 @@ TEST_F(ObjReaderTest, TexturesAreLoaded) {
   EXPECT_EQ(mesh.textures[0].image.height, 3);
   EXPECT_EQ(mesh.materials[0].texture, 0);
   EXPECT_EQ(mesh.materials[1].texture, 0);
+  // Read without pixels, then decoded: the same texture, pixel for pixel; the model read is untouched.
+  const TexturedMesh geometry = read(path, no_textures());
+  const std::vector<Texture> decoded = load_texture_pixels(geometry);
+  ASSERT_EQ(decoded.size(), 1u);
+  EXPECT_EQ(decoded[0].path, mesh.textures[0].path);
+  EXPECT_EQ(decoded[0].image.pixels, image.pixels);
+  EXPECT_TRUE(geometry.textures[0].image.empty());
 }
 
 // Files named as another machine saw them: a Windows exporter's absolute path in quotes, a name whose
@@ -458,10 +465,16 @@ TEST_F(ObjReaderTest, MissingTextureNamesTheMaterialLibraryLine) {
   const std::string message = error_of(path);
   EXPECT_EQ(message.rfind(mtl + ":3: texture 'gone.png' of material 'a' could not be loaded: ", 0), 0u)
       << message;
-  // Without pixels the path is kept and nothing is opened.
+  // Without pixels the path is kept and nothing is opened; decoding it later names the same line.
   const TexturedMesh mesh = read(path, no_textures());
   ASSERT_EQ(mesh.textures.size(), 1u);
   EXPECT_EQ(fs::path(mesh.textures[0].path), dir_ / "gone.png");
+  try {
+    load_texture_pixels(mesh);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), message);
+  }
 }
 
 TEST_F(ObjReaderTest, MalformedMaterialLibrary) {

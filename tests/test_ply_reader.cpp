@@ -402,6 +402,35 @@ TEST_F(PlyReaderTest, HostileFilesAreRefusedWithOneLineNamingTheFile) {
   }
 }
 
+// The pages of a model read without pixels, decoded later (load_texture_pixels, as the CLI does beside
+// the geometric stages): the pixels a read with them gives, and for a page that cannot be loaded the
+// same one-line error, naming its TextureFile line.
+TEST_F(PlyReaderTest, PagesDecodedAfterTheReadAreThoseTheReadGives) {
+  write_image("page_a.png", 2, 3);
+  const std::string path = write("model.ply", textured_model(Format::kAscii));
+  ModelReadOptions geometry_only;
+  geometry_only.load_textures = false;
+  const TexturedMesh geometry = read_ply(path, geometry_only);
+  ASSERT_EQ(geometry.textures.size(), 2u);
+  const std::string message = error_of(path);
+  EXPECT_EQ(message.rfind(path + ":5: texture 'page b.png' (comment TextureFile) could not be loaded: ", 0), 0u) << message;
+  try {
+    load_texture_pixels(geometry);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), message);
+  }
+  write_image("page b.png", 4, 1);
+  const TexturedMesh full = read_ply(path);
+  const std::vector<Texture> decoded = load_texture_pixels(geometry);
+  ASSERT_EQ(decoded.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(decoded[i].path, full.textures[i].path);
+    EXPECT_EQ(decoded[i].image.width, full.textures[i].image.width);
+    EXPECT_EQ(decoded[i].image.pixels, full.textures[i].image.pixels);
+  }
+}
+
 TEST_F(PlyReaderTest, BodyErrorsNameTheElementEntryAndAsciiLine) {
   const std::string ascii = write("a.ply", kHead + kFace + kVerts + "3 0 1 7" + kTexcoords);
   EXPECT_EQ(error_of(ascii), ascii + ":14: face 0: vertex index 7 out of range (the file has 3 vertices)");

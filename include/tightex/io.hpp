@@ -88,6 +88,13 @@ size_t texture_vertex_colours(TexturedMesh& mesh, size_t max_pixels = size_t(1) 
 /// Draco or meshopt compression, a texture whose UV set the primitive lacks.
 TexturedMesh read_gltf(const std::string& path, const ModelReadOptions& options = {}, ModelReadStats* stats = nullptr);
 
+/// The textures of `mesh`, read with load_textures false, with their pixels: each decoded from its file,
+/// or a glTF's from the document the model keeps (TexturedMesh::gltf); a texture that has its pixels (one
+/// made from vertex colours) as it is. Reads `mesh` only, so that one thread decodes while another works
+/// on the geometry; the model is not parsed again. Throws the InputError the reader would have thrown
+/// with load_textures true for the first texture, in order, that cannot be loaded.
+std::vector<Texture> load_texture_pixels(const TexturedMesh& mesh, size_t max_pixels = size_t(1) << 30);
+
 /// Reads a model by its file name's extension, without case: .ply with read_ply, .gltf and .glb with
 /// read_gltf, anything else with read_obj; then texture_vertex_colours. Requires, guarantees and throws
 /// as they do.

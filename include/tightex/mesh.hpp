@@ -59,6 +59,10 @@ struct Texture {
   int width = 0, height = 0;
   /// Made from the model's vertex colours (texture_vertex_colours), not read from a file.
   bool from_vertex_colours = false;
+  /// Where the model names it, for the message of a texture that cannot be loaded: "FILE:LINE: texture
+  /// 'NAME' of material 'M'" (OBJ), "FILE:LINE: texture 'NAME' (comment TextureFile)" (PLY); empty for a
+  /// glTF's (its document names it) and a texture made in memory.
+  std::string named_at = {};
 };
 
 /// A glTF model's own document (scenes, nodes, materials, buffers), kept by read_gltf for write_gltf so

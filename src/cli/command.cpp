@@ -362,18 +362,19 @@ struct PlannedModel {
   double textures_s = 0;  // when the textures were read, in seconds from the start
 };
 
-/// Reads the textures and plans the charts. The geometric stages need no pixels, so the textures are
-/// decoded beside them, unless the plan needs the pixels (the detail map places texels by them, the
-/// auto aspect compares its shapes with them): then only the preparation (repair, components, seams,
-/// handles) is made beside them, and the rest after. A texture error is thrown before a plan error: a
-/// bad texture is the user's first problem.
-PlannedModel read_textures_and_plan(const std::string& input, const TexturedMesh& geometry, const Options& opt,
-                                    std::chrono::steady_clock::time_point t0) {
+/// Decodes the textures of `geometry` (read without pixels), which becomes the planned model, and plans
+/// the charts. The geometric stages need no pixels, so the textures are decoded beside them, unless the
+/// plan needs the pixels (the detail map places texels by them, the auto aspect compares its shapes
+/// with them): then only the preparation (repair, components, seams, handles) is made beside them, and
+/// the rest after. A texture error is thrown before a plan error: a bad texture is the user's first
+/// problem.
+PlannedModel read_textures_and_plan(TexturedMesh geometry, const Options& opt, std::chrono::steady_clock::time_point t0) {
   PlannedModel r;
   std::exception_ptr texture_error, plan_error;
+  std::vector<Texture> textures;
   auto read_textures = [&] {
     try {
-      r.mesh = read_model(input);
+      textures = load_texture_pixels(geometry, ObjReadOptions{}.max_texture_pixels);
       r.textures_s = seconds_since(t0);
     } catch (...) {
       texture_error = std::current_exception();
@@ -386,13 +387,20 @@ PlannedModel read_textures_and_plan(const std::string& input, const TexturedMesh
       plan_error = std::current_exception();
     }
   };
-  if (opt.map == MapKind::kDetail || (opt.aspect == 0 && opt.map != MapKind::kHarmonic && opt.layout == Layout::kAtlas)) {
-    PreparedMesh prepared;
-    tbb::parallel_invoke(read_textures, [&] { planning([&] { prepared = prepare_mesh(geometry, opt); }); });
-    if (!texture_error && !plan_error) planning([&] { r.plan = plan_charts(r.mesh, opt, std::move(prepared)); });
-  } else {
-    tbb::parallel_invoke(read_textures, [&] { planning([&] { r.plan = plan_charts(geometry, opt); }); });
-  }
+  const bool plan_needs_pixels =
+      opt.map == MapKind::kDetail || (opt.aspect == 0 && opt.map != MapKind::kHarmonic && opt.layout == Layout::kAtlas);
+  PreparedMesh prepared;
+  tbb::parallel_invoke(read_textures, [&] {
+    planning([&] {
+      if (plan_needs_pixels)
+        prepared = prepare_mesh(geometry, opt);
+      else
+        r.plan = plan_charts(geometry, opt);
+    });
+  });
+  r.mesh = std::move(geometry);
+  if (!texture_error) r.mesh.textures = std::move(textures);
+  if (plan_needs_pixels && !texture_error && !plan_error) planning([&] { r.plan = plan_charts(r.mesh, opt, std::move(prepared)); });
   if (texture_error) std::rethrow_exception(texture_error);
   if (plan_error) std::rethrow_exception(plan_error);
   return r;
@@ -613,8 +621,8 @@ CommandLine parse_arguments(const std::vector<std::string>& args) {
 nlohmann::json run_command(const CommandLine& line, const CommandHooks& hooks) {
   const auto t0 = std::chrono::steady_clock::now();
   check_paths(line);
-  // Geometry first (milliseconds); the texture pixels are decoded while the geometric stages run. The
-  // model is parsed twice: cheap, and every texture error keeps its file and line.
+  // Geometry first; the texture pixels are decoded while the geometric stages run, into the same model
+  // (each texture keeps where the model names it, for its error).
   CliTimings timings;
   ObjReadStats read_stats;
   TexturedMesh geometry = read_geometry(line, &read_stats);
@@ -625,7 +633,7 @@ nlohmann::json run_command(const CommandLine& line, const CommandHooks& hooks) {
   const bool show_progress = !hooks.progress && printing && isatty(STDERR_FILENO);
   const MemoryGuard guard = check_memory(line, geometry, size);
   const Options opt = library_options(line, size, show_progress ? ProgressCallback(print_progress) : hooks.progress);
-  PlannedModel planned = read_textures_and_plan(line.input, geometry, opt, t0);
+  PlannedModel planned = read_textures_and_plan(std::move(geometry), opt, t0);
   timings.textures_s = planned.textures_s;
   if (line.layout != Layout::kAtlas) check_per_component_memory(guard, planned.plan);
   Result result = bake_plan(planned.plan, planned.mesh, opt);

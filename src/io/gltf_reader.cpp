@@ -850,21 +850,16 @@ void GltfReader::finish_normals(ReadState& state) const {
   }
 }
 
-/// The header size of every texture, and with load_textures its pixels.
+/// The header size of every texture, and with load_textures its pixels (load_texture_pixels, from the
+/// document the mesh keeps).
 void GltfReader::load_textures(TexturedMesh& mesh) {
   for (size_t i = 0; i < mesh.textures.size(); ++i) {
     const std::string_view bytes = doc_->images[size_t(doc_->texture_image[i])];
-    const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
-    const std::string element = fmt::format("images[{}]", doc_->texture_image[i]);
-    if (bytes.empty()) fail(element, "is empty");
-    std::tie(mesh.textures[i].width, mesh.textures[i].height) = image_dimensions(data, bytes.size());
-    if (!options_.load_textures) continue;
-    try {
-      mesh.textures[i].image = decode_image(data, bytes.size(), element, options_.max_texture_pixels);
-    } catch (const InputError& e) {
-      fail_input("{}: {}", path_, e.what());
-    }
+    if (bytes.empty()) fail(fmt::format("images[{}]", doc_->texture_image[i]), "is empty");
+    std::tie(mesh.textures[i].width, mesh.textures[i].height) =
+        image_dimensions(reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size());
   }
+  if (options_.load_textures) mesh.textures = load_texture_pixels(mesh, options_.max_texture_pixels);
 }
 
 TexturedMesh GltfReader::read(ModelReadStats* stats) {
@@ -905,8 +900,8 @@ TexturedMesh GltfReader::read(ModelReadStats* stats) {
   if (!state.any_tangents) state.mesh.corner_tangent.clear();
   TexturedMesh mesh = std::move(state.mesh);
   mesh.source = path_;
-  load_textures(mesh);
   mesh.gltf = doc_;
+  load_textures(mesh);
   if (stats != nullptr) {
     *stats = ModelReadStats{};
     stats->not_read = not_read_;

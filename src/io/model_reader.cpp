@@ -2,10 +2,53 @@
 #include <filesystem>
 #include <string>
 
+#include "core/error.hpp"
+#include "io/gltf_document.hpp"
+#include "io/image_io.hpp"
 #include "io/model_files.hpp"
 #include "tightex/io.hpp"
 
 namespace tightex {
+
+namespace {
+
+/// A glTF's textures decoded from its document's bytes, one after another (the reader's order and
+/// message: "FILE: images[N]: problem").
+void decode_gltf_textures(const TexturedMesh& mesh, std::vector<Texture>& textures, size_t max_pixels) {
+  const GltfDocument& doc = *mesh.gltf;
+  for (size_t i = 0; i < textures.size() && i < doc.texture_image.size(); ++i) {
+    if (!textures[i].image.empty()) continue;
+    const std::string_view bytes = doc.images[size_t(doc.texture_image[i])];
+    try {
+      textures[i].image = decode_image(reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size(),
+                                       fmt::format("images[{}]", doc.texture_image[i]), max_pixels);
+    } catch (const InputError& e) {
+      fail_input("{}: {}", mesh.source, e.what());
+    }
+  }
+}
+
+}  // namespace
+
+std::vector<Texture> load_texture_pixels(const TexturedMesh& mesh, size_t max_pixels) {
+  std::vector<Texture> textures = mesh.textures;
+  if (mesh.gltf) {
+    decode_gltf_textures(mesh, textures, max_pixels);
+    return textures;
+  }
+  std::vector<Texture> files;  // those without pixels, decoded at once
+  std::vector<size_t> index;
+  for (size_t i = 0; i < textures.size(); ++i)
+    if (textures[i].image.empty() && !textures[i].from_vertex_colours) files.push_back(std::move(textures[i])), index.push_back(i);
+  // Errors are kept per texture and the first in the model's order is reported, so the message does
+  // not depend on which decode ended first.
+  const std::vector<std::string> errors = load_texture_images(files, max_pixels);
+  for (size_t k = 0; k < files.size(); ++k)
+    if (!errors[k].empty())
+      fail_input("{} could not be loaded: {}", files[k].named_at.empty() ? files[k].path : files[k].named_at, errors[k]);
+  for (size_t k = 0; k < files.size(); ++k) textures[index[k]] = std::move(files[k]);
+  return textures;
+}
 
 TexturedMesh read_model(const std::string& path, const ModelReadOptions& options, ModelReadStats* stats) {
   const std::string extension = std::filesystem::path(path).extension().string();

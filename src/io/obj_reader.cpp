@@ -987,18 +987,13 @@ void ObjParser::assemble_materials(TexturedMesh& mesh) {
     if (m >= 0) m = material_of_use[size_t(m)];
 
   // One Texture per distinct resolved path, however many materials share it.
+  // A texture's load error blames the first statement naming it.
   std::unordered_map<std::string, int> texture_by_path;
-  struct Source {  // the first statement naming each texture, to blame
-    const MaterialDef* def;
-    size_t line;
-    const std::string* written;
-  };
-  std::vector<Source> texture_source;
   auto texture_of = [&](const MaterialDef* def, const std::string& resolved, size_t line, const std::string& written) {
     const auto [it, inserted] = texture_by_path.try_emplace(resolved, int(mesh.textures.size()));
     if (inserted) {
-      mesh.textures.push_back(Texture{resolved, Image{}});
-      texture_source.push_back({def, line, &written});
+      Texture& t = mesh.textures.emplace_back(Texture{resolved, Image{}});
+      t.named_at = fmt::format("{}:{}: texture '{}' of material '{}'", def->mtl_path, line, excerpt(written), excerpt(def->material.name));
     }
     return it->second;
   };
@@ -1011,17 +1006,7 @@ void ObjParser::assemble_materials(TexturedMesh& mesh) {
       if (!used_defs[u]->map_resolved[s].empty())
         mesh.materials[u].maps[s] =
             texture_of(used_defs[u], used_defs[u]->map_resolved[s], used_defs[u]->map_line[s], used_defs[u]->map_written[s]);
-  if (!options_.load_textures) return;
-
-  // Errors are kept per texture and the first in file order is reported, so the message does not
-  // depend on thread timing.
-  const std::vector<std::string> errors = load_texture_images(mesh.textures, options_.max_texture_pixels);
-  for (size_t i = 0; i < errors.size(); ++i) {
-    if (errors[i].empty()) continue;
-    const Source& src = texture_source[i];
-    fail_input("{}:{}: texture '{}' of material '{}' could not be loaded: {}", src.def->mtl_path, src.line, excerpt(*src.written),
-               excerpt(src.def->material.name), errors[i]);
-  }
+  if (options_.load_textures) mesh.textures = load_texture_pixels(mesh, options_.max_texture_pixels);
 }
 
 }  // namespace

@@ -513,15 +513,10 @@ void PlyReader::assemble_materials(TexturedMesh& mesh) {
     m.name = fs::path(written).stem().string();
     m.texture = int(mesh.textures.size());
     mesh.materials.push_back(m);
-    mesh.textures.push_back(Texture{(found ? *found : folder / written).lexically_normal().string(), Image{}});
+    Texture& t = mesh.textures.emplace_back(Texture{(found ? *found : folder / written).lexically_normal().string(), Image{}});
+    t.named_at = fmt::format("{}:{}: texture '{}' (comment TextureFile)", path_, file.line, excerpt(file.name));
   }
-  if (!options_.load_textures) return;
-  // The first failure in file order is reported, whatever the order the textures decoded in.
-  const std::vector<std::string> errors = load_texture_images(mesh.textures, options_.max_texture_pixels);
-  for (size_t i = 0; i < errors.size(); ++i)
-    if (!errors[i].empty())
-      fail_input("{}:{}: texture '{}' (comment TextureFile) could not be loaded: {}", path_, header_.texture_files[i].line,
-                 excerpt(header_.texture_files[i].name), errors[i]);
+  if (options_.load_textures) mesh.textures = load_texture_pixels(mesh, options_.max_texture_pixels);
 }
 
 TexturedMesh PlyReader::read(ModelReadStats* stats) {
