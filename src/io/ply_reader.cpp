@@ -21,6 +21,7 @@
 #include "core/error.hpp"
 #include "io/model_files.hpp"
 #include "io/ply_header.hpp"
+#include "io/ply_reader.hpp"
 #include "tightex/io.hpp"
 
 namespace tightex {
@@ -33,9 +34,6 @@ constexpr double kAbsurdCoordinate = 1e15;
 // Corners of one polygon: more than any scan's faces, few enough that a lying list size cannot make
 // the scratch arrays large.
 constexpr size_t kMaxCorners = 1024;
-// Entries of an ascii element read as one block on one core; an element of fewer than two blocks is
-// read in one pass.
-constexpr uint64_t kBlockEntries = 16384;
 
 bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
 
@@ -248,9 +246,9 @@ struct FaceArrays {
 };
 
 /// Where the blocks of an ascii element of `count` entries would start if each entry is a line of its
-/// own from `from` on: at `from`, then every kBlockEntries-th line after the line of the first value,
+/// own from `from` on: at `from`, then every block_entries-th line after the line of the first value,
 /// and last where the count-th line ends. Empty where the text has fewer lines.
-std::vector<const char*> block_bounds(const char* from, const char* end, uint64_t count) {
+std::vector<const char*> block_bounds(const char* from, const char* end, uint64_t count, uint64_t block_entries) {
   const char* line = from;
   while (line < end && is_space(*line)) ++line;
   std::vector<const char*> bounds{from};
@@ -261,14 +259,15 @@ std::vector<const char*> block_bounds(const char* from, const char* end, uint64_
       newline = end;
     }
     line = entry < count ? newline + 1 : newline;
-    if (entry % kBlockEntries == 0 || entry == count) bounds.push_back(line);
+    if (entry % block_entries == 0 || entry == count) bounds.push_back(line);
   }
   return bounds;
 }
 
 class PlyReader {
  public:
-  PlyReader(const std::string& path, const ModelReadOptions& options) : path_(path), options_(options) {}
+  PlyReader(const std::string& path, const ModelReadOptions& options, uint64_t block_entries)
+      : path_(path), options_(options), block_entries_(std::max<uint64_t>(block_entries, 1)) {}
   TexturedMesh read(ModelReadStats* stats);
 
  private:
@@ -289,6 +288,7 @@ class PlyReader {
 
   const std::string& path_;
   const ModelReadOptions& options_;
+  const uint64_t block_entries_;  // of an ascii element read in blocks (kPlyBlockEntries)
   PlyHeader header_;
 
   std::vector<Vec3> positions_;
@@ -319,8 +319,8 @@ float PlyReader::colour_value(PlyBody& body, PlyType type) {
 /// false, `body` untouched, otherwise (the caller then reads the element in one pass).
 template <class ReadBlock>
 bool PlyReader::read_in_blocks(PlyBody& body, uint64_t count, ReadBlock&& read_block) const {
-  if (header_.format != PlyFormat::kAscii || count < 2 * kBlockEntries) return false;
-  const std::vector<const char*> bounds = block_bounds(body.position(), body.end(), count);
+  if (header_.format != PlyFormat::kAscii || count / 2 < block_entries_) return false;
+  const std::vector<const char*> bounds = block_bounds(body.position(), body.end(), count, block_entries_);
   if (bounds.empty()) return false;
   const size_t blocks = bounds.size() - 1;
   std::vector<char> exact(blocks, 0);
@@ -328,7 +328,7 @@ bool PlyReader::read_in_blocks(PlyBody& body, uint64_t count, ReadBlock&& read_b
   tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
     try {
       PlyBody block(path_, std::string_view(bounds[b], size_t(bounds[b + 1] - bounds[b])), PlyFormat::kAscii, 0);
-      const char* value_end = read_block(block, uint64_t(b) * kBlockEntries, std::min(count, uint64_t(b + 1) * kBlockEntries));
+      const char* value_end = read_block(block, uint64_t(b) * block_entries_, std::min(count, uint64_t(b + 1) * block_entries_));
       if (b + 1 == blocks) last_value_end = value_end;
       exact[b] = block.only_blanks_left();
     } catch (const std::exception&) {
@@ -442,9 +442,9 @@ void PlyReader::add_face(PlyBody& body, const FaceEntry& face, FaceArrays& out) 
 }
 
 void PlyReader::read_faces(PlyBody& body, const PlyElement& e) {
-  std::vector<FaceArrays> blocks(size_t((e.count + kBlockEntries - 1) / kBlockEntries));
+  std::vector<FaceArrays> blocks(size_t(e.count / block_entries_ + 1));  // at least one per block
   const bool in_blocks = read_in_blocks(body, e.count, [&](PlyBody& block, uint64_t first, uint64_t end) {
-    FaceArrays& out = blocks[size_t(first / kBlockEntries)];
+    FaceArrays& out = blocks[size_t(first / block_entries_)];
     FaceEntry face;
     for (uint64_t i = first; i < end; ++i) {
       read_face(block, e, face);
@@ -559,8 +559,12 @@ TexturedMesh PlyReader::read(ModelReadStats* stats) {
 
 }  // namespace
 
+TexturedMesh read_ply_in_blocks(const std::string& path, const ModelReadOptions& options, ModelReadStats* stats, uint64_t block_entries) {
+  return PlyReader(path, options, block_entries).read(stats);
+}
+
 TexturedMesh read_ply(const std::string& path, const ModelReadOptions& options, ModelReadStats* stats) {
-  return PlyReader(path, options).read(stats);
+  return read_ply_in_blocks(path, options, stats, kPlyBlockEntries);
 }
 
 }  // namespace tightex
