@@ -183,6 +183,7 @@ std::vector<std::string> load_texture_images(std::vector<Texture>& textures, siz
   // Decoding an 8K PNG takes a fraction of a second; multi-page atlases decode in parallel.
   std::vector<std::string> errors(textures.size());
   tbb::parallel_for(size_t(0), textures.size(), [&](size_t i) {
+    if (!textures[i].image.empty() || textures[i].from_vertex_colours) return;
     try {
       std::error_code ec;
       if (is_special_file(fs::status(textures[i].path, ec))) fail_input("{}: {}", textures[i].path, kNotRegular);

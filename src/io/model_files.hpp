@@ -50,9 +50,10 @@ bool read_whole_file(const std::filesystem::path& path, std::string& data, std::
 /// them with a clearer message than "malformed"); a number beyond double's range parses as ±infinity.
 bool parse_double(std::string_view token, double& out);
 
-/// Decodes every texture's image from its path (in parallel; a device or pipe is refused). Returns one
-/// message per texture: empty where it loaded, else load_image's reason on one line, so a reader can
-/// report the first failure in file order with its own file and line, whatever the thread timing.
+/// Decodes the image of every texture that has no pixels yet from its path (in parallel; a device or
+/// pipe is refused); one made from vertex colours, or decoded already, stays as it is. Returns one
+/// message per texture: empty where it loaded (or was left), else load_image's reason on one line, so
+/// the caller can report the first failure in the model's order, whatever the thread timing.
 std::vector<std::string> load_texture_images(std::vector<Texture>& textures, size_t max_pixels);
 
 }  // namespace tightex

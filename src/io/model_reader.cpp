@@ -36,17 +36,12 @@ std::vector<Texture> load_texture_pixels(const TexturedMesh& mesh, size_t max_pi
     decode_gltf_textures(mesh, textures, max_pixels);
     return textures;
   }
-  std::vector<Texture> files;  // those without pixels, decoded at once
-  std::vector<size_t> index;
-  for (size_t i = 0; i < textures.size(); ++i)
-    if (textures[i].image.empty() && !textures[i].from_vertex_colours) files.push_back(std::move(textures[i])), index.push_back(i);
   // Errors are kept per texture and the first in the model's order is reported, so the message does
   // not depend on which decode ended first.
-  const std::vector<std::string> errors = load_texture_images(files, max_pixels);
-  for (size_t k = 0; k < files.size(); ++k)
-    if (!errors[k].empty())
-      fail_input("{} could not be loaded: {}", files[k].named_at.empty() ? files[k].path : files[k].named_at, errors[k]);
-  for (size_t k = 0; k < files.size(); ++k) textures[index[k]] = std::move(files[k]);
+  const std::vector<std::string> errors = load_texture_images(textures, max_pixels);
+  for (size_t i = 0; i < textures.size(); ++i)
+    if (!errors[i].empty())
+      fail_input("{} could not be loaded: {}", textures[i].named_at.empty() ? textures[i].path : textures[i].named_at, errors[i]);
   return textures;
 }
 

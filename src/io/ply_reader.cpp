@@ -453,6 +453,7 @@ void PlyReader::read_faces(PlyBody& body, const PlyElement& e) {
     return block.position();
   });
   if (in_blocks) {
+    faces_.reserve_for(blocks);
     for (const FaceArrays& b : blocks) faces_.append(b);
     return;
   }
