@@ -180,7 +180,7 @@ TEST(Aspect, ALargeComponentsShapeIsChosenBetweenOwnMaps) {
   const Result r = optimize(longsheet, Options{});
   const nlohmann::json& aspect = r.report["aspect"];
   const double stretch = aspect["square_texel_stretch"];
-  ASSERT_GT(std::max(stretch, 1 / stretch), kAspectProbeStretch);
+  ASSERT_GT(std::max(stretch, 1 / stretch), kShapeLookStretch);
   double square = -1, side = -1;
   for (const auto& p : aspect["probes"]) {
     EXPECT_EQ(p["estimated_psnr_db"].get<double>(), -1.0) << p;  // no probe

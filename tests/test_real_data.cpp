@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "io/obj_reader.hpp"
+#include "pipeline/aspect.hpp"
 #include "report/metrics.hpp"
 #include "tightex/tightex.hpp"
 
@@ -268,31 +269,30 @@ TEST(RealDataMaps, AreaMapKeepsTheRefinementStepsWithinTheDensitySlack) {
 }
 
 // A component large enough for its probes to be multilevel (meshroom_esp32cam: 53k faces) is not
-// probed: its coarse copy's texel stretch points to one other shape, and the square's and that shape's
-// own maps are made, estimated and chosen between. With the texel map the probes used to choose 2:1
-// (36.35 against 35.59 dB) where the own maps keep the square (41.62 against 41.45).
-TEST(RealDataMaps, ALargeComponentsShapeIsChosenOnOwnMaps) {
+// probed: its coarse copy's texel stretch decides whether another shape's own map is made beside the
+// square's. Meshroom's reads 1.48, within kShapeLookStretch: its square alone is mapped, nothing is
+// estimated, and the square is kept (its 2:1 map, when it was made, gave 43.50 dB against 44.16).
+TEST(RealDataMaps, ALargeComponentWithMildStretchKeepsItsSquareOnOneMap) {
   const fs::path input = fs::path(TIGHTEX_SHARED_DATA) / "meshroom_esp32cam" / "texturedMesh.obj";
   if (!fs::exists(input)) GTEST_SKIP() << "../shared/data/meshroom_esp32cam not present";
 #ifdef __SANITIZE_ADDRESS__
-  GTEST_SKIP() << "the first CI pass runs it (9 s in Release); the sanitizer pass runs the same code on fuze's probes";
+  GTEST_SKIP() << "the first CI pass runs it; the sanitizer pass runs the same code on fuze's probes";
 #endif
-  const nlohmann::json r = run_cli(input.string(), "--map texel --no-html", "own_maps");
+  const nlohmann::json r = run_cli(input.string(), "--no-html", "own_maps");
   ASSERT_TRUE(r.contains("metrics"));
   const nlohmann::json& aspect = r["aspect"];
   const nlohmann::json& probes = aspect["probes"];
   ASSERT_EQ(probes.size(), 3u);
-  // No probe: no probe's estimate. The stretch read off the coarse copy points to 2:1 (kAspectProbes[2]).
-  for (const nlohmann::json& p : probes) EXPECT_EQ(p["estimated_psnr_db"].get<double>(), -1.0);
-  ASSERT_GT(aspect["square_texel_stretch"].get<double>(), 1.35);
-  // The square's and 2:1's own maps estimated, 1:2's not made; the choice follows the own maps.
-  ASSERT_FALSE(probes[0]["full_map_estimated_psnr_db"].is_null());
-  ASSERT_FALSE(probes[2]["full_map_estimated_psnr_db"].is_null());
-  EXPECT_TRUE(probes[1]["full_map_estimated_psnr_db"].is_null());
-  const double own_square = probes[0]["full_map_estimated_psnr_db"], own_other = probes[2]["full_map_estimated_psnr_db"];
-  EXPECT_GT(own_square, 40.0);
-  EXPECT_EQ(aspect["chosen"].get<double>(), own_other > own_square + 0.22 ? 2.0 : 1.0);
-  // Measured 43.88 dB in the square.
-  EXPECT_GT(r["metrics"]["surface_psnr_db"].get<double>(), 43.6);
+  const double stretch = aspect["square_texel_stretch"].get<double>();
+  EXPECT_GT(stretch, kAspectProbeStretch);  // a probe this stretched would have had 2:1 mapped too
+  EXPECT_LT(stretch, kShapeLookStretch);
+  for (const nlohmann::json& p : probes) {
+    EXPECT_EQ(p["estimated_psnr_db"].get<double>(), -1.0) << p;
+    EXPECT_TRUE(p["full_map_estimated_psnr_db"].is_null()) << p;
+  }
+  EXPECT_EQ(aspect["chosen"].get<double>(), 1.0);
+  // Measured 44.16 dB.
+  EXPECT_GT(r["metrics"]["surface_psnr_db"].get<double>(), 43.8);
   EXPECT_EQ(r["metrics"]["flipped"].get<size_t>(), 0u);
+  EXPECT_EQ(r["metrics"]["lost_triangles"].get<size_t>(), 0u);
 }

@@ -24,10 +24,9 @@ constexpr double kAspectMinGain = 0.95;
 /// stretch of 1.45-1.86, always on the 2:1 side, and 2k takes 0.14-0.3 s of the 8k copy's 0.42-1.6 s.
 constexpr size_t kShapeLookVertices = 2000;
 
-/// Whether the square's map leaves room for another shape to do better: its texels are longer on the
-/// surface along one axis than along the other by more than kAspectProbeStretch (`stretch` < 0: the
-/// square has no map).
-bool worth_probing_other_shapes(double stretch) { return stretch > kAspectProbeStretch || stretch < 1 / kAspectProbeStretch; }
+/// Whether a map's texel stretch leaves room for another shape to do better: its texels are longer on
+/// the surface along one axis than along the other by more than `limit` (`stretch` < 0: no map).
+bool worth_probing_other_shapes(double stretch, double limit = kAspectProbeStretch) { return stretch > limit || stretch < 1 / limit; }
 
 /// The shape chosen on own maps, for a component whose probes would be multilevel: the square's own map
 /// on one core; on the other, a coarse copy's map in the square (map_coarse_copy, a fifth of a probe's
@@ -47,7 +46,7 @@ ShapeChoice choose_on_own_maps(const MapContext& ctx, size_t dominant, const Cut
                        [&] {
                          const Mapped look = map_coarse_copy(ctx, dominant, *rect[0], shared, kShapeLookVertices);
                          choice.square_texel_stretch = look.kept.empty() ? texel_stretch_ratio(look) : -1;
-                         if (!worth_probing_other_shapes(choice.square_texel_stretch)) return;
+                         if (!worth_probing_other_shapes(choice.square_texel_stretch, kShapeLookStretch)) return;
                          other = choice.square_texel_stretch > 1 ? 2 : 1;  // kAspectProbes: 2:1 where texels are long along x
                          if (rect[other]) own[other] = map_component(ctx, dominant, *rect[other], shared, CapChoice::kKeep);
                        });
