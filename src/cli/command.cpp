@@ -465,23 +465,30 @@ WrittenAndMeasured write_and_measure(const CommandLine& line, const TexturedMesh
   };
   WrittenAndMeasured r;
   nlohmann::json html_data;
+  auto measure_and_gather = [&] {
+    // The models' welded edges once, for the measure's charts and the page's seams.
+    WeldedEdges input_edges, output_edges;
+    tbb::parallel_invoke([&] { input_edges = welded_edges(input); }, [&] { output_edges = welded_edges(output); });
+    tbb::parallel_invoke(
+        [&] {
+          r.metrics = measure(input, output, input_edges, output_edges);
+          timings.measure_s = seconds_since(tw);
+          timings.measure_cpu = cpu_since();
+        },
+        [&] {
+          if (line.no_html) return;
+          html_data = html_model_data_without_charts(input, output, input_edges, output_edges);
+          timings.html_s = seconds_since(tw);
+          timings.html_cpu = cpu_since();
+        });
+  };
   tbb::parallel_invoke(
       [&] {
         r.removed = write_model(line, output, name);
         timings.write_s = seconds_since(tw);
         timings.write_cpu = cpu_since();
       },
-      [&] {
-        r.metrics = measure(input, output);
-        timings.measure_s = seconds_since(tw);
-        timings.measure_cpu = cpu_since();
-      },
-      [&] {
-        if (line.no_html) return;
-        html_data = html_model_data_without_charts(input, output);
-        timings.html_s = seconds_since(tw);
-        timings.html_cpu = cpu_since();
-      });
+      measure_and_gather);
   // The page's chart counts are the measure's.
   if (!line.no_html) r.html_data = html_model_data(std::move(html_data), r.metrics.charts_input, r.metrics.charts);
   return r;

@@ -83,21 +83,6 @@ std::vector<uint32_t> shown_triangles(const TexturedMesh& mesh, double keep_frac
   return shown;
 }
 
-/// Each vertex's lowest-numbered vertex at exactly the same position, so that a model written with
-/// its vertices split along the charts is still seen as one surface.
-std::vector<uint32_t> welded_vertices(const TexturedMesh& mesh) {
-  std::vector<uint32_t> order(mesh.num_vertices());
-  std::iota(order.begin(), order.end(), 0u);
-  auto key = [&](uint32_t v) { return std::tuple(mesh.positions[v].x(), mesh.positions[v].y(), mesh.positions[v].z(), v); };
-  tbb::parallel_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
-  std::vector<uint32_t> canonical(mesh.num_vertices());
-  for (size_t i = 0; i < order.size(); ++i) {
-    const bool same = i > 0 && mesh.positions[order[i]] == mesh.positions[order[i - 1]];
-    canonical[order[i]] = same ? canonical[order[i - 1]] : order[i];
-  }
-  return canonical;
-}
-
 /// The texture triangle t samples, or -1.
 int texture_of(const TexturedMesh& mesh, size_t t) {
   const int32_t m = mesh.face_material[t];
@@ -107,36 +92,24 @@ int texture_of(const TexturedMesh& mesh, size_t t) {
 /// Per triangle, bit k set where edge k (corner k to corner k+1) is a seam as METRICS.md counts charts:
 /// the texture coordinates (or the texture) differ on its two sides, or it has not exactly one
 /// neighbour across it (a border, or a non-manifold edge).
-std::vector<uint8_t> seam_bits(const TexturedMesh& mesh) {
-  const std::vector<uint32_t> canonical = welded_vertices(mesh);
-  std::vector<std::pair<uint64_t, uint32_t>> edges;  // (vertex pair, corner 3t+k)
-  edges.reserve(3 * mesh.num_triangles());
-  for (size_t t = 0; t < mesh.num_triangles(); ++t)
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t a = canonical[mesh.triangles[t][k]], b = canonical[mesh.triangles[t][(k + 1) % 3]];
-      edges.push_back({(uint64_t(std::min(a, b)) << 32) | std::max(a, b), uint32_t(3 * t + k)});
-    }
-  tbb::parallel_sort(edges.begin(), edges.end());
+std::vector<uint8_t> seam_bits(const TexturedMesh& mesh, const WeldedEdges& edges) {
   std::vector<uint8_t> bits(mesh.num_triangles(), 0);
-  // The texture coordinate of corner c's triangle at canonical vertex v (one of the edge's two ends).
-  auto uv_at = [&](uint32_t c, uint32_t v) {
-    const size_t t = c / 3;
-    const int k = int(c % 3);
-    return canonical[mesh.triangles[t][k]] == v ? mesh.corner_uv[3 * t + k] : mesh.corner_uv[3 * t + (k + 1) % 3];
+  // The texture coordinate of half-edge h's triangle at welded vertex v (one of the edge's two ends).
+  auto uv_at = [&](uint32_t h, uint32_t v) {
+    const size_t t = h / 3;
+    const int k = int(h % 3);
+    return edges.end_of(mesh, h, 0) == v ? mesh.corner_uv[3 * t + k] : mesh.corner_uv[3 * t + (k + 1) % 3];
   };
-  for (size_t i = 0; i < edges.size();) {
-    size_t j = i;
-    while (j < edges.size() && edges[j].first == edges[i].first) ++j;
+  edges.for_each_edge(mesh, [&](size_t i, size_t j) {
     bool seam = j - i != 2;
     if (!seam) {
-      const uint32_t c0 = edges[i].second, c1 = edges[i + 1].second;
-      const auto a = uint32_t(edges[i].first >> 32), b = uint32_t(edges[i].first);
-      seam = texture_of(mesh, c0 / 3) != texture_of(mesh, c1 / 3) || uv_at(c0, a) != uv_at(c1, a) || uv_at(c0, b) != uv_at(c1, b);
+      const uint32_t h0 = edges.by_ends[i], h1 = edges.by_ends[i + 1];
+      const uint32_t a = edges.lower(mesh, h0), b = edges.higher(mesh, h0);
+      seam = texture_of(mesh, h0 / 3) != texture_of(mesh, h1 / 3) || uv_at(h0, a) != uv_at(h1, a) || uv_at(h0, b) != uv_at(h1, b);
     }
     if (seam)
-      for (size_t e = i; e < j; ++e) bits[edges[e].second / 3] |= uint8_t(1u << (edges[e].second % 3));
-    i = j;
-  }
+      for (size_t e = i; e < j; ++e) bits[edges.by_ends[e] / 3] |= uint8_t(1u << (edges.by_ends[e] % 3));
+  });
   return bits;
 }
 
@@ -200,9 +173,10 @@ json textures_json(const TexturedMesh& mesh, const HtmlReportOptions& options) {
 }
 
 /// One model's entry of html_model_data.
-json model_json(const TexturedMesh& mesh, const std::string& name, double keep_fraction, const HtmlReportOptions& options) {
+json model_json(const TexturedMesh& mesh, const WeldedEdges& edges, const std::string& name, double keep_fraction,
+                const HtmlReportOptions& options) {
   const std::vector<uint32_t> shown = shown_triangles(mesh, keep_fraction);
-  const std::vector<uint8_t> all_seams = seam_bits(mesh);
+  const std::vector<uint8_t> all_seams = seam_bits(mesh, edges);
   const std::vector<double> all_density = relative_density(mesh);
   std::vector<uint32_t> vertex_index(mesh.num_vertices(), kNone), indices;
   std::vector<float> positions, uv, density;
@@ -280,10 +254,13 @@ std::string filled(std::string_view page, std::vector<Filling> fillings) {
 }  // namespace
 
 std::string html_model_data(const TexturedMesh& input, const TexturedMesh& output, const HtmlReportOptions& options) {
+  WeldedEdges input_edges, output_edges;
+  tbb::parallel_invoke([&] { input_edges = welded_edges(input); }, [&] { output_edges = welded_edges(output); });
   size_t input_charts = 0, output_charts = 0;
   json data;
-  tbb::parallel_invoke([&] { data = html_model_data_without_charts(input, output, options); },
-                       [&] { input_charts = count_charts(input, nullptr); }, [&] { output_charts = count_charts(output, nullptr); });
+  tbb::parallel_invoke([&] { data = html_model_data_without_charts(input, output, input_edges, output_edges, options); },
+                       [&] { input_charts = count_charts(input, input_edges, nullptr); },
+                       [&] { output_charts = count_charts(output, output_edges, nullptr); });
   return html_model_data(std::move(data), input_charts, output_charts);
 }
 
@@ -294,12 +271,19 @@ std::string html_model_data(json data, size_t input_charts, size_t output_charts
 }
 
 json html_model_data_without_charts(const TexturedMesh& input, const TexturedMesh& output, const HtmlReportOptions& options) {
+  WeldedEdges input_edges, output_edges;
+  tbb::parallel_invoke([&] { input_edges = welded_edges(input); }, [&] { output_edges = welded_edges(output); });
+  return html_model_data_without_charts(input, output, input_edges, output_edges, options);
+}
+
+json html_model_data_without_charts(const TexturedMesh& input, const TexturedMesh& output, const WeldedEdges& input_edges,
+                                    const WeldedEdges& output_edges, const HtmlReportOptions& options) {
   // The input's count sets the fraction for both, so that both show the same surface triangles.
   const double keep_fraction =
       input.num_triangles() > options.max_triangles ? double(options.max_triangles) / double(input.num_triangles()) : 1.0;
   json in, out;  // side by side: each encodes its own textures
-  tbb::parallel_invoke([&] { in = model_json(input, "input", keep_fraction, options); },
-                       [&] { out = model_json(output, "output", keep_fraction, options); });
+  tbb::parallel_invoke([&] { in = model_json(input, input_edges, "input", keep_fraction, options); },
+                       [&] { out = model_json(output, output_edges, "output", keep_fraction, options); });
   return {{"max_triangles", options.max_triangles}, {"models", json::array({std::move(in), std::move(out)})}};
 }
 

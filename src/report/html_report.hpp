@@ -9,6 +9,7 @@
 #include <string>
 
 #include "core/mesh.hpp"
+#include "report/welded_edges.hpp"
 
 namespace tightex {
 
@@ -33,6 +34,10 @@ std::string html_model_data(const TexturedMesh& input, const TexturedMesh& outpu
 /// html_model_data in two steps, for a caller that counts the charts anyway (measure does): the data
 /// without the chart counts, then the text with them.
 nlohmann::json html_model_data_without_charts(const TexturedMesh& input, const TexturedMesh& output, const HtmlReportOptions& options = {});
+/// The same with both models' welded edges made already (welded_edges), for a caller that shares them
+/// with measure.
+nlohmann::json html_model_data_without_charts(const TexturedMesh& input, const TexturedMesh& output, const WeldedEdges& input_edges,
+                                              const WeldedEdges& output_edges, const HtmlReportOptions& options = {});
 std::string html_model_data(nlohmann::json data, size_t input_charts, size_t output_charts);
 
 /// The page: the embedded template with its style, three.js and script, `report_json` (report.json's

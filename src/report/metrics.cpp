@@ -27,36 +27,6 @@ namespace tightex {
 
 namespace {
 
-uint64_t bits(double d) {
-  if (d == 0.0) d = 0.0;
-  uint64_t b;
-  std::memcpy(&b, &d, 8);
-  return b;
-}
-
-/// Vertex ids by bit-equal position, so models with split vertices compare as surfaces.
-std::vector<uint32_t> weld_positions(const TexturedMesh& m) {
-  // Sorted by the coordinates' bits (a sort on every core, where a hash map's inserts miss the cache
-  // one by one); each run of equal positions shares an id.
-  struct Keyed {
-    std::array<uint64_t, 3> key;
-    uint32_t vertex;
-  };
-  std::vector<Keyed> keyed(m.num_vertices());
-  tbb::parallel_for(size_t(0), keyed.size(), [&](size_t v) {
-    const Vec3& p = m.positions[v];
-    keyed[v] = {{bits(p.x()), bits(p.y()), bits(p.z())}, uint32_t(v)};
-  });
-  tbb::parallel_sort(keyed.begin(), keyed.end(), [](const Keyed& a, const Keyed& b) { return a.key < b.key; });
-  std::vector<uint32_t> id(m.num_vertices());
-  uint32_t next = 0;
-  for (size_t i = 0; i < keyed.size(); ++i) {
-    if (i > 0 && keyed[i].key != keyed[i - 1].key) ++next;
-    id[keyed[i].vertex] = next;
-  }
-  return id;
-}
-
 int texture_of(const TexturedMesh& m, size_t t) {
   const int32_t mat = m.face_material[t];
   return mat < 0 ? -1 : m.materials[size_t(mat)].texture;
@@ -134,26 +104,9 @@ namespace {
 
 /// Chart of every triangle (union-find root): triangles joined through edges whose two endpoints have
 /// the same uv, and the same image, on both sides. Adds the seam's 3D length to *seam when given.
-std::vector<uint32_t> chart_ids(const TexturedMesh& m, double* seam) {
-  const auto vid = weld_positions(m);
-  const size_t nh = 3 * m.num_triangles();
-  const uint32_t welded = vid.empty() ? 0 : *std::max_element(vid.begin(), vid.end()) + 1;
-  auto end_of = [&](uint32_t h, int k) { return vid[m.triangles[h / 3][(h % 3 + k) % 3]]; };
-  auto low = [&](uint32_t h) { return std::min(end_of(h, 0), end_of(h, 1)); };
-  auto high = [&](uint32_t h) { return std::max(end_of(h, 0), end_of(h, 1)); };
-  // Half-edges grouped by their welded endpoints: bucketed by the lower end (a counting sort, half-edges
-  // ascending in each bucket), each bucket then ordered by the higher end. Runs of equal ends come in
-  // the order a sort of (lower, higher, half-edge) gives, without sorting all 3 x triangles.
-  std::vector<uint32_t> start(size_t(welded) + 1, 0), by_ends(nh);
-  for (uint32_t h = 0; h < nh; ++h) ++start[size_t(low(h)) + 1];
-  for (uint32_t v = 0; v < welded; ++v) start[v + 1] += start[v];
-  {
-    std::vector<uint32_t> next(start.begin(), start.end() - 1);
-    for (uint32_t h = 0; h < nh; ++h) by_ends[next[low(h)]++] = h;
-  }
-  tbb::parallel_for(uint32_t(0), welded, [&](uint32_t v) {
-    std::stable_sort(by_ends.begin() + start[v], by_ends.begin() + start[v + 1], [&](uint32_t x, uint32_t y) { return high(x) < high(y); });
-  });
+std::vector<uint32_t> chart_ids(const TexturedMesh& m, const WeldedEdges& edges, double* seam) {
+  const std::vector<uint32_t>& vid = edges.vertex;
+  const std::vector<uint32_t>& by_ends = edges.by_ends;
   detail::UnionFind uf(m.num_triangles());
   auto uv_at = [&](uint32_t h, uint32_t v) {
     const uint32_t t = h / 3;
@@ -161,10 +114,8 @@ std::vector<uint32_t> chart_ids(const TexturedMesh& m, double* seam) {
       if (vid[m.triangles[t][k]] == v) return m.corner_uv[3 * t + size_t(k)];
     return Vec2(NAN, NAN);
   };
-  for (size_t i = 0; i < nh;) {
-    const uint32_t a = low(by_ends[i]), b = high(by_ends[i]);
-    size_t j = i + 1;
-    while (j < nh && low(by_ends[j]) == a && high(by_ends[j]) == b) ++j;
+  edges.for_each_edge(m, [&](size_t i, size_t j) {
+    const uint32_t a = edges.lower(m, by_ends[i]), b = edges.higher(m, by_ends[i]);
     bool differs = false;
     for (size_t k0 = i; k0 < j; ++k0)
       for (size_t k = k0 + 1; k < j; ++k) {
@@ -178,8 +129,7 @@ std::vector<uint32_t> chart_ids(const TexturedMesh& m, double* seam) {
       const uint32_t h = by_ends[i];
       *seam += (m.positions[m.triangles[h / 3][h % 3]] - m.positions[m.triangles[h / 3][(h % 3 + 1) % 3]]).norm();
     }
-    i = j;
-  }
+  });
   std::vector<uint32_t> id(m.num_triangles());
   for (uint32_t t = 0; t < m.num_triangles(); ++t) id[t] = uf.find(t);
   return id;
@@ -190,9 +140,9 @@ std::vector<uint32_t> chart_ids(const TexturedMesh& m, double* seam) {
 namespace {
 
 /// count_charts, keeping the chart of every triangle in *ids (count_flips needs them too).
-size_t count_charts(const TexturedMesh& m, double* seam_length, std::vector<uint32_t>* ids) {
+size_t count_charts(const TexturedMesh& m, const WeldedEdges& edges, double* seam_length, std::vector<uint32_t>* ids) {
   double seam = 0, area = 0;
-  *ids = chart_ids(m, &seam);
+  *ids = chart_ids(m, edges, &seam);
   const std::vector<uint32_t>& id = *ids;
   for (size_t t = 0; t < m.num_triangles(); ++t)
     area += triangle_area(m.positions[m.triangles[t][0]], m.positions[m.triangles[t][1]], m.positions[m.triangles[t][2]]);
@@ -204,10 +154,12 @@ size_t count_charts(const TexturedMesh& m, double* seam_length, std::vector<uint
 
 }  // namespace
 
-size_t count_charts(const TexturedMesh& m, double* seam_length) {
+size_t count_charts(const TexturedMesh& m, const WeldedEdges& edges, double* seam_length) {
   std::vector<uint32_t> ids;
-  return count_charts(m, seam_length, &ids);
+  return count_charts(m, edges, seam_length, &ids);
 }
+
+size_t count_charts(const TexturedMesh& m, double* seam_length) { return count_charts(m, welded_edges(m), seam_length); }
 
 namespace {
 
@@ -231,15 +183,15 @@ bool has_float32_positions(const TexturedMesh& m) {
 /// keeps its positions as exactly as that format can.
 CornerKey corner_key(const TexturedMesh& m, size_t t, bool as_float32, std::array<int, 3>* order) {
   std::array<int, 3> o{0, 1, 2};
-  auto position_bits = [&](int k) {
+  auto corner_bits = [&](int k) {
     const Vec3& p = m.positions[m.triangles[t][k]];
     auto coordinate = [&](int i) { return as_float32 ? double(float(p[i])) : p[i]; };
-    return std::array<uint64_t, 3>{bits(coordinate(0)), bits(coordinate(1)), bits(coordinate(2))};
+    return std::array<uint64_t, 3>{position_bits(coordinate(0)), position_bits(coordinate(1)), position_bits(coordinate(2))};
   };
-  std::sort(o.begin(), o.end(), [&](int a, int b) { return position_bits(a) < position_bits(b); });
+  std::sort(o.begin(), o.end(), [&](int a, int b) { return corner_bits(a) < corner_bits(b); });
   CornerKey k;
   for (int i = 0; i < 3; ++i) {
-    const auto b = position_bits(o[i]);
+    const auto b = corner_bits(o[i]);
     k.v[3 * i] = b[0], k.v[3 * i + 1] = b[1], k.v[3 * i + 2] = b[2];
   }
   if (order) *order = o;
@@ -635,11 +587,18 @@ std::vector<MapFigures> measure_maps(const TexturedMesh& in, const TexturedMesh&
 }  // namespace
 
 Metrics measure(const TexturedMesh& in, const TexturedMesh& out, size_t psnr_samples) {
+  WeldedEdges in_edges, out_edges;
+  tbb::parallel_invoke([&] { in_edges = welded_edges(in); }, [&] { out_edges = welded_edges(out); });
+  return measure(in, out, in_edges, out_edges, psnr_samples);
+}
+
+Metrics measure(const TexturedMesh& in, const TexturedMesh& out, const WeldedEdges& in_edges, const WeldedEdges& out_edges,
+                size_t psnr_samples) {
   Metrics r;
-  std::vector<uint32_t> out_chart;
+  std::vector<uint32_t> out_chart, in_chart;
   tbb::parallel_invoke([&] { r.input = measure_texture_space(in); }, [&] { r.output = measure_texture_space(out); },
-                       [&] { r.charts_input = count_charts(in, &r.seam_length_input); },
-                       [&] { r.charts = count_charts(out, &r.seam_length, &out_chart); });
+                       [&] { r.charts_input = count_charts(in, in_edges, &r.seam_length_input, &in_chart); },
+                       [&] { r.charts = count_charts(out, out_edges, &r.seam_length, &out_chart); });
   const Correspondence c = match_triangles(in, out);
   r.lost_triangles = c.lost_triangles;
   const std::vector<SurfacePoint> points = surface_points(in, c, psnr_samples);

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "core/mesh.hpp"
+#include "report/welded_edges.hpp"
 
 namespace tightex {
 
@@ -56,6 +57,8 @@ ModelFigures measure_texture_space(const TexturedMesh& mesh);
 /// (optional) gets METRICS.md's seam length: the 3D length of the edges whose uv differs on the two
 /// sides over the square root of the surface area.
 size_t count_charts(const TexturedMesh& mesh, double* seam_length);
+/// count_charts with the model's welded edges made already (welded_edges).
+size_t count_charts(const TexturedMesh& mesh, const WeldedEdges& edges, double* seam_length);
 
 /// Everything in METRICS.md for a result `output` of `input`. Triangles correspond by their three
 /// corner positions (bit-exact); an input triangle without a counterpart is lost and samples black in
@@ -63,6 +66,9 @@ size_t count_charts(const TexturedMesh& mesh, double* seam_length);
 /// `psnr_samples` points with a fixed seed, so the same models always give the same figures. Never
 /// throws but for allocation.
 Metrics measure(const TexturedMesh& input, const TexturedMesh& output, size_t psnr_samples = 200000);
+/// measure with both models' welded edges made already (welded_edges), for a caller that shares them.
+Metrics measure(const TexturedMesh& input, const TexturedMesh& output, const WeldedEdges& input_edges, const WeldedEdges& output_edges,
+                size_t psnr_samples = 200000);
 
 /// The figures of every map slot that both models bind (MapFigures), at the surface PSNR's points.
 std::vector<MapFigures> measure_maps(const TexturedMesh& input, const TexturedMesh& output, size_t samples = 200000);
