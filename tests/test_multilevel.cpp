@@ -6,6 +6,8 @@
 #include <numeric>
 #include <set>
 
+#include <tbb/parallel_for.h>
+
 #include "cut/cut.hpp"
 #include "mesh_catalogue.hpp"
 #include "param/param.hpp"
@@ -143,6 +145,26 @@ TEST(Multilevel, OneVertexOrderForEverySystemGivesTheSameMap) {
   for (size_t v = 0; v < uv.size(); ++v) worst = std::max(worst, (uv[v] - own_uv[v]).norm());
   EXPECT_LT(worst, 1e-6) << "the same map but for the rounding of another elimination order";
   EXPECT_GT(worst, 0.0) << "the order was taken (another elimination order rounds otherwise)";
+}
+
+// A model's pieces are mapped side by side, and their symmetric Dirichlet steps take turns (one
+// piece's steps' system at a time): four multilevel maps at once, on every core, each the map it is
+// alone, bit for bit.
+TEST(Multilevel, MapsMadeSideBySideAreTheMapsMadeAlone) {
+  const Disk disk = torus_disk();
+  SquareMapOptions options;
+  options.face_target = varying_targets(disk.mesh);
+  options.multilevel_from = 2000;
+  options.coarse_vertices = 1000;
+  options.supernodal_from = 0;  // every system supernodal, as a large piece's are
+  options.refine_keeps_density = false;
+  SquareMapStats alone_st;
+  const std::vector<Vec2> alone = map_to_square(disk, options, &alone_st);
+  ASSERT_GT(alone_st.coarse_vertices, 0u) << "the multilevel path was taken";
+  ASSERT_GT(alone_st.fine_steps, 0);
+  std::vector<std::vector<Vec2>> side_by_side(4);
+  tbb::parallel_for(size_t(0), side_by_side.size(), [&](size_t i) { side_by_side[i] = map_to_square(disk, options, nullptr); });
+  for (const std::vector<Vec2>& uv : side_by_side) EXPECT_EQ(uv, alone);
 }
 
 }  // namespace
