@@ -39,6 +39,16 @@ std::vector<double> varying_targets(const Surface& m) {
   return t;
 }
 
+/// Options that send `disk` down the multilevel path (a coarse copy of at most 1000 vertices), with
+/// varying_targets.
+SquareMapOptions multilevel_options(const Disk& disk) {
+  SquareMapOptions options;
+  options.face_target = varying_targets(disk.mesh);
+  options.multilevel_from = 2000;
+  options.coarse_vertices = 1000;
+  return options;
+}
+
 TEST(Multilevel, CoarseDiskKeepsTheBoundaryTopologyAndTargets) {
   const Disk fine = torus_disk();
   const std::vector<double> target = varying_targets(fine.mesh);
@@ -125,10 +135,7 @@ TEST(Multilevel, MapIsFoldFreeOnTheSquareAndNearTheFullMapsDensity) {
 // systems CHOLMOD orders one by one, up to rounding.
 TEST(Multilevel, OneVertexOrderForEverySystemGivesTheSameMap) {
   const Disk disk = torus_disk();
-  SquareMapOptions options;
-  options.face_target = varying_targets(disk.mesh);
-  options.multilevel_from = 2000;
-  options.coarse_vertices = 1000;
+  SquareMapOptions options = multilevel_options(disk);
   options.vertex_order_from = size_t(-1);
   SquareMapStats own;
   const std::vector<Vec2> own_uv = map_to_square(disk, options, &own);
@@ -147,15 +154,12 @@ TEST(Multilevel, OneVertexOrderForEverySystemGivesTheSameMap) {
   EXPECT_GT(worst, 0.0) << "the order was taken (another elimination order rounds otherwise)";
 }
 
-// A model's pieces are mapped side by side, and their symmetric Dirichlet steps take turns (one
-// piece's steps' system at a time): four multilevel maps at once, on every core, each the map it is
-// alone, bit for bit.
+// A model's pieces are mapped side by side (their supernodal factorisations one at a time, blas_mutex;
+// the orders CHOLMOD finds one at a time, metis_mutex): four multilevel maps at once, on every core,
+// each the map it is alone, bit for bit.
 TEST(Multilevel, MapsMadeSideBySideAreTheMapsMadeAlone) {
   const Disk disk = torus_disk();
-  SquareMapOptions options;
-  options.face_target = varying_targets(disk.mesh);
-  options.multilevel_from = 2000;
-  options.coarse_vertices = 1000;
+  SquareMapOptions options = multilevel_options(disk);
   options.supernodal_from = 0;  // every system supernodal, as a large piece's are
   options.refine_keeps_density = false;
   SquareMapStats alone_st;
