@@ -595,9 +595,9 @@ Metrics measure(const TexturedMesh& in, const TexturedMesh& out, size_t psnr_sam
 Metrics measure(const TexturedMesh& in, const TexturedMesh& out, const WeldedEdges& in_edges, const WeldedEdges& out_edges,
                 size_t psnr_samples) {
   Metrics r;
-  std::vector<uint32_t> out_chart, in_chart;
+  std::vector<uint32_t> out_chart;
   tbb::parallel_invoke([&] { r.input = measure_texture_space(in); }, [&] { r.output = measure_texture_space(out); },
-                       [&] { r.charts_input = count_charts(in, in_edges, &r.seam_length_input, &in_chart); },
+                       [&] { r.charts_input = count_charts(in, in_edges, &r.seam_length_input); },
                        [&] { r.charts = count_charts(out, out_edges, &r.seam_length, &out_chart); });
   const Correspondence c = match_triangles(in, out);
   r.lost_triangles = c.lost_triangles;
