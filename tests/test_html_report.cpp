@@ -85,11 +85,12 @@ TEST(HtmlReport, ChartCountsAreTheMeasures) {
   // The command line takes the page's chart counts from the measure: the same data as counted here.
   const TexturedMesh split = square({{0, 0}, {1, 0}, {0, 1}, {0.5, 1}, {1.5, 0}, {1.5, 1}});
   const TexturedMesh joined = square({{0, 0}, {1, 0}, {0, 1}, {0, 1}, {1, 0}, {1, 1}});
-  const Metrics m = measure(split, joined, 1000);
+  const WeldedEdges split_edges = welded_edges(split), joined_edges = welded_edges(joined);
+  const Metrics m = measure(split, joined, split_edges, joined_edges, 1000);
   EXPECT_EQ(m.charts_input, 2u);
   EXPECT_EQ(m.charts, 1u);
   const std::string counted = html_model_data(split, joined);
-  EXPECT_EQ(html_model_data(html_model_data_without_charts(split, joined), m.charts_input, m.charts), counted);
+  EXPECT_EQ(html_model_data(html_model_data_without_charts(split, joined, split_edges, joined_edges), m.charts_input, m.charts), counted);
   const nlohmann::json data = nlohmann::json::parse(counted);
   EXPECT_EQ(data["models"][0]["charts"], 2);
   EXPECT_EQ(data["models"][1]["charts"], 1);

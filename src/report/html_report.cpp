@@ -270,12 +270,6 @@ std::string html_model_data(json data, size_t input_charts, size_t output_charts
   return data.dump();
 }
 
-json html_model_data_without_charts(const TexturedMesh& input, const TexturedMesh& output, const HtmlReportOptions& options) {
-  WeldedEdges input_edges, output_edges;
-  tbb::parallel_invoke([&] { input_edges = welded_edges(input); }, [&] { output_edges = welded_edges(output); });
-  return html_model_data_without_charts(input, output, input_edges, output_edges, options);
-}
-
 json html_model_data_without_charts(const TexturedMesh& input, const TexturedMesh& output, const WeldedEdges& input_edges,
                                     const WeldedEdges& output_edges, const HtmlReportOptions& options) {
   // The input's count sets the fraction for both, so that both show the same surface triangles.

@@ -32,10 +32,8 @@ struct HtmlReportOptions {
 std::string html_model_data(const TexturedMesh& input, const TexturedMesh& output, const HtmlReportOptions& options = {});
 
 /// html_model_data in two steps, for a caller that counts the charts anyway (measure does): the data
-/// without the chart counts, then the text with them.
-nlohmann::json html_model_data_without_charts(const TexturedMesh& input, const TexturedMesh& output, const HtmlReportOptions& options = {});
-/// The same with both models' welded edges made already (welded_edges), for a caller that shares them
-/// with measure.
+/// without the chart counts, from both models' welded edges (welded_edges, which measure shares), then
+/// the text with them.
 nlohmann::json html_model_data_without_charts(const TexturedMesh& input, const TexturedMesh& output, const WeldedEdges& input_edges,
                                               const WeldedEdges& output_edges, const HtmlReportOptions& options = {});
 std::string html_model_data(nlohmann::json data, size_t input_charts, size_t output_charts);
