@@ -1,7 +1,7 @@
 // Per-stage benchmarks on generated meshes of 10k..1M triangles: a bumpy sphere (closed, genus 0,
 // cut along one path) and the same with holes, a bumpy torus for the handle search, its coarse copy for the multilevel map, and reading it
-// back from an OBJ (in stretches on every core, and as one stretch). Speed is measured here, never asserted in tests.
-// Run: build/bench/tightex_bench --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
+// back from an OBJ (in stretches on every core, and as one stretch), and a scan texture's PNG decoded. Speed is measured here, never
+// asserted in tests. Run: build/bench/tightex_bench --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
 
 #include <unistd.h>
@@ -10,9 +10,13 @@
 #include <filesystem>
 #include <map>
 #include <numbers>
+#include <random>
+
+#include <spng.h>
 
 #include "bake/bake.hpp"
 #include "cut/cut.hpp"
+#include "io/image_io.hpp"
 #include "io/obj_reader.hpp"
 #include "layout/layout.hpp"
 #include "param/coarsen.hpp"
@@ -200,6 +204,60 @@ void BM_BakeTexture(benchmark::State& state) {
   state.counters["texels/s"] = benchmark::Counter(double(size) * size, benchmark::Counter::kIsIterationInvariantRate);
 }
 
+/// A scan's texture of side x side texels as its PNG file: square charts of smooth colour and noise on
+/// black (about half the texels), encoded as scanners' exporters do (libspng's defaults: zlib level 6,
+/// each row's best filter).
+const std::vector<unsigned char>& scan_texture_png(int side) {
+  static std::map<int, std::vector<unsigned char>> cache;
+  auto [it, inserted] = cache.try_emplace(side);
+  if (!inserted) return it->second;
+  std::mt19937 rng(5);
+  std::vector<unsigned char> rgb(size_t(side) * size_t(side) * 3, 0);
+  const int chart = std::max(8, side / 16);
+  for (int y = 0; y < side; ++y)
+    for (int x = 0; x < side; ++x) {
+      if ((x / chart + y / chart) % 2 == 1) continue;
+      unsigned char* p = &rgb[(size_t(y) * size_t(side) + size_t(x)) * 3];
+      for (int c = 0; c < 3; ++c) p[c] = static_cast<unsigned char>(60 + (x * (c + 1) + y * (3 - c)) % 120 + rng() % 24);
+    }
+  spng_ctx* ctx = spng_ctx_new(SPNG_CTX_ENCODER);
+  spng_set_option(ctx, SPNG_ENCODE_TO_BUFFER, 1);
+  spng_ihdr ihdr{};
+  ihdr.width = ihdr.height = uint32_t(side);
+  ihdr.bit_depth = 8;
+  ihdr.color_type = SPNG_COLOR_TYPE_TRUECOLOR;
+  spng_set_ihdr(ctx, &ihdr);
+  spng_encode_image(ctx, rgb.data(), rgb.size(), SPNG_FMT_PNG, SPNG_ENCODE_FINALIZE);
+  size_t length = 0;
+  int error = 0;
+  auto* buffer = static_cast<unsigned char*>(spng_get_png_buffer(ctx, &length, &error));
+  it->second.assign(buffer, buffer + length);
+  std::free(buffer);
+  spng_ctx_free(ctx);
+  return it->second;
+}
+
+/// Decoding a scan's RGB texture (argument 0: its side): `decode_image` (one pass: libdeflate's inflate,
+/// then the rows unfiltered into the image) against libspng's streaming decode (argument 1: 0), which
+/// it used before and still uses for other kinds of PNG.
+void BM_DecodePng(benchmark::State& state) {
+  const std::vector<unsigned char>& png = scan_texture_png(int(state.range(0)));
+  for (auto _ : state) {
+    if (state.range(1) == 1) {
+      benchmark::DoNotOptimize(decode_image(png.data(), png.size(), "bench.png"));
+      continue;
+    }
+    spng_ctx* ctx = spng_ctx_new(0);
+    spng_set_png_buffer(ctx, png.data(), png.size());
+    size_t size = 0;
+    spng_decoded_image_size(ctx, SPNG_FMT_RGBA8, &size);
+    Image image(int(state.range(0)), int(state.range(0)));
+    spng_decode_image(ctx, image.pixels.data(), size, SPNG_FMT_RGBA8, SPNG_DECODE_TRNS);
+    spng_ctx_free(ctx);
+    benchmark::DoNotOptimize(image);
+  }
+}
+
 }  // namespace
 
 BENCHMARK(BM_ReadObj)->Args({1000000, 0})->Args({1000000, 1})->Unit(benchmark::kMillisecond);
@@ -209,5 +267,7 @@ BENCHMARK(BM_CutToDisk)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::
 BENCHMARK(BM_MapToSquare)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CoarsenDisk)->Arg(200000)->Arg(1000000)->Arg(2000000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_BakeTexture)->Args({100000, 2048})->Args({100000, 4096})->Args({1000000, 8192})->Unit(benchmark::kMillisecond);
+
+BENCHMARK(BM_DecodePng)->Args({4096, 0})->Args({4096, 1})->Args({8192, 0})->Args({8192, 1})->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();

@@ -4,7 +4,7 @@ set -euo pipefail
 pkgs=(build-essential cmake ninja-build pkg-config
       libeigen3-dev libsuitesparse-dev libopenblas0-pthread libtbb-dev
       libtinyobjloader-dev nlohmann-json3-dev
-      libspng-dev libjpeg62-turbo-dev libwebp-dev libstb-dev zlib1g-dev
+      libspng-dev libdeflate-dev libjpeg62-turbo-dev libwebp-dev libstb-dev zlib1g-dev
       libcli11-dev libfmt-dev libgtest-dev libgmock-dev libbenchmark-dev
       pybind11-dev python3-dev python3-numpy python3-distributed python3-pytest
       libjs-three chromium)

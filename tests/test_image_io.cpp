@@ -11,7 +11,9 @@
 // clang-format on
 #include <spng.h>
 #include <webp/encode.h>
+#include <zlib.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -19,12 +21,15 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <optional>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/error.hpp"
 #include "io/image_io.hpp"
+#include "io/png_one_pass.hpp"
 
 namespace tightex {
 namespace {
@@ -96,10 +101,11 @@ double psnr_rgb(const Image& a, const Image& b) {
 int png_color_type(const Bytes& png) { return png.size() > 25 ? png[25] : -1; }
 
 // Encodes raw samples (PNG layout, host-endian for 16 bits) with libspng.
-Bytes encode_png(const spng_ihdr& ihdr, const void* samples, size_t size, const spng_plte* plte = nullptr,
-                 const spng_trns* trns = nullptr) {
+Bytes encode_png(const spng_ihdr& ihdr, const void* samples, size_t size, const spng_plte* plte = nullptr, const spng_trns* trns = nullptr,
+                 int filter_choice = SPNG_FILTER_CHOICE_ALL) {
   spng_ctx* ctx = spng_ctx_new(SPNG_CTX_ENCODER);
   spng_set_option(ctx, SPNG_ENCODE_TO_BUFFER, 1);
+  spng_set_option(ctx, SPNG_FILTER_CHOICE, filter_choice);
   spng_ihdr header = ihdr;
   EXPECT_EQ(spng_set_ihdr(ctx, &header), 0);
   if (plte != nullptr) {
@@ -410,6 +416,171 @@ TEST_F(ImageIoTest, DecodesRgbPngWithTransparentColour) {
 
 // ---------------------------------------------------------------------------------------------------
 // JPEG colour spaces and the stb_image fallback
+
+// ---------------------------------------------------------------------------------------------------
+// PNG in one pass (libdeflate), against libspng's own decode
+
+// libspng's RGBA8 pixels of a PNG, as decode_png asked for them before the one-pass decoder.
+Bytes spng_rgba8(const Bytes& png) {
+  spng_ctx* ctx = spng_ctx_new(0);
+  spng_set_png_buffer(ctx, png.data(), png.size());
+  size_t size = 0;
+  EXPECT_EQ(spng_decoded_image_size(ctx, SPNG_FMT_RGBA8, &size), 0);
+  Bytes out(size);
+  EXPECT_EQ(spng_decode_image(ctx, out.data(), out.size(), SPNG_FMT_RGBA8, SPNG_DECODE_TRNS), 0);
+  spng_ctx_free(ctx);
+  return out;
+}
+
+Bytes pixel_bytes(const Image& image) {
+  const auto* p = reinterpret_cast<const unsigned char*>(image.pixels.data());
+  return Bytes(p, p + image.pixels.size() * sizeof(Rgba8));
+}
+
+// The chunks of a PNG (type, data), in order.
+std::vector<std::pair<std::string, Bytes>> png_chunks(const Bytes& png) {
+  std::vector<std::pair<std::string, Bytes>> chunks;
+  for (size_t p = 8; p + 12 <= png.size();) {
+    const uint32_t length = uint32_t(png[p]) << 24 | uint32_t(png[p + 1]) << 16 | uint32_t(png[p + 2]) << 8 | png[p + 3];
+    chunks.emplace_back(std::string(png.begin() + std::ptrdiff_t(p + 4), png.begin() + std::ptrdiff_t(p + 8)),
+                        Bytes(png.begin() + std::ptrdiff_t(p + 8), png.begin() + std::ptrdiff_t(p + 8 + length)));
+    p += 12 + length;
+  }
+  return chunks;
+}
+
+// A PNG of the given chunks, each with its length and CRC.
+Bytes png_of(const std::vector<std::pair<std::string, Bytes>>& chunks) {
+  Bytes png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  for (const auto& [type, data] : chunks) {
+    for (int shift : {24, 16, 8, 0}) png.push_back(uint8_t(data.size() >> shift));
+    const size_t start = png.size();
+    png.insert(png.end(), type.begin(), type.end());
+    png.insert(png.end(), data.begin(), data.end());
+    const uint32_t crc = png_crc(png.data() + start, png.size() - start);
+    for (int shift : {24, 16, 8, 0}) png.push_back(uint8_t(crc >> shift));
+  }
+  return png;
+}
+
+// The filtered rows of a PNG (each a filter type byte, then its samples), inflated by zlib.
+Bytes png_raw_rows(const Bytes& png, size_t raw_size) {
+  Bytes stream;
+  for (const auto& [type, data] : png_chunks(png))
+    if (type == "IDAT") stream.insert(stream.end(), data.begin(), data.end());
+  Bytes raw(raw_size);
+  uLongf size = raw_size;
+  EXPECT_EQ(uncompress(raw.data(), &size, stream.data(), stream.size()), Z_OK);
+  EXPECT_EQ(size, raw_size);
+  return raw;
+}
+
+// 8-bit samples with smooth parts and noise, `channels` a pixel.
+Bytes mixed_samples(uint32_t width, uint32_t height, int channels) {
+  std::mt19937 rng(21);
+  Bytes samples(size_t(width) * height * size_t(channels));
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const size_t pixel = i / size_t(channels);
+    const uint32_t x = uint32_t(pixel % width), y = uint32_t(pixel / width);
+    samples[i] = (x + y) % 5 == 0 ? uint8_t(rng()) : uint8_t(x * 7 + y * 3 + i % size_t(channels) * 50);
+  }
+  return samples;
+}
+
+TEST(PngOnePass, EveryFilterOfEveryCommonKindDecodesAsLibspng) {
+  const uint32_t width = 37, height = 29;
+  std::vector<int> filters_seen(5, 0);
+  for (const auto& [colour_type, channels] : {std::pair{0, 1}, {4, 2}, {2, 3}, {6, 4}}) {
+    const Bytes samples = mixed_samples(width, height, channels);
+    for (int choice : {int(SPNG_DISABLE_FILTERING), int(SPNG_FILTER_CHOICE_SUB), int(SPNG_FILTER_CHOICE_UP), int(SPNG_FILTER_CHOICE_AVG),
+                       int(SPNG_FILTER_CHOICE_PAETH), int(SPNG_FILTER_CHOICE_ALL)}) {
+      SCOPED_TRACE(testing::Message() << "colour type " << colour_type << ", filter choice " << choice);
+      const Bytes png =
+          encode_png(make_ihdr(width, height, 8, uint8_t(colour_type)), samples.data(), samples.size(), nullptr, nullptr, choice);
+      const Bytes raw = png_raw_rows(png, size_t(height) * (1 + size_t(width) * size_t(channels)));
+      for (uint32_t y = 0; y < height; ++y) ++filters_seen.at(raw[size_t(y) * (1 + size_t(width) * size_t(channels))]);
+      const std::optional<Image> image = decode_png_in_one_pass(png.data(), png.size(), size_t(1) << 30, size_t(64) << 20);
+      ASSERT_TRUE(image.has_value());
+      EXPECT_EQ(image->width, int(width));
+      EXPECT_EQ(image->height, int(height));
+      EXPECT_EQ(pixel_bytes(*image), spng_rgba8(png));
+      EXPECT_EQ(pixel_bytes(decode_image(png.data(), png.size(), "kind.png")), spng_rgba8(png));
+    }
+  }
+  for (int type = 0; type < 5; ++type) EXPECT_GT(filters_seen[size_t(type)], 0) << "filter type " << type << " never written";
+}
+
+TEST(PngOnePass, SeveralImageDataChunksAreOneStream) {
+  const Image image = noise_image(300, 200, true, 22);
+  const Bytes one = encode_png(make_ihdr(300, 200, 8, 6), image.pixels.data(), image.pixels.size() * 4);
+  // The same stream cut into IDAT chunks of 1000 bytes, and an ancillary chunk before them.
+  std::vector<std::pair<std::string, Bytes>> chunks;
+  Bytes stream;
+  for (const auto& [type, data] : png_chunks(one)) {
+    if (type == "IDAT") stream.insert(stream.end(), data.begin(), data.end());
+    if (type == "IHDR") chunks.emplace_back(type, data), chunks.emplace_back("tEXt", Bytes{'a', 0, 'b'});
+  }
+  for (size_t p = 0; p < stream.size(); p += 1000)
+    chunks.emplace_back("IDAT",
+                        Bytes(stream.begin() + std::ptrdiff_t(p), stream.begin() + std::ptrdiff_t(std::min(stream.size(), p + 1000))));
+  chunks.emplace_back("IEND", Bytes{});
+  ASSERT_GT(chunks.size(), 10u);
+  const Bytes png = png_of(chunks);
+  const std::optional<Image> decoded = decode_png_in_one_pass(png.data(), png.size(), size_t(1) << 30, size_t(64) << 20);
+  ASSERT_TRUE(decoded.has_value());
+  EXPECT_TRUE(decoded->pixels == image.pixels);
+}
+
+TEST(PngOnePass, OtherKindsAreLeftToLibspng) {
+  const auto declined = [](const Bytes& png) {
+    return !decode_png_in_one_pass(png.data(), png.size(), size_t(1) << 30, size_t(64) << 20).has_value();
+  };
+  const Bytes rgb = mixed_samples(16, 8, 3);
+  const Bytes plain = encode_png(make_ihdr(16, 8, 8, 2), rgb.data(), rgb.size());
+  ASSERT_FALSE(declined(plain));
+  std::vector<uint16_t> wide(16 * 8 * 3, 0x1234);
+  EXPECT_TRUE(declined(encode_png(make_ihdr(16, 8, 16, 2), wide.data(), wide.size() * 2)));  // 16-bit
+  spng_plte plte{};
+  plte.n_entries = 2;
+  const Bytes indices(16 * 8, 1);
+  EXPECT_TRUE(declined(encode_png(make_ihdr(16, 8, 8, 3), indices.data(), indices.size(), &plte)));  // palette
+  spng_trns trns{};
+  trns.red = 7;
+  EXPECT_TRUE(declined(encode_png(make_ihdr(16, 8, 8, 2), rgb.data(), rgb.size(), nullptr, &trns)));  // a transparent colour
+  const Bytes grey4(16 * 8 / 2, 0x5a);
+  EXPECT_TRUE(declined(encode_png(make_ihdr(16, 8, 4, 0), grey4.data(), grey4.size())));  // 4-bit grey
+  std::vector<std::pair<std::string, Bytes>> chunks = png_chunks(plain);
+  chunks[0].second[12] = 1;  // interlaced (Adam7), told by the header alone
+  EXPECT_TRUE(declined(png_of(chunks)));
+  EXPECT_TRUE(!decode_png_in_one_pass(plain.data(), plain.size(), 16 * 8 - 1, size_t(64) << 20).has_value());  // too many pixels
+}
+
+TEST(PngOnePass, DamageIsLeftToLibspngWhichNamesIt) {
+  const Bytes rgb = mixed_samples(16, 8, 3);
+  const Bytes plain = encode_png(make_ihdr(16, 8, 8, 2), rgb.data(), rgb.size());
+  const auto check = [](const Bytes& png, const std::string& what) {
+    SCOPED_TRACE(what);
+    EXPECT_FALSE(decode_png_in_one_pass(png.data(), png.size(), size_t(1) << 30, size_t(64) << 20).has_value());
+    expect_input_error([&] { decode_image(png.data(), png.size(), "damaged.png"); }, "damaged.png");
+  };
+  Bytes flipped = plain;
+  flipped[flipped.size() - 20] ^= 0x40;  // inside the image data: its CRC fails
+  check(flipped, "a flipped bit");
+  check(Bytes(plain.begin(), plain.begin() + std::ptrdiff_t(plain.size() / 2)), "cut in half");
+  // Rows whose filter type is 5 (there are five, 0..4), and a stream one row short, each with sound CRCs.
+  Bytes raw = png_raw_rows(plain, 8 * (1 + 16 * 3));
+  for (const auto& [rows, filter] : {std::pair{8, 5}, {7, 0}}) {
+    Bytes cut(raw.begin(), raw.begin() + rows * (1 + 16 * 3));
+    for (int y = 0; y < rows; ++y) cut[size_t(y) * (1 + 16 * 3)] = uint8_t(filter);
+    Bytes stream(compressBound(uLong(cut.size())));
+    uLongf size = stream.size();
+    ASSERT_EQ(compress(stream.data(), &size, cut.data(), uLong(cut.size())), Z_OK);
+    stream.resize(size);
+    std::vector<std::pair<std::string, Bytes>> chunks = png_chunks(plain);
+    chunks = {chunks.front(), {"IDAT", stream}, {"IEND", Bytes{}}};
+    check(png_of(chunks), rows == 8 ? "filter type 5" : "a row short");
+  }
+}
 
 TEST_F(ImageIoTest, DecodesGreyJpeg) {
   Bytes grey(40 * 30);
