@@ -3,7 +3,9 @@
 
 #include <time.h>
 
+#include <algorithm>
 #include <cmath>
+#include <random>
 #include <set>
 #include <string>
 
@@ -311,6 +313,44 @@ TEST(Metrics, TrianglesCorrespondByTheirCornerPositions) {
       std::count_if(moved.triangles.begin(), moved.triangles.end(), [](const Tri& f) { return f[0] == 0 || f[1] == 0 || f[2] == 0; }));
   ASSERT_GT(around, 2u);
   EXPECT_EQ(measure(sphere(), moved, 20000).lost_triangles, around);
+}
+
+// The used texels are the texel centres inside some UV triangle (wrapped as a renderer repeats), each
+// counted once however many triangles cover it: thousands of overlapping triangles, many beyond [0, 1],
+// against a point-in-triangle test of every centre in each triangle's box.
+TEST(Metrics, UsedTexelsAreTheCentresInsideSomeTriangle) {
+  const int W = 96, H = 40;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> corner(-0.4, 1.4), step(-0.08, 0.08);
+  TexturedMesh m = sphere();
+  m.textures[0].image = Image(W, H);
+  m.corner_uv.clear();
+  for (size_t t = 0; t < m.num_triangles(); ++t) {
+    const Vec2 a(corner(rng), corner(rng));
+    m.corner_uv.insert(m.corner_uv.end(), {a, a + Vec2(step(rng), step(rng)), a + Vec2(step(rng), step(rng))});
+  }
+  std::vector<char> covered(size_t(W) * size_t(H), 0);
+  for (size_t t = 0; t < m.num_triangles(); ++t) {
+    Vec2 p[3];
+    for (int k = 0; k < 3; ++k) p[k] = Vec2(m.corner_uv[3 * t + size_t(k)].x() * W, (1 - m.corner_uv[3 * t + size_t(k)].y()) * H);
+    const auto side = [](const Vec2& a, const Vec2& b, const Vec2& c) { return (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x(); };
+    const double x0 = std::min({p[0].x(), p[1].x(), p[2].x()}), x1 = std::max({p[0].x(), p[1].x(), p[2].x()});
+    const double y0 = std::min({p[0].y(), p[1].y(), p[2].y()}), y1 = std::max({p[0].y(), p[1].y(), p[2].y()});
+    for (long y = long(std::floor(y0)) - 1; y <= long(std::ceil(y1)); ++y)
+      for (long x = long(std::floor(x0)) - 1; x <= long(std::ceil(x1)); ++x) {
+        const Vec2 c(x + 0.5, y + 0.5);
+        const double s0 = side(p[0], p[1], c), s1 = side(p[1], p[2], c), s2 = side(p[2], p[0], c);
+        if ((s0 >= 0 && s1 >= 0 && s2 >= 0) || (s0 <= 0 && s1 <= 0 && s2 <= 0))
+          covered[size_t(((y % H) + H) % H) * size_t(W) + size_t(((x % W) + W) % W)] = 1;
+      }
+  }
+  const double expected = double(std::count(covered.begin(), covered.end(), 1));
+  ASSERT_GT(expected, 0.3 * W * H);
+  ASSERT_LT(expected, 0.95 * W * H);
+  const ModelFigures f = measure_texture_space(m);
+  EXPECT_EQ(f.used_texels, expected);
+  EXPECT_EQ(f.texels, size_t(W) * size_t(H));
+  EXPECT_DOUBLE_EQ(f.utilization, expected / (W * H));
 }
 
 /// The calling thread's CPU time so far, in seconds.

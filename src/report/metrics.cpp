@@ -10,6 +10,7 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <functional>
@@ -44,6 +45,30 @@ void raster(const Vec2& a, const Vec2& b, const Vec2& c, int W, int H, F&& f) {
   if (!(std::abs(x0) < 1e15 && std::abs(x1) < 1e15 && std::abs(y0) < 1e15 && std::abs(y1) < 1e15)) return;
   scan_triangle(p[0], p[1], p[2], long(std::floor(x0)) - 1, long(std::ceil(x1)) + 1, long(std::floor(y0)) - 1, long(std::ceil(y1)) + 1,
                 EdgeRule::kInclusive, [&](long x, long y, double, double, double) { f(x, y); });
+}
+
+/// How many texels of a W x H image the UV triangles `tris` of `mesh` cover (texel centres inside a
+/// triangle, edges included, wrapped as a renderer repeats), drawn on every core: a texel two
+/// triangles share may be marked by both at once, so each mark is a relaxed atomic store.
+size_t covered_texels(const TexturedMesh& mesh, const std::vector<size_t>& tris, int W, int H) {
+  std::vector<uint8_t, LargeBufferAllocator<uint8_t>> cov(size_t(W) * size_t(H), 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, tris.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k < r.end(); ++k) {
+      const size_t t = tris[k];
+      raster(mesh.sampled_uv(t, 0), mesh.sampled_uv(t, 1), mesh.sampled_uv(t, 2), W, H, [&](long x, long y) {
+        x %= W, y %= H;
+        if (x < 0) x += W;
+        if (y < 0) y += H;
+        std::atomic_ref<uint8_t>(cov[size_t(y) * size_t(W) + size_t(x)]).store(1, std::memory_order_relaxed);
+      });
+    }
+  });
+  return tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, cov.size(), size_t(1) << 20), size_t(0),
+      [&](const tbb::blocked_range<size_t>& r, size_t n) {
+        return n + size_t(std::count(cov.begin() + std::ptrdiff_t(r.begin()), cov.begin() + std::ptrdiff_t(r.end()), 1));
+      },
+      std::plus<>());
 }
 
 std::array<uint8_t, 3> colour_at(const TexturedMesh& m, size_t t, const Vec2& uv) {
@@ -83,18 +108,10 @@ ModelFigures measure_texture_space(const TexturedMesh& mesh) {
     const std::pair<int, int> size = texture_size(mesh, int(i));
     const int W = size.first, H = size.second;
     if (W <= 0 || H <= 0) continue;
-    std::vector<uint8_t, LargeBufferAllocator<uint8_t>> cov(size_t(W) * size_t(H), 0);
-    for (size_t t : tris[i])
-      raster(mesh.sampled_uv(t, 0), mesh.sampled_uv(t, 1), mesh.sampled_uv(t, 2), W, H, [&](long x, long y) {
-        x %= W, y %= H;
-        if (x < 0) x += W;
-        if (y < 0) y += H;
-        cov[size_t(y) * size_t(W) + size_t(x)] = 1;
-      });
-    const size_t used = size_t(std::count(cov.begin(), cov.end(), 1));
-    f.image_utilization[i] = double(used) / double(cov.size());
+    const size_t used = covered_texels(mesh, tris[i], W, H);
+    f.image_utilization[i] = double(used) / (double(W) * double(H));
     f.used_texels += double(used);
-    f.texels += cov.size();
+    f.texels += size_t(W) * size_t(H);
   }
   f.utilization = f.texels ? f.used_texels / double(f.texels) : 0.0;
   return f;
