@@ -123,9 +123,11 @@ class Collapser {
       for (const auto& [d, u] : by_distance_)
         if (allowed(v, u)) {
           collapse(v, u);
+          // Only u and v's neighbours have new edges (their edges to v are now to u); u's other
+          // neighbours keep their shortest edge, and so their place in the queue.
           push(u);
-          neighbours(u, ring_);
-          for (uint32_t w : ring_) push(w);
+          for (uint32_t w : nv_)
+            if (w != u) push(w);
           break;
         }
     }
@@ -218,7 +220,7 @@ class Collapser {
   std::vector<double> mass_;
   std::vector<char> face_alive_, vertex_alive_, locked_, on_boundary_;
   std::vector<std::vector<uint32_t>> faces_;
-  std::vector<uint32_t> ring_, apex_, nv_, nu_, common_, removed_, kept_;  // scratch of run(), allowed() and collapse()
+  std::vector<uint32_t> apex_, nv_, nu_, common_, removed_, kept_;         // scratch of run(), allowed() and collapse()
   std::vector<std::pair<double, uint32_t>> by_distance_;                   // scratch of run()
   size_t alive_ = 0;
   bool queued_ = false;  // every vertex pushed once (the first run)
