@@ -34,12 +34,13 @@ class VertexQueue {
 
   bool empty() const { return heap_.empty(); }
 
-  /// Queues v at `length`, or moves it there if it is queued.
+  /// Queues v at `length`, or moves it there if it is queued (where it is already, nothing moves).
   void set(uint32_t v, double length) {
     if (place_[v] == kNone) {
       place_[v] = uint32_t(heap_.size());
       heap_.emplace_back(length, v);
     } else {
+      if (heap_[place_[v]].first == length) return;
       heap_[place_[v]].first = length;
       down(place_[v]);
     }
