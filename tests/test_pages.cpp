@@ -1,14 +1,22 @@
 // Texture pages (Options::max_page_side): a budget larger than a page goes on several pages, a component
 // too large for one page is split into pieces (split_into_parts), and every other property holds.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <set>
+#include <string>
 
 #include "mesh_catalogue.hpp"
 #include "prepare/components.hpp"
 #include "prepare/repair.hpp"
 #include "report/metrics.hpp"
+#include "tightex/io.hpp"
 #include "tightex/tightex.hpp"
 
 namespace tightex {
@@ -80,6 +88,54 @@ TEST(Pages, ABudgetBeyondThePageGoesOnSeveralPagesWithEveryPropertyKept) {
   // Colour kept: each piece's border is a seam more, so the split model loses a little to the one-page
   // one (57.7 dB), but stays far above what the eye sees.
   EXPECT_GT(m.surface_psnr, 45.0);
+}
+
+TEST(Pages, AComponentOfMoreTrianglesThanAPieceMayHoldIsSplitOnOnePage) {
+  const TexturedMesh in = cat::multi_component();  // a torus of 1024 triangles, a disk, two floaters
+  Options opt;
+  opt.size = 512;
+  opt.aspect = 1.0;
+  opt.max_page_side = 0;  // no page cap: the split is the triangles' alone
+  opt.max_piece_faces = 300;
+  const Result r = optimize(in, opt);
+  const nlohmann::json& pages = r.report["pages"];
+  EXPECT_EQ(pages["count"], 1);
+  EXPECT_EQ(pages["max_piece_faces"], 300);
+  EXPECT_GE(pages["components_split"].get<size_t>(), 1u) << "the torus holds more than 300 triangles";
+  EXPECT_GE(pages["pieces"].get<size_t>(), 3u) << "1024 triangles in pieces of at most 300: four pieces or more";
+  size_t triangles = 0;
+  for (const nlohmann::json& c : r.report["components"]) {
+    EXPECT_LE(c["triangles"].get<size_t>(), 300u);
+    triangles += c["triangles"].get<size_t>();
+  }
+  EXPECT_EQ(triangles, in.num_triangles());
+  const Metrics m = measure(in, r.output, 20000);
+  EXPECT_EQ(m.lost_triangles, 0u);
+  EXPECT_EQ(m.flipped, 0u);
+  EXPECT_EQ(m.charts, r.report["preparation"]["components"].get<size_t>()) << "one chart per component or piece";
+  for (double u : m.output.image_utilization) EXPECT_GE(u, 0.99);
+  EXPECT_GT(m.surface_psnr, 45.0);
+  // No cap: the torus stays one chart.
+  opt.max_piece_faces = 0;
+  const Result whole = optimize(in, opt);
+  EXPECT_EQ(whole.report["pages"]["components_split"], 0);
+  EXPECT_TRUE(whole.report["pages"]["max_piece_faces"].is_null());
+}
+
+TEST(PagesCli, ANegativePieceCapIsRefusedAndNothingIsWritten) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("tightex_piece_cap_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  write_obj(cat::multi_component(), (dir / "in").string(), "multi", ImageFormat::kPng);
+  const std::string cmd = std::string(TIGHTEX_CLI) + " '" + (dir / "in" / "multi.obj").string() + "' -o '" + (dir / "out").string() +
+                          "' --quiet --max-piece-faces -5 2> '" + (dir / "err").string() + "'";
+  const int status = std::system(cmd.c_str());
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 1);
+  std::ifstream err(dir / "err");
+  const std::string text((std::istreambuf_iterator<char>(err)), {});
+  EXPECT_NE(text.substr(0, text.find('\n')).find("--max-piece-faces"), std::string::npos) << text;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -99,6 +99,8 @@ using ProgressCallback = std::function<bool(std::string_view stage, double fract
 /// What a caller chooses. Every default is the CLI's; 0 means "choose for this model".
 /// Options::max_page_side's default.
 constexpr int kDefaultMaxPageSide = 8192;
+/// Options::max_piece_faces's default.
+constexpr size_t kDefaultMaxPieceFaces = 6000000;
 
 struct Options {
   /// Atlas: the texture's side; per-component: the largest texture's side. 0 (default): default_size,
@@ -124,6 +126,11 @@ struct Options {
   /// a component whose share alone is more than a page holds is first split into pieces that fit, each
   /// its own chart (report "pages"). 8192: what WebGL and most engines accept.
   int max_page_side = kDefaultMaxPageSide;
+  /// Atlas: the most triangles one chart holds; 0: no cap. A component of more is split into pieces
+  /// of at most this many, each its own chart (report "pages"), as for a page. The map's memory grows
+  /// faster than its triangles (its factorisations' fill): a 10M-face scan at its default budget peaks
+  /// at 18.2 GiB in one piece, at 11.9 GiB in two (and takes 220 s, not 316 s; BENCHMARKS.md).
+  size_t max_piece_faces = kDefaultMaxPieceFaces;
   HoleMode holes = HoleMode::kFill;
   /// Default kDetail: the highest surface PSNR of the four maps on every model of ../shared/data at
   /// the input's budget (BENCHMARKS.md, "Quality per map").

@@ -167,6 +167,13 @@ CLI::Option* define_options(CLI::App& app, CommandLine& line, ChoiceNames& names
                  "16384; 0: no cap). A budget that does not fit one page goes on several, each component whole on one page; a "
                  "component too large for a page is split into pieces that fit, each its own chart (report: \"pages\")")
       ->check(CLI::Range(0, 65536));
+  app.add_option("--max-piece-faces", line.max_piece_faces,
+                 "atlas: the most triangles one chart holds (default 6000000; 0: no cap). A larger component is split into "
+                 "pieces, each its own chart, so that the map's memory stays about proportional to the triangles (a 10M-face "
+                 "component in one chart needs about 18 GiB, in two about 12)")
+      ->check([](const std::string& value) {
+        return value.find('-') == std::string::npos ? std::string() : "must be 0 or more, not " + value;
+      });
   app.add_option("--balance", line.balance,
                  "area/texel/detail maps: 1 = target density exactly, 0 = the harmonic map's density (least angle "
                  "distortion); between: a geometric blend")
@@ -267,9 +274,12 @@ int texture_side(const CommandLine& line, const TexturedMesh& geometry) {
   return size;
 }
 
-/// Memory a run needs per input triangle (the mesh and its stages; the peak on the scans of
-/// ../shared/data) and per output texel (RGBA and the bake's coverage masks), in bytes.
-constexpr double kBytesPerTriangle = 1200.0;
+/// Memory a run needs whatever the model (the process, its pools, the other maps' images and the
+/// report's pictures), per input triangle (the mesh and its stages, with components of at most
+/// Options::max_piece_faces) and per output texel and image (RGBA and the bake's coverage masks), in
+/// bytes: at or above the peaks measured from 1k to 10M triangles (BENCHMARKS.md, "Memory").
+constexpr double kBaseBytes = 256.0 * (1 << 20);
+constexpr double kBytesPerTriangle = 1500.0;
 constexpr double kBytesPerOutputTexel = 7.0;
 
 /// The resource guard: refuses a run whose estimated memory is above --max-memory (default 90% of RAM)
@@ -280,6 +290,8 @@ struct MemoryGuard {
   /// The memory before the per-component output textures: decoded input textures (RGBA), the mesh and
   /// its stages, and for the atlas the output texture.
   double estimate = 0;
+  /// Output images per base colour texel (output_images).
+  double output_images = 1;
 
   /// Throws InputError naming `what` if `bytes` is above the limit.
   void check(double bytes, const std::string& what) const {
@@ -305,13 +317,23 @@ void check_texture_headers(const MemoryGuard& guard, const TexturedMesh& geometr
     guard.check(double(t.width) * double(t.height) * 4.0, fmt::format("texture {} ({} x {} pixels)", t.path, t.width, t.height));
 }
 
+/// The output images baked per base colour texel: the base colour's and one per map slot some
+/// material binds (a slot may share another's image, or be baked larger: one each is the estimate).
+double output_images(const TexturedMesh& geometry) {
+  std::array<bool, kMapSlots> bound{};
+  for (const Material& m : geometry.materials)
+    for (size_t s = 0; s < kMapSlots; ++s) bound[s] = bound[s] || m.maps[s] >= 0;
+  return 1.0 + double(std::count(bound.begin(), bound.end(), true));
+}
+
 /// Checks the memory the model needs at this size; per-component outputs are checked once the layout
 /// is known (check_per_component_memory).
 MemoryGuard check_memory(const CommandLine& line, const TexturedMesh& geometry, int size) {
   MemoryGuard guard = memory_guard(line);
-  guard.estimate = double(geometry.num_triangles()) * kBytesPerTriangle;
+  guard.estimate = kBaseBytes + double(geometry.num_triangles()) * kBytesPerTriangle;
   for (const Texture& t : geometry.textures) guard.estimate += double(t.width) * double(t.height) * 4.0;
-  if (line.layout == Layout::kAtlas) guard.estimate += double(size) * double(size) * kBytesPerOutputTexel;
+  guard.output_images = output_images(geometry);
+  if (line.layout == Layout::kAtlas) guard.estimate += double(size) * double(size) * kBytesPerOutputTexel * guard.output_images;
   guard.check(guard.estimate, "this model at this --size");
   return guard;
 }
@@ -320,7 +342,7 @@ MemoryGuard check_memory(const CommandLine& line, const TexturedMesh& geometry, 
 void check_per_component_memory(const MemoryGuard& guard, const Plan& plan) {
   double out_texels = 0;
   for (const auto& [w, h] : plan.texture_sizes()) out_texels += double(w) * double(h);
-  guard.check(guard.estimate + out_texels * kBytesPerOutputTexel, "this model's per-component textures");
+  guard.check(guard.estimate + out_texels * kBytesPerOutputTexel * guard.output_images, "this model's per-component textures");
 }
 
 /// The library's options for this command line at texture side `size`. Metrics are left to the CLI,
@@ -337,6 +359,7 @@ Options library_options(const CommandLine& line, int size, ProgressCallback prog
   opt.aspect = line.aspect.empty() ? (line.size_given ? 1.0 : 0.0) : line.aspect == "auto" ? 0.0 : std::stod(line.aspect);
   opt.corners = line.corners;
   opt.max_page_side = line.max_size;
+  opt.max_piece_faces = line.max_piece_faces;
   opt.fit = !line.no_fit;
   opt.fine_fit = line.fine_fit;
   opt.linear_light_colour = line.linear_light_colour;

@@ -24,6 +24,7 @@ struct CommandLine {
   double texels = 0;                   // 0: not given
   std::string aspect;                  // empty, "auto" or a number
   int max_size = kDefaultMaxPageSide;  // --max-size: the largest side of a texture page (0: no cap)
+  size_t max_piece_faces = kDefaultMaxPieceFaces;  // --max-piece-faces: the most triangles a chart holds (0: no cap)
   double balance = 1.0;
   Layout layout = Layout::kAtlas;
   HoleMode holes = HoleMode::kFill;

@@ -71,28 +71,32 @@ bool have_pixels(const TexturedMesh& input) {
   return false;
 }
 
-/// Splits every component whose share of the size^2 budget is more than kPageFill of a page
-/// (Options::max_page_side) into pieces that fit (split_into_parts, by area), and marks the pieces in
-/// `piece` (per component, kept aligned). Returns whether any was.
+/// How many pieces component `c` becomes: enough that each holds at most kPageFill of a page
+/// (Options::max_page_side) of the size^2 budget and at most Options::max_piece_faces triangles; 1:
+/// it stays whole. `texels`: its share of the budget.
+int pieces_needed(const Options& options, const Surface& component, double texels) {
+  double parts = 1;
+  if (options.max_page_side > 0) parts = std::ceil(texels / (kPageFill * double(options.max_page_side) * double(options.max_page_side)));
+  if (options.max_piece_faces > 0) parts = std::max(parts, std::ceil(double(component.num_faces()) / double(options.max_piece_faces)));
+  // Not below kMinPieceFaces triangles a piece: a piece of a few triangles cannot fill its square
+  // (one triangle covers half of it); such a piece keeps a capped page instead (assign_pages).
+  const size_t most = std::max<size_t>(1, component.num_faces() / kMinPieceFaces);
+  return int(std::min(double(most), parts));
+}
+
+/// Splits every component that is more than a page holds or has more than Options::max_piece_faces
+/// triangles (pieces_needed) into pieces (split_into_parts, by area), and marks the pieces in `piece`
+/// (per component, kept aligned). Returns whether any was.
 bool split_oversized_components(const Options& options, int size, const std::vector<double>& shares, std::vector<Surface>& components,
                                 std::vector<char>& piece, Pages& pages) {
-  const double page = kPageFill * double(options.max_page_side) * double(options.max_page_side);
   const double budget = double(size) * double(size), total = std::accumulate(shares.begin(), shares.end(), 0.0);
-  if (options.layout != Layout::kAtlas || options.max_page_side <= 0 || budget <= page || !(total > 0)) return false;
+  if (options.layout != Layout::kAtlas || !(total > 0)) return false;
   piece.resize(components.size(), 0);
   std::vector<Surface> split;
   std::vector<char> split_piece;
   bool any = false;
   for (size_t c = 0; c < components.size(); ++c) {
-    const double texels = shares[c] / total * budget;
-    if (texels <= page) {
-      split.push_back(std::move(components[c])), split_piece.push_back(piece[c]);
-      continue;
-    }
-    // Not below kMinPieceFaces triangles a piece: a piece of a few triangles cannot fill its square
-    // (one triangle covers half of it); such a piece keeps a capped page instead (assign_pages).
-    const size_t most = std::max<size_t>(1, components[c].num_faces() / kMinPieceFaces);
-    const int parts = int(std::min<double>(double(most), std::ceil(texels / page)));
+    const int parts = pieces_needed(options, components[c], shares[c] / total * budget);
     if (parts < 2) {
       split.push_back(std::move(components[c])), split_piece.push_back(piece[c]);
       continue;
@@ -318,7 +322,9 @@ Plan plan_prepared(const TexturedMesh& input, const Options& options, const Plan
   std::vector<ComponentDensity> density;
   std::vector<double> shares = plan_density(input, options, plan->components, areas, size, density);
   rep.pages.max_side = options.layout == Layout::kAtlas ? options.max_page_side : 0;
-  // Pieces split by area can still hold more than a page where the density is uneven: split again.
+  rep.pages.max_piece_faces = options.layout == Layout::kAtlas ? options.max_piece_faces : 0;
+  // Pieces split by area can still hold more than a page, or more triangles than a piece may, where the
+  // density or the triangles' size is uneven: split again.
   std::vector<char> split_piece;
   for (int round = 0; round < 3 && split_oversized_components(options, size, shares, plan->components, split_piece, rep.pages); ++round) {
     areas = component_areas(plan->components);

@@ -72,8 +72,9 @@ struct AspectChoice {
 /// "pages": the texture pages of the atlas and why there is more than one.
 struct Pages {
   int max_side = 0;             // Options::max_page_side (0: no cap, null)
+  size_t max_piece_faces = 0;   // Options::max_piece_faces (0: no cap, null)
   size_t count = 1;             // texture pages written
-  size_t components_split = 0;  // components split into pieces because one alone was more than a page holds
+  size_t components_split = 0;  // components split into pieces: one alone was more than a page holds or max_piece_faces
   size_t pieces = 0;            // the pieces they became
   std::string reason;           // why more than one page; empty for one
 };

@@ -178,6 +178,7 @@ json to_json(const Report& report) {
   j["aspect"] = aspect_choice_json(report.aspect);
   const Pages& pages = report.pages;
   j["pages"] = {{"max_side", pages.max_side > 0 ? json(pages.max_side) : json(nullptr)},
+                {"max_piece_faces", pages.max_piece_faces > 0 ? json(pages.max_piece_faces) : json(nullptr)},
                 {"count", pages.count},
                 {"components_split", pages.components_split},
                 {"pieces", pages.pieces},
