@@ -90,7 +90,7 @@ TEST(Pages, ABudgetBeyondThePageGoesOnSeveralPagesWithEveryPropertyKept) {
   EXPECT_GT(m.surface_psnr, 45.0);
 }
 
-TEST(Pages, AComponentOfMoreTrianglesThanAPieceMayHoldIsSplitOnOnePage) {
+TEST(Pages, AComponentOfMoreTrianglesThanAPieceMayHoldIsSplitInEitherLayout) {
   const TexturedMesh in = cat::multi_component();  // a torus of 1024 triangles, a disk, two floaters
   Options opt;
   opt.size = 512;
@@ -115,6 +115,16 @@ TEST(Pages, AComponentOfMoreTrianglesThanAPieceMayHoldIsSplitOnOnePage) {
   EXPECT_EQ(m.charts, r.report["preparation"]["components"].get<size_t>()) << "one chart per component or piece";
   for (double u : m.output.image_utilization) EXPECT_GE(u, 0.99);
   EXPECT_GT(m.surface_psnr, 45.0);
+  // Per component: each piece its own chart and texture.
+  Options per_component = opt;
+  per_component.layout = Layout::kPerComponent;
+  const Result each = optimize(in, per_component);
+  EXPECT_GE(each.report["pages"]["components_split"].get<size_t>(), 1u);
+  const Metrics me = measure(in, each.output, 20000);
+  EXPECT_EQ(me.lost_triangles, 0u);
+  EXPECT_EQ(me.flipped, 0u);
+  EXPECT_EQ(me.charts, each.output.textures.size()) << "one texture per component or piece";
+  EXPECT_EQ(me.charts, each.report["preparation"]["components"].get<size_t>());
   // No cap: the torus stays one chart.
   opt.max_piece_faces = 0;
   const Result whole = optimize(in, opt);

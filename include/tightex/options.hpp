@@ -126,8 +126,9 @@ struct Options {
   /// a component whose share alone is more than a page holds is first split into pieces that fit, each
   /// its own chart (report "pages"). 8192: what WebGL and most engines accept.
   int max_page_side = kDefaultMaxPageSide;
-  /// Atlas: the most triangles one chart holds; 0: no cap. A component of more is split into pieces
-  /// of at most this many, each its own chart (report "pages"), as for a page. The map's memory grows
+  /// The most triangles one chart holds; 0: no cap. A component of more is split into pieces of at
+  /// most this many, each its own chart (and, per component, its own texture; report "pages"), as for
+  /// a page. The map's memory grows
   /// faster than its triangles (its factorisations' fill): a 10M-face scan at its default budget peaks
   /// at 18.2 GiB in one piece, at 11.9 GiB in two (and takes 220 s, not 316 s; BENCHMARKS.md).
   size_t max_piece_faces = kDefaultMaxPieceFaces;

@@ -168,7 +168,7 @@ CLI::Option* define_options(CLI::App& app, CommandLine& line, ChoiceNames& names
                  "component too large for a page is split into pieces that fit, each its own chart (report: \"pages\")")
       ->check(CLI::Range(0, 65536));
   app.add_option("--max-piece-faces", line.max_piece_faces,
-                 "atlas: the most triangles one chart holds (default 6000000; 0: no cap). A larger component is split into "
+                 "the most triangles one chart holds (default 6000000; 0: no cap). A larger component is split into "
                  "pieces, each its own chart, so that the map's memory stays about proportional to the triangles (a 10M-face "
                  "component in one chart needs about 18 GiB, in two about 12)")
       ->check([](const std::string& value) {

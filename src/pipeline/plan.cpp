@@ -71,12 +71,13 @@ bool have_pixels(const TexturedMesh& input) {
   return false;
 }
 
-/// How many pieces component `c` becomes: enough that each holds at most kPageFill of a page
-/// (Options::max_page_side) of the size^2 budget and at most Options::max_piece_faces triangles; 1:
-/// it stays whole. `texels`: its share of the budget.
+/// How many pieces component `c` becomes: enough that each holds at most Options::max_piece_faces
+/// triangles and, in the atlas, at most kPageFill of a page (Options::max_page_side) of the size^2
+/// budget; 1: it stays whole. `texels`: its share of the budget.
 int pieces_needed(const Options& options, const Surface& component, double texels) {
   double parts = 1;
-  if (options.max_page_side > 0) parts = std::ceil(texels / (kPageFill * double(options.max_page_side) * double(options.max_page_side)));
+  if (options.layout == Layout::kAtlas && options.max_page_side > 0)
+    parts = std::ceil(texels / (kPageFill * double(options.max_page_side) * double(options.max_page_side)));
   if (options.max_piece_faces > 0) parts = std::max(parts, std::ceil(double(component.num_faces()) / double(options.max_piece_faces)));
   // Not below kMinPieceFaces triangles a piece: a piece of a few triangles cannot fill its square
   // (one triangle covers half of it); such a piece keeps a capped page instead (assign_pages).
@@ -90,7 +91,7 @@ int pieces_needed(const Options& options, const Surface& component, double texel
 bool split_oversized_components(const Options& options, int size, const std::vector<double>& shares, std::vector<Surface>& components,
                                 std::vector<char>& piece, Pages& pages) {
   const double budget = double(size) * double(size), total = std::accumulate(shares.begin(), shares.end(), 0.0);
-  if (options.layout != Layout::kAtlas || !(total > 0)) return false;
+  if (!(total > 0)) return false;
   piece.resize(components.size(), 0);
   std::vector<Surface> split;
   std::vector<char> split_piece;
@@ -322,7 +323,7 @@ Plan plan_prepared(const TexturedMesh& input, const Options& options, const Plan
   std::vector<ComponentDensity> density;
   std::vector<double> shares = plan_density(input, options, plan->components, areas, size, density);
   rep.pages.max_side = options.layout == Layout::kAtlas ? options.max_page_side : 0;
-  rep.pages.max_piece_faces = options.layout == Layout::kAtlas ? options.max_piece_faces : 0;
+  rep.pages.max_piece_faces = options.max_piece_faces;
   // Pieces split by area can still hold more than a page, or more triangles than a piece may, where the
   // density or the triangles' size is uneven: split again.
   std::vector<char> split_piece;
