@@ -128,9 +128,9 @@ struct Options {
   int max_page_side = kDefaultMaxPageSide;
   /// The most triangles one chart holds; 0: no cap. A component of more is split into pieces of at
   /// most this many, each its own chart (and, per component, its own texture; report "pages"), as for
-  /// a page. The map's memory grows
-  /// faster than its triangles (its factorisations' fill): a 10M-face scan at its default budget peaks
-  /// at 18.2 GiB in one piece, at 11.9 GiB in two (and takes 220 s, not 316 s; BENCHMARKS.md).
+  /// a page. The map's memory grows faster than its triangles (its factorisations' fill): a 10M-face
+  /// scan at its default budget peaks at 18.2 GiB in one piece, at 11.9 GiB in two (and takes 220 s,
+  /// not 316 s; BENCHMARKS.md, "Memory the run needs").
   size_t max_piece_faces = kDefaultMaxPieceFaces;
   HoleMode holes = HoleMode::kFill;
   /// Default kDetail: the highest surface PSNR of the four maps on every model of ../shared/data at
