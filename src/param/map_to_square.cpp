@@ -1,5 +1,9 @@
 #include "param/map_to_square.hpp"
 
+#include <optional>
+
+#include <tbb/task_group.h>
+
 #include "core/error.hpp"
 #include "param/boundary.hpp"
 #include "param/density_map.hpp"
@@ -37,6 +41,15 @@ std::vector<Vec2> map_disk(const Disk& disk, const SquareMapOptions& options, Sq
   // Alg. 2: the harmonic map with the fold-free fallbacks.
   // One fill-reducing order for all of this map's systems (harmonic, reweighting, symmetric Dirichlet).
   const std::shared_ptr<const std::vector<int>> order = vertex_order_from(m, options.vertex_order_from);
+  // The symmetric Dirichlet steps' system is built and analysed beside the harmonic map and the
+  // reweighting, which do not need it: a core to spare while a disk's map is one solve after another.
+  std::optional<DensityConstraints> constraints;
+  tbb::task_group steps_ahead;
+  if (density) constraints.emplace(density_constraints(disk, boundary, options, order));
+  if (density && (options.refine_iterations > 0 || options.density_flow))
+    steps_ahead.run([&] {
+      constraints->refinement = prepare_refinement(m, constraints->fixed, options.face_target, options.supernodal_from, order.get());
+    });
   DirichletSolver solver(options.supernodal_from, order);
   HarmonicAttempts harmonic = fold_free_harmonic_map(m, bnd, boundary.uv, solver);
   // No weighting solved (a factorisation failed, or its solution did not solve the system): the
@@ -62,11 +75,12 @@ std::vector<Vec2> map_disk(const Disk& disk, const SquareMapOptions& options, Sq
     std::vector<double> positive = harmonic.positive_weights;
     if (positive.empty()) positive = edge_weights(m, EdgeWeights::kClamped);
     reweight_towards_density(m, bnd, options, options.slide_boundary ? &boundary : nullptr, std::move(positive), solver, uv, st);
-    const DensityConstraints constraints = density_constraints(disk, boundary, options, order);
-    flow_towards_targets(constraints, uv, st);
-    refine_towards_targets(constraints, uv, st);
+    steps_ahead.wait();
+    flow_towards_targets(*constraints, uv, st);
+    refine_towards_targets(*constraints, uv, st);
     st.blended_target.clear();
   }
+  steps_ahead.wait();
   return uv;
 }
 

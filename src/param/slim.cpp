@@ -9,6 +9,7 @@
 
 #include <Eigen/Sparse>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <utility>
 
@@ -230,8 +231,18 @@ class SlimSystem {
   void assemble_newton(const std::vector<TargetFrame>& fr, const std::vector<Vec2>& uv) {
     std::fill(A.valuePtr(), A.valuePtr() + A.nonZeros(), 0.0);
     rhs.setZero();
-    for (size_t f = 0; f < m_.num_faces(); ++f)
-      if (fr[f].area > 0) add_face_newton(fr[f], f, uv);
+    // Each block of faces' terms on every core, then added in face order: the same sums as one core's.
+    constexpr size_t kBlock = 8192;
+    std::vector<FaceNewton> terms(std::min(kBlock, m_.num_faces()));
+    for (size_t first = 0; first < m_.num_faces(); first += kBlock) {
+      const size_t last = std::min(first + kBlock, m_.num_faces());
+      tbb::parallel_for(tbb::blocked_range<size_t>(first, last, 512), [&](const tbb::blocked_range<size_t>& faces) {
+        for (size_t f = faces.begin(); f != faces.end(); ++f)
+          if (fr[f].area > 0) face_newton(fr[f], f, uv, terms[f - first]);
+      });
+      for (size_t f = first; f < last; ++f)
+        if (fr[f].area > 0) add_face_newton(f, terms[f - first]);
+    }
   }
 
   const std::vector<int>& index() const { return index_; }
@@ -341,15 +352,41 @@ class SlimSystem {
     }
   }
 
-  /// Face f's projected Hessian and negative gradient. With J = U diag(s1, s2) V^T, the energy's
-  /// Hessian in J has the eigenvectors U D V^T for D = diag(1, 0), diag(0, 1), the twist [0 -1; 1 0]
-  /// and the flip [0 1; 1 0] (the last two over sqrt 2), with the eigenvalues 2 + 6 / s1^4,
+  /// One face's terms of the projected Newton system: the negative gradient's per free coordinate of
+  /// its corners (corner i's a-th at 2 i + a), and the Hessian's entries the system takes, in the order
+  /// for_each_newton_entry visits them (21 where the face's corners are distinct).
+  struct FaceNewton {
+    std::array<double, 6> gradient;
+    std::array<double, 36> hessian;
+  };
+
+  /// Calls on_row(i, a, row) for each free coordinate of face f's corners (corner i's a-th, the
+  /// system's row), then on_entry(i, a, j, b) for each entry of the lower triangle that row takes from
+  /// corner j's b-th coordinate.
+  template <class OnRow, class OnEntry>
+  void for_each_newton_entry(size_t f, OnRow&& on_row, OnEntry&& on_entry) const {
+    const Tri& t = m_.triangles[f];
+    for (int i = 0; i < 3; ++i)
+      for (int a = 0; a < 2; ++a) {
+        const int row = index_[2 * t[i] + size_t(a)];
+        if (row < 0) continue;
+        on_row(i, a, row);
+        for (int j = 0; j < 3; ++j)
+          for (int b = 0; b < 2; ++b) {
+            const int col = index_[2 * t[j] + size_t(b)];
+            if (col >= 0 && row >= col) on_entry(i, a, j, b);
+          }
+      }
+  }
+
+  /// Face f's projected Hessian and negative gradient into `out`. With J = U diag(s1, s2) V^T, the
+  /// energy's Hessian in J has the eigenvectors U D V^T for D = diag(1, 0), diag(0, 1), the twist
+  /// [0 -1; 1 0] and the flip [0 1; 1 0] (the last two over sqrt 2), with the eigenvalues 2 + 6 / s1^4,
   /// 2 + 6 / s2^4, (f1 + f2) / (s1 + s2) and (f1 - f2) / (s1 - s2), f_k = 2 s_k - 2 / s_k^3 (Smith,
   /// De Goes and Kim 2019; the flip's in a form without the division, which s1 = s2 would make 0 / 0);
-  /// only the twist's can be negative.
-  void add_face_newton(const TargetFrame& F, size_t f, const std::vector<Vec2>& uv) {
-    double* values = A.valuePtr();
-    const Tri& t = m_.triangles[f];
+  /// only the twist's can be negative. Reads the system's numbering only, so faces can be computed in
+  /// parallel.
+  void face_newton(const TargetFrame& F, size_t f, const std::vector<Vec2>& uv, FaceNewton& out) const {
     Mat2 U, V;
     Vec2 s;
     face_svd(F, f, uv, U, s, V);
@@ -369,20 +406,23 @@ class SlimSystem {
     std::array<std::array<Vec2, 3>, 4> q;  // q[k][i]: mode k's derivative in corner i's coordinates
     for (int k = 0; k < 4; ++k)
       for (int i = 0; i < 3; ++i) q[size_t(k)][size_t(i)] = mode[size_t(k)] * F.g[size_t(i)];
-    for (int i = 0; i < 3; ++i)
-      for (int a = 0; a < 2; ++a) {
-        const int row = index_[2 * t[i] + size_t(a)];
-        if (row < 0) continue;
-        rhs(row) -= (gradient * F.g[size_t(i)])(a);
-        for (int j = 0; j < 3; ++j)
-          for (int b = 0; b < 2; ++b) {
-            const int col = index_[2 * t[j] + size_t(b)];
-            if (col < 0 || row < col) continue;
-            double h = 0;
-            for (size_t k = 0; k < 4; ++k) h += lambda[k] * q[k][size_t(i)](a) * q[k][size_t(j)](b);
-            values[slot_[f * kPairs + pair(2 * i + a, 2 * j + b)]] += F.area * h;
-          }
-      }
+    size_t n = 0;
+    for_each_newton_entry(
+        f, [&](int i, int a, int) { out.gradient[size_t(2 * i + a)] = (gradient * F.g[size_t(i)])(a); },
+        [&](int i, int a, int j, int b) {
+          double h = 0;
+          for (size_t k = 0; k < 4; ++k) h += lambda[k] * q[k][size_t(i)](a) * q[k][size_t(j)](b);
+          out.hessian[n++] = F.area * h;
+        });
+  }
+
+  /// Adds face f's terms (face_newton's) to the system, in the order one loop over the faces did.
+  void add_face_newton(size_t f, const FaceNewton& terms) {
+    double* values = A.valuePtr();
+    size_t n = 0;
+    for_each_newton_entry(
+        f, [&](int i, int a, int row) { rhs(row) -= terms.gradient[size_t(2 * i + a)]; },
+        [&](int i, int a, int j, int b) { values[slot_[f * kPairs + pair(2 * i + a, 2 * j + b)]] += terms.hessian[n++]; });
   }
 
   const Surface& m_;
