@@ -143,4 +143,52 @@ inline GridGltf grid_gltf(int n = 4) {
   return g;
 }
 
+/// Appends `bytes` to the scene's buffer as a new buffer view (4-byte aligned); its index.
+inline size_t add_buffer_view(GridGltf& g, const std::string& bytes) {
+  while (g.bin.size() % 4 != 0) g.bin.push_back('\0');
+  g.doc["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", g.bin.size()}, {"byteLength", bytes.size()}});
+  g.bin += bytes;
+  g.doc["buffers"][0]["byteLength"] = g.bin.size();
+  return g.doc["bufferViews"].size() - 1;
+}
+
+/// Appends an accessor of `count` elements over `bytes` (a new buffer view); its index.
+inline size_t add_accessor(GridGltf& g, const std::string& bytes, int component_type, size_t count, const char* type) {
+  g.doc["accessors"].push_back({{"bufferView", add_buffer_view(g, bytes)}, {"componentType", component_type}, {"count", count}, {"type", type}});
+  return g.doc["accessors"].size() - 1;
+}
+
+/// A scene as users bring them: the grid's mesh (mesh 0, shown by the grid's two nodes) and a second
+/// mesh with the same POSITION accessor but texture coordinates of its own (mesh 1: a second cup beside
+/// the first), shown by node 2, moved and mirrored (scale -1 in x). With `untextured_part`, mesh 1 also
+/// has a quad whose material has a colour and no texture. Local-space triangles: 2 x grid (+ 2); in
+/// world space: 3 x grid (+ 2).
+inline GridGltf scene_gltf(bool untextured_part) {
+  const int n = 4, v = n + 1;
+  GridGltf g = grid_gltf(n);
+  std::string uv;
+  for (int j = 0; j < v; ++j)
+    for (int i = 0; i < v; ++i) append_bytes(uv, float(0.9 - 0.4 * i / n)), append_bytes(uv, float(0.35 + 0.5 * j / n));
+  const size_t a_uv = add_accessor(g, uv, 5126, size_t(v * v), "VEC2");
+  nlohmann::json copy = g.doc["meshes"][0]["primitives"][0];
+  copy["attributes"]["TEXCOORD_0"] = a_uv;
+  g.doc["meshes"].push_back({{"name", "copy"}, {"primitives", {copy}}});
+  g.doc["nodes"].push_back({{"name", "copy"}, {"mesh", 1}, {"translation", {3.0, 0.0, 0.0}}, {"scale", {-1.0, 1.0, 1.0}}});
+  g.doc["scenes"][0]["nodes"] = {0, 2};
+  if (untextured_part) {
+    std::string pos, idx;
+    for (const auto& [x, y] : {std::pair{0.f, 0.f}, {1.f, 0.f}, {1.f, 1.f}, {0.f, 1.f}})
+      append_bytes(pos, x), append_bytes(pos, y), append_bytes(pos, 0.5f);
+    for (const uint16_t i : {0, 1, 2, 0, 2, 3}) append_bytes(idx, i);
+    const size_t a_pos = add_accessor(g, pos, 5126, 4, "VEC3");
+    g.doc["accessors"][a_pos]["min"] = {0.0, 0.0, 0.5};
+    g.doc["accessors"][a_pos]["max"] = {1.0, 1.0, 0.5};
+    const size_t a_idx = add_accessor(g, idx, 5123, 6, "SCALAR");
+    g.doc["materials"].push_back({{"name", "plain"}, {"pbrMetallicRoughness", {{"baseColorFactor", {0.2, 0.4, 0.6, 1.0}}}}});
+    g.doc["meshes"][1]["primitives"].push_back({{"attributes", {{"POSITION", a_pos}}}, {"indices", a_idx}, {"material", 1}});
+    g.triangles += 2;
+  }
+  return g;
+}
+
 }  // namespace tightex::testing

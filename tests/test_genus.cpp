@@ -61,7 +61,7 @@ TEST_P(Genus, GeneratorIsTheExtremeCase) {
   const TexturedMesh m = make(GetParam());
   RepairStats rs;
   const Surface s = prepare_surface(m, &rs);
-  EXPECT_EQ(rs.non_manifold_edges + rs.sliced_vertices + rs.zero_area_triangles + rs.duplicate_triangles, 0u);
+  EXPECT_EQ(rs.non_manifold_edges + rs.sliced_vertices + rs.zero_area_triangles + rs.repeated_triangles, 0u);
   const auto comps = split_components(s);
   ASSERT_EQ(comps.size(), 1u);
   const Topology t = topology_of(comps[0]);

@@ -17,6 +17,8 @@
 #include <set>
 #include <string>
 
+#include "command_line.hpp"
+#include "gltf_checks.hpp"
 #include "core/error.hpp"
 #include "gltf_builder.hpp"
 #include "io/gltf_document.hpp"
@@ -32,24 +34,10 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using testing::GridGltf;
 
-fs::path scratch(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("tightex_gltf_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
-
-void write_file(const fs::path& p, const std::string& bytes) { std::ofstream(p, std::ios::binary) << bytes; }
-
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
-int run_cli(const std::string& args) {
-  const int status = std::system((std::string(TIGHTEX_CLI) + " " + args).c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
+fs::path scratch(const std::string& name) { return testing::scratch_folder("gltf_" + name); }
+void write_file(const fs::path& p, const std::string& bytes) { testing::write_whole(p, bytes); }
+std::string read_file(const fs::path& p) { return testing::read_whole(p); }
+int run_cli(const std::string& args) { return testing::run_tightex(args); }
 
 double linear_to_srgb(double c) { return c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055; }
 
@@ -280,6 +268,14 @@ std::vector<Lie> lies() {
          g.doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"]["KHR_texture_transform"] = {{"offset", {0.9, 0}}};
        },
        "wrap mode"},
+      {"KTX2 without fallback",
+       [](GridGltf& g) {
+         g.doc["textures"][0] = {{"extensions", {{"KHR_texture_basisu", {{"source", 1}}}}}};
+       },
+       "textures[0]: KHR_texture_basisu"},
+      {"unknown required extension", [](GridGltf& g) { g.doc["extensionsRequired"] = {"EXT_made_up"}; }, "EXT_made_up"},
+      {"node matrix", [](GridGltf& g) { g.doc["nodes"][1]["matrix"] = {1, 0, 0}; }, "nodes[1]: matrix"},
+      {"node rotation", [](GridGltf& g) { g.doc["nodes"][0]["rotation"] = {0, 0, 0, 0}; }, "nodes[0]: rotation"},
   };
 }
 
@@ -404,7 +400,9 @@ TEST(GltfWriter, WritesTheInputDocumentBackWithEachTriangleInItsPrimitive) {
   }
 }
 
-void expect_valid_and_loading(const fs::path& file, size_t triangles);
+using testing::expect_valid_and_loading;
+using testing::node_check;
+using testing::node_checks_ready;
 
 /// Element `i` of accessor `a` of a document read by read_gltf, as raw bytes.
 std::string accessor_element(const GltfDocument& doc, size_t a, size_t i) {
@@ -539,40 +537,6 @@ TEST(GltfWriter, WritesAFreshDocumentForAnotherModel) {
 // ---------------------------------------------------------------------------------------------------
 // The command line, and the written files in the Khronos glTF-Validator and three.js (tests/gltf).
 
-/// True when `node` exists and tests/gltf's packages are installed (scripts/gltf-checks.sh: npm ci,
-/// pinned by the lockfile; the test scripts run it before the tests).
-bool node_checks_ready() {
-  static const bool ready = [] {
-    const fs::path modules = fs::path(TIGHTEX_GLTF_CHECKS) / "node_modules";
-    return std::system("command -v node >/dev/null 2>&1") == 0 && fs::exists(modules / "gltf-validator") && fs::exists(modules / "three");
-  }();
-  return ready;
-}
-
-/// Runs tests/gltf/check_gltf.mjs on `file`: its JSON line (errors, warnings, meshes, triangles).
-json node_check(const fs::path& file) {
-  const fs::path out = file.parent_path() / "check.json";
-  std::system(
-      ("node '" + std::string(TIGHTEX_GLTF_CHECKS) + "/check_gltf.mjs' '" + file.string() + "' > '" + out.string() + "' 2>&1").c_str());
-  try {
-    return json::parse(read_file(out));
-  } catch (const json::exception&) {
-    return {{"unparsed", read_file(out)}};
-  }
-}
-
-void expect_valid_and_loading(const fs::path& file, size_t triangles) {
-  if (!node_checks_ready()) {
-    std::cout << "[  SKIPPED ] glTF-Validator and three.js: node or tests/gltf/node_modules is missing (bash scripts/gltf-checks.sh)\n";
-    return;
-  }
-  const json r = node_check(file);
-  EXPECT_EQ(r.value("errors", -1), 0) << r.dump();
-  EXPECT_EQ(r.value("warnings", -1), 0) << r.dump();
-  EXPECT_FALSE(r.contains("load_error")) << r.dump();
-  EXPECT_EQ(r.value("triangles", 0.0), double(triangles)) << r.dump();
-}
-
 TEST(GltfValidator, WrittenFilesHaveNoErrorNorWarningAndLoadInThree) {
   const fs::path dir = scratch("validator");
   const TexturedMesh in = read_gltf(grid_glb(dir).string());
@@ -658,6 +622,10 @@ TEST(GltfCli, RefusesHostileFilesWithExitOneAndNothingWritten) {
   huge.doc["images"][0] = {{"uri", "big.png"}};
   write_file(dir / "big.png", png);
   files.push_back({"huge texture header", testing::make_glb(huge.doc, huge.bin)});
+  // Nothing to bake: no texture, no vertex colours.
+  GridGltf plain = testing::grid_gltf();
+  plain.doc["materials"][0].erase("pbrMetallicRoughness");
+  files.push_back({"nothing to bake", testing::make_glb(plain.doc, plain.bin)});
   for (const auto& [name, bytes] : files) {
     const fs::path input = dir / "in.glb", out = dir / "out", err = dir / "err.txt";
     write_file(input, bytes);

@@ -87,7 +87,8 @@ std::vector<Case> catalogue() {
                  return s;
                }(),
                kMtl, true, "", true});
-  c.push_back({"valid_no_material", grid_obj(""), "", false, "", true});
+  // No material, no texture, no vertex colours: nothing to bake, refused.
+  c.push_back({"no_material_nothing_to_bake", grid_obj(""), "", false, "", false});
   for (const char* png : {"rgb16", "rgba16", "grey16", "grey8", "greyalpha8", "rgba8"})
     c.push_back({std::string("valid_texture_") + png, grid_obj(), kMtl, true, seed_png(std::string(png) + ".png"), true});
   c.push_back({"valid_spaces_in_names", grid_obj("mtllib my materials.mtl\nusemtl a\n"), "newmtl a\nmap_Kd my texture.png\n", true, "",

@@ -172,19 +172,29 @@ TEST(KeptComponent, PerComponentLayoutWritesNoEmptyImage) {
 
 // Every component kept, some triangles without a material: no new texture at all, a white material for
 // the triangles that had none, and the model still writes and reads back whole.
+// Every component kept, and triangles without a material (nothing to bake: written as they came, beside
+// the kept component).
 TEST(KeptComponent, AllKeptAndNoMaterial) {
   TexturedMesh in = tightex::testing::sphere();
-  for (size_t t = 0; t < in.num_triangles(); t += 3) in.face_material[t] = -1;
+  // The triangles around the first vertex (a pole): the sphere's rest stays one component without them.
+  std::vector<uint32_t> untextured;
+  for (uint32_t t = 0; t < in.num_triangles(); ++t)
+    if (in.triangles[t][0] == 0 || in.triangles[t][1] == 0 || in.triangles[t][2] == 0) in.face_material[t] = -1, untextured.push_back(t);
+  ASSERT_GE(untextured.size(), 3u);
+  ASSERT_LE(untextured.size(), in.num_triangles() / 4);
   Options opt;
   opt.size = 64;
   const Plan plan = plan_charts(in, opt, PlanHooks{{0}});
   ASSERT_EQ(plan.state().components.size(), 1u);
+  EXPECT_EQ(plan.state().set_aside.untextured, untextured);
   const Result r = bake_plan(plan, in, opt);
   const TexturedMesh& out = r.output;
   ASSERT_EQ(out.materials.size(), 2u);
   EXPECT_EQ(out.textures.size(), 1u);  // the input's, copied; no empty new image
+  EXPECT_EQ(r.report["preparation"]["untextured_kept"], untextured.size());
   EXPECT_EQ(measure(in, out, 20000).lost_triangles, 0u);
   expect_kept_as_input(in, out, triangles_of(plan, 0));
+  expect_kept_as_input(in, out, std::set<uint32_t>(untextured.begin(), untextured.end()));
   TempDir dir("tightex_kept_all");
   write_obj(out, dir.path.string(), "sphere", ImageFormat::kJpeg);
   EXPECT_TRUE(fs::is_regular_file(dir.path / "kept_sphere.jpg"));

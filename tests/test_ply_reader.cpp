@@ -471,9 +471,10 @@ std::string large_sheet(Format format, int n, bool irregular, int64_t bad_face =
   auto put_face = [&](std::initializer_list<int> corners) {
     b.put(uint8_t(corners.size()));
     for (int c : corners) b.put(int32_t(face == bad_face ? n * n + 5 : c));
+    if (irregular && face == cells / 2) b.end();  // the face's texture coordinates on the next line
     b.put(uint8_t(2 * corners.size()));
     for (int c : corners) put_float((c % n) / 1024.0), put_float((c / n) / 2048.0);
-    if (!(irregular && face == cells / 2)) b.end();  // the next face on the same line
+    b.end();
     ++face;
   };
   for (int cell = 0; cell < cells; ++cell) {
@@ -489,7 +490,7 @@ std::string large_sheet(Format format, int n, bool irregular, int64_t bad_face =
 }
 
 // A large ascii file reads as the same model in binary does, whether each entry is a line of its own
-// (read in blocks) or not (read in one pass), and counts the same lines either way.
+// (read in blocks) or split over two (read in one pass), and counts its lines either way.
 TEST_F(PlyReaderTest, LargeAsciiFilesReadAsTheirBinaryTwin) {
   write_image("page.png", 4, 4);
   const int n = 200;  // 40000 vertices, 73544 faces: more than two blocks of each
@@ -508,7 +509,24 @@ TEST_F(PlyReaderTest, LargeAsciiFilesReadAsTheirBinaryTwin) {
   }
   EXPECT_EQ(ascii_stats.polygons_triangulated, binary_stats.polygons_triangulated);
   EXPECT_EQ(irregular_stats.polygons_triangulated, binary_stats.polygons_triangulated);
-  EXPECT_EQ(irregular_stats.lines, ascii_stats.lines);  // one line more in the vertices, one fewer in the faces
+  EXPECT_EQ(irregular_stats.lines, ascii_stats.lines + 2);  // one line more in the vertices, one more in the faces
+}
+
+// An entry's values end its line: a line holding more values than the header declares (two entries
+// joined, or one with a value too many) is refused at that line, not where the next entry misreads.
+TEST_F(PlyReaderTest, SurplusValuesOnALineAreRefusedAtThatLine) {
+  std::string text = large_sheet(Format::kAscii, 20, false);
+  const size_t body = text.find("end_header\n") + 11;
+  size_t line = size_t(std::count(text.begin(), text.begin() + long(body), '\n')) + 1;
+  size_t at = body;
+  for (int i = 0; i < 400 + 5; ++i, ++line) at = text.find('\n', at) + 1;  // the sixth face's line
+  text[text.find('\n', at)] = ' ';                                          // the seventh joined to it
+  try {
+    read_ply(write("joined.ply", text), ModelReadOptions{false});
+    ADD_FAILURE() << "read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(fmt::format("joined.ply:{}: face 5: more values on the line", line)), std::string::npos) << e.what();
+  }
 }
 
 // Ascii files damaged at random places in their body (a byte replaced, removed or doubled; two entries

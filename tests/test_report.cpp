@@ -50,7 +50,7 @@ Report filled_report() {
   r.preparation.repair.input_vertices = 502;
   r.preparation.repair.welded_vertices = 500;
   r.preparation.repair.zero_area_triangles = 1;
-  r.preparation.repair.duplicate_triangles = 2;
+  r.preparation.repair.repeated_triangles = 2;
   r.preparation.repair.reoriented_triangles = 3;
   r.preparation.repair.non_manifold_edges = 4;
   r.preparation.repair.inconsistent_edges = 5;
@@ -132,7 +132,7 @@ TEST(Report, HasEveryKeyOfTheSchema) {
   EXPECT_EQ(keys_of(j["aspect"]["probes"][0]),
             (std::set<std::string>{"aspect", "width", "height", "estimated_psnr_db", "full_map_estimated_psnr_db"}));
   EXPECT_EQ(keys_of(j["preparation"]),
-            (std::set<std::string>{"input_vertices", "welded_vertices", "zero_area_dropped", "duplicates_dropped",
+            (std::set<std::string>{"input_vertices", "welded_vertices", "zero_area_dropped", "exact_repeats_copied", "layered_triangles", "untextured_kept",
                                    "non_manifold_edges_sliced", "inconsistent_edges_sliced", "reoriented_triangles", "vertices_sliced",
                                    "slits_closed", "components", "holes_filled", "holes_cut", "components_with_fallback",
                                    "components_longest_hole_capped", "components_listed", "components_kept_original_uvs"}));
@@ -302,10 +302,22 @@ TEST(Metrics, TrianglesCorrespondByTheirCornerPositions) {
   for (size_t k = 0; k < 3; ++k) std::swap(crossed.corner_uv[3 * (n - 2) + k], crossed.corner_uv[3 * (n - 1) + k]);
   EXPECT_EQ(measure(input, crossed, 20000).lost_triangles, 0u);
   EXPECT_LT(measure(input, crossed, 20000).surface_psnr, 99.0);
-  // Fewer copies in the output: the extra input copies match its last one.
+  // Fewer copies in the output: each output triangle matches one input triangle, so the input copy
+  // beyond the output's is lost.
   const Metrics fewer = measure(input, rewritten(with_copies(sphere(), 5, 1), true), 20000);
-  EXPECT_EQ(fewer.lost_triangles, 0u);
+  EXPECT_EQ(fewer.lost_triangles, 1u);
   EXPECT_LT(fewer.surface_psnr, 99.0);
+  // Two meshes of a scene with the same geometry: told apart by their source mesh where both models
+  // have them; an output holding one mesh's triangles twice loses the other's.
+  TexturedMesh two = with_copies(sphere(), 5, 1);
+  two.source_mesh.assign(two.num_triangles(), 0);
+  two.source_mesh.back() = 1;
+  two.positions.push_back(two.positions[two.triangles.back()[0]]);  // meshes share no vertex
+  two.triangles.back()[0] = uint32_t(two.positions.size() - 1);
+  TexturedMesh twice = two;
+  twice.source_mesh.back() = 0;
+  EXPECT_EQ(measure(two, two, 20000).lost_triangles, 0u);
+  EXPECT_EQ(measure(two, twice, 20000).lost_triangles, 1u);
   // A moved vertex loses the triangles around it, and only those.
   TexturedMesh moved = rewritten(sphere(), true);
   moved.positions[0] += Vec3(1e-9, 0, 0);

@@ -14,6 +14,10 @@ namespace tightex {
 struct ObjReadOptions {
   bool load_textures = true;  // false: materials keep their texture path, no pixels
   size_t max_texture_pixels = size_t(1) << 30;
+  /// glTF: every mesh instance in world space (node transforms applied, each node that shows a mesh
+  /// its own copy, TexturedMesh::source_mesh its instance), as a format without a scene graph (OBJ,
+  /// PLY) must hold it. Off: each mesh once, in its own space, for write_gltf to put back.
+  bool flatten_scene = false;
 };
 
 /// What the reader did beyond plain reading, for the report.
@@ -28,6 +32,10 @@ struct ObjReadStats {
   /// primitive, "meshes[0].primitives[1] (points)"): write_gltf writes it back as it came, the other
   /// writers cannot.
   std::vector<std::string> not_read;
+  /// What the reader read otherwise than the file asks, one line each (a KTX2 texture read from its
+  /// fallback image); the command prints them as warnings.
+  std::vector<std::string> warnings;
+  size_t instances_flattened = 0;  // glTF read with flatten_scene: the mesh instances placed in world space
 };
 
 /// Reads an OBJ file and its MTL libraries and textures.
@@ -70,12 +78,14 @@ size_t texture_vertex_colours(TexturedMesh& mesh, size_t max_pixels = size_t(1) 
 /// Reads a glTF 2.0 model: a .glb, or a .gltf with its buffers and images in files beside it (found as
 /// read_obj finds an MTL's files) or in base64 data URIs. Every triangle primitive (mode 4, 5 or 6,
 /// indexed or not) of every mesh the scene reaches (the default scene, else scene 0, else every root
-/// node) is read, each mesh once and in its own local space: node transforms are never applied, so a
-/// mesh that two nodes use is one set of triangles, and the texel budget is shared by local-space area.
+/// node) is read, each mesh once and in its own local space (source_mesh: the glTF mesh; a mesh that
+/// two nodes use is one set of triangles, source_mesh_area_scale the area its nodes show of it), or
+/// with options.flatten_scene every instance in world space (ObjReadOptions::flatten_scene).
 /// Read: POSITION (exactly as stored), NORMAL, the TEXCOORD_n its material's baseColorTexture uses
 /// (with KHR_texture_transform's offset and scale applied: the corner UVs are what a renderer samples;
 /// a rotation is refused), COLOR_0 (into corner_color, converted from linear to sRGB), the base colour
-/// texture (PNG, JPEG, WebP; one Texture per glTF image) and baseColorFactor (Material::kd, as sRGB).
+/// texture (PNG, JPEG, WebP; one Texture per glTF image; a KTX2 or DDS texture from its fallback
+/// source, stats->warnings saying so) and baseColorFactor (Material::kd, as sRGB).
 /// A sampler other than REPEAT is accepted while the texture coordinates stay in [0,1]. Points and
 /// lines primitives are left as they are (stats->not_read). The document itself is kept in
 /// TexturedMesh::gltf for write_gltf.
@@ -85,7 +95,8 @@ size_t texture_vertex_colours(TexturedMesh& mesh, size_t max_pixels = size_t(1) 
 /// before any byte is read; no allocation sized by a count before it is checked against a buffer.
 /// Throws InputError "FILE: ELEMENT: problem" (the element as the JSON names it, "accessors[3]",
 /// "GLB header") for malformed, lying or unsupported content: sparse accessors, skins, morph targets,
-/// Draco or meshopt compression, a texture whose UV set the primitive lacks.
+/// Draco or meshopt compression, a texture whose UV set the primitive lacks, a KTX2 or DDS texture
+/// without fallback.
 TexturedMesh read_gltf(const std::string& path, const ModelReadOptions& options = {}, ModelReadStats* stats = nullptr);
 
 /// The textures of `mesh`, read with load_textures false, with their pixels: each decoded from its file,
@@ -97,7 +108,8 @@ std::vector<Texture> load_texture_pixels(const TexturedMesh& mesh, size_t max_pi
 
 /// Reads a model by its file name's extension, without case: .ply with read_ply, .gltf and .glb with
 /// read_gltf, anything else with read_obj; then texture_vertex_colours. Requires, guarantees and throws
-/// as they do.
+/// as they do; a 3D Tiles payload (.b3dm, .i3dm, .pnts, .cmpt) is refused with an InputError naming the
+/// tile runner.
 TexturedMesh read_model(const std::string& path, const ModelReadOptions& options = {}, ModelReadStats* stats = nullptr);
 
 enum class ImageFormat { kPng, kJpeg };

@@ -86,6 +86,15 @@ struct TexturedMesh {
   std::vector<Material> materials;
   std::vector<Texture> textures;
   std::string source;  // file it was read from, for messages
+  /// Per triangle, or empty (one source mesh): the mesh of the input file it belongs to (glTF: its mesh;
+  /// a scene flattened to world space: its mesh instance). Vertices are welded within one source mesh,
+  /// never across two, so two meshes with the same geometry stay two surfaces with texels of their own.
+  /// Triangles of different source meshes share no vertex.
+  std::vector<uint32_t> source_mesh;
+  /// Per source mesh, or empty (1 each): how many times its own area the scene shows of it (glTF: the
+  /// sum, over the nodes that show the mesh, of each node's area scale |det|^(2/3)). The texel budget
+  /// and the surface PSNR weigh each mesh's area by it, as a viewer of the scene sees the surfaces.
+  std::vector<double> source_mesh_area_scale;
   /// Per triangle of an output model: the input triangle it is (build_output_model fills it; empty in a
   /// model read from a file). write_gltf uses it to put each triangle back into its own glTF primitive.
   std::vector<uint32_t> input_triangle;

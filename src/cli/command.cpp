@@ -36,6 +36,17 @@ namespace fs = std::filesystem;
 
 namespace tightex::cli {
 
+/// The --output-format names, in ModelFormat's order, each also its file extension.
+constexpr std::array<const char*, 4> kModelFormatNames{"obj", "ply", "gltf", "glb"};
+
+/// The model format a file's extension names (without case): .ply, .gltf, .glb, else OBJ.
+ModelFormat model_format_of(const std::string& path) {
+  const std::string extension = fs::path(path).extension().string();
+  for (size_t i = 1; i < kModelFormatNames.size(); ++i)
+    if (equals_ignoring_case(extension, std::string(".") + kModelFormatNames[i])) return ModelFormat(i);
+  return ModelFormat::kObj;
+}
+
 namespace {
 fs::path temporary_beside(const fs::path& path) { return path.parent_path() / ("." + path.filename().string() + ".tmp"); }
 
@@ -63,17 +74,6 @@ void write_texts_atomically(const std::vector<std::pair<fs::path, std::string>>&
       fail_input("{}: cannot rename into place", path.string());
     }
   }
-}
-
-/// The --output-format names, in ModelFormat's order, each also its file extension.
-constexpr std::array<const char*, 4> kModelFormatNames{"obj", "ply", "gltf", "glb"};
-
-/// The model format a file's extension names (without case): .ply, .gltf, .glb, else OBJ.
-ModelFormat model_format_of(const std::string& path) {
-  const std::string extension = fs::path(path).extension().string();
-  for (size_t i = 1; i < kModelFormatNames.size(); ++i)
-    if (equals_ignoring_case(extension, std::string(".") + kModelFormatNames[i])) return ModelFormat(i);
-  return ModelFormat::kObj;
 }
 
 /// Seconds from t0 to now.
@@ -136,7 +136,9 @@ void define_encoding_options(CLI::App& app, CommandLine& line, const ChoiceNames
 CLI::Option* define_options(CLI::App& app, CommandLine& line, ChoiceNames& names) {
   names.layout = to_string(line.layout), names.holes = to_string(line.holes), names.map = to_string(line.map);
   names.corners = to_string(line.corners);
-  app.add_option("input", line.input, "textured model (OBJ + MTL, or PLY; with textures)")->required();
+  app.add_option("input", line.input,
+                 "textured model: OBJ + MTL, PLY, glTF (.gltf) or GLB, with its textures or vertex colours (a 3D Tiles .b3dm: its GLB)")
+      ->required();
   app.add_option("-o,--output", line.outdir, "output directory")->required();
   auto* size_opt =
       app.add_option("--size", line.size,
@@ -437,6 +439,15 @@ void print_notes(const Plan& plan, const nlohmann::json& report) {
                "tightex: warning: {} component(s), {} triangles, could not be re-parameterized and keep their original "
                "texture coordinates and texture(s) ({}); see \"kept_original_uvs\" in the report\n",
                kept_components, plan.kept_triangles(), plan.first_kept_reason());
+  const nlohmann::json& prep = report["preparation"];
+  if (const size_t untextured = prep["untextured_kept"].get<size_t>(); untextured > 0)
+    fmt::print(stderr, "tightex: warning: {} triangles have no texture to bake from (no texture, no vertex colours) and are written as they came\n",
+               untextured);
+  if (const size_t repeats = prep["exact_repeats_copied"].get<size_t>(); repeats > 0)
+    fmt::print(stderr,
+               "tightex: warning: {} triangles repeat another of their mesh exactly (positions, texture coordinates, material): each is "
+               "written as a copy of the one it repeats\n",
+               repeats);
   if (const auto& grown = report["options"]["size_grown_from"]; !grown.is_null())
     fmt::print(stderr,
                "tightex: note: {} components need a 4x4 texel rectangle each: the texture grew from {}^2 to {}^2 texels (--size sets it)\n",
@@ -553,6 +564,10 @@ void write_preview(const std::string& preview_path, const TexturedMesh& input, c
 /// the new texture coordinates; one line), and each map slot OBJ or PLY cannot bind (one line each).
 void print_not_carried(const CommandLine& line, const ObjReadStats& read_stats, const std::vector<std::string>& removed) {
   const bool gltf = line.output_format == ModelFormat::kGltf || line.output_format == ModelFormat::kGlb;
+  for (const std::string& w : read_stats.warnings) fmt::print(stderr, "tightex: warning: {}\n", w);
+  if (read_stats.instances_flattened > 0)
+    fmt::print(stderr, "tightex: note: the glTF scene's {} mesh instances are written in world space ({} has no scene graph)\n",
+               read_stats.instances_flattened, kModelFormatNames[size_t(line.output_format)]);
   if (!gltf && !read_stats.not_read.empty())
     fmt::print(
         stderr, "tightex: warning: {} {} of the input {} not written ({} has no place for them; --output-format glb keeps them): {}\n",
@@ -606,6 +621,8 @@ void print_summary(const CommandLine& line, const TexturedMesh& output, size_t c
 TexturedMesh read_geometry(const CommandLine& line, ObjReadStats* read_stats) {
   ObjReadOptions geometry_only;
   geometry_only.load_textures = false;
+  // OBJ and PLY have no scene graph: a glTF scene written as one is placed in world space.
+  geometry_only.flatten_scene = line.output_format == ModelFormat::kObj || line.output_format == ModelFormat::kPly;
   TexturedMesh geometry = read_model(line.input, geometry_only, read_stats);
   for (Texture& t : geometry.textures)
     if (t.image.empty() && t.width == 0)  // a vertex-colour texture is made, a glTF's embedded image sized by its reader

@@ -14,6 +14,9 @@ namespace tightex::cli {
 /// The kinds of model the command writes.
 enum class ModelFormat { kObj, kPly, kGltf, kGlb };
 
+/// The model format a file's extension names (without case): .ply, .gltf, .glb, else OBJ.
+ModelFormat model_format_of(const std::string& path);
+
 /// What the command line asks for.
 struct CommandLine {
   std::string input, outdir;

@@ -34,7 +34,16 @@ int run_measure(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 1;
   }
-  const TexturedMesh in = read_model(in_path), out = read_model(out_path);
+  // A glTF scene beside a model without a scene graph (OBJ, PLY) is compared in world space, as
+  // tightex writes a scene to OBJ or PLY; two glTF models each mesh in its own space.
+  auto is_gltf = [](const std::string& path) {
+    const cli::ModelFormat f = cli::model_format_of(path);
+    return f == cli::ModelFormat::kGltf || f == cli::ModelFormat::kGlb;
+  };
+  ModelReadOptions in_options, out_options;
+  in_options.flatten_scene = is_gltf(in_path) && !is_gltf(out_path);
+  out_options.flatten_scene = is_gltf(out_path) && !is_gltf(in_path);
+  const TexturedMesh in = read_model(in_path, in_options), out = read_model(out_path, out_options);
   std::cout << to_json(measure(in, out, samples)).dump(2) << "\n";
   return 0;
 }

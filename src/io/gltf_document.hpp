@@ -45,6 +45,9 @@ struct GltfDocument {
   std::vector<uint32_t> vertex_source;       // per vertex of the model read: its index in its primitive's accessors
   /// Per texture of the model read: the glTF image it is.
   std::vector<int> texture_image;
+  /// Read with ModelReadOptions::flatten_scene: the model holds the scene's instances in world space,
+  /// which write_gltf does not put back into this document (it writes a fresh one).
+  bool flattened = false;
 };
 
 /// The JSON text and the BIN chunk of a .glb, or the whole text of a .gltf.

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -132,6 +133,28 @@ struct AccessorView {
   }
 };
 
+/// Whether tightex can read a model that requires extension `e`: the texture coordinates' transform,
+/// WebP and KTX2 images (a KTX2 texture needs a fallback source, texture_for), quantized attributes,
+/// lights (nodes' data, written back as they are) and material extensions (written back where they
+/// name no texture; one that does is removed, and said).
+bool required_extension_understood(const json& e) {
+  if (!e.is_string()) return false;
+  const std::string name = e.get<std::string>();
+  for (const char* known : {"KHR_texture_transform", "EXT_texture_webp", "KHR_texture_basisu", "KHR_mesh_quantization", "KHR_lights_punctual"})
+    if (name == known) return true;
+  return name.rfind("KHR_materials_", 0) == 0;
+}
+
+/// A node that shows a mesh: the mesh, and the node's transform to world space (its ancestors' composed).
+struct MeshInstance {
+  size_t mesh = 0;
+  Eigen::Matrix4d world = Eigen::Matrix4d::Identity();
+};
+
+/// The most triangles a scene flattened to world space may hold (its instances multiply its meshes'):
+/// beyond that a glTF output, which keeps the instancing, is the way.
+constexpr uint64_t kMaxFlattenedTriangles = uint64_t(1) << 27;
+
 /// What the reader collects while it walks the scene.
 struct ReadState {
   TexturedMesh mesh;
@@ -139,6 +162,7 @@ struct ReadState {
   std::map<int, int> texture_of;       // glTF image -> TexturedMesh texture
   bool any_normals = false, any_colors = false, any_tangents = false;
   std::vector<uint8_t> corner_has_normal;  // per corner, while normals are partial
+  std::set<int64_t> fallbacks_noted;       // textures read from their fallback source, each said once
 };
 
 class GltfReader {
@@ -166,7 +190,10 @@ class GltfReader {
   void each_object(const json& j, const char* key, const std::string& element, F&& f) const;
   AccessorView accessor(int64_t index, const std::string& element) const;
   AccessorView attribute(const json& primitive, const std::string& name, const std::string& element, bool required) const;
-  std::vector<size_t> reached_meshes() const;
+  std::vector<MeshInstance> scene_instances() const;
+  Eigen::Matrix4d node_matrix(const json& node, const std::string& element) const;
+  std::vector<double> numbers_of(const json& node, const char* key, size_t count, const std::string& element) const;
+  TexturedMesh flattened(const TexturedMesh& local, const std::vector<MeshInstance>& instances) const;
   void read_primitive(size_t m, size_t p, ReadState& state);
   std::vector<Tri> primitive_triangles(const json& primitive, size_t vertices, int64_t mode, const std::string& element) const;
   void check_supported(const json& primitive, const std::string& element) const;
@@ -186,6 +213,7 @@ class GltfReader {
   fs::path folder_;
   std::shared_ptr<GltfDocument> doc_ = std::make_shared<GltfDocument>();
   std::vector<std::string> not_read_;
+  std::vector<std::string> warnings_;
   std::map<std::string, std::string_view> files_;  // each file a URI names, read once
   uint64_t input_bytes_ = 0;                       // the model file and every file it names: the corner budget
   uint64_t corners_read_ = 0;
@@ -446,9 +474,47 @@ AccessorView GltfReader::attribute(const json& primitive, const std::string& nam
   return accessor(it->get<int64_t>(), fmt::format("{}.attributes.{}", element, name));
 }
 
-/// The meshes the scene reaches, each once, in the order its node tree first reaches them: the default
-/// scene, else scene 0, else every root node.
-std::vector<size_t> GltfReader::reached_meshes() const {
+/// `count` numbers of node member `key`, checked.
+std::vector<double> GltfReader::numbers_of(const json& node, const char* key, size_t count, const std::string& element) const {
+  const json& a = node[key];
+  if (!a.is_array() || a.size() != count) fail(element, "{} is not {} numbers", key, count);
+  std::vector<double> v;
+  for (const json& x : a) {
+    if (!x.is_number() || !std::isfinite(x.get<double>())) fail(element, "{} is not {} finite numbers", key, count);
+    v.push_back(x.get<double>());
+  }
+  return v;
+}
+
+/// A node's local transform: its `matrix` (column-major), or translation * rotation * scale.
+Eigen::Matrix4d GltfReader::node_matrix(const json& node, const std::string& element) const {
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  if (node.contains("matrix")) {
+    const std::vector<double> a = numbers_of(node, "matrix", 16, element);
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r) m(r, c) = a[size_t(4 * c + r)];
+    return m;
+  }
+  if (node.contains("scale")) {
+    const std::vector<double> s = numbers_of(node, "scale", 3, element);
+    m.topLeftCorner<3, 3>() = Eigen::Vector3d(s[0], s[1], s[2]).asDiagonal();
+  }
+  if (node.contains("rotation")) {
+    const std::vector<double> q = numbers_of(node, "rotation", 4, element);
+    const Eigen::Quaterniond rotation(q[3], q[0], q[1], q[2]);
+    if (!(rotation.norm() > 0)) fail(element, "rotation is not a unit quaternion");
+    m.topLeftCorner<3, 3>() = rotation.normalized().toRotationMatrix() * m.topLeftCorner<3, 3>();
+  }
+  if (node.contains("translation")) {
+    const std::vector<double> t = numbers_of(node, "translation", 3, element);
+    m.topRightCorner<3, 1>() = Eigen::Vector3d(t[0], t[1], t[2]);
+  }
+  return m;
+}
+
+/// Every node the scene reaches that shows a mesh, in the order its node tree reaches them, with its
+/// world transform: the default scene, else scene 0, else every root node.
+std::vector<MeshInstance> GltfReader::scene_instances() const {
   const json& nodes = array("nodes");
   std::vector<int64_t> roots;
   const json& scenes = array("scenes");
@@ -475,31 +541,122 @@ std::vector<size_t> GltfReader::reached_meshes() const {
     for (size_t i = 0; i < nodes.size(); ++i)
       if (!is_child[i]) roots.push_back(int64_t(i));
   }
-  std::vector<bool> visited(nodes.size(), false), mesh_seen(array("meshes").size(), false);
-  std::vector<size_t> meshes;
-  std::vector<int64_t> stack(roots.rbegin(), roots.rend());
+  std::vector<bool> visited(nodes.size(), false);
+  std::vector<MeshInstance> instances;
+  std::vector<std::pair<int64_t, Eigen::Matrix4d>> stack;  // node, its parent's world transform
+  for (auto it = roots.rbegin(); it != roots.rend(); ++it) stack.push_back({*it, Eigen::Matrix4d::Identity()});
   while (!stack.empty()) {
-    const int64_t n = stack.back();
+    const auto [n, parent] = stack.back();
     stack.pop_back();
     const json& node = item("nodes", n, "scene's node tree");
     if (visited[size_t(n)]) fail(fmt::format("nodes[{}]", n), "is reached twice (a node has one parent, the tree no cycle)");
     visited[size_t(n)] = true;
     const std::string element = fmt::format("nodes[{}]", n);
+    const Eigen::Matrix4d world = parent * node_matrix(node, element);
     const int64_t m = index_in(node, "mesh", "meshes", element);
-    if (m >= 0 && !mesh_seen[size_t(m)]) {
-      mesh_seen[size_t(m)] = true;
-      meshes.push_back(size_t(m));
-    }
+    if (m >= 0) instances.push_back({size_t(m), world});
     if (node.contains("children")) {
       if (!node["children"].is_array()) fail(element, "children is not an array");
       const json& children = node["children"];
       for (auto it = children.rbegin(); it != children.rend(); ++it) {
         if (!it->is_number_integer()) fail(element, "children holds a non-integer");
-        stack.push_back(it->get<int64_t>());
+        stack.push_back({it->get<int64_t>(), world});
       }
     }
   }
+  return instances;
+}
+
+/// Per mesh of the document, the area the scene shows of it in units of its own area: the sum of its
+/// instances' area scales, |det|^(2/3) of each world transform (exact for a uniform scale).
+std::vector<double> area_scales(const std::vector<MeshInstance>& instances, size_t meshes) {
+  std::vector<double> scale(meshes, 0.0);
+  for (const MeshInstance& i : instances) scale[i.mesh] += std::pow(std::abs(i.world.topLeftCorner<3, 3>().determinant()), 2.0 / 3.0);
+  return scale;
+}
+
+/// The meshes `instances` show, each once, in the order of their first instance.
+std::vector<size_t> meshes_of(const std::vector<MeshInstance>& instances) {
+  std::vector<size_t> meshes;
+  for (const MeshInstance& i : instances)
+    if (std::find(meshes.begin(), meshes.end(), i.mesh) == meshes.end()) meshes.push_back(i.mesh);
   return meshes;
+}
+
+/// Appends instance `i`'s copy of `local`'s triangles [t0, t1) and vertices [v0, v1) to `out`, in world
+/// space: positions through the transform, normals through its inverse transpose, tangents through it
+/// (their handedness with its determinant's sign). A mirroring transform (negative determinant) turns
+/// the front faces, as glTF renders them: corners 1 and 2 swap so the world-space winding shows the same side.
+void append_instance(const TexturedMesh& local, size_t t0, size_t t1, size_t v0, size_t v1, const MeshInstance& instance, uint32_t i,
+                     TexturedMesh& out, std::vector<uint32_t>& triangle_primitive, std::vector<uint32_t>& vertex_source,
+                     const GltfDocument& doc) {
+  const Eigen::Matrix3d linear = instance.world.topLeftCorner<3, 3>();
+  const Eigen::Matrix3d normal_matrix = linear.inverse().transpose();
+  const bool mirrored = linear.determinant() < 0;
+  const uint32_t base = uint32_t(out.positions.size());
+  for (size_t v = v0; v < v1; ++v) {
+    out.positions.push_back((instance.world * local.positions[v].homogeneous()).head<3>());
+    vertex_source.push_back(doc.vertex_source[v]);
+  }
+  auto direction = [](const Eigen::Matrix3d& m, const Vec3& d) {
+    const Vec3 x = m * d;
+    return x.norm() > 0 ? Vec3(x.normalized()) : x;
+  };
+  for (size_t t = t0; t < t1; ++t) {
+    const std::array<size_t, 3> corner = mirrored ? std::array<size_t, 3>{0, 2, 1} : std::array<size_t, 3>{0, 1, 2};
+    Tri tri;
+    for (size_t k = 0; k < 3; ++k) tri[k] = base + uint32_t(local.triangles[t][corner[k]] - v0);
+    out.triangles.push_back(tri);
+    out.face_material.push_back(local.face_material[t]);
+    out.source_mesh.push_back(i);
+    triangle_primitive.push_back(doc.triangle_primitive[t]);
+    for (const size_t k : corner) {
+      const size_t c = 3 * t + k;
+      out.corner_uv.push_back(local.corner_uv[c]);
+      if (!local.corner_normal.empty()) out.corner_normal.push_back(direction(normal_matrix, local.corner_normal[c]));
+      if (!local.corner_color.empty()) out.corner_color.push_back(local.corner_color[c]);
+      if (!local.corner_tangent.empty()) {
+        const Eigen::Vector4d& tg = local.corner_tangent[c];
+        const Vec3 d = direction(linear, tg.head<3>());
+        out.corner_tangent.push_back(Eigen::Vector4d(d.x(), d.y(), d.z(), mirrored ? -tg.w() : tg.w()));
+      }
+    }
+  }
+}
+
+/// `local` (each mesh once, as read) with every instance in world space (append_instance); source_mesh
+/// is the instance.
+TexturedMesh GltfReader::flattened(const TexturedMesh& local, const std::vector<MeshInstance>& instances) const {
+  // Each mesh's triangles and vertices are contiguous in `local` (read mesh by mesh).
+  std::map<size_t, std::array<size_t, 4>> range;  // mesh -> t0, t1, v0, v1
+  for (size_t t = 0; t < local.num_triangles();) {
+    const uint32_t m = local.source_mesh[t];
+    size_t end = t;
+    uint32_t v0 = UINT32_MAX, v1 = 0;
+    for (; end < local.num_triangles() && local.source_mesh[end] == m; ++end)
+      for (uint32_t v : local.triangles[end]) v0 = std::min(v0, v), v1 = std::max(v1, v + 1);
+    range[m] = {t, end, v0, v1};
+    t = end;
+  }
+  uint64_t total = 0;
+  for (const MeshInstance& i : instances)
+    if (range.count(i.mesh)) total += range[i.mesh][1] - range[i.mesh][0];
+  if (total > kMaxFlattenedTriangles)
+    fail("scene", "its {} mesh instances hold {} triangles in world space, more than tightex flattens ({}); write glTF to keep them instanced",
+         instances.size(), total, kMaxFlattenedTriangles);
+  TexturedMesh out;
+  out.materials = local.materials, out.textures = local.textures;
+  std::vector<uint32_t> triangle_primitive, vertex_source;
+  for (size_t i = 0; i < instances.size(); ++i) {
+    const auto it = range.find(instances[i].mesh);
+    if (it == range.end()) continue;  // a mesh of points or lines only
+    const auto [t0, t1, v0, v1] = it->second;
+    append_instance(local, t0, t1, v0, v1, instances[i], uint32_t(i), out, triangle_primitive, vertex_source, *doc_);
+  }
+  doc_->triangle_primitive = std::move(triangle_primitive);
+  doc_->vertex_source = std::move(vertex_source);
+  doc_->flattened = true;
+  return out;
 }
 
 /// Refuses what a triangle primitive carries that cannot follow new vertices.
@@ -559,12 +716,21 @@ int GltfReader::texture_for(const json& info, const std::string& t_element, Read
   const int64_t tex = index_in(info, "index", "textures", t_element);
   if (tex < 0) fail(t_element, "has no index");
   const json& texture = array("textures")[size_t(tex)];
-  int64_t image = index_in(texture, "source", "images", fmt::format("textures[{}]", tex));
-  if (texture.contains("extensions"))
-    for (const char* ext : {"EXT_texture_webp", "KHR_texture_basisu", "MSFT_texture_dds"})
-      if (texture["extensions"].contains(ext) && texture["extensions"][ext].is_object() && image < 0)
-        image = index_in(texture["extensions"][ext], "source", "images", fmt::format("textures[{}].extensions.{}", tex, ext));
-  if (image < 0) fail(fmt::format("textures[{}]", tex), "has no image source tightex can read");
+  const std::string element = fmt::format("textures[{}]", tex);
+  int64_t image = index_in(texture, "source", "images", element);
+  // WebP tightex decodes; KTX2 (Basis Universal) and DDS it does not: their fallback source is read.
+  if (texture.contains("extensions") && texture["extensions"].is_object())
+    for (const char* ext : {"EXT_texture_webp", "KHR_texture_basisu", "MSFT_texture_dds"}) {
+      if (!texture["extensions"].contains(ext) || !texture["extensions"][ext].is_object()) continue;
+      const bool decoded = std::string_view(ext) == "EXT_texture_webp";
+      if (!decoded && image < 0)
+        fail(element, "{} images ({}) are not supported, and the texture has no PNG, JPEG or WebP fallback source", ext,
+             std::string_view(ext) == "KHR_texture_basisu" ? "KTX2" : "DDS");
+      if (!decoded && state.fallbacks_noted.insert(tex).second)
+        warnings_.push_back(fmt::format("{}: {} image not decoded: its fallback source images[{}] is read", element, ext, image));
+      if (decoded && image < 0) image = index_in(texture["extensions"][ext], "source", "images", element + ".extensions." + ext);
+    }
+  if (image < 0) fail(element, "has no image source tightex can read");
   auto [it, inserted] = state.texture_of.try_emplace(int(image), int(state.mesh.textures.size()));
   if (inserted) {
     const json& img = array("images")[size_t(image)];
@@ -810,6 +976,7 @@ void GltfReader::read_primitive(size_t m, size_t p, ReadState& state) {
   for (const Tri& t : tris) {
     state.mesh.triangles.push_back({vertex_of(t[0]), vertex_of(t[1]), vertex_of(t[2])});
     state.mesh.face_material.push_back(tm);
+    state.mesh.source_mesh.push_back(uint32_t(m));
     doc_->triangle_primitive.push_back(prim_index);
     for (const uint32_t v : t) {
       Vec3 n(0, 0, 0);
@@ -880,8 +1047,7 @@ TexturedMesh GltfReader::read(ModelReadStats* stats) {
     fail("asset", "version is not 2.x (tightex reads glTF 2.0)");
   if (doc_->json.contains("extensionsRequired") && doc_->json["extensionsRequired"].is_array())
     for (const json& e : doc_->json["extensionsRequired"])
-      if (e != "KHR_texture_transform" && e != "KHR_materials_emissive_strength" && e != "EXT_texture_webp" && e != "KHR_mesh_quantization")
-        fail("extensionsRequired", "{} is not supported", excerpt(e.dump()));
+      if (!required_extension_understood(e)) fail("extensionsRequired", "{} is not supported", excerpt(e.dump()));
   if (doc_->json.contains("extensionsUsed") && doc_->json["extensionsUsed"].is_array())
     for (const json& e : doc_->json["extensionsUsed"]) quantized_ = quantized_ || e == "KHR_mesh_quantization";
   check_document_shape();
@@ -889,7 +1055,9 @@ TexturedMesh GltfReader::read(ModelReadStats* stats) {
   check_buffer_views();
   load_images();
   ReadState state;
-  for (const size_t m : reached_meshes()) {
+  const std::vector<MeshInstance> instances = scene_instances();
+  const std::vector<size_t> meshes = meshes_of(instances);
+  for (const size_t m : meshes) {
     const json& mesh = array("meshes")[m];
     if (!mesh.contains("primitives") || !mesh["primitives"].is_array()) fail(fmt::format("meshes[{}]", m), "primitives missing");
     for (size_t p = 0; p < mesh["primitives"].size(); ++p) read_primitive(m, p, state);
@@ -898,13 +1066,16 @@ TexturedMesh GltfReader::read(ModelReadStats* stats) {
   finish_normals(state);
   if (!state.any_colors) state.mesh.corner_color.clear();
   if (!state.any_tangents) state.mesh.corner_tangent.clear();
-  TexturedMesh mesh = std::move(state.mesh);
+  if (!options_.flatten_scene) state.mesh.source_mesh_area_scale = area_scales(instances, array("meshes").size());
+  TexturedMesh mesh = options_.flatten_scene ? flattened(state.mesh, instances) : std::move(state.mesh);
   mesh.source = path_;
   mesh.gltf = doc_;
   load_textures(mesh);
   if (stats != nullptr) {
     *stats = ModelReadStats{};
     stats->not_read = not_read_;
+    stats->warnings = warnings_;
+    if (options_.flatten_scene) stats->instances_flattened = instances.size();
   }
   return mesh;
 }

@@ -486,6 +486,9 @@ void DocumentBuilder::collect_garbage() {
       if (p.contains("material")) renumber(p["material"], ni);
   used.assign(array_of(doc_, "textures").size(), false);
   for_each_texture_reference(array_of(doc_, "materials"), [&](json& r) { mark(r, used); });
+  for (size_t i = 0; i < used.size(); ++i)  // a texture's extension (KTX2, WebP, DDS image) goes with it: said
+    if (!used[i] && doc_["textures"][i].contains("extensions") && doc_["textures"][i]["extensions"].is_object())
+      for (const auto& [name, ext] : doc_["textures"][i]["extensions"].items()) removed_.insert(fmt::format("textures[{}].extensions.{}", i, name));
   ni = compact(doc_, "textures", used);
   for_each_texture_reference(array_of(doc_, "materials"), [&](json& r) { renumber(r, ni); });
   std::vector<bool> used_images(array_of(doc_, "images").size(), false), used_samplers(array_of(doc_, "samplers").size(), false);
@@ -581,8 +584,26 @@ void DocumentBuilder::update_extensions_used() {
   if (!required.empty()) doc_["extensionsRequired"] = required;
 }
 
+/// Removes every empty array below `j` (a node's `children: []`, a scene's `nodes: []`): glTF allows
+/// no empty array, and the input's own are dropped rather than carried into the output. Extras, the
+/// application's own data, are left as they are.
+void drop_empty_arrays(json& j) {
+  if (j.is_array()) {
+    for (json& e : j) drop_empty_arrays(e);
+    return;
+  }
+  if (!j.is_object()) return;
+  std::vector<std::string> empty;
+  for (auto& [key, value] : j.items()) {
+    if (key == "extras") continue;
+    drop_empty_arrays(value);
+    if (value.is_array() && value.empty()) empty.push_back(key);
+  }
+  for (const std::string& key : empty) j.erase(key);
+}
+
 json DocumentBuilder::build(std::string& bin, std::vector<std::string>& removed) {
-  source_ = mesh_.gltf.get();
+  source_ = mesh_.gltf && !mesh_.gltf->flattened ? mesh_.gltf.get() : nullptr;  // a flattened scene: a fresh document
   if (source_ != nullptr && mesh_.input_triangle.size() != mesh_.num_triangles())
     fail_internal("write_gltf: a glTF model's output needs input_triangle for each of its {} triangles", mesh_.num_triangles());
   if (source_ != nullptr && source_->vertex_source.size() != mesh_.num_vertices())
@@ -609,9 +630,9 @@ json DocumentBuilder::build(std::string& bin, std::vector<std::string>& removed)
   collect_garbage();
   rebuild_buffer(bin);
   update_extensions_used();
-  // glTF's top-level arrays may not be empty: the walks above create those the input did not have.
-  for (const char* name : {"accessors", "animations", "bufferViews", "images", "materials", "samplers", "skins", "textures"})
-    if (doc_.contains(name) && doc_[name].is_array() && doc_[name].empty()) doc_.erase(name);
+  // glTF's arrays may not be empty: the walks above create top-level ones the input did not have, and
+  // the input may hold its own.
+  drop_empty_arrays(doc_);
   removed.assign(removed_.begin(), removed_.end());
   return doc_;
 }

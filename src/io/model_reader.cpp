@@ -47,6 +47,11 @@ std::vector<Texture> load_texture_pixels(const TexturedMesh& mesh, size_t max_pi
 
 TexturedMesh read_model(const std::string& path, const ModelReadOptions& options, ModelReadStats* stats) {
   const std::string extension = std::filesystem::path(path).extension().string();
+  for (const char* tile : {".b3dm", ".i3dm", ".pnts", ".cmpt"})
+    if (equals_ignoring_case(extension, tile))
+      fail_input("{}: a 3D Tiles {} payload, not a model: run `python3 -m tightex.tiles` on its tileset.json (it keeps the batch and "
+                 "feature tables), or give the GLB inside it",
+                 path, tile + 1);
   TexturedMesh mesh = equals_ignoring_case(extension, ".ply")                                                  ? read_ply(path, options, stats)
                       : equals_ignoring_case(extension, ".gltf") || equals_ignoring_case(extension, ".glb") ? read_gltf(path, options, stats)
                                                                                                              : read_obj(path, options, stats);

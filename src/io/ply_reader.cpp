@@ -67,6 +67,13 @@ class PlyBody {
     line_ += size_t(std::count(p_, p, '\n'));
     p_ = p;
   }
+  /// Ends an entry (ascii): what is left of its last value's line must be blank, so a line holding more
+  /// values than the header declares is refused at that line, not one line later.
+  void end_entry() {
+    if (format_ != PlyFormat::kAscii) return;
+    while (p_ < end_ && *p_ != '\n' && is_space(*p_)) ++p_;
+    if (p_ < end_ && *p_ != '\n') fail("more values on the line than the header declares (from '{}')", excerpt(next_token()));
+  }
   /// Whether only blanks are left (ascii).
   bool only_blanks_left() {
     while (p_ < end_ && is_space(*p_)) ++p_;
@@ -363,6 +370,7 @@ void PlyReader::read_vertex(PlyBody& body, const PlyElement& e, VertexEntry& ver
         body.skip(prop);
     }
   }
+  body.end_entry();
 }
 
 void PlyReader::keep_vertex(size_t index, const VertexEntry& vertex) {
@@ -423,6 +431,7 @@ void PlyReader::read_face(PlyBody& body, const PlyElement& e, FaceEntry& face) c
       body.skip(prop);
     }
   }
+  body.end_entry();
 }
 
 void PlyReader::add_face(PlyBody& body, const FaceEntry& face, FaceArrays& out) const {

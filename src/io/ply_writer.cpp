@@ -27,10 +27,23 @@ bool positions_fit_float(const TexturedMesh& mesh) {
   return true;
 }
 
-/// The texture a face's texnumber names: its material's, or -1.
-int32_t face_texture(const TexturedMesh& mesh, size_t t) {
+/// Per texture, its page: the textures some material binds as its base colour numbered in order
+/// (texnumber and `comment TextureFile` name only these; a PLY reader takes every TextureFile for a
+/// page), -1 for the others.
+std::vector<int32_t> texture_pages(const TexturedMesh& mesh) {
+  std::vector<int32_t> page(mesh.textures.size(), -1);
+  for (const Material& m : mesh.materials)
+    if (m.texture >= 0) page[size_t(m.texture)] = 0;
+  int32_t next = 0;
+  for (int32_t& p : page)
+    if (p == 0) p = next++;
+  return page;
+}
+
+/// The page a face's texnumber names: its material's base colour's, or -1.
+int32_t face_page(const TexturedMesh& mesh, const std::vector<int32_t>& page, size_t t) {
   const int32_t m = mesh.face_material[t];
-  return m < 0 ? -1 : int32_t(mesh.materials[size_t(m)].texture);
+  return m < 0 || mesh.materials[size_t(m)].texture < 0 ? -1 : page[size_t(mesh.materials[size_t(m)].texture)];
 }
 
 std::string ply_header(const TexturedMesh& mesh, const std::vector<std::string>& texture_file, bool float_positions) {
@@ -43,8 +56,8 @@ std::string ply_header(const TexturedMesh& mesh, const std::vector<std::string>&
   return h;
 }
 
-/// The whole PLY file: header, vertices, faces.
-std::string ply_bytes(const TexturedMesh& mesh, const std::vector<std::string>& texture_file) {
+/// The whole PLY file: header, vertices, faces. `texture_file`: the file of each page (texture_pages).
+std::string ply_bytes(const TexturedMesh& mesh, const std::vector<std::string>& texture_file, const std::vector<int32_t>& page) {
   const bool float_positions = positions_fit_float(mesh);
   std::string out = ply_header(mesh, texture_file, float_positions);
   out.reserve(out.size() + mesh.num_vertices() * (float_positions ? 12 : 24) + mesh.num_triangles() * 42);
@@ -59,7 +72,7 @@ std::string ply_bytes(const TexturedMesh& mesh, const std::vector<std::string>& 
       put(out, float(uv.x()));
       put(out, float(uv.y()));
     }
-    put(out, face_texture(mesh, t));
+    put(out, face_page(mesh, page, t));
   }
   return out;
 }
@@ -73,9 +86,11 @@ std::vector<std::string> write_ply(const TexturedMesh& mesh, const std::string& 
     fail_input("{}: {} vertices are more than a PLY's int vertex indices can name", (fs::path(outdir) / ply_name).string(),
                mesh.num_vertices());
   std::vector<OutputFile> files = texture_output_files(mesh, encoding);
+  const std::vector<int32_t> page = texture_pages(mesh);
   std::vector<std::string> texture_file;
-  for (const OutputFile& f : files) texture_file.push_back(f.name);
-  files.push_back({ply_name, [&](const fs::path& tmp) { write_whole_file(tmp, ply_bytes(mesh, texture_file)); }});
+  for (size_t i = 0; i < files.size(); ++i)
+    if (page[i] >= 0) texture_file.push_back(files[i].name);
+  files.push_back({ply_name, [&](const fs::path& tmp) { write_whole_file(tmp, ply_bytes(mesh, texture_file, page)); }});
   write_files_atomically(outdir, files);
   return unbound_maps(
       mesh, [](const Material&, MapSlot) { return false; }, "PLY has no material maps; its image is written beside the model");

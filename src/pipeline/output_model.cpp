@@ -156,6 +156,49 @@ void add_kept_triangles(const Plan::State& plan, const TexturedMesh& input, std:
   }
 }
 
+/// Which corner of input triangle `r` is at corner `corner` of input triangle `t` (r repeats t: the same
+/// three positions).
+uint8_t same_corner(const TexturedMesh& input, uint32_t r, uint32_t t, uint8_t corner) {
+  const Vec3& p = input.positions[input.triangles[t][corner]];
+  for (uint8_t k = 0; k < 3; ++k)
+    if (input.positions[input.triangles[r][k]] == p) return k;
+  fail_internal("output model: triangle {} repeats triangle {} but lacks its corner {}", r, t, corner);
+}
+
+/// The exact repeats of the output's triangles from `first` on (SetAside::repeats), each appended as
+/// a copy of the triangle it repeats: its own vertices and normals, the same texture coordinates,
+/// material and (for a mapped one) bake triangle.
+void add_repeats(const SetAside& set_aside, const TexturedMesh& input, size_t first, OutputModel& om) {
+  std::vector<uint32_t> output_of(input.num_triangles(), kNone);
+  const size_t end = om.mesh.num_triangles();
+  for (size_t o = first; o < end; ++o) output_of[om.mesh.input_triangle[o]] = uint32_t(o);
+  const bool mapped = om.bake_triangles.size() == end;
+  for (const auto& [r, t] : set_aside.repeats) {
+    const uint32_t o = output_of[t];
+    if (o == kNone) continue;
+    uint8_t corner[3];
+    for (size_t k = 0; k < 3; ++k) corner[k] = same_corner(input, r, t, om.input_corner[3 * size_t(o) + k]);
+    add_input_triangle(input, r, corner, om.mesh, om.input_corner);
+    for (size_t k = 0; k < 3; ++k) om.mesh.corner_uv.push_back(om.mesh.corner_uv[3 * size_t(o) + k]);
+    om.mesh.face_material.push_back(om.mesh.face_material[o]);
+    if (mapped) om.bake_triangles.push_back(om.bake_triangles[o]);
+  }
+}
+
+/// The triangles with nothing to bake (SetAside::untextured), last: as they came, each input material
+/// copied once (kept_material).
+void add_untextured_triangles(const SetAside& set_aside, const TexturedMesh& input, std::set<std::string>& names, OutputModel& om) {
+  std::vector<int32_t> material_of(input.materials.size() + 1, -1);
+  std::vector<int> texture_of(input.textures.size(), -1);
+  static constexpr uint8_t kInOrder[3] = {0, 1, 2};
+  for (const uint32_t t : set_aside.untextured) {
+    const int32_t m = kept_material(input, input.face_material[t], material_of, texture_of, names, om.mesh);
+    add_input_triangle(input, t, kInOrder, om.mesh, om.input_corner);
+    for (int k = 0; k < 3; ++k) om.mesh.corner_uv.push_back(input.corner_uv[3 * size_t(t) + size_t(k)]);
+    om.mesh.face_material.push_back(m);
+  }
+}
+
 }  // namespace
 
 OutputModel build_output_model(const Plan::State& plan, const TexturedMesh& input) {
@@ -166,9 +209,15 @@ OutputModel build_output_model(const Plan::State& plan, const TexturedMesh& inpu
   om.bake_triangles.reserve(input.num_triangles());
   const std::vector<int> image_index = renumber_images(plan, &om.new_images);
   add_mapped_triangles(plan, input, image_index, om);
+  add_repeats(plan.set_aside, input, 0, om);
   std::set<std::string> names;  // file stems and material names taken, compared without case
   add_new_textures(plan, image_index, names, om);
+  const size_t kept_from = om.mesh.num_triangles();
   add_kept_triangles(plan, input, names, om.mesh, om.input_corner);
+  add_repeats(plan.set_aside, input, kept_from, om);
+  add_untextured_triangles(plan.set_aside, input, names, om);
+  if (!input.source_mesh.empty())
+    for (const uint32_t t : om.mesh.input_triangle) om.mesh.source_mesh.push_back(input.source_mesh[t]);
   return om;
 }
 

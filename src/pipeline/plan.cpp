@@ -249,6 +249,30 @@ uint64_t input_fingerprint(const TexturedMesh& input) {
   return h;
 }
 
+std::vector<char> untextured_triangles(const TexturedMesh& geometry, std::vector<uint32_t>& list) {
+  std::vector<char> untextured(geometry.num_triangles(), 0);
+  list.clear();
+  for (uint32_t t = 0; t < geometry.num_triangles(); ++t) {
+    const int32_t m = geometry.face_material[t];
+    if (m >= 0 && geometry.materials[size_t(m)].texture >= 0) continue;
+    untextured[t] = 1;
+    list.push_back(t);
+  }
+  if (list.size() == geometry.num_triangles())
+    fail_input("{}: nothing to bake: none of its {} triangles has a texture or vertex colours", geometry.source, list.size());
+  return untextured;
+}
+
+void scale_to_world_area(const TexturedMesh& geometry, std::vector<Surface>& components) {
+  if (geometry.source_mesh_area_scale.empty() || geometry.source_mesh.empty()) return;
+  for (Surface& comp : components) {
+    const double area_scale = geometry.source_mesh_area_scale[geometry.source_mesh[comp.input_face[0]]];
+    if (area_scale == 1.0 || !(area_scale > 0)) continue;
+    const double scale = std::sqrt(area_scale);
+    for (Vec3& p : comp.positions) p *= scale;
+  }
+}
+
 std::vector<std::optional<CutInputs>> prepare_cut_inputs(const TexturedMesh& input, const std::vector<Surface>& components) {
   std::vector<std::optional<CutInputs>> out(components.size());
   tbb::parallel_for(size_t(0), components.size(), [&](size_t c) {
@@ -273,15 +297,18 @@ std::unique_ptr<PreparedMesh::State> prepare_state(const TexturedMesh& geometry,
   //    elements.
   progress("repair", 0);
   const RepairStats& rs = prepared->repair;
-  const Surface surface = prepare_surface(geometry, &prepared->repair);
+  const std::vector<char> untextured = untextured_triangles(geometry, prepared->set_aside.untextured);
+  const Surface surface = prepare_surface(geometry, &prepared->repair, &prepared->set_aside.repeats,
+                                          prepared->set_aside.untextured.empty() ? nullptr : &untextured);
   if (surface.num_faces() == 0)
     fail_input("{}: no triangle with non-zero area ({} zero-area, {} duplicate)", geometry.source, rs.zero_area_triangles,
-               rs.duplicate_triangles);
+               rs.repeated_triangles);
   clock.done("repair");
 
   // 2. Connected components, each one's texture seams (the cut prefers them) and handles removed.
   progress("components", 0);
   prepared->components = split_components(surface);
+  scale_to_world_area(geometry, prepared->components);
   prepared->cut_inputs = prepare_cut_inputs(geometry, prepared->components);
   clock.done("seams+handles");
   return prepared;
@@ -308,6 +335,8 @@ Plan plan_prepared(const TexturedMesh& input, const Options& options, const Plan
   int& size = rep.options.size;
   plan->input_fingerprint = prepared->input_fingerprint;
   rep.preparation.repair = prepared->repair;
+  rep.preparation.untextured_kept = prepared->set_aside.untextured.size();
+  plan->set_aside = std::move(prepared->set_aside);
   rep.timings = std::move(prepared->timings);
   StageClock clock(rep.timings);
 

@@ -18,6 +18,12 @@
 
 namespace tightex {
 
+/// Input triangles that the surface leaves out and the output still holds (Plan::State::set_aside).
+struct SetAside {
+  std::vector<std::pair<uint32_t, uint32_t>> repeats;  // (repeat, the triangle it repeats), sorted
+  std::vector<uint32_t> untextured;                    // no texture to bake from: kept as they are
+};
+
 struct Plan::State {
   std::vector<Surface> components;    // Surface::input_face -> input triangle
   std::vector<Disk> disks;            // per component; face_parent -> component face (kNone: scaffolding)
@@ -28,6 +34,10 @@ struct Plan::State {
   /// its input texture coordinates and a copy of its input material(s) and texture(s) (bake_plan), so
   /// no triangle is ever dropped; its disk and uv are empty.
   std::vector<std::string> kept;
+  /// Input triangles outside the components that the output still holds: exact repeats, each with the
+  /// triangle it repeats (written as a copy of it), and triangles with nothing to bake (no texture),
+  /// written as they came.
+  SetAside set_aside;
   Report report;                   // what was done so far
   nlohmann::json report_json;      // the same, as Plan::report() gives it
   uint64_t input_fingerprint = 0;  // input_fingerprint() of the mesh planned
@@ -43,6 +53,7 @@ uint64_t input_fingerprint(const TexturedMesh& input);
 struct PreparedMesh::State {
   uint64_t input_fingerprint = 0;  // input_fingerprint() of the mesh prepared
   RepairStats repair;
+  SetAside set_aside;
   std::vector<Surface> components;
   std::vector<std::optional<CutInputs>> cut_inputs;
   std::vector<StageTiming> timings;  // "repair", "seams+handles"
@@ -50,6 +61,16 @@ struct PreparedMesh::State {
 
 /// Each component's cut_inputs, computed in parallel (nullopt where it throws InternalError).
 std::vector<std::optional<CutInputs>> prepare_cut_inputs(const TexturedMesh& input, const std::vector<Surface>& components);
+
+/// Per triangle of `geometry`, whether it has no texture to bake from (no material, or one without a
+/// texture); `list` gets them in order. Throws InputError when no triangle has one: nothing to bake.
+std::vector<char> untextured_triangles(const TexturedMesh& geometry, std::vector<uint32_t>& list);
+
+/// Scales each component (one source mesh's surface) by the square root of its source mesh's area
+/// scale (TexturedMesh::source_mesh_area_scale): its share of the texels, and its density, follow the
+/// area the scene shows of it. The maps are the same up to that similarity; the output keeps the
+/// input's own positions.
+void scale_to_world_area(const TexturedMesh& geometry, std::vector<Surface>& components);
 
 /// prepare_mesh's work, without the wrapper.
 std::unique_ptr<PreparedMesh::State> prepare_state(const TexturedMesh& geometry, const Options& options);

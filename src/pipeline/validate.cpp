@@ -1,5 +1,7 @@
 #include "pipeline/validate.hpp"
 
+#include <cmath>
+
 #include "core/error.hpp"
 
 namespace tightex {
@@ -29,6 +31,26 @@ void validate_mesh(const TexturedMesh& m) {
       if (m.materials[i].maps[s] < -1 || m.materials[i].maps[s] >= int(m.textures.size()))
         fail_input("{}: material {} binds texture {} as its {} map (mesh has {})", f, i, m.materials[i].maps[s], map_slot_name(MapSlot(s)),
                    m.textures.size());
+  }
+  if (!m.source_mesh.empty()) {
+    if (m.source_mesh.size() != m.triangles.size())
+      fail_input("{}: {} source meshes for {} triangles (needs 1 per triangle or none)", f, m.source_mesh.size(), m.triangles.size());
+    std::vector<uint32_t> vertex_mesh(m.positions.size(), kNone);
+    for (size_t t = 0; t < m.triangles.size(); ++t)
+      for (uint32_t v : m.triangles[t]) {
+        if (vertex_mesh[v] != kNone && vertex_mesh[v] != m.source_mesh[t])
+          fail_input("{}: vertex {} is used by source meshes {} and {} (they share no vertex)", f, v, vertex_mesh[v], m.source_mesh[t]);
+        vertex_mesh[v] = m.source_mesh[t];
+      }
+  }
+  if (!m.source_mesh_area_scale.empty()) {
+    for (size_t i = 0; i < m.source_mesh_area_scale.size(); ++i)
+      if (!(m.source_mesh_area_scale[i] >= 0 && std::isfinite(m.source_mesh_area_scale[i])))
+        fail_input("{}: source mesh {} has area scale {} (needs a finite one, 0 or more)", f, i, m.source_mesh_area_scale[i]);
+    for (size_t t = 0; t < m.source_mesh.size(); ++t)
+      if (m.source_mesh[t] >= m.source_mesh_area_scale.size())
+        fail_input("{}: triangle {} is of source mesh {}, which has no area scale ({} given)", f, t, m.source_mesh[t],
+                   m.source_mesh_area_scale.size());
   }
   if (!m.corner_tangent.empty() && m.corner_tangent.size() != 3 * m.triangles.size())
     fail_input("{}: {} corner tangents for {} triangles (needs 3 per triangle or none)", f, m.corner_tangent.size(), m.triangles.size());

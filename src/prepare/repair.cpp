@@ -11,6 +11,7 @@ namespace {
 
 struct PositionKey {
   uint64_t x, y, z;
+  uint32_t source_mesh;
   bool operator==(const PositionKey&) const = default;
 };
 struct PositionHash {
@@ -18,6 +19,7 @@ struct PositionHash {
     uint64_t h = k.x * 0x9E3779B97F4A7C15ull;
     h ^= (k.y + 0x632BE59BD9B4E019ull + (h << 6) + (h >> 2));
     h ^= (k.z + 0x85EBCA77C2B2AE63ull + (h << 6) + (h >> 2));
+    h ^= (k.source_mesh + 0x165667B19E3779F9ull + (h << 6) + (h >> 2));
     return size_t(h);
   }
 };
@@ -28,49 +30,120 @@ uint64_t bits(double d) {
   return b;
 }
 
-/// Step 1. Welds equal positions: OBJ exports split vertices along UV seams; the surface is one piece.
-/// Returns per input vertex its welded vertex; `origin` gets per welded vertex its first input vertex.
+/// Per input vertex, the source mesh of the triangles that use it (TexturedMesh::source_mesh; 0 where
+/// the model has one).
+std::vector<uint32_t> vertex_source_mesh(const TexturedMesh& mesh) {
+  std::vector<uint32_t> group(mesh.num_vertices(), 0);
+  if (mesh.source_mesh.empty()) return group;
+  for (size_t t = 0; t < mesh.num_triangles(); ++t)
+    for (uint32_t v : mesh.triangles[t]) group[v] = mesh.source_mesh[t];
+  return group;
+}
+
+/// Step 1. Welds equal positions within each source mesh: OBJ exports split vertices along UV seams;
+/// the surface is one piece. Two meshes of a glTF scene stay apart even where their geometry is the
+/// same. Returns per input vertex its welded vertex; `origin` gets per welded vertex its first input vertex.
 std::vector<uint32_t> weld_vertices(const TexturedMesh& mesh, std::vector<uint32_t>& origin) {
+  const std::vector<uint32_t> group = vertex_source_mesh(mesh);
   std::vector<uint32_t> weld(mesh.num_vertices());
   std::unordered_map<PositionKey, uint32_t, PositionHash> index;
   index.reserve(mesh.num_vertices() * 2);
   for (uint32_t v = 0; v < mesh.num_vertices(); ++v) {
     const Vec3& p = mesh.positions[v];
-    auto [it, inserted] = index.try_emplace(PositionKey{bits(p.x()), bits(p.y()), bits(p.z())}, uint32_t(origin.size()));
+    auto [it, inserted] = index.try_emplace(PositionKey{bits(p.x()), bits(p.y()), bits(p.z()), group[v]}, uint32_t(origin.size()));
     if (inserted) origin.push_back(v);
     weld[v] = it->second;
   }
   return weld;
 }
 
-/// Step 2. Drops zero-area and duplicated triangles: the kept ones go to `s0` (welded vertices, in
-/// input order; face_parent = input triangle).
-void drop_degenerate_triangles(const TexturedMesh& mesh, const std::vector<uint32_t>& weld, Surface& s0, RepairStats& st) {
-  std::vector<std::pair<Tri, uint32_t>> keyed;
+/// A triangle by its welded corners, rotated so the smallest index comes first (equal keys: the same
+/// corners in the same cyclic order), and how far it was rotated.
+struct RotatedTriangle {
+  Tri key;
+  uint32_t t;
+  uint8_t rotation;
+};
+
+/// Whether triangles a and b (the same corners in the same cyclic order) have the same texture
+/// coordinates at the same corners and the same material: one repeats the other exactly.
+bool same_attributes(const TexturedMesh& mesh, const RotatedTriangle& a, const RotatedTriangle& b) {
+  if (mesh.face_material[a.t] != mesh.face_material[b.t]) return false;
+  for (int k = 0; k < 3; ++k)
+    if (mesh.corner_uv[3 * size_t(a.t) + (a.rotation + k) % 3] != mesh.corner_uv[3 * size_t(b.t) + (b.rotation + k) % 3]) return false;
+  return true;
+}
+
+/// Step 2. Drops zero-area triangles, sets aside exact repeats (same corners, texture coordinates and
+/// material as an earlier triangle of the same source mesh: `repeats` gets (repeat, the triangle it
+/// repeats)), and the triangles `left_out` marks. A triangle with the corners of an earlier one but
+/// other texture coordinates or material is kept on a layer of its own (`layer`, 1 for the first such
+/// copy; all 0 when there is none). The kept ones go to `s0` (welded vertices, in input order;
+/// face_parent = input triangle).
+void drop_degenerate_triangles(const TexturedMesh& mesh, const std::vector<uint32_t>& weld, const std::vector<char>* left_out,
+                               Surface& s0, RepairStats& st, std::vector<std::pair<uint32_t, uint32_t>>& repeats,
+                               std::vector<uint32_t>& layer) {
+  std::vector<RotatedTriangle> keyed;
   keyed.reserve(mesh.num_triangles());
   for (uint32_t t = 0; t < mesh.num_triangles(); ++t) {
+    if (left_out != nullptr && (*left_out)[t]) continue;
     Tri f{weld[mesh.triangles[t][0]], weld[mesh.triangles[t][1]], weld[mesh.triangles[t][2]]};
     if (f[0] == f[1] || f[1] == f[2] || f[2] == f[0] || triangle_area(s0.positions, f) == 0.0) {
       ++st.zero_area_triangles;
       continue;
     }
-    // Rotate so the smallest index comes first: equal keys = same triangle, same orientation.
     const int m = f[0] < f[1] ? (f[0] < f[2] ? 0 : 2) : (f[1] < f[2] ? 1 : 2);
-    keyed.push_back({Tri{f[m], f[(m + 1) % 3], f[(m + 2) % 3]}, t});
+    keyed.push_back({Tri{f[m], f[(m + 1) % 3], f[(m + 2) % 3]}, t, uint8_t(m)});
   }
-  std::stable_sort(keyed.begin(), keyed.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::stable_sort(keyed.begin(), keyed.end(), [](const auto& a, const auto& b) { return a.key < b.key; });
   std::vector<char> keep(mesh.num_triangles(), 0);
-  for (size_t i = 0; i < keyed.size(); ++i) {
-    if (i > 0 && keyed[i].first == keyed[i - 1].first) {
-      ++st.duplicate_triangles;
-      continue;
+  for (size_t i = 0; i < keyed.size();) {
+    size_t end = i + 1;
+    while (end < keyed.size() && keyed[end].key == keyed[i].key) ++end;
+    std::vector<size_t> kept_in_run;  // the first triangle of each set of attributes, its layer its place
+    for (size_t k = i; k < end; ++k) {
+      const auto same = std::find_if(kept_in_run.begin(), kept_in_run.end(),
+                                     [&](size_t j) { return same_attributes(mesh, keyed[j], keyed[k]); });
+      if (same != kept_in_run.end()) {
+        ++st.repeated_triangles;
+        repeats.push_back({keyed[k].t, keyed[*same].t});
+        continue;
+      }
+      if (!kept_in_run.empty()) {
+        if (layer.empty()) layer.assign(mesh.num_triangles(), 0);
+        layer[keyed[k].t] = uint32_t(kept_in_run.size());
+        ++st.layered_triangles;
+      }
+      kept_in_run.push_back(k);
+      keep[keyed[k].t] = 1;
     }
-    keep[keyed[i].second] = 1;
+    i = end;
   }
+  std::sort(repeats.begin(), repeats.end());
   for (uint32_t t = 0; t < mesh.num_triangles(); ++t) {
     if (!keep[t]) continue;
     s0.triangles.push_back({weld[mesh.triangles[t][0]], weld[mesh.triangles[t][1]], weld[mesh.triangles[t][2]]});
     s0.face_parent.push_back(t);
+  }
+}
+
+/// Step 2b. Gives the triangles of each layer above 0 vertices of their own, shared within the layer,
+/// so that a copy of a surface with other texture coordinates becomes a surface of its own instead of
+/// a stack of non-manifold edges.
+void separate_layers(const std::vector<uint32_t>& layer, Surface& s0) {
+  if (layer.empty()) return;
+  std::unordered_map<uint64_t, uint32_t> copy;  // (layer, welded vertex) -> its copy
+  for (size_t f = 0; f < s0.num_faces(); ++f) {
+    const uint32_t l = layer[s0.face_parent[f]];
+    if (l == 0) continue;
+    for (uint32_t& v : s0.triangles[f]) {
+      auto [it, inserted] = copy.try_emplace(uint64_t(l) << 32 | v, uint32_t(s0.positions.size()));
+      if (inserted) {
+        s0.positions.push_back(s0.positions[v]);
+        s0.vertex_parent.push_back(s0.vertex_parent[v]);
+      }
+      v = it->second;
+    }
   }
 }
 
@@ -219,7 +292,8 @@ void close_slits(Surface& s, RepairStats& st) {
 
 }  // namespace
 
-Surface prepare_surface(const TexturedMesh& mesh, RepairStats* stats) {
+Surface prepare_surface(const TexturedMesh& mesh, RepairStats* stats, std::vector<std::pair<uint32_t, uint32_t>>* repeats,
+                        const std::vector<char>* left_out) {
   RepairStats st;
   st.input_vertices = mesh.num_vertices();
   std::vector<uint32_t> welded_origin;  // welded vertex -> first input vertex
@@ -230,7 +304,11 @@ Surface prepare_surface(const TexturedMesh& mesh, RepairStats* stats) {
   s0.positions.resize(welded_origin.size());
   for (size_t w = 0; w < welded_origin.size(); ++w) s0.positions[w] = mesh.positions[welded_origin[w]];
   s0.vertex_parent = welded_origin;
-  drop_degenerate_triangles(mesh, weld, s0, st);
+  std::vector<std::pair<uint32_t, uint32_t>> repeated;
+  std::vector<uint32_t> layer;
+  drop_degenerate_triangles(mesh, weld, left_out, s0, st, repeated, layer);
+  separate_layers(layer, s0);
+  if (repeats) *repeats = std::move(repeated);
 
   auto keyed = halfedges_by_edge(s0);
   const std::vector<char> reversed = orient_patches(s0, keyed, st);

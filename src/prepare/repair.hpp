@@ -1,6 +1,7 @@
 // Data preparation, first half (paper §4.1): make the input a clean manifold surface.
 #pragma once
 #include <cstddef>
+#include <utility>
 #include <vector>
 
 #include "core/surface.hpp"
@@ -11,7 +12,8 @@ struct RepairStats {
   size_t input_vertices = 0;
   size_t welded_vertices = 0;       // vertices after welding equal positions
   size_t zero_area_triangles = 0;   // dropped: repeated vertex or exactly zero 3D area
-  size_t duplicate_triangles = 0;   // dropped: same three vertices in the same cyclic order as an earlier one
+  size_t repeated_triangles = 0;   // set aside: an exact repeat of an earlier triangle (the output repeats its copy)
+  size_t layered_triangles = 0;     // the corners of an earlier triangle with other texture coordinates or material: a surface of their own
   size_t reoriented_triangles = 0;  // wound against the rest of their patch: corners 1 and 2 swapped
   size_t non_manifold_edges = 0;    // edges used by more than two triangles, sliced apart
   size_t inconsistent_edges = 0;    // edges whose two triangles disagree on orientation, sliced apart
@@ -20,17 +22,23 @@ struct RepairStats {
 };
 
 /// Makes the input a clean manifold surface (paper §4.1), in six steps: welds vertices with bit-equal
-/// positions, drops zero-area and duplicated triangles, orients each connected patch consistently (the
+/// positions within each source mesh (TexturedMesh::source_mesh), drops zero-area triangles, sets
+/// aside exact repeats (the same corners in the same cyclic order, texture coordinates and material as
+/// an earlier triangle of the same source mesh; `repeats`, if given, gets each as (repeat, the
+/// triangle it repeats), sorted) and the triangles `left_out` marks (if given; per input triangle),
+/// gives each copy of a surface with other texture coordinates or material vertices of its own, orients each connected patch consistently (the
 /// orientation most of its area has), pairs the halfedges of every edge used by exactly two triangles in
 /// opposite directions (every other edge is sliced: non-manifold edges, and edges whose two triangles
 /// still disagree on orientation, so a Mobius strip becomes an orientable strip), slices non-manifold
 /// vertices, and closes the slits slicing left inside one sheet.
 /// Requires: nothing of the mesh (any triangle soup; indices in range, as the readers guarantee).
-/// Guarantees: a manifold surface (`opposite` built) in which no triangle with area was dropped;
+/// Guarantees: a manifold surface (`opposite` built) holding every triangle with area that is neither
+/// set aside as a repeat nor left out;
 /// face_parent and input_face map to input triangles, vertex_parent to input vertices, and input_corner
 /// gives each corner's input corner (a reoriented triangle has its corners 1 and 2 swapped). `stats`,
 /// if given, gets what each step did.
 /// Throws: nothing of its own.
-Surface prepare_surface(const TexturedMesh& mesh, RepairStats* stats);
+Surface prepare_surface(const TexturedMesh& mesh, RepairStats* stats, std::vector<std::pair<uint32_t, uint32_t>>* repeats = nullptr,
+                        const std::vector<char>* left_out = nullptr);
 
 }  // namespace tightex

@@ -163,8 +163,9 @@ size_t count_charts(const TexturedMesh& m, const WeldedEdges& edges, double* sea
   const std::vector<uint32_t>& id = *ids;
   for (size_t t = 0; t < m.num_triangles(); ++t)
     area += triangle_area(m.positions[m.triangles[t][0]], m.positions[m.triangles[t][1]], m.positions[m.triangles[t][2]]);
+  // Triangles without a texture (a scene's untextured parts) sample nothing: they make no chart.
   size_t charts = 0;
-  for (uint32_t t = 0; t < m.num_triangles(); ++t) charts += id[t] == t;
+  for (uint32_t t = 0; t < m.num_triangles(); ++t) charts += id[t] == t && texture_of(m, t) >= 0;
   if (seam_length) *seam_length = area > 0 ? seam / std::sqrt(area) : 0;
   return charts;
 }
@@ -183,7 +184,7 @@ namespace {
 /// The sorted triple of a triangle's corner positions (bit patterns), so that the same triangle is
 /// found whatever its corner order and vertex numbering.
 struct CornerKey {
-  std::array<uint64_t, 9> v;
+  std::array<uint64_t, 10> v;  // the last: the source mesh, where both models have them
   auto operator<=>(const CornerKey&) const = default;
 };
 
@@ -195,10 +196,18 @@ bool has_float32_positions(const TexturedMesh& m) {
   return true;
 }
 
-/// The key of triangle t of m; `order` (optional) gets its corners in key order. With `as_float32`
-/// the positions are rounded to float32 first: a model written to a format that stores float32 (glTF)
-/// keeps its positions as exactly as that format can.
-CornerKey corner_key(const TexturedMesh& m, size_t t, bool as_float32, std::array<int, 3>* order) {
+/// How two models' triangles are keyed: with `as_float32` the positions are rounded to float32 first
+/// (a model written to a format that stores float32, glTF, keeps its positions as exactly as that
+/// format can); with `by_source_mesh` the key holds the triangle's source mesh (both models have them:
+/// two meshes of a scene with the same geometry are told apart).
+struct KeyRules {
+  bool as_float32 = false;
+  bool by_source_mesh = false;
+};
+
+/// The key of triangle t of m; `order` (optional) gets its corners in key order.
+CornerKey corner_key(const TexturedMesh& m, size_t t, const KeyRules& rules, std::array<int, 3>* order) {
+  const bool as_float32 = rules.as_float32;
   std::array<int, 3> o{0, 1, 2};
   auto corner_bits = [&](int k) {
     const Vec3& p = m.positions[m.triangles[t][k]];
@@ -211,6 +220,7 @@ CornerKey corner_key(const TexturedMesh& m, size_t t, bool as_float32, std::arra
     const auto b = corner_bits(o[i]);
     k.v[3 * i] = b[0], k.v[3 * i + 1] = b[1], k.v[3 * i + 2] = b[2];
   }
+  k.v[9] = rules.by_source_mesh ? m.source_mesh[t] : 0;
   if (order) *order = o;
   return k;
 }
@@ -250,17 +260,18 @@ void for_each_shared_run(std::span<const Pair> in, std::span<const Pair> out, si
 }
 
 /// Matches input triangles to output triangles, both sorted by (key, triangle): the k-th of an input
-/// triangle's copies matches the k-th copy in the output (the last where the output has fewer).
+/// triangle's copies matches the k-th copy in the output, each output triangle at most once, so two
+/// input copies need two in the output (the copies beyond the output's stay unmatched: lost).
 void match_sorted(std::span<const KeyedTriangle> in_keys, std::span<const KeyedTriangle> out_keys, std::vector<uint32_t>& match) {
   for_each_shared_run(in_keys, out_keys, 0, in_keys.size(), 0, [&](size_t i, size_t i_end, size_t o, size_t o_end) {
-    for (size_t k = i; k < i_end; ++k) match[in_keys[k].second] = out_keys[std::min(o + (k - i), o_end - 1)].second;
+    for (size_t k = i; k < i_end && o + (k - i) < o_end; ++k) match[in_keys[k].second] = out_keys[o + (k - i)].second;
   });
 }
 
 /// match_sorted for the input and output triangles whose keys hash alike (`in_run`, `out_run`, each in
 /// triangle order). One and one, the usual case, are matched without comparing their keys: match_triangles
 /// compares them after.
-void match_hash_run(const TexturedMesh& in, const TexturedMesh& out, bool as_float32, std::span<const HashedTriangle> in_run,
+void match_hash_run(const TexturedMesh& in, const TexturedMesh& out, const KeyRules& rules, std::span<const HashedTriangle> in_run,
                     std::span<const HashedTriangle> out_run, std::vector<uint32_t>& match) {
   if (in_run.size() == 1 && out_run.size() == 1) {
     match[in_run[0].second] = out_run[0].second;
@@ -269,7 +280,7 @@ void match_hash_run(const TexturedMesh& in, const TexturedMesh& out, bool as_flo
   auto keyed = [&](const TexturedMesh& m, std::span<const HashedTriangle> run) {
     std::vector<KeyedTriangle> keys;
     keys.reserve(run.size());
-    for (const auto& [hash, t] : run) keys.push_back({corner_key(m, t, as_float32, nullptr), t});
+    for (const auto& [hash, t] : run) keys.push_back({corner_key(m, t, rules, nullptr), t});
     std::sort(keys.begin(), keys.end());
     return keys;
   };
@@ -281,11 +292,11 @@ void match_hash_run(const TexturedMesh& in, const TexturedMesh& out, bool as_flo
 Correspondence match_triangles(const TexturedMesh& in, const TexturedMesh& out) {
   // Both models' triangles sorted by the hash of their key (then index), on every core; each input run
   // of a hash is matched with the output's run of that hash, blocks of input runs on every core.
-  const bool as_float32 = has_float32_positions(in) != has_float32_positions(out);
+  const KeyRules rules{has_float32_positions(in) != has_float32_positions(out), !in.source_mesh.empty() && !out.source_mesh.empty()};
   auto sorted_hashes = [&](const TexturedMesh& m) {
     std::vector<HashedTriangle> hashes(m.num_triangles());
     tbb::parallel_for(uint32_t(0), uint32_t(m.num_triangles()), [&](uint32_t t) {
-      hashes[t] = {hash_of(corner_key(m, t, as_float32, nullptr)), t};
+      hashes[t] = {hash_of(corner_key(m, t, rules, nullptr)), t};
     });
     tbb::parallel_sort(hashes.begin(), hashes.end());
     return hashes;
@@ -304,7 +315,7 @@ Correspondence match_triangles(const TexturedMesh& in, const TexturedMesh& out) 
     const auto o = size_t(std::lower_bound(out_h.begin(), out_h.end(), in_h[i].first, before) - out_h.begin());
     const std::span<const HashedTriangle> in_s(in_h), out_s(out_h);
     for_each_shared_run(in_s, out_s, i, r.end(), o, [&](size_t i0, size_t i1, size_t o0, size_t o1) {
-      match_hash_run(in, out, as_float32, in_s.subspan(i0, i1 - i0), out_s.subspan(o0, o1 - o0), c.match);
+      match_hash_run(in, out, rules, in_s.subspan(i0, i1 - i0), out_s.subspan(o0, o1 - o0), c.match);
     });
   });
   std::vector<char> lost(in.num_triangles(), 0);
@@ -313,7 +324,7 @@ Correspondence match_triangles(const TexturedMesh& in, const TexturedMesh& out) 
     if (c.match[t] != kNone) {
       // Equal keys, unless the hashes of two different keys met (then no output triangle has t's key).
       std::array<int, 3> oi, oo;
-      if (corner_key(in, t, as_float32, &oi) == corner_key(out, c.match[t], as_float32, &oo))
+      if (corner_key(in, t, rules, &oi) == corner_key(out, c.match[t], rules, &oo))
         for (size_t i = 0; i < 3; ++i) c.corner_map[t][size_t(oi[i])] = oo[i];
       else
         c.match[t] = kNone;
@@ -334,6 +345,7 @@ void count_flips(const TexturedMesh& out, const std::vector<uint32_t>& chart, si
   for (uint32_t t = 0; t < out.num_triangles(); ++t)
     if (sa[t] != 0) balance[chart[t]] += sa[t] > 0 ? 1 : -1;
   for (uint32_t t = 0; t < out.num_triangles(); ++t) {
+    if (texture_of(out, t) < 0) continue;  // untextured: its texture coordinates read nothing
     if (sa[t] == 0) {
       *degenerate += triangle_area(out.positions, out.triangles[t]) > 0;
       continue;
@@ -343,13 +355,48 @@ void count_flips(const TexturedMesh& out, const std::vector<uint32_t>& chart, si
   }
 }
 
+/// Per triangle of `out`, whether it repeats an earlier triangle exactly: the same image and texture
+/// coordinates at the same three corner positions (an input's repeated triangle, written as a copy of
+/// the one it repeats). One surface twice, not two surfaces on one texel.
+std::vector<char> exact_repeats(const TexturedMesh& out) {
+  auto key_of = [&](size_t t) {
+    uint64_t h = splitmix64(uint64_t(int64_t(texture_of(out, t))));
+    for (size_t k = 0; k < 3; ++k) {
+      const Vec2 uv = out.corner_uv[3 * t + k];
+      const Vec3& p = out.positions[out.triangles[t][k]];
+      for (const double x : {uv.x(), uv.y(), p.x(), p.y(), p.z()}) h = splitmix64(h ^ position_bits(x));
+    }
+    return h;
+  };
+  std::vector<std::pair<uint64_t, uint32_t>> keys(out.num_triangles());
+  tbb::parallel_for(uint32_t(0), uint32_t(keys.size()), [&](uint32_t t) { keys[t] = {key_of(t), t}; });
+  tbb::parallel_sort(keys.begin(), keys.end());
+  auto same = [&](uint32_t a, uint32_t b) {
+    if (texture_of(out, a) != texture_of(out, b)) return false;
+    for (size_t k = 0; k < 3; ++k)
+      if (out.corner_uv[3 * a + k] != out.corner_uv[3 * b + k] || out.positions[out.triangles[a][k]] != out.positions[out.triangles[b][k]])
+        return false;
+    return true;
+  };
+  std::vector<char> repeat(out.num_triangles(), 0);
+  for (size_t i = 1; i < keys.size(); ++i)
+    for (size_t j = i; j-- > 0 && keys[j].first == keys[i].first;)
+      if (!repeat[keys[j].second] && same(keys[j].second, keys[i].second)) {
+        repeat[keys[i].second] = 1;
+        break;
+      }
+  return repeat;
+}
+
 /// METRICS.md "overlap": texel centres covered by two or more triangles of the same image; a centre
-/// exactly on a shared edge is counted for one triangle only (top-left rule via a half-open test).
+/// exactly on a shared edge is counted for one triangle only (top-left rule via a half-open test). An
+/// exact repeat of a triangle (exact_repeats) is that triangle again, not an overlap.
 double overlap_fraction(const TexturedMesh& out) {
   size_t overlapped = 0, total = 0;
+  const std::vector<char> repeat = exact_repeats(out);
   std::vector<std::vector<size_t>> tris(out.textures.size());
   for (size_t t = 0; t < out.num_triangles(); ++t)
-    if (texture_of(out, t) >= 0) tris[size_t(texture_of(out, t))].push_back(t);
+    if (texture_of(out, t) >= 0 && !repeat[t]) tris[size_t(texture_of(out, t))].push_back(t);
   for (size_t i = 0; i < out.textures.size(); ++i) {
     const Image& img = out.textures[i].image;
     if (img.empty()) continue;
@@ -466,7 +513,10 @@ struct SurfacePoint {
 std::vector<SurfacePoint> surface_points(const TexturedMesh& in, const Correspondence& c, size_t samples) {
   std::vector<double> cdf(in.num_triangles());
   double acc = 0;
-  for (size_t t = 0; t < in.num_triangles(); ++t) cdf[t] = acc += c.area3[t];
+  // A scene's meshes by the area it shows of them (TexturedMesh::source_mesh_area_scale).
+  const bool scaled = !in.source_mesh_area_scale.empty() && !in.source_mesh.empty();
+  for (size_t t = 0; t < in.num_triangles(); ++t)
+    cdf[t] = acc += c.area3[t] * (scaled ? in.source_mesh_area_scale[in.source_mesh[t]] : 1.0);
   std::mt19937_64 rng(kPsnrSeed);
   std::uniform_real_distribution<double> uni(0.0, 1.0);
   std::vector<SurfacePoint> points;

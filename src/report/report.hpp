@@ -87,6 +87,7 @@ struct Preparation {
   size_t components_with_fallback = 0;        // CutStats::fallback_reason non-empty
   size_t components_longest_hole_capped = 0;  // CutStats::longest_loop_capped
   size_t components_kept_original_uvs = 0;    // Plan::kept non-empty
+  size_t untextured_kept = 0;                 // triangles with nothing to bake (no texture), written as they came
   // "components_listed" is Report::components.size().
 };
 

@@ -55,7 +55,9 @@ json preparation_json(const Preparation& p, size_t listed) {
   return {{"input_vertices", rs.input_vertices},
           {"welded_vertices", rs.welded_vertices},
           {"zero_area_dropped", rs.zero_area_triangles},
-          {"duplicates_dropped", rs.duplicate_triangles},
+          {"exact_repeats_copied", rs.repeated_triangles},
+          {"layered_triangles", rs.layered_triangles},
+          {"untextured_kept", p.untextured_kept},
           {"non_manifold_edges_sliced", rs.non_manifold_edges},
           {"inconsistent_edges_sliced", rs.inconsistent_edges},
           {"reoriented_triangles", rs.reoriented_triangles},
@@ -168,6 +170,8 @@ json reader_json(const ObjReadStats& stats) {
             {"paths_found", stats.paths_found},
             {"vertex_coloured_triangles", stats.vertex_coloured_triangles}};
   if (!stats.not_read.empty()) j["not_read"] = stats.not_read;  // glTF points and lines, kept as they were
+  if (stats.instances_flattened > 0) j["instances_flattened"] = stats.instances_flattened;
+  if (!stats.warnings.empty()) j["warnings"] = stats.warnings;
   return j;
 }
 

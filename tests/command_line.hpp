@@ -1,0 +1,37 @@
+// What the tests that run the `tightex` command share: a scratch folder of their own, whole files in
+// and out, and the command's exit status.
+#pragma once
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+namespace tightex::testing {
+
+/// An empty folder under the system's temporary folder, named for the test and this process (test
+/// shards run side by side).
+inline std::filesystem::path scratch_folder(const std::string& name) {
+  const std::filesystem::path d = std::filesystem::temp_directory_path() / ("tightex_" + name + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(d);
+  std::filesystem::create_directories(d);
+  return d;
+}
+
+inline void write_whole(const std::filesystem::path& p, const std::string& bytes) { std::ofstream(p, std::ios::binary) << bytes; }
+
+inline std::string read_whole(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+/// Runs `tightex ARGS` through the shell; its exit status (-1 when a signal ended it).
+inline int run_tightex(const std::string& args) {
+  const int status = std::system((std::string(TIGHTEX_CLI) + " " + args).c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+}  // namespace tightex::testing
