@@ -18,6 +18,8 @@ command's; ``--allow-large-size`` passes the command's own ``--force``.
   worker resource "memory"; local workers offer their share of this machine's memory, so a worker never
   runs two tiles together that would not fit. Workers of an external cluster that declare no "memory"
   resource run tiles without that check (a note says so).
+- A tile with nothing to bake (no texture, no vertex colours: the command refuses it) is copied through
+  unchanged and listed as "passed_through", not as failed.
 - A tile whose input is bad is reported with its one-line error and the others complete; a tile whose
   worker died is retried elsewhere (Dask's allowed-failures). A tile's outputs are written into a
   temporary folder beside it and renamed into place, so a half tile never appears.
@@ -128,6 +130,23 @@ def _optimize_b3dm(path, outdir, args):
     return report, stem + ".b3dm"
 
 
+# The library's message for a model with nothing to bake ("FILE: nothing to bake: ..."): such a tile is
+# copied through as it is.
+NOTHING_TO_BAKE = ": nothing to bake: "
+
+
+def _pass_through(tile, outdir):
+    """Copies the tile's input (a model with the files it names, or a b3dm) into ``outdir`` unchanged;
+    returns the copied content's file name."""
+    files = [tile["input"]] + (_referenced_files(tile["input"]) if tile["kind"] == "model" else [])
+    base = os.path.dirname(tile["input"])
+    for f in files:
+        target = os.path.join(outdir, os.path.relpath(f, base))
+        os.makedirs(os.path.dirname(target), exist_ok=True)
+        shutil.copyfile(f, target)
+    return os.path.basename(tile["input"])
+
+
 def _figures(report):
     """The summary's figures from a tile's report."""
     m = report.get("metrics", {})
@@ -170,6 +189,10 @@ def run_tile(tile, args):
         record.update(_figures(report), status="done", content=os.path.join(final, content))
     except (Error, OSError) as e:
         record["error"] = f"{type(e).__name__}: {e}".replace("\n", " ")
+        if isinstance(e, Error) and NOTHING_TO_BAKE in str(e):
+            content = _pass_through(tile, tmp)
+            _replace_folder(tmp, final)
+            record.update(status="passed_through", error=None, content=os.path.join(final, content), note="passed through: nothing to bake")
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     record["seconds"] = time.monotonic() - start
@@ -320,7 +343,7 @@ def write_tilesets(tilesets, records, input_root, output_root):
         base = os.path.dirname(ts["output"])
         for content, key, tile_id in ts["refs"]:
             record = records.get(tile_id, {})
-            if record.get("status") in ("done", "skipped") and record.get("content"):
+            if record.get("status") in ("done", "skipped", "passed_through") and record.get("content"):
                 content[key] = urllib.parse.quote(os.path.relpath(record["content"], base).replace(os.sep, "/"))
             else:
                 source = os.path.join(input_root, tile_id)
@@ -435,7 +458,8 @@ def _prepare(tile, manifest, args):
     tile["hash"] = input_hash(tile["input"])
     if is_done(tile, manifest, tile["hash"], args):
         earlier = manifest[tile["id"]]["record"]
-        return dict(earlier, status="skipped" if earlier["status"] == "done" else "failed", skipped=True)
+        status = {"done": "skipped", "passed_through": "passed_through"}.get(earlier["status"], "failed")
+        return dict(earlier, status=status, skipped=True)
     tile["estimate"] = _estimate(tile, args)
     return None
 
@@ -504,10 +528,10 @@ def run_tiles(client, tiles, args, output_root, use_resources, skipped=0):
             except Exception as e:
                 record = _error_record(tile, e)
             records[tile["id"]] = record
-            if record["status"] == "done" or str(record.get("error")).startswith("InputError"):
+            if record["status"] in ("done", "passed_through") or str(record.get("error")).startswith("InputError"):
                 append_manifest(output_root, record, tile["hash"], args)
-            done += record["status"] == "done"
-            failed += record["status"] != "done"
+            done += record["status"] in ("done", "passed_through")
+            failed += record["status"] not in ("done", "passed_through")
         running = sum(len(v) for v in client.processing().values()) if pending else 0
         progress.show(done, failed, min(running, len(pending)))
     progress.show(done, failed, 0, final=True)
@@ -517,7 +541,7 @@ def run_tiles(client, tiles, args, output_root, use_resources, skipped=0):
 def write_summary(output_root, records, wall_seconds, workers):
     """OUTPUT/summary.json (totals and every tile's record) and summary.csv (one row per tile)."""
     rows = sorted(records.values(), key=lambda r: r["tile"])
-    counts = {s: sum(r["status"] == s for r in rows) for s in ("done", "skipped", "failed")}
+    counts = {s: sum(r["status"] == s for r in rows) for s in ("done", "skipped", "passed_through", "failed")}
     summary = {"tiles": len(rows), **counts, "wall_seconds": wall_seconds, "workers": workers, "per_tile": rows}
     _write_atomically(os.path.join(output_root, "summary.json"), json.dumps(summary, indent=2) + "\n")
     tmp = os.path.join(output_root, f".summary.csv.tmp-{uuid.uuid4().hex[:8]}")
@@ -621,7 +645,10 @@ def main(argv=None):
     for r in sorted(records.values(), key=lambda r: r["tile"]):
         if r["status"] == "failed":
             print(f"tightex.tiles: {r['tile']}: {r['error']}", file=sys.stderr)
-    print(f"tightex.tiles: {summary['done']} done, {summary['skipped']} skipped, {summary['failed']} failed in "
+        if r["status"] == "passed_through":
+            print(f"tightex.tiles: {r['tile']}: passed through: nothing to bake", file=sys.stderr)
+    print(f"tightex.tiles: {summary['done']} done, {summary['skipped']} skipped, {summary['passed_through']} passed through "
+          f"(nothing to bake), {summary['failed']} failed in "
           f"{summary['wall_seconds']:.1f} s; {os.path.join(opts.output, 'summary.json')}", file=sys.stderr)
     return 1 if summary["failed"] else 0
 

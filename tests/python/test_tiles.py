@@ -29,6 +29,9 @@ def tile_folder(root, boxes=(30, 60, 45), small=0):
     for i in range(small):
         make_boxes(os.path.join(root, "c", f"s{i}"), 2 + i % 8, 100 + i)
     make_bad_obj(os.path.join(root, "b", "bad.obj"))
+    # Nothing to bake: no material, no texture: copied through.
+    with open(os.path.join(root, "b", "plain.obj"), "w") as f:
+        f.write("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/1\n")
 
 
 def check_done_tile(record):
@@ -46,23 +49,27 @@ def no_temporaries(root):
 
 
 def test_folder_bad_tile_and_rerun(tightex, tmp_path):
-    tile_folder(tmp_path / "in", small=36)  # 40 tiles
+    tile_folder(tmp_path / "in", small=36)  # 41 tiles
     rc, err = run_tiles(tmp_path / "in", tmp_path / "out", "--workers", "2", "--size", "128")
     assert rc == 1, err
     with open(tmp_path / "out" / "summary.json") as f:
         summary = json.load(f)
-    assert (summary["done"], summary["failed"], summary["workers"]) == (39, 1, 2)
+    assert (summary["done"], summary["passed_through"], summary["failed"], summary["workers"]) == (39, 1, 1, 2)
     records = {r["tile"]: r for r in summary["per_tile"]}
     for tile, record in records.items():
-        if tile != "b/bad.obj":
+        if tile not in ("b/bad.obj", "b/plain.obj"):
             check_done_tile(record)
+    plain = records["b/plain.obj"]
+    assert plain["status"] == "passed_through" and "b/plain.obj: passed through: nothing to bake" in err
+    with open(plain["content"]) as copied, open(tmp_path / "in" / "b" / "plain.obj") as original:
+        assert copied.read() == original.read()
     with open(os.path.join(os.path.dirname(records["b/t2/boxes.obj"]["content"]), "report.json")) as f:
         assert len(json.load(f)["metrics"]["input"]["image_utilization"]) == 2  # both pages read
     bad = records["b/bad.obj"]
     assert bad["status"] == "failed" and bad["error"].startswith("InputError: ") and "bad.obj:" in bad["error"]
     assert "\n" not in bad["error"] and "b/bad.obj: InputError" in err
     with open(tmp_path / "out" / "summary.csv") as f:
-        assert len(f.read().splitlines()) == 41
+        assert len(f.read().splitlines()) == 42
     assert not no_temporaries(tmp_path / "out")
     assert not [n for d, _, files in os.walk(tmp_path / "out") for n in files if n == "report.html"], "no page per tile without --html"
 
@@ -72,11 +79,11 @@ def test_folder_bad_tile_and_rerun(tightex, tmp_path):
     assert rc == 1 and "0 to do" in err, err
     with open(tmp_path / "out" / "summary.json") as f:
         again = json.load(f)
-    assert (again["skipped"], again["failed"], again["workers"]) == (39, 1, 0)
+    assert (again["skipped"], again["passed_through"], again["failed"], again["workers"]) == (39, 1, 1, 0)
     assert all(os.stat(records[t]["content"]).st_mtime_ns == m for t, m in mtimes.items())
     # Changed options redo the tiles.
     rc, err = run_tiles(tmp_path / "in", tmp_path / "out", "--workers", "2", "--size", "64")
-    assert rc == 1 and "40 to do" in err, err
+    assert rc == 1 and "41 to do" in err, err
 
 
 def write_tileset(root, tileset):
