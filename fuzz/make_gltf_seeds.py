@@ -2,7 +2,8 @@
 """Writes the seeds of fuzz/corpus/fuzz_gltf: small glTF models as run_gltf (fuzz/targets.hpp) reads them,
 GLB and .gltf text, each using another part of the format (indices or none, strips and fans, an embedded
 PNG or the harness folder's t.png, data URIs, COLOR_0, KHR_texture_transform, normalized UVs, byteStride,
-points beside triangles, nested nodes, a sampler) and a few that lie."""
+points beside triangles, nested nodes, a sampler, a scene of copies, mirrored and untextured parts and
+KTX2 textures) and a few that lie."""
 import base64
 import json
 import os
@@ -119,6 +120,26 @@ def main():
     d.j["meshes"] = [{"primitives": [{"attributes": {"POSITION": a, "TEXCOORD_0": uv}, "mode": 5, "material": 0}]}]
     d.j["nodes"] = [{"mesh": 0}]
     seeds["strided_strip_no_scene.glb"] = d.glb()
+
+    # A scene: two meshes on one POSITION accessor with their own texture coordinates, one shown twice
+    # (once mirrored), an untextured primitive, an empty children array, a KTX2 texture with a PNG
+    # fallback; then the same KTX2 texture without one.
+    d = Doc()
+    p = quad(d)
+    copy = dict(p, attributes=dict(p["attributes"], TEXCOORD_0=d.accessor("ff", [(0.5, 0.5), (1.0, 0.5), (1.0, 1.0), (0.5, 1.0)], 5126, "VEC2")))
+    plain = {"attributes": {"POSITION": d.accessor("fff", [(0.0, 0.0, 1.0), (1.0, 0.0, 1.0), (0.0, 1.0, 1.0)], 5126, "VEC3")}, "material": 1}
+    textured(d, {"bufferView": d.view(png()), "mimeType": "image/png"})
+    d.j["images"].append({"bufferView": d.view(b"\xabKTX 20\xbb\r\n\x1a\n"), "mimeType": "image/ktx2"})
+    d.j["textures"][0]["extensions"] = {"KHR_texture_basisu": {"source": 1}}
+    d.j["materials"].append({"pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.4, 0.6, 1]}})
+    d.j["extensionsUsed"] = ["KHR_texture_basisu"]
+    d.j["meshes"] = [{"primitives": [p]}, {"primitives": [copy, plain]}]
+    d.j["nodes"] = [{"mesh": 0, "children": []}, {"mesh": 1, "scale": [-1, 1, 1], "translation": [3, 0, 0]}, {"mesh": 1, "children": [0]}]
+    d.j["scenes"] = [{"nodes": [1, 2]}]
+    d.j["scene"] = 0
+    seeds["scene_copies_mirror_untextured_ktx2.glb"] = d.glb()
+    del d.j["textures"][0]["source"]
+    seeds["scene_ktx2_without_fallback.glb"] = d.glb()
 
     d = Doc()
     p = quad(d)

@@ -182,6 +182,16 @@ inline Outcome run_gltf(const uint8_t* data, size_t size) {
   } catch (const InputError&) {
     return Outcome::kRefused;
   }
+  // The scene in world space too (an OBJ or PLY output's reading): the same document, every instance.
+  ModelReadOptions flat = options;
+  flat.flatten_scene = true;
+  try {
+    const TexturedMesh world = read_gltf(path, flat);
+    check_mesh(world, false);
+    require(world.source_mesh.size() == world.num_triangles(), "a flattened scene without a source mesh per triangle");
+  } catch (const InputError&) {
+    // A scene whose instances hold too many triangles may be refused flattened alone.
+  }
   options.load_textures = true;
   TexturedMesh mesh;
   try {
