@@ -112,12 +112,13 @@ std::vector<Texture> load_texture_pixels(const TexturedMesh& mesh, size_t max_pi
 /// tile runner.
 TexturedMesh read_model(const std::string& path, const ModelReadOptions& options = {}, ModelReadStats* stats = nullptr);
 
-enum class ImageFormat { kPng, kJpeg };
+enum class ImageFormat { kPng, kJpeg, kWebp };
 
 /// ImageEncoding::png_level's default: zlib level 1, the Z_RLE strategy and the UP filter on every row:
 /// several times faster than level 6, files within about a tenth of level 9's (BENCHMARKS.md, "Options").
 constexpr int kPngLevelFast = -1;
 constexpr int kDefaultJpegQuality = 92;
+constexpr int kDefaultWebpQuality = 90;
 
 /// How the texture images of a model are encoded: the format and its setting. An ImageFormat converts
 /// to it with the defaults, so a writer call that names only a format means the fast PNG or quality 92.
@@ -127,11 +128,22 @@ struct ImageEncoding {
   /// choice of filter per row (9: the smallest file, the slowest).
   int png_level = kPngLevelFast;
   int jpeg_quality = kDefaultJpegQuality;  // JPEG: 1..100
+  int webp_quality = kDefaultWebpQuality;  // WebP: 1..100 (lossy)
+  bool webp_lossless = false;              // WebP: lossless instead
 
   ImageEncoding() = default;
   ImageEncoding(ImageFormat image_format) : format(image_format) {}  // NOLINT(google-explicit-constructor): see above
   ImageEncoding(ImageFormat image_format, int png, int jpeg) : format(image_format), png_level(png), jpeg_quality(jpeg) {}
+  /// Whether a written image may differ from the pixels (JPEG, lossy WebP).
+  bool lossy() const { return format == ImageFormat::kJpeg || (format == ImageFormat::kWebp && !webp_lossless); }
 };
+
+/// The image encoded as `encoding` says, in memory: the bytes save_image writes. Throws as save_image
+/// does (InputError for a setting out of range, naming `name`).
+std::string encode_image(const Image& image, const ImageEncoding& encoding, const std::string& name = "image");
+
+/// The file extension of a format, with its dot: ".png", ".jpg", ".webp".
+const char* image_extension(ImageFormat format);
 
 /// Loads an image file. Throws InputError naming the file and the problem (missing, unreadable,
 /// truncated, corrupt, unsupported, or larger than max_pixels) -- never crashes on a bad file.

@@ -164,6 +164,10 @@ struct Options {
   /// Compute the METRICS.md figures into report["metrics"]. A caller that writes the result can turn
   /// this off and measure beside the write (the CLI does).
   bool measure = true;
+  /// Triangles with nothing to bake (no texture, no vertex colours) are written as they came, with
+  /// their material. false: their colour is baked into the new texture like any other (an output
+  /// format without materials, PLY, has no other place for it).
+  bool keep_untextured = true;
   /// Progress and cancellation (see ProgressCallback); empty: none.
   ProgressCallback progress;
 };

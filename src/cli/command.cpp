@@ -11,6 +11,7 @@
 #include <CLI/CLI.hpp>
 #include <array>
 #include <chrono>
+#include <numeric>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -31,6 +32,7 @@
 #include "report/metrics.hpp"
 #include "report/preview.hpp"
 #include "report/report.hpp"
+#include "cli/texture_bytes.hpp"
 
 namespace fs = std::filesystem;
 
@@ -111,7 +113,7 @@ std::string check_aspect(const std::string& v) {
 
 /// The option names as given on the command line, before they become enum values.
 struct ChoiceNames {
-  std::string layout, format = "png", holes, map, corners;
+  std::string layout, format, holes, map, corners;  // format empty: the input's
   std::string output_format;  // empty: not given
 };
 
@@ -122,12 +124,37 @@ void define_encoding_options(CLI::App& app, CommandLine& line, const ChoiceNames
                                    "smaller than the default, many times slower to write). Default: fast settings (level 1, "
                                    "run-length matches, the Up filter)")
                         ->check(CLI::Range(0, 9));
-  auto* jpeg_quality =
-      app.add_option("--jpeg-quality", line.encoding.jpeg_quality, "JPEG textures (--format jpg): quality 1..100 (default 92)")
-          ->check(CLI::Range(1, 100));
-  app.callback([png_level, jpeg_quality, &names] {
-    if (png_level->count() > 0 && names.format != "png") throw CLI::ValidationError("--png-level", "needs --format png");
-    if (jpeg_quality->count() > 0 && names.format != "jpg") throw CLI::ValidationError("--jpeg-quality", "needs --format jpg");
+  auto* jpeg_quality = app.add_option("--jpeg-quality", line.encoding.jpeg_quality,
+                                      "JPEG textures: quality 1..100 (default: rate control, see --format)")
+                           ->check(CLI::Range(1, 100));
+  auto* webp_quality = app.add_option("--webp-quality", line.encoding.webp_quality,
+                                      "lossy WebP textures: quality 1..100 (default: rate control, see --format)")
+                           ->check(CLI::Range(1, 100));
+  auto* webp_lossless = app.add_flag("--webp-lossless", line.encoding.webp_lossless, "WebP textures: lossless (with --format webp)");
+  auto* target = app.add_option("--target-psnr", line.target_psnr_db,
+                                "lossy textures: the lowest quality whose written images reach this surface PSNR against the input (dB)")
+                     ->check(CLI::Range(1.0, 99.0));
+  auto* max_bytes = app.add_option("--max-bytes", line.max_bytes, "lossy textures: the highest quality whose images take at most this many bytes")
+                        ->check(CLI::PositiveNumber);
+  app.callback([png_level, jpeg_quality, webp_quality, webp_lossless, target, max_bytes, &names, &line] {
+    auto needs = [&](const CLI::Option* o, const char* option, std::initializer_list<const char*> formats) {
+      if (o->count() == 0 || names.format.empty()) return;
+      for (const char* f : formats)
+        if (names.format == f) return;
+      throw CLI::ValidationError(option, fmt::format("needs --format {} (does nothing with --format {})", *formats.begin(), names.format));
+    };
+    needs(png_level, "--png-level", {"png"});
+    needs(jpeg_quality, "--jpeg-quality", {"jpg"});
+    needs(webp_quality, "--webp-quality", {"webp"});
+    needs(webp_lossless, "--webp-lossless", {"webp"});
+    needs(target, "--target-psnr", {"jpg", "webp"});
+    needs(max_bytes, "--max-bytes", {"jpg", "webp"});
+    if (target->count() > 0 && max_bytes->count() > 0) throw CLI::ValidationError("--target-psnr", "goes without --max-bytes");
+    if ((target->count() > 0 || max_bytes->count() > 0) && (jpeg_quality->count() > 0 || webp_quality->count() > 0))
+      throw CLI::ValidationError("--target-psnr/--max-bytes", "choose the quality: they go without --jpeg-quality and --webp-quality");
+    line.quality_given = jpeg_quality->count() > 0 || webp_quality->count() > 0;
+    for (const auto* o : {png_level, jpeg_quality, webp_quality, webp_lossless})
+      if (o->count() > 0) line.codec_options.push_back(o->get_name());
   });
 }
 
@@ -203,7 +230,10 @@ CLI::Option* define_options(CLI::App& app, CommandLine& line, ChoiceNames& names
       ->check(CLI::PositiveNumber);
   app.add_option("--layout", names.layout, "atlas: all components in one texture; per-component: one texture each (the paper's)")
       ->check(CLI::IsMember(names_of(kLayouts)));
-  app.add_option("--format", names.format, "texture file format")->check(CLI::IsMember({"png", "jpg"}));
+  app.add_option("--format", names.format,
+                 "texture file format: png, jpg or webp. Default: the input's base colour's (PNG for vertex colours or mixed "
+                 "inputs); a lossy one at the highest quality whose images take no more bytes than the input's")
+      ->check(CLI::IsMember({"png", "jpg", "webp"}));
   define_encoding_options(app, line, names);
   app.add_option("--output-format", names.output_format,
                  "model file format: obj (OBJ + MTL), ply (binary PLY, textures named by comment TextureFile), gltf (.gltf + .bin "
@@ -233,7 +263,9 @@ void finish_command_line(CommandLine& line, const ChoiceNames& names, const CLI:
   line.holes = parsed(kHoleModes, names.holes);
   line.map = parsed(kMapKinds, names.map);
   line.corners = parsed(kCornerRules, names.corners);
-  line.encoding.format = names.format == "png" ? ImageFormat::kPng : ImageFormat::kJpeg;
+  if (!names.format.empty())
+    line.image_format = names.format == "png" ? ImageFormat::kPng : names.format == "jpg" ? ImageFormat::kJpeg : ImageFormat::kWebp;
+  line.encoding.format = line.image_format.value_or(ImageFormat::kPng);
   line.output_format = model_format_of(line.input);
   for (size_t i = 0; i < kModelFormatNames.size(); ++i)
     if (names.output_format == kModelFormatNames[i]) line.output_format = ModelFormat(i);
@@ -367,6 +399,7 @@ Options library_options(const CommandLine& line, int size, ProgressCallback prog
   opt.linear_light_colour = line.linear_light_colour;
   opt.map_budget_db = line.map_budget_db;
   opt.measure = false;
+  opt.keep_untextured = line.output_format != ModelFormat::kPly;  // PLY has no material for an untextured colour
   opt.progress = std::move(progress);
   return opt;
 }
@@ -559,15 +592,30 @@ void write_preview(const std::string& preview_path, const TexturedMesh& input, c
   if (ec) fail_input("{}: cannot write preview ({})", preview_path, ec.message());
 }
 
+/// The input's textured materials whose colour factor is not white (read from glTF: the factor a
+/// glTF output keeps in its material, which OBJ and PLY outputs lose).
+size_t tinted_textures(const TexturedMesh& input) {
+  if (!input.gltf) return 0;
+  size_t n = 0;
+  for (const Material& m : input.materials) n += m.texture >= 0 && (m.kd[0] != 1.0 || m.kd[1] != 1.0 || m.kd[2] != 1.0);
+  return n;
+}
+
 /// One warning line each for what the output does not carry: the input's parts the reader left as they
 /// were (written back only to glTF), what the glTF writer removed (texture slots that cannot follow
 /// the new texture coordinates; one line), and each map slot OBJ or PLY cannot bind (one line each).
-void print_not_carried(const CommandLine& line, const ObjReadStats& read_stats, const std::vector<std::string>& removed) {
+void print_not_carried(const CommandLine& line, const TexturedMesh& input, const ObjReadStats& read_stats,
+                       const std::vector<std::string>& removed) {
   const bool gltf = line.output_format == ModelFormat::kGltf || line.output_format == ModelFormat::kGlb;
   for (const std::string& w : read_stats.warnings) fmt::print(stderr, "tightex: warning: {}\n", w);
   if (read_stats.instances_flattened > 0)
     fmt::print(stderr, "tightex: note: the glTF scene's {} mesh instances are written in world space ({} has no scene graph)\n",
                read_stats.instances_flattened, kModelFormatNames[size_t(line.output_format)]);
+  if (!gltf && tinted_textures(input) > 0)
+    fmt::print(stderr,
+               "tightex: warning: {} textured material(s) have a colour factor (glTF baseColorFactor) that {} cannot carry and the new "
+               "texture does not hold; --output-format glb keeps it\n",
+               tinted_textures(input), kModelFormatNames[size_t(line.output_format)]);
   if (!gltf && !read_stats.not_read.empty())
     fmt::print(
         stderr, "tightex: warning: {} {} of the input {} not written ({} has no place for them; --output-format glb keeps them): {}\n",
@@ -601,7 +649,8 @@ fs::path write_reports(const CommandLine& line, const nlohmann::json& report, co
 }
 
 /// The one-line summary (and with --verbose the metrics) on stdout.
-void print_summary(const CommandLine& line, const TexturedMesh& output, size_t components, const Metrics& metrics, double wall_seconds) {
+void print_summary(const CommandLine& line, const TexturedMesh& output, size_t components, const Metrics& metrics,
+                   const nlohmann::json& bytes, double wall_seconds) {
   // The new texture's size (the first of several: per-component layout).
   std::string texture;
   if (!output.textures.empty()) {
@@ -610,10 +659,72 @@ void print_summary(const CommandLine& line, const TexturedMesh& output, size_t c
   }
   fmt::print(
       "tightex: {} -> {}/{}  ({}{} components, {:.1f}% -> {:.1f}% texels used, {} charts, "
-      "PSNR {:.1f} dB, {} lost, {} flipped, {:.2f} s)\n",
+      "PSNR {:.1f} dB ({:.1f} as written), textures {:.0f} -> {:.0f} KiB {}, {} lost, {} flipped, {:.2f} s)\n",
       line.input, line.outdir, output_model_name(line), texture, components, 100 * metrics.input.utilization,
-      100 * metrics.output.utilization, metrics.charts, metrics.surface_psnr, metrics.lost_triangles, metrics.flipped, wall_seconds);
+      100 * metrics.output.utilization, metrics.charts, metrics.surface_psnr, bytes["surface_psnr_written_db"].get<double>(),
+      bytes["input"]["total"].get<double>() / 1024, bytes["output"]["total"].get<double>() / 1024,
+      bytes["encoding"]["format"].get<std::string>(), metrics.lost_triangles, metrics.flipped, wall_seconds);
   if (line.verbose) fmt::print("{}\n", to_json(metrics).dump(2));
+}
+
+BytesRequest bytes_request(const CommandLine& line) {
+  return {line.image_format, line.encoding, line.quality_given, line.target_psnr_db, line.max_bytes};
+}
+
+/// Refuses --target-psnr or --max-bytes where the images will be written losslessly (no --format, and
+/// the input's base colour is PNG): they choose a lossy codec's quality.
+void check_rate_control(const CommandLine& line, const TexturedMesh& geometry) {
+  const bool rate = line.target_psnr_db > 0 || line.max_bytes > 0;
+  if ((!rate && line.codec_options.empty()) || line.image_format) return;  // with --format, the parser checked them
+  const ImageFormat f = base_colour_format(geometry, texture_sources(geometry)).value_or(ImageFormat::kPng);
+  const char* name = f == ImageFormat::kJpeg ? "jpg" : f == ImageFormat::kWebp ? "webp" : "png";
+  if (rate && f == ImageFormat::kPng)
+    fail_input("{}: --target-psnr and --max-bytes choose a lossy codec's quality, and this input's images would be written as PNG: "
+               "add --format webp or --format jpg",
+               line.input);
+  for (const std::string& option : line.codec_options) {
+    const bool fits = (option == "--png-level" && f == ImageFormat::kPng) || (option == "--jpeg-quality" && f == ImageFormat::kJpeg) ||
+                      (option.rfind("--webp", 0) == 0 && f == ImageFormat::kWebp);
+    if (!fits)
+      fail_input("{}: {} does nothing: the images are written as {}, the input's codec (--format chooses another)", line.input, option, name);
+  }
+}
+
+/// Whether --target-psnr chooses the texel budget too: a lossy codec, and no budget given.
+bool budget_follows_target(const CommandLine& line, const EncodingChoice& choice) {
+  return line.target_psnr_db > 0 && choice.encoding.lossy() && !line.size_given && !(line.texels > 0);
+}
+
+/// The texel budgets --target-psnr tries, as fractions of the default's texels, largest first.
+constexpr double kTargetBudgetFractions[] = {0.7, 0.5, 0.35, 0.25, 0.18};
+
+/// --target-psnr's budget search: `result` and `choice` (the default budget's, at the lowest quality
+/// that reaches the target as written) are replaced by a smaller budget's, re-planned and baked, where
+/// it reaches the target in fewer bytes. Stops at the first budget that misses the target or takes more
+/// bytes than the best so far. Returns each budget tried (side, quality, bytes, written PSNR).
+nlohmann::json smallest_reaching_target(const CommandLine& line, const TexturedMesh& input, const std::vector<TextureSource>& sources,
+                                        const Options& opt, Result& result, EncodingChoice& choice) {
+  auto total = [](const EncodingChoice& c) { return std::accumulate(c.bytes.begin(), c.bytes.end(), uint64_t(0)); };
+  auto entry = [&](int side, const EncodingChoice& c) {
+    return nlohmann::json{{"size", side},
+                          {"quality", c.encoding.format == ImageFormat::kJpeg ? c.encoding.jpeg_quality : c.encoding.webp_quality},
+                          {"bytes", total(c)},
+                          {"surface_psnr_written_db", c.written_psnr_db.value_or(0)}};
+  };
+  nlohmann::json tried = nlohmann::json::array({entry(opt.size, choice)});
+  if (!(choice.written_psnr_db.value_or(0) >= line.target_psnr_db)) return tried;  // the default budget misses it already
+  for (const double fraction : kTargetBudgetFractions) {
+    Options smaller = opt;
+    smaller.size = std::max(8, int(std::lround(opt.size * std::sqrt(fraction) / 4)) * 4);
+    smaller.progress = nullptr;
+    Result r = bake_plan(plan_charts(input, smaller), input, smaller);
+    EncodingChoice c = choose_encoding(bytes_request(line), input, sources, r.output);
+    tried.push_back(entry(smaller.size, c));
+    if (!(c.written_psnr_db.value_or(0) >= line.target_psnr_db) || total(c) >= total(choice)) break;
+    c.reason += fmt::format("; a texel budget of {}^2 (of the default {}^2) reaches the target in the fewest bytes", smaller.size, opt.size);
+    result = std::move(r), choice = std::move(c);
+  }
+  return tried;
 }
 
 /// The model's geometry (no pixels) with its textures' sizes from their headers, checked against the
@@ -675,6 +786,7 @@ nlohmann::json run_command(const CommandLine& line, const CommandHooks& hooks) {
   TexturedMesh geometry = read_geometry(line, &read_stats);
   timings.read_s = seconds_since(t0);
   timings.read_cpu = process_cpu_times();
+  check_rate_control(line, geometry);
   const int size = texture_side(line, geometry);
   const bool printing = hooks.print && !line.quiet;
   const bool show_progress = !hooks.progress && printing && isatty(STDERR_FILENO);
@@ -687,18 +799,28 @@ nlohmann::json run_command(const CommandLine& line, const CommandHooks& hooks) {
   if (show_progress) fmt::print(stderr, "\r\033[K");
   if (printing) print_notes(planned.plan, planned.plan.report());
 
+  // The images' codec and quality (the input's codec; rate control), then the model written with it.
+  const std::vector<TextureSource> sources = texture_sources(planned.mesh);
+  EncodingChoice choice = choose_encoding(bytes_request(line), planned.mesh, sources, result.output);
+  nlohmann::json budgets;
+  if (budget_follows_target(line, choice)) budgets = smallest_reaching_target(line, planned.mesh, sources, opt, result, choice);
+  CommandLine encoded_line = line;
+  encoded_line.encoding = choice.encoding;
   const std::string name = fs::path(line.input).stem().string();
-  const WrittenAndMeasured written = write_and_measure(line, planned.mesh, result.output, name, timings);
+  const WrittenAndMeasured written = write_and_measure(encoded_line, planned.mesh, result.output, name, timings);
   const Metrics& metrics = written.metrics;
   const std::vector<std::string>& removed = written.removed;
-  if (printing) print_not_carried(line, read_stats, removed);
+  if (printing) print_not_carried(line, planned.mesh, read_stats, removed);
   const double wall_seconds = seconds_since(t0);
   add_cli_figures(result.report, metrics, timings, wall_seconds, read_stats,
                   OutputFiles{line.outdir, output_model_name(line), line.no_html ? "" : kHtmlName, removed});
+  result.report["bytes"] = bytes_json(planned.mesh, sources, result.output, choice, metrics.surface_psnr);
+  if (!budgets.is_null()) result.report["bytes"]["budgets_tried"] = budgets;
   if (!line.preview_path.empty()) write_preview(line.preview_path, planned.mesh, result.output);
   const fs::path report_path = write_reports(line, result.report, written.html_data);
   if (printing) {
-    print_summary(line, result.output, result.report["preparation"]["components"].get<size_t>(), metrics, wall_seconds);
+    print_summary(line, result.output, result.report["preparation"]["components"].get<size_t>(), metrics, result.report["bytes"],
+                  wall_seconds);
     fmt::print("tightex: report: {}\n", report_path.string());
   }
   return result.report;

@@ -33,7 +33,12 @@ struct CommandLine {
   HoleMode holes = HoleMode::kFill;
   MapKind map = MapKind::kDetail;
   CornerRule corners = CornerRule::kEqualArcs;
-  ImageEncoding encoding;                         // --format, --png-level, --jpeg-quality: how every texture image of the model is written
+  ImageEncoding encoding;  // --png-level, --jpeg-quality, --webp-quality, --webp-lossless: how every texture image of the model is written
+  std::optional<ImageFormat> image_format;  // --format; nullopt: the input's base colour codec (texture_bytes.hpp)
+  bool quality_given = false;               // --jpeg-quality or --webp-quality given: no rate control
+  std::vector<std::string> codec_options;   // the codec options given (--png-level ...): each checked against the codec written
+  double target_psnr_db = 0;                // --target-psnr (0: none)
+  uint64_t max_bytes = 0;                   // --max-bytes (0: none)
   ModelFormat output_format = ModelFormat::kObj;  // --output-format, else the input's kind
   bool quiet = false, verbose = false, force = false, no_fit = false, fine_fit = false, linear_light_colour = false;
   double map_budget_db = 51;  // Options::map_budget_db

@@ -503,7 +503,9 @@ Eigen::Matrix4d GltfReader::node_matrix(const json& node, const std::string& ele
     const std::vector<double> q = numbers_of(node, "rotation", 4, element);
     const Eigen::Quaterniond rotation(q[3], q[0], q[1], q[2]);
     if (!(rotation.norm() > 0)) fail(element, "rotation is not a unit quaternion");
-    m.topLeftCorner<3, 3>() = rotation.normalized().toRotationMatrix() * m.topLeftCorner<3, 3>();
+    // As stored, not normalized: a renderer builds its matrix from the stored values, and an exporter's
+    // quaternion is unit only to float precision; normalizing moves world positions by a float step.
+    m.topLeftCorner<3, 3>() = rotation.toRotationMatrix() * m.topLeftCorner<3, 3>();
   }
   if (node.contains("translation")) {
     const std::vector<double> t = numbers_of(node, "translation", 3, element);

@@ -53,6 +53,7 @@ struct TextureImage {
   std::string uri;
   std::string bytes;
   std::string mime;
+  bool webp = false;  // referred to through EXT_texture_webp
 };
 
 /// Builds the written document and its one buffer.
@@ -168,7 +169,11 @@ int DocumentBuilder::texture_index(int texture) {
   json& images = array_of(doc_, "images");
   images.push_back(std::move(image));
   json& textures = array_of(doc_, "textures");
-  textures.push_back({{"source", images.size() - 1}});
+  // A WebP image is a texture's source only through EXT_texture_webp (required: there is no fallback).
+  if (ti.webp)
+    textures.push_back({{"extensions", {{"EXT_texture_webp", {{"source", images.size() - 1}}}}}});
+  else
+    textures.push_back({{"source", images.size() - 1}});
   return texture_of_[texture] = int(textures.size() - 1);
 }
 
@@ -578,6 +583,9 @@ void DocumentBuilder::update_extensions_used() {
   if (doc_.contains("extensionsRequired") && doc_["extensionsRequired"].is_array())
     for (const json& e : doc_["extensionsRequired"])
       if (e.is_string() && used.count(e.get<std::string>()) != 0) required.insert(e.get<std::string>());
+  // A texture whose only image is WebP (tightex's own, written as WebP) needs the extension.
+  for (const json& t : array_of(doc_, "textures"))
+    if (!t.contains("source") && t.contains("extensions") && t["extensions"].contains("EXT_texture_webp")) required.insert("EXT_texture_webp");
   doc_.erase("extensionsUsed");
   doc_.erase("extensionsRequired");
   if (!used.empty()) doc_["extensionsUsed"] = used;
@@ -674,7 +682,8 @@ std::vector<TextureImage> encoded_textures(const TexturedMesh& mesh, const Image
     }
     std::error_code ec;
     fs::remove(file, ec);
-    ti.mime = encoding.format == ImageFormat::kPng ? "image/png" : "image/jpeg";
+    ti.mime = encoding.format == ImageFormat::kPng ? "image/png" : encoding.format == ImageFormat::kJpeg ? "image/jpeg" : "image/webp";
+    ti.webp = encoding.format == ImageFormat::kWebp;
     images.push_back(std::move(ti));
   }
   return images;
@@ -697,7 +706,7 @@ std::vector<std::string> write_gltf(const TexturedMesh& mesh, const std::string&
   }
   std::vector<OutputFile> files = texture_output_files(mesh, encoding);
   std::vector<TextureImage> images(files.size());
-  for (size_t i = 0; i < files.size(); ++i) images[i].uri = files[i].name;
+  for (size_t i = 0; i < files.size(); ++i) images[i].uri = files[i].name, images[i].webp = encoding.format == ImageFormat::kWebp;
   std::string bin;
   json doc = DocumentBuilder(mesh, images).build(bin, removed);
   if (!bin.empty()) {

@@ -26,6 +26,7 @@
 // clang-format on
 #include <spng.h>
 #include <webp/decode.h>
+#include <webp/encode.h>
 #include <zlib.h>
 
 #include "core/error.hpp"
@@ -191,6 +192,8 @@ class OutputFile {
       discard();
     }
   }
+  /// A stream opened by the caller (a memory stream, `name` for messages): never removed.
+  OutputFile(std::FILE* stream, const std::string& name) : path_(name), file_(stream) {}
   OutputFile(const OutputFile&) = delete;
   OutputFile& operator=(const OutputFile&) = delete;
 
@@ -750,6 +753,72 @@ void check_image_encoding(const ImageEncoding& encoding, const std::string& path
     fail_input("{}: PNG compression level {} is outside 0..9", path, encoding.png_level);
   if (encoding.format == ImageFormat::kJpeg && (encoding.jpeg_quality < 1 || encoding.jpeg_quality > 100))
     fail_input("{}: JPEG quality {} is outside 1..100", path, encoding.jpeg_quality);
+  if (encoding.format == ImageFormat::kWebp && !encoding.webp_lossless && (encoding.webp_quality < 1 || encoding.webp_quality > 100))
+    fail_input("{}: WebP quality {} is outside 1..100", path, encoding.webp_quality);
+}
+
+namespace {
+
+/// The image as a WebP file's bytes (libwebp's simple API: lossy at `quality`, or lossless), RGB where
+/// it is opaque. WebP's side is at most 16383.
+std::string encode_webp(const Image& image, const ImageEncoding& encoding, const std::string& name) {
+  constexpr int kMaxWebpSide = 16383;
+  if (image.width > kMaxWebpSide || image.height > kMaxWebpSide)
+    fail_input("{}: {}x{} is larger than WebP allows ({} pixels a side)", name, image.width, image.height, kMaxWebpSide);
+  const bool opaque = is_opaque(image);
+  std::vector<uint8_t> rgb;
+  const uint8_t* pixels = reinterpret_cast<const uint8_t*>(image.pixels.data());
+  int stride = image.width * 4;
+  if (opaque) {
+    rgb.resize(size_t(image.width) * size_t(image.height) * 3);
+    for (size_t i = 0; i < image.pixels.size(); ++i) rgb[3 * i] = image.pixels[i].r, rgb[3 * i + 1] = image.pixels[i].g, rgb[3 * i + 2] = image.pixels[i].b;
+    pixels = rgb.data();
+    stride = image.width * 3;
+  }
+  uint8_t* out = nullptr;
+  const float q = float(encoding.webp_quality);
+  const size_t size = encoding.webp_lossless
+                          ? (opaque ? WebPEncodeLosslessRGB(pixels, image.width, image.height, stride, &out)
+                                    : WebPEncodeLosslessRGBA(pixels, image.width, image.height, stride, &out))
+                          : (opaque ? WebPEncodeRGB(pixels, image.width, image.height, stride, q, &out)
+                                    : WebPEncodeRGBA(pixels, image.width, image.height, stride, q, &out));
+  std::string bytes(reinterpret_cast<const char*>(out), size);
+  WebPFree(out);
+  if (size == 0) fail_internal("{}: libwebp could not encode a {}x{} image", name, image.width, image.height);
+  return bytes;
+}
+
+}  // namespace
+
+const char* image_extension(ImageFormat format) {
+  switch (format) {
+    case ImageFormat::kJpeg:
+      return ".jpg";
+    case ImageFormat::kWebp:
+      return ".webp";
+    case ImageFormat::kPng:
+      break;
+  }
+  return ".png";
+}
+
+std::string encode_image(const Image& image, const ImageEncoding& encoding, const std::string& name) {
+  check_image_encoding(encoding, name);
+  if (encoding.format == ImageFormat::kJpeg) return encode_jpeg(image, encoding.jpeg_quality);
+  if (encoding.format == ImageFormat::kWebp) return encode_webp(image, encoding, name);
+  // PNG through a file (libspng writes to a FILE): a memory stream.
+  char* buffer = nullptr;
+  size_t size = 0;
+  std::FILE* stream = open_memstream(&buffer, &size);
+  if (stream == nullptr) throw std::bad_alloc();
+  {
+    OutputFile out(stream, name);
+    save_png(out, image, encoding.png_level);
+    out.commit();
+  }
+  std::string bytes(buffer != nullptr ? buffer : "", buffer != nullptr ? size : 0);
+  std::free(buffer);
+  return bytes;
 }
 
 void save_image(const std::string& path, const Image& image, const ImageEncoding& encoding) {
@@ -765,6 +834,11 @@ void save_image(const std::string& path, const Image& image, const ImageEncoding
     case ImageFormat::kJpeg:
       save_jpeg(out, image, encoding.jpeg_quality);
       break;
+    case ImageFormat::kWebp: {
+      const std::string bytes = encode_webp(image, encoding, path);
+      if (std::fwrite(bytes.data(), 1, bytes.size(), out.get()) != bytes.size()) out.fail("write failed");
+      break;
+    }
   }
   out.commit();
 }

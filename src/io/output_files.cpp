@@ -57,7 +57,7 @@ void write_whole_file(const fs::path& path, std::span<const std::string> pieces)
 }
 
 std::string texture_file_name(const Texture& texture, ImageFormat format) {
-  return texture.path + (format == ImageFormat::kPng ? ".png" : ".jpg");
+  return texture.path + image_extension(format);
 }
 
 std::vector<OutputFile> texture_output_files(const TexturedMesh& mesh, const ImageEncoding& encoding) {

@@ -298,6 +298,7 @@ std::unique_ptr<PreparedMesh::State> prepare_state(const TexturedMesh& geometry,
   progress("repair", 0);
   const RepairStats& rs = prepared->repair;
   const std::vector<char> untextured = untextured_triangles(geometry, prepared->set_aside.untextured);
+  if (!options.keep_untextured) prepared->set_aside.untextured.clear();  // baked with the rest
   const Surface surface = prepare_surface(geometry, &prepared->repair, &prepared->set_aside.repeats,
                                           prepared->set_aside.untextured.empty() ? nullptr : &untextured);
   if (surface.num_faces() == 0)

@@ -681,6 +681,11 @@ Metrics measure(const TexturedMesh& in, const TexturedMesh& out, const WeldedEdg
   return r;
 }
 
+double surface_psnr(const TexturedMesh& in, const TexturedMesh& out, size_t psnr_samples) {
+  const Correspondence c = match_triangles(in, out);
+  return measure_surface_psnr(in, out, c, surface_points(in, c, psnr_samples)).first;
+}
+
 nlohmann::json to_json(const Metrics& m) {
   nlohmann::json j;
   auto fig = [](const ModelFigures& f) {

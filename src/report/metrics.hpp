@@ -70,6 +70,10 @@ Metrics measure(const TexturedMesh& input, const TexturedMesh& output, size_t ps
 Metrics measure(const TexturedMesh& input, const TexturedMesh& output, const WeldedEdges& input_edges, const WeldedEdges& output_edges,
                 size_t psnr_samples = 200000);
 
+/// METRICS.md's surface PSNR alone (measure's figure, the same points), for a caller that tries other
+/// encodings of the same output's images.
+double surface_psnr(const TexturedMesh& input, const TexturedMesh& output, size_t psnr_samples = 200000);
+
 /// The figures of every map slot that both models bind (MapFigures), at the surface PSNR's points.
 std::vector<MapFigures> measure_maps(const TexturedMesh& input, const TexturedMesh& output, size_t samples = 200000);
 

@@ -15,6 +15,14 @@ globalThis.ProgressEvent ??= class ProgressEvent extends Event {
     Object.assign(this, init);
   }
 };
+// EXT_texture_webp: the loader asks an Image whether WebP decodes (every browser it targets says yes);
+// node has no Image, so a stand-in answers as a browser does, and the texture itself fails softly.
+globalThis.Image ??= class Image {
+  set src(_) {
+    this.height = 1;
+    setTimeout(() => this.onload && this.onload(), 0);
+  }
+};
 const quiet = console.error, warn = console.warn;
 
 async function validate(file, bytes) {

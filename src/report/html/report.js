@@ -91,6 +91,11 @@
         "The texels that carry the surface's colour: the texture budget the model really holds."],
       ['Texture size', textureSizes(input), textureSizes(output),
         'Every texture page, width \u00d7 height in texels.'],
+      ['Texture bytes', reportNumber('bytes.input.total', 0, 1 / 1024, ' KiB'), reportNumber('bytes.output.total', 0, 1 / 1024, ' KiB'),
+        'What the images the materials bind take on disk, every map included. The output is written as ' +
+        (get('bytes.encoding.format') || '?') + ': ' + (get('bytes.encoding.reason') || '') + '.'],
+      ['Surface PSNR as written', dash(), reportNumber('bytes.surface_psnr_written_db', 2, 1, ' dB'),
+        'The surface PSNR of the images as written (a lossy codec decoded back), against the input.'],
       ['Surface PSNR', dash(), reportNumber('metrics.surface_psnr_db', 2, 1, ' dB'),
         "How closely the output's colours match the input's, at " + formatNumber(get('metrics.psnr_samples') || 0, 0) +
         ' points spread evenly over the surface. Higher is better; above about 40 dB differences are hard to see.'],

@@ -1,0 +1,159 @@
+#include "cli/texture_bytes.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <fmt/format.h>
+
+#include <functional>
+
+#include "io/image_io.hpp"
+#include "report/metrics.hpp"
+
+namespace tightex::cli {
+
+namespace {
+
+const char* format_name(ImageFormat f) { return f == ImageFormat::kJpeg ? "jpg" : f == ImageFormat::kWebp ? "webp" : "png"; }
+
+/// The quality setting of a lossy encoding.
+int& quality_of(ImageEncoding& e) { return e.format == ImageFormat::kJpeg ? e.jpeg_quality : e.webp_quality; }
+
+/// Each texture of `output` encoded as `encoding` says (on every core).
+std::vector<std::string> encoded(const TexturedMesh& output, const ImageEncoding& encoding) {
+  std::vector<std::string> bytes(output.textures.size());
+  tbb::parallel_for(size_t(0), bytes.size(), [&](size_t i) {
+    if (!output.textures[i].image.empty()) bytes[i] = encode_image(output.textures[i].image, encoding, output.textures[i].path);
+  });
+  return bytes;
+}
+
+uint64_t total(const std::vector<std::string>& images) {
+  uint64_t n = 0;
+  for (const std::string& b : images) n += b.size();
+  return n;
+}
+
+/// The surface PSNR of `output` with its images as `images` decode (swapped in, then back).
+double psnr_as_written(const TexturedMesh& input, TexturedMesh& output, const std::vector<std::string>& images) {
+  std::vector<Image> decoded(images.size());
+  tbb::parallel_for(size_t(0), images.size(), [&](size_t i) {
+    if (!images[i].empty())
+      decoded[i] = decode_image(reinterpret_cast<const unsigned char*>(images[i].data()), images[i].size(), output.textures[i].path);
+  });
+  for (size_t i = 0; i < decoded.size(); ++i)
+    if (!decoded[i].empty()) std::swap(output.textures[i].image, decoded[i]);
+  const double psnr = surface_psnr(input, output);
+  for (size_t i = 0; i < decoded.size(); ++i)
+    if (!decoded[i].empty()) std::swap(output.textures[i].image, decoded[i]);
+  return psnr;
+}
+
+/// The bytes of the input's images that its materials bind (base colour or another map), each once.
+uint64_t bound_input_bytes(const TexturedMesh& input, const std::vector<TextureSource>& sources) {
+  std::vector<char> bound(sources.size(), 0);
+  for (const Material& m : input.materials) {
+    if (m.texture >= 0) bound[size_t(m.texture)] = 1;
+    for (const int t : m.maps)
+      if (t >= 0) bound[size_t(t)] = 1;
+  }
+  uint64_t n = 0;
+  for (size_t i = 0; i < sources.size(); ++i) n += bound[i] ? sources[i].bytes : 0;
+  return n;
+}
+
+/// The lowest quality in [1, 100] for which `good` holds, where `good` holds from some quality on
+/// (bisection); 101 where it holds for none.
+int lowest_quality(const std::function<bool(int)>& good) {
+  if (!good(100)) return 101;
+  int lo = 0, hi = 100;  // good(hi), !good(lo) (or lo = 0)
+  while (hi - lo > 1) {
+    const int mid = (lo + hi) / 2;
+    (good(mid) ? hi : lo) = mid;
+  }
+  return hi;
+}
+
+/// Rate control of a lossy encoding: the quality and why.
+std::string pick_quality(const BytesRequest& request, const TexturedMesh& input, const std::vector<TextureSource>& sources,
+                         TexturedMesh& output, ImageEncoding& e) {
+  int& q = quality_of(e);
+  if (request.target_psnr_db > 0) {
+    const int lowest = lowest_quality([&](int quality) {
+      q = quality;
+      return psnr_as_written(input, output, encoded(output, e)) >= request.target_psnr_db;
+    });
+    q = std::min(lowest, 100);
+    return lowest <= 100 ? fmt::format("the lowest quality whose written images reach --target-psnr {} dB", request.target_psnr_db)
+                         : fmt::format("no quality reaches --target-psnr {} dB at this texel budget: the highest", request.target_psnr_db);
+  }
+  const uint64_t bound = request.max_bytes > 0 ? request.max_bytes : bound_input_bytes(input, sources);
+  const char* what = request.max_bytes > 0 ? "--max-bytes" : "the input's own texture bytes";
+  if (bound == 0) return fmt::format("quality {} (no bound: the input's images have no bytes on disk)", q);
+  // The highest quality within the bound: one above the lowest that exceeds it.
+  const int over = lowest_quality([&](int quality) {
+    q = quality;
+    return total(encoded(output, e)) > bound;
+  });
+  q = std::max(over - 1, 1);
+  return over > 1 ? fmt::format("the highest quality whose images take at most {} ({} bytes)", what, bound)
+                  : fmt::format("even quality 1 takes more than {} ({} bytes): quality 1", what, bound);
+}
+
+}  // namespace
+
+EncodingChoice choose_encoding(const BytesRequest& request, const TexturedMesh& input, const std::vector<TextureSource>& sources,
+                               TexturedMesh& output) {
+  EncodingChoice c;
+  c.encoding = request.encoding;
+  const std::optional<ImageFormat> input_format = base_colour_format(input, sources);
+  c.encoding.format = request.format.value_or(input_format.value_or(ImageFormat::kPng));
+  c.reason = request.format ? fmt::format("--format {}", format_name(c.encoding.format))
+                            : fmt::format("{}, as the input's base colour", format_name(c.encoding.format));
+  if (c.encoding.lossy() && !request.quality_given) c.reason += "; " + pick_quality(request, input, sources, output, c.encoding);
+  const std::vector<std::string> images = encoded(output, c.encoding);
+  for (const std::string& b : images) c.bytes.push_back(b.size());
+  if (c.encoding.lossy()) c.written_psnr_db = psnr_as_written(input, output, images);
+  return c;
+}
+
+namespace {
+
+/// The bytes of a model's images by the slot its materials bind them to (each image once, under its
+/// first slot: the base colour first), and in total.
+nlohmann::json slot_bytes(const TexturedMesh& mesh, const std::vector<uint64_t>& bytes) {
+  std::vector<int> slot(mesh.textures.size(), -2);  // -1: base colour, else the MapSlot
+  for (const Material& m : mesh.materials)
+    if (m.texture >= 0) slot[size_t(m.texture)] = -1;
+  for (const Material& m : mesh.materials)
+    for (size_t s = 0; s < kMapSlots; ++s)
+      if (m.maps[s] >= 0 && slot[size_t(m.maps[s])] == -2) slot[size_t(m.maps[s])] = int(s);
+  nlohmann::json j = {{"base_colour", 0}, {"maps", nlohmann::json::object()}, {"total", 0}};
+  for (size_t i = 0; i < slot.size() && i < bytes.size(); ++i) {
+    if (slot[i] == -2) continue;
+    if (slot[i] == -1)
+      j["base_colour"] = j["base_colour"].get<uint64_t>() + bytes[i];
+    else
+      j["maps"][map_slot_name(MapSlot(slot[i]))] = j["maps"].value(map_slot_name(MapSlot(slot[i])), uint64_t(0)) + bytes[i];
+    j["total"] = j["total"].get<uint64_t>() + bytes[i];
+  }
+  return j;
+}
+
+}  // namespace
+
+nlohmann::json bytes_json(const TexturedMesh& input, const std::vector<TextureSource>& sources, const TexturedMesh& output,
+                          const EncodingChoice& choice, double bake_psnr_db) {
+  std::vector<uint64_t> in_bytes;
+  for (const TextureSource& s : sources) in_bytes.push_back(s.bytes);
+  const ImageEncoding& e = choice.encoding;
+  nlohmann::json encoding = {{"format", format_name(e.format)}, {"reason", choice.reason}};
+  if (e.format == ImageFormat::kJpeg) encoding["quality"] = e.jpeg_quality;
+  if (e.format == ImageFormat::kWebp)
+    encoding[e.webp_lossless ? "lossless" : "quality"] = e.webp_lossless ? nlohmann::json(true) : nlohmann::json(e.webp_quality);
+  return {{"input", slot_bytes(input, in_bytes)},
+          {"output", slot_bytes(output, choice.bytes)},
+          {"encoding", encoding},
+          {"surface_psnr_written_db", choice.written_psnr_db.value_or(bake_psnr_db)}};
+}
+
+}  // namespace tightex::cli

@@ -1,0 +1,47 @@
+// How the output's texture images are encoded, and what both models' images weigh: the input's codec
+// unless the command line names one; for a lossy codec the quality that rate control picks (the
+// input's own bytes as the bound by default, or --target-psnr / --max-bytes); the bytes of every image
+// the materials bind, and the surface PSNR of the images as written.
+#pragma once
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "io/texture_sources.hpp"
+#include "tightex/io.hpp"
+#include "tightex/mesh.hpp"
+
+namespace tightex::cli {
+
+/// What the command line asks of the output's images.
+struct BytesRequest {
+  std::optional<ImageFormat> format;  // --format; nullopt: the input's base colour codec (PNG where none)
+  ImageEncoding encoding;             // the levels and qualities as given or defaulted
+  bool quality_given = false;         // --jpeg-quality or --webp-quality: kept as it is
+  double target_psnr_db = 0;          // --target-psnr (0: none)
+  uint64_t max_bytes = 0;             // --max-bytes (0: none)
+};
+
+/// The encoding chosen and what it gives: each output texture's encoded bytes, the surface PSNR of the
+/// images as written (decoded back; for a lossless codec the bake's, unset here), and why.
+struct EncodingChoice {
+  ImageEncoding encoding;
+  std::vector<uint64_t> bytes;  // per output texture
+  std::optional<double> written_psnr_db;
+  std::string reason;
+};
+
+/// Chooses the encoding of `output`'s images (the result of `input`, whose textures are `sources`), and
+/// measures what it gives. Leaves `output` as it was.
+EncodingChoice choose_encoding(const BytesRequest& request, const TexturedMesh& input, const std::vector<TextureSource>& sources,
+                               TexturedMesh& output);
+
+/// report.json's "bytes": per model, the bytes of the images its materials bind, as base colour and per
+/// other map slot, and in total; the encoding chosen and why; the surface PSNR as written
+/// (`bake_psnr_db` where the codec is lossless).
+nlohmann::json bytes_json(const TexturedMesh& input, const std::vector<TextureSource>& sources, const TexturedMesh& output,
+                          const EncodingChoice& choice, double bake_psnr_db);
+
+}  // namespace tightex::cli

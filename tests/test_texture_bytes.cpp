@@ -1,0 +1,125 @@
+// Bytes, not only texels: the output's images in the input's codec, a lossy input never larger on disk
+// after a default run, WebP out (OBJ and glTF), --target-psnr and --max-bytes, and the report's bytes and
+// written-file PSNR equal to what the files hold.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "command_line.hpp"
+#include "gltf_builder.hpp"
+#include "gltf_checks.hpp"
+#include "mesh_catalogue.hpp"
+#include "tightex/io.hpp"
+
+namespace tightex {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using testing::read_whole;
+using testing::run_tightex;
+
+/// A generated model (the catalogue's sphere, its texture coordinates a projection, with a 256^2 texture
+/// of gradients and a product pattern) written as OBJ with its texture in `format`, into `dir`; the OBJ's path.
+fs::path scan_obj(const fs::path& dir, ImageFormat format) {
+  TexturedMesh m = testing::sphere();
+  Image img(256, 256);
+  for (int y = 0; y < 256; ++y)
+    for (int x = 0; x < 256; ++x) img.at(x, y) = {uint8_t(x), uint8_t((x * y) / 256), uint8_t(255 - y), 255};
+  m.textures[0].image = img;
+  m.textures[0].path = "scan_texture";
+  write_obj(m, dir.string(), "scan", ImageEncoding(format));
+  return dir / "scan.obj";
+}
+
+/// `tightex IN -o OUT OPTIONS` (quiet); its report.
+json run(const fs::path& in, const fs::path& out, const std::string& options = "") {
+  EXPECT_EQ(run_tightex("'" + in.string() + "' -o '" + out.string() + "' --quiet " + options), 0);
+  return json::parse(read_whole(out / "report.json"));
+}
+
+/// The sizes of the files in `dir` ending in `extension`.
+uint64_t bytes_of(const fs::path& dir, const std::string& extension) {
+  uint64_t n = 0;
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.path().extension() == extension) n += fs::file_size(e.path());
+  return n;
+}
+
+/// `tightex measure IN OUT`: the surface PSNR of the written files.
+double measured_psnr(const fs::path& in, const fs::path& out) {
+  const fs::path j = out.parent_path() / "measured.json";
+  EXPECT_EQ(run_tightex("measure '" + in.string() + "' '" + out.string() + "' > '" + j.string() + "'"), 0);
+  return json::parse(read_whole(j))["surface_psnr_db"].get<double>();
+}
+
+TEST(TextureBytes, AJpegScanComesBackAsJpegNoLargerOnDisk) {
+  const fs::path dir = testing::scratch_folder("bytes_jpeg");
+  const fs::path in = scan_obj(dir / "in", ImageFormat::kJpeg);
+  const json report = run(in, dir / "out");
+  const json& bytes = report["bytes"];
+  EXPECT_EQ(bytes["encoding"]["format"], "jpg");
+  EXPECT_EQ(bytes["input"]["total"].get<uint64_t>(), bytes_of(dir / "in", ".jpg"));
+  EXPECT_EQ(bytes["output"]["total"].get<uint64_t>(), bytes_of(dir / "out", ".jpg"));
+  EXPECT_EQ(bytes_of(dir / "out", ".png"), 0u);
+  EXPECT_LE(bytes_of(dir / "out", ".jpg"), bytes_of(dir / "in", ".jpg"));
+  EXPECT_NEAR(bytes["surface_psnr_written_db"].get<double>(), measured_psnr(in, dir / "out" / "scan.obj"), 0.3);
+  EXPECT_LE(bytes["surface_psnr_written_db"].get<double>(), report["metrics"]["surface_psnr_db"].get<double>() + 0.05);
+}
+
+TEST(TextureBytes, APngScanComesBackAsPngWithTheBakesPsnr) {
+  const fs::path dir = testing::scratch_folder("bytes_png");
+  const json report = run(scan_obj(dir / "in", ImageFormat::kPng), dir / "out");
+  EXPECT_EQ(report["bytes"]["encoding"]["format"], "png");
+  EXPECT_EQ(report["bytes"]["output"]["total"].get<uint64_t>(), bytes_of(dir / "out", ".png"));
+  EXPECT_EQ(report["bytes"]["surface_psnr_written_db"], report["metrics"]["surface_psnr_db"]);
+}
+
+TEST(TextureBytes, WebpTargetPsnrIsReachedAsWritten) {
+  const fs::path dir = testing::scratch_folder("bytes_webp");
+  const fs::path in = scan_obj(dir / "in", ImageFormat::kPng);
+  for (const double target : {30.0, 38.0}) {
+    const fs::path out = dir / ("out" + std::to_string(int(target)));
+    const json report = run(in, out, "--format webp --target-psnr " + std::to_string(target));
+    EXPECT_EQ(report["bytes"]["encoding"]["format"], "webp");
+    const double written = measured_psnr(in, out / "scan.obj");
+    EXPECT_GE(written, target - 0.2) << target;
+    EXPECT_NEAR(report["bytes"]["surface_psnr_written_db"].get<double>(), written, 0.3);
+    EXPECT_EQ(report["bytes"]["output"]["total"].get<uint64_t>(), bytes_of(out, ".webp"));
+  }
+  // A lower target takes fewer bytes.
+  EXPECT_LT(bytes_of(dir / "out30", ".webp"), bytes_of(dir / "out38", ".webp"));
+}
+
+TEST(TextureBytes, MaxBytesIsABound) {
+  const fs::path dir = testing::scratch_folder("bytes_max");
+  const fs::path in = scan_obj(dir / "in", ImageFormat::kPng);
+  const json report = run(in, dir / "out", "--format jpg --max-bytes 6000");
+  EXPECT_LE(bytes_of(dir / "out", ".jpg"), 6000u);
+  EXPECT_GT(report["bytes"]["encoding"]["quality"].get<int>(), 1);
+}
+
+TEST(TextureBytes, WebpGlbDeclaresItsExtensionAndValidates) {
+  const fs::path dir = testing::scratch_folder("bytes_webp_glb");
+  testing::GridGltf g = testing::grid_gltf();
+  testing::write_whole(dir / "grid.glb", testing::make_glb(g.doc, g.bin));
+  run(dir / "grid.glb", dir / "out", "--size 64 --format webp --webp-quality 80");
+  const TexturedMesh back = read_gltf((dir / "out" / "grid.glb").string());
+  EXPECT_EQ(back.num_triangles(), g.triangles);
+  testing::expect_valid_and_loading(dir / "out" / "grid.glb", 2 * g.triangles);
+  run(dir / "grid.glb", dir / "lossless", "--size 64 --format webp --webp-lossless");
+  testing::expect_valid_and_loading(dir / "lossless" / "grid.glb", 2 * g.triangles);
+}
+
+TEST(TextureBytes, QualityOptionsRefusedBesideAnotherFormat) {
+  const fs::path dir = testing::scratch_folder("bytes_options");
+  const fs::path in = scan_obj(dir / "in", ImageFormat::kPng);
+  for (const char* options : {"--format png --webp-quality 50", "--format png --target-psnr 40",
+                              "--format jpg --jpeg-quality 80 --max-bytes 100", "--format webp --target-psnr 40 --max-bytes 100"})
+    EXPECT_EQ(run_tightex("'" + in.string() + "' -o '" + (dir / "out").string() + "' --quiet " + options + " 2>/dev/null"), 1) << options;
+}
+
+}  // namespace
+}  // namespace tightex
