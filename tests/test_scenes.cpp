@@ -184,6 +184,14 @@ TEST(Scenes, UntexturedPartsAreWrittenAsTheyCame) {
   }
   EXPECT_EQ(plain, 2u);
   testing::expect_valid_and_loading(dir / "out" / "scene.glb", 3 * kGridTriangles + 2);
+  // PLY has no material for their colour: it is baked into the new texture with the rest.
+  ASSERT_EQ(run_quietly(in_path, dir / "ply", "--output-format ply"), 0) << read_whole(dir / "ply.stderr");
+  const json ply_report = json::parse(read_whole(dir / "ply" / "report.json"));
+  EXPECT_EQ(ply_report["preparation"]["untextured_kept"], 0);
+  EXPECT_EQ(ply_report["metrics"]["lost_triangles"], 0);
+  const TexturedMesh ply = read_ply((dir / "ply" / "scene.ply").string());
+  EXPECT_EQ(ply.num_triangles(), 3 * kGridTriangles + 2);
+  for (const int32_t m : ply.face_material) EXPECT_GE(ply.materials[size_t(m)].texture, 0);
 }
 
 TEST(Scenes, NothingToBakeIsRefusedWithNothingWritten) {
