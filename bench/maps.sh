@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 30's figures (BENCHMARKS.md, "Every map"): the two Khronos GLBs of ../shared/data and the
+# The figures of every map (BENCHMARKS.md, "Every map"): the two Khronos GLBs of ../shared/data and the
 # generated scan-like PBR model through tightex at the default budget, each map's surface PSNR against
 # the ideal re-sampler (tools/map_eval.cpp), the normal maps' angular error, and the Khronos
 # glTF-Validator on every GLB written.

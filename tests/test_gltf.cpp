@@ -362,7 +362,7 @@ TEST(GltfWriter, WritesTheInputDocumentBackWithEachTriangleInItsPrimitive) {
   for (const GltfContainer container : {GltfContainer::kGlb, GltfContainer::kGltf}) {
     const fs::path out = dir / (container == GltfContainer::kGlb ? "glb" : "gltf");
     const std::vector<std::string> removed = write_gltf(r.output, out.string(), "grid", ImageFormat::kPng, container);
-    // The normal map reads the base colour's coordinates: re-baked, not removed (issue 30).
+    // The normal map reads the base colour's coordinates: re-baked, not removed.
     EXPECT_EQ(std::find(removed.begin(), removed.end(), "materials[0].normalTexture"), removed.end());
     const fs::path file = out / (container == GltfContainer::kGlb ? "grid.glb" : "grid.gltf");
     if (container == GltfContainer::kGltf) {
@@ -574,7 +574,7 @@ TEST(GltfRealData, KhronosGlbModelsGiveGlbs) {
     EXPECT_EQ(m.lost_triangles, 0u) << model;  // read back from the file: positions bit for bit
     EXPECT_GE(m.output.utilization, 0.99) << model;
     EXPECT_EQ(back.gltf->json["nodes"], in.gltf->json["nodes"]) << model;
-    // Every map slot of the input, in the output (issue 30); normals through both TANGENTs.
+    // Every map slot of the input, in the output; normals through both TANGENTs.
     EXPECT_EQ(back.corner_tangent.size(), 3 * back.num_triangles()) << model;
     size_t normal_maps = 0;
     for (const MapFigures& f : m.maps) {

@@ -1,4 +1,4 @@
-// Every map a material binds (issue 30): the maps re-baked through the new layout, one image in two
+// Every map a material binds: the maps re-baked through the new layout, one image in two
 // slots kept as one, tangent-space normals re-expressed in the output's frame, and the tangent frames
 // compatible with the TANGENT an exporter writes.
 #include <gtest/gtest.h>

@@ -261,7 +261,7 @@ void expect_vertex_colours_baked(const TexturedMesh& textured, const fs::path& d
     EXPECT_EQ(m.flipped, 0u) << kind;
     EXPECT_EQ(m.charts, report["preparation"]["components"].get<size_t>()) << kind;
     EXPECT_GT(m.surface_psnr, min_psnr) << kind;
-    // The vertex colours come back at the vertices (issue 24's check): mean within 1/255, P99 within 4.
+    // The vertex colours come back at the vertices: mean within 1/255, P99 within 4.
     const std::vector<double> errors = corner_colour_errors(coloured, result);
     ASSERT_FALSE(errors.empty());
     EXPECT_LE(std::accumulate(errors.begin(), errors.end(), 0.0) / double(errors.size()), 1.0) << kind;

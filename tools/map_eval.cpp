@@ -1,4 +1,4 @@
-// The maps' evaluator of issue 30 (BENCHMARKS.md, "Every map"): for each map slot of an input and its
+// The maps' evaluator (BENCHMARKS.md, "Every map"): for each map slot of an input and its
 // tightex output, the surface PSNR (METRICS.md's points, the channels the slot reads) against what an
 // ideal re-sampler keeps, and the normal maps' object-space angular error. Also makes the scan-like
 // test model: the demo's vase with a hard-mask metallic channel and a tangent-space normal map whose

@@ -77,7 +77,7 @@ Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& opt
   progress("bake", 0);
   rep.bake = bake_new_textures(input, options, progress, om);
   clock.done("bake");
-  // 6b. Every other map the materials bind, through the same layout (issue 30).
+  // 6b. Every other map the materials bind, through the same layout.
   rep.maps = bake_other_maps(input, options, om);
   if (!rep.maps.empty()) clock.done("bake_maps");
   Result result;
