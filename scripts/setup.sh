@@ -6,7 +6,7 @@ pkgs=(build-essential cmake ninja-build pkg-config
       libtinyobjloader-dev nlohmann-json3-dev
       libspng-dev libdeflate-dev libjpeg62-turbo-dev libwebp-dev libstb-dev zlib1g-dev
       libcli11-dev libfmt-dev libgtest-dev libgmock-dev libbenchmark-dev
-      pybind11-dev python3-dev python3-numpy python3-distributed python3-pytest
+      pybind11-dev python3-dev python3-numpy python3-distributed python3-pytest python3-venv python3-pip python3-setuptools
       libjs-three chromium)
 # libjs-three: the three.js that report.html packs (at build time). chromium: the browser test of
 # report.html. Tests only: Node.js drives it, and runs the Khronos glTF-Validator and three.js on
