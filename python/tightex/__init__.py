@@ -71,7 +71,8 @@ def optimize_arrays(positions, faces, uvs, images, material_ids=None, face_uvs=N
 
     positions: (V, 3) float; faces: (F, 3) int, counter-clockwise front.
     uvs: texture coordinates, OBJ convention (v up; row 0 of an image is v = 1), one of
-      - (F, 3, 2): per corner (Open3D's ``triangle_uvs.reshape(-1, 3, 2)``);
+      - (F, 3, 2): per corner (Open3D's ``triangle_uvs.reshape(-1, 3, 2)``; Open3D holds a texture it
+        read bottom row first: pass ``np.asarray(texture)[::-1]``, and flip the images returned back);
       - (T, 2) with ``face_uvs`` (F, 3) indexing it (as an OBJ's ``vt`` and its face indices);
       - (V, 2) per vertex without ``face_uvs`` (trimesh's ``visual.uv``).
     images: a list of H x W x 3 or H x W x 4 uint8 arrays (one array alone is taken as a list of one).
