@@ -592,6 +592,9 @@ void write_preview(const std::string& preview_path, const TexturedMesh& input, c
   if (ec) fail_input("{}: cannot write preview ({})", preview_path, ec.message());
 }
 
+/// One warning line each for what the output does not carry: the input's parts the reader left as they
+/// were (written back only to glTF), what the glTF writer removed (texture slots that cannot follow
+/// the new texture coordinates; one line), and each map slot OBJ or PLY cannot bind (one line each).
 /// The input's textured materials whose colour factor is not white (read from glTF: the factor a
 /// glTF output keeps in its material, which OBJ and PLY outputs lose).
 size_t tinted_textures(const TexturedMesh& input) {
@@ -601,9 +604,6 @@ size_t tinted_textures(const TexturedMesh& input) {
   return n;
 }
 
-/// One warning line each for what the output does not carry: the input's parts the reader left as they
-/// were (written back only to glTF), what the glTF writer removed (texture slots that cannot follow
-/// the new texture coordinates; one line), and each map slot OBJ or PLY cannot bind (one line each).
 void print_not_carried(const CommandLine& line, const TexturedMesh& input, const ObjReadStats& read_stats,
                        const std::vector<std::string>& removed) {
   const bool gltf = line.output_format == ModelFormat::kGltf || line.output_format == ModelFormat::kGlb;
@@ -659,9 +659,9 @@ void print_summary(const CommandLine& line, const TexturedMesh& output, size_t c
   }
   fmt::print(
       "tightex: {} -> {}/{}  ({}{} components, {:.1f}% -> {:.1f}% texels used, {} charts, "
-      "PSNR {:.1f} dB ({:.1f} as written), textures {:.0f} -> {:.0f} KiB {}, {} lost, {} flipped, {:.2f} s)\n",
+      "PSNR {:.1f} dB as written ({:.1f} baked), textures {:.0f} -> {:.0f} KiB {}, {} lost, {} flipped, {:.2f} s)\n",
       line.input, line.outdir, output_model_name(line), texture, components, 100 * metrics.input.utilization,
-      100 * metrics.output.utilization, metrics.charts, metrics.surface_psnr, bytes["surface_psnr_written_db"].get<double>(),
+      100 * metrics.output.utilization, metrics.charts, metrics.surface_psnr, metrics.surface_psnr_bake.value_or(metrics.surface_psnr),
       bytes["input"]["total"].get<double>() / 1024, bytes["output"]["total"].get<double>() / 1024,
       bytes["encoding"]["format"].get<std::string>(), metrics.lost_triangles, metrics.flipped, wall_seconds);
   if (line.verbose) fmt::print("{}\n", to_json(metrics).dump(2));
@@ -807,7 +807,9 @@ nlohmann::json run_command(const CommandLine& line, const CommandHooks& hooks) {
   CommandLine encoded_line = line;
   encoded_line.encoding = choice.encoding;
   const std::string name = fs::path(line.input).stem().string();
-  const WrittenAndMeasured written = write_and_measure(encoded_line, planned.mesh, result.output, name, timings);
+  WrittenAndMeasured written = write_and_measure(encoded_line, planned.mesh, result.output, name, timings);
+  // The surface PSNR of the files as written (a lossy codec's images decoded back), the bake's beside it.
+  if (choice.written_psnr_db) written.metrics.surface_psnr_bake = std::exchange(written.metrics.surface_psnr, *choice.written_psnr_db);
   const Metrics& metrics = written.metrics;
   const std::vector<std::string>& removed = written.removed;
   if (printing) print_not_carried(line, planned.mesh, read_stats, removed);
@@ -815,6 +817,7 @@ nlohmann::json run_command(const CommandLine& line, const CommandHooks& hooks) {
   add_cli_figures(result.report, metrics, timings, wall_seconds, read_stats,
                   OutputFiles{line.outdir, output_model_name(line), line.no_html ? "" : kHtmlName, removed});
   result.report["bytes"] = bytes_json(planned.mesh, sources, result.output, choice, metrics.surface_psnr);
+  result.report["bytes"]["surface_psnr_bake_db"] = metrics.surface_psnr_bake.value_or(metrics.surface_psnr);
   if (!budgets.is_null()) result.report["bytes"]["budgets_tried"] = budgets;
   if (!line.preview_path.empty()) write_preview(line.preview_path, planned.mesh, result.output);
   const fs::path report_path = write_reports(line, result.report, written.html_data);

@@ -265,6 +265,12 @@ std::vector<char> untextured_triangles(const TexturedMesh& geometry, std::vector
 
 void scale_to_world_area(const TexturedMesh& geometry, std::vector<Surface>& components) {
   if (geometry.source_mesh_area_scale.empty() || geometry.source_mesh.empty()) return;
+  // One scale for every component changes no share: the components stay as they are.
+  const double first = geometry.source_mesh_area_scale[geometry.source_mesh[components.front().input_face[0]]];
+  if (std::all_of(components.begin(), components.end(), [&](const Surface& comp) {
+        return geometry.source_mesh_area_scale[geometry.source_mesh[comp.input_face[0]]] == first;
+      }))
+    return;
   for (Surface& comp : components) {
     const double area_scale = geometry.source_mesh_area_scale[geometry.source_mesh[comp.input_face[0]]];
     if (area_scale == 1.0 || !(area_scale > 0)) continue;

@@ -704,6 +704,7 @@ nlohmann::json to_json(const Metrics& m) {
   j["detail_loss_area"] = m.detail_loss_area;
   j["angle_distortion"] = {{"mean", m.angle_distortion_mean}, {"p95", m.angle_distortion_p95}};
   j["surface_psnr_db"] = m.surface_psnr;
+  if (m.surface_psnr_bake) j["surface_psnr_bake_db"] = *m.surface_psnr_bake;
   j["psnr_samples"] = m.psnr_samples;
   if (!m.maps.empty()) {
     nlohmann::json maps = nlohmann::json::array();

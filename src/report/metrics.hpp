@@ -2,6 +2,7 @@
 // code measures tightex's own result (in memory) and any other tool's output (read from its files).
 #pragma once
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <vector>
 
 #include "core/mesh.hpp"
@@ -43,6 +44,9 @@ struct Metrics {
   double detail_loss_area = 0;
   double angle_distortion_mean = 0, angle_distortion_p95 = 0;
   double surface_psnr = 0;
+  /// Where the images are written lossily (the command: JPEG, lossy WebP), surface_psnr is that of the
+  /// images as written (decoded back) and this the bake's before encoding; unset otherwise.
+  std::optional<double> surface_psnr_bake;
   size_t psnr_samples = 0;
   std::vector<MapFigures> maps;  // each slot bound in the input and in the output
 };
