@@ -1,0 +1,51 @@
+#!/usr/bin/env bash
+# Bytes against surface PSNR (BENCHMARKS.md, "Bytes"): for each model, the input's texture bytes, the
+# default run (the input's codec, no larger on disk for a lossy input), tightex --format webp at several
+# --target-psnr, and the input's own textures re-encoded to WebP at several qualities without repacking
+# (tools/reencode_curve.cpp, what gltf-transform or gltfpack would do); tightex's bytes beside the
+# re-encode's at the same written PSNR (its curve interpolated).
+#
+#   bash bench/bytes.sh [OUT] [MODEL...]    (default: every model of ../shared/data; a build with the tools)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out=${1:-build/bytes-bench}
+shift || true
+models=("$@")
+if [ ${#models[@]} -eq 0 ]; then
+  for d in ../shared/data/*/; do
+    m=$(ls "$d"*.obj "$d"*.glb 2>/dev/null | head -1 || true)
+    [ -n "$m" ] && models+=("$m")
+  done
+fi
+rm -rf "$out" && mkdir -p "$out"
+targets=(36 40 44)
+qualities=(1 5 10 20 35 50 70 80 90 95)
+echo "| model | input KiB | default: codec, KiB, written dB | webp --target-psnr: written dB, KiB, re-encode KiB at that dB, ratio | input re-encoded to WebP: quality dB KiB |"
+echo "|---|---|---|---|---|"
+for model in "${models[@]}"; do
+  name=$(basename "$(dirname "$model")")
+  ./build/tightex "$model" -o "$out/$name/default" -q --no-html
+  for t in "${targets[@]}"; do ./build/tightex "$model" -o "$out/$name/webp$t" -q --no-html --format webp --target-psnr "$t"; done
+  ./build/tightex_reencode_curve "$model" webp "${qualities[@]}" > "$out/$name/reencode.txt"
+  python3 - "$out/$name" "$name" "${targets[@]}" <<'PY'
+import json, sys
+folder, name, targets = sys.argv[1], sys.argv[2], sys.argv[3:]
+curve = sorted(tuple(float(x) for x in line.split()) for line in open(folder + "/reencode.txt"))  # quality, bytes, dB
+def reencode_bytes_at(db):
+    pts = sorted((p, b) for _, b, p in curve)
+    for (p0, b0), (p1, b1) in zip(pts, pts[1:]):
+        if p0 <= db <= p1:
+            return b0 + (b1 - b0) * (db - p0) / (p1 - p0) if p1 > p0 else b1
+    return None
+d = json.load(open(folder + "/default/report.json"))["bytes"]
+cells = []
+for t in targets:
+    b = json.load(open(f"{folder}/webp{t}/report.json"))["bytes"]
+    db, out = b["surface_psnr_written_db"], b["output"]["total"]
+    ref = reencode_bytes_at(db)
+    cells.append(f"{t}: {db:.1f}, {out/1024:.0f}, " + (f"{ref/1024:.0f}, {out/ref:.2f}" if ref else "beyond the curve"))
+kib = lambda x: f"{x/1024:.0f}"
+print(f"| {name} | {kib(d['input']['total'])} | {d['encoding']['format']} q{d['encoding'].get('quality', '-')}, {kib(d['output']['total'])}, "
+      f"{d['surface_psnr_written_db']:.1f} | {'; '.join(cells)} | " + "; ".join(f"{q:.0f}: {p:.1f} {b/1024:.0f}" for q, b, p in curve) + " |")
+PY
+done
