@@ -132,7 +132,8 @@ void define_encoding_options(CLI::App& app, CommandLine& line, const ChoiceNames
                            ->check(CLI::Range(1, 100));
   auto* webp_lossless = app.add_flag("--webp-lossless", line.encoding.webp_lossless, "WebP textures: lossless (with --format webp)");
   auto* target = app.add_option("--target-psnr", line.target_psnr_db,
-                                "lossy textures: the lowest quality whose written images reach this surface PSNR against the input (dB)")
+                                "lossy textures: the fewest bytes whose written images reach this surface PSNR against the input (dB): the "
+                                "quality and, without --size or --texels, the texel budget")
                      ->check(CLI::Range(1.0, 99.0));
   auto* max_bytes = app.add_option("--max-bytes", line.max_bytes, "lossy textures: the highest quality whose images take at most this many bytes")
                         ->check(CLI::PositiveNumber);
@@ -164,7 +165,8 @@ CLI::Option* define_options(CLI::App& app, CommandLine& line, ChoiceNames& names
   names.layout = to_string(line.layout), names.holes = to_string(line.holes), names.map = to_string(line.map);
   names.corners = to_string(line.corners);
   app.add_option("input", line.input,
-                 "textured model: OBJ + MTL, PLY, glTF (.gltf) or GLB, with its textures or vertex colours (a 3D Tiles .b3dm: its GLB)")
+                 "textured model: OBJ + MTL, PLY, glTF (.gltf) or GLB, with its textures or vertex colours (3D Tiles: python3 -m "
+                 "tightex.tiles)")
       ->required();
   app.add_option("-o,--output", line.outdir, "output directory")->required();
   auto* size_opt =
