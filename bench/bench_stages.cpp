@@ -133,7 +133,7 @@ const std::string& obj_for(int triangles) {
 /// one stretch (the file parsed from start to end on one core).
 void BM_ReadObj(benchmark::State& state) {
   const std::string& path = obj_for(int(state.range(0)));
-  ObjReadOptions options;
+  ModelReadOptions options;
   options.load_textures = false;
   const size_t chunk_bytes = state.range(1) == 0 ? kObjChunkBytes : std::numeric_limits<size_t>::max();
   for (auto _ : state) benchmark::DoNotOptimize(read_obj_in_chunks(path, options, nullptr, chunk_bytes));

@@ -21,6 +21,7 @@
 #include "io/image_io.hpp"
 #include "io/obj_reader.hpp"
 #include "report/metrics.hpp"
+#include "report/report.hpp"
 #include "tightex/io.hpp"
 #include "tightex/tightex.hpp"
 
@@ -100,7 +101,7 @@ inline Outcome run_obj(const uint8_t* data, size_t size) {
   else
     fs::remove(dir / "m.mtl", ec);
   const std::string path = (dir / "in.obj").string();
-  ObjReadOptions options;
+  ModelReadOptions options;
   options.max_texture_pixels = size_t(1) << 20;
   options.load_textures = false;
   // Parsed as one stretch and with every line a stretch of its own (read_obj_in_chunks): the same
@@ -345,7 +346,7 @@ inline PipelineOutcome run_pipeline(const uint8_t* data, size_t size) {
   try {
     const Result r = optimize(mesh, options);
     const TexturedMesh& o = r.output;
-    for (const auto& c : r.report["components"])
+    for (const auto& c : report_json(r.report)["components"])
       if (c["kept_original_uvs"].get<bool>()) {
         if (out.kept++ == 0) out.kept_reason = c["kept_reason"].get<std::string>();
       }

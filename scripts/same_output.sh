@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Proves that a change leaves tightex's output unchanged: builds the reference commit REF (default
-# 2947552, the tree before the stage-by-stage restructuring) in /tmp, runs its CLI and this tree's on
-# the generated demo and every OBJ model in ../shared/data with the default map, --map harmonic and
-# --map area, and compares every written file but report.json (which holds times) byte for byte.
+# HEAD) in /tmp, runs its CLI and this tree's on the generated demo and every OBJ and GLB model in
+# ../shared/data with the default map, --map harmonic and --map area, and compares every written file
+# but report.json and report.html (which hold times) byte for byte.
 #
 #   bash scripts/same_output.sh [REF] [MODEL_FILTER]
 #
@@ -10,7 +10,7 @@
 # DIFFERENT) and exits non-zero if any output differs or is missing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-ref=${1:-2947552}
+ref=$(git rev-parse --short "${1:-HEAD}")
 filter=${2:-}
 ref_dir=/tmp/tightex-ref-$ref
 work=build/same-output
@@ -37,14 +37,14 @@ mkdir -p "$ref_dir/demo" "$work"
 [ -f "$ref_dir/demo/vase.obj" ] || "$ref_dir/build/tightex_make_demo" "$ref_dir/demo" >/dev/null
 models=("$ref_dir/demo/vase.obj")
 if [ -d ../shared/data ]; then
-  while IFS= read -r m; do models+=("$m"); done < <(find ../shared/data -name '*.obj' | sort)
+  while IFS= read -r m; do models+=("$m"); done < <(find ../shared/data -name '*.obj' -o -name '*.glb' | sort)
 fi
 
-hashes() { (cd "$1" 2>/dev/null && find . -type f ! -name report.json | sort | xargs -r sha256sum); }
+hashes() { (cd "$1" 2>/dev/null && find . -type f ! -name report.json ! -name report.html | sort | xargs -r sha256sum); }
 failed=0
 for model in "${models[@]}"; do
   [ -n "$filter" ] && [[ "$model" != *"$filter"* ]] && continue
-  name=$(basename "$(dirname "$model")")_$(basename "$model" .obj)
+  name=$(basename "$(dirname "$model")")_$(basename "${model%.*}")
   for map in default harmonic area; do
     args=()
     [ "$map" != default ] && args=(--map "$map")

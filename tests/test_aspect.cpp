@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 
+#include "report/report.hpp"
 #include "cut/cut.hpp"
 #include "mesh_catalogue.hpp"
 #include "param/param.hpp"
@@ -132,13 +133,13 @@ TEST(Aspect, AutoShapeFollowsTheSurfaceAndKeepsMoreOfTheTexture) {
   const TexturedMesh longsheet = noisy_sheet(49, 17, 0.9 / 48);  // 3:1, 0.9 x 0.3 of the texture
   Options opt;
   const Result aut = optimize(longsheet, opt);
-  const double chosen = aut.report["aspect"]["chosen"];
+  const double chosen = report_json(aut.report)["aspect"]["chosen"];
   EXPECT_NE(chosen, 1.0);
-  EXPECT_EQ(aut.report["aspect"]["probes"].size(), 3u);
-  const double long_stretch = aut.report["aspect"]["square_texel_stretch"];  // < 1: the long side along y
+  EXPECT_EQ(report_json(aut.report)["aspect"]["probes"].size(), 3u);
+  const double long_stretch = report_json(aut.report)["aspect"]["square_texel_stretch"];  // < 1: the long side along y
   EXPECT_GT(std::max(long_stretch, 1 / long_stretch), kAspectProbeStretch);
   // The square and the shape on the stretch's side are mapped and estimated, the third is not.
-  for (const auto& p : aut.report["aspect"]["probes"]) {
+  for (const auto& p : report_json(aut.report)["aspect"]["probes"]) {
     const double a = p["aspect"];
     if (a == 1.0 || (a > 1) == (long_stretch > 1))
       EXPECT_GT(p["estimated_psnr_db"].get<double>(), 0.0) << p;
@@ -151,24 +152,24 @@ TEST(Aspect, AutoShapeFollowsTheSurfaceAndKeepsMoreOfTheTexture) {
   opt.aspect = 1;
   const Result sq = optimize(longsheet, opt);
   EXPECT_EQ(sq.output.textures.at(0).image.width, sq.output.textures.at(0).image.height);
-  EXPECT_EQ(sq.report["aspect"]["probes"].size(), 0u);
-  const double p_auto = aut.report["metrics"]["surface_psnr_db"], p_square = sq.report["metrics"]["surface_psnr_db"];
+  EXPECT_EQ(report_json(sq.report)["aspect"]["probes"].size(), 0u);
+  const double p_auto = report_json(aut.report)["metrics"]["surface_psnr_db"], p_square = report_json(sq.report)["metrics"]["surface_psnr_db"];
   EXPECT_GT(p_auto, p_square + 1.0);
-  EXPECT_EQ(aut.report["metrics"]["flipped"].get<size_t>(), 0u);
+  EXPECT_EQ(report_json(aut.report)["metrics"]["flipped"].get<size_t>(), 0u);
 
   const TexturedMesh squaresheet = noisy_sheet(33, 33, 0.9 / 32);
   const Result sq2 = optimize(squaresheet, Options{});
-  EXPECT_EQ(sq2.report["aspect"]["chosen"].get<double>(), 1.0);
+  EXPECT_EQ(report_json(sq2.report)["aspect"]["chosen"].get<double>(), 1.0);
   // Its square map's texels are about as long as wide, so the other shapes are not mapped at all, and
   // with nothing to compare the square with, nothing is estimated.
-  const double stretch = sq2.report["aspect"]["square_texel_stretch"];
+  const double stretch = report_json(sq2.report)["aspect"]["square_texel_stretch"];
   EXPECT_LT(stretch, kAspectProbeStretch);
   EXPECT_GT(stretch, 1 / kAspectProbeStretch);
-  for (const auto& p : sq2.report["aspect"]["probes"]) EXPECT_EQ(p["estimated_psnr_db"].get<double>(), -1.0) << p;
+  for (const auto& p : report_json(sq2.report)["aspect"]["probes"]) EXPECT_EQ(p["estimated_psnr_db"].get<double>(), -1.0) << p;
   // The harmonic map is the paper's square, and so is any map in the paper's per-component layout.
   Options h;
   h.map = MapKind::kHarmonic;
-  EXPECT_EQ(optimize(longsheet, h).report["aspect"]["chosen"].get<double>(), 1.0);
+  EXPECT_EQ(report_json(optimize(longsheet, h).report)["aspect"]["chosen"].get<double>(), 1.0);
 }
 
 // A component whose probes would be multilevel (over 32k triangles) is not probed: a coarse copy's map
@@ -178,7 +179,7 @@ TEST(Aspect, ALargeComponentsShapeIsChosenBetweenOwnMaps) {
   const TexturedMesh longsheet = noisy_sheet(241, 81, 0.9 / 240);
   ASSERT_TRUE(probes_would_be_multilevel(longsheet.num_triangles()));
   const Result r = optimize(longsheet, Options{});
-  const nlohmann::json& aspect = r.report["aspect"];
+  const nlohmann::json& aspect = report_json(r.report)["aspect"];
   const double stretch = aspect["square_texel_stretch"];
   ASSERT_GT(std::max(stretch, 1 / stretch), kShapeLookStretch);
   double square = -1, side = -1;
@@ -198,8 +199,8 @@ TEST(Aspect, ALargeComponentsShapeIsChosenBetweenOwnMaps) {
   EXPECT_NE(chosen, 1.0);
   const Image& img = r.output.textures.at(0).image;
   EXPECT_EQ(chosen > 1, img.width > img.height);
-  EXPECT_EQ(r.report["metrics"]["flipped"].get<size_t>(), 0u);
-  EXPECT_EQ(r.report["metrics"]["lost_triangles"].get<size_t>(), 0u);
+  EXPECT_EQ(report_json(r.report)["metrics"]["flipped"].get<size_t>(), 0u);
+  EXPECT_EQ(report_json(r.report)["metrics"]["lost_triangles"].get<size_t>(), 0u);
 }
 
 // At tiny sizes a long shape rounds to the square (sides are multiples of 4, at least 8): such a probe
@@ -212,9 +213,9 @@ TEST(Aspect, TheReportedShapeIsTheTexturesAtAnySize) {
     opt.size = size;
     const Result r = optimize(longsheet, opt);
     const Image& img = r.output.textures.at(0).image;
-    const double chosen = r.report["aspect"]["chosen"];
+    const double chosen = report_json(r.report)["aspect"]["chosen"];
     EXPECT_EQ(chosen == 1.0, img.width == img.height);
-    for (const auto& p : r.report["aspect"]["probes"])
+    for (const auto& p : report_json(r.report)["aspect"]["probes"])
       if (p["estimated_psnr_db"].get<double>() != -1.0 && p["aspect"].get<double>() != 1.0) EXPECT_NE(p["width"], p["height"]);
   }
 }
@@ -243,7 +244,7 @@ TEST(Aspect, ChartsCoverEveryTexelCentreAtAnySize) {
       opt.aspect = aspect;
       opt.map = MapKind::kArea;
       const Result r = optimize(sheet, opt);
-      EXPECT_EQ(r.report["metrics"]["output"]["utilization"].get<double>(), 1.0);
+      EXPECT_EQ(report_json(r.report)["metrics"]["output"]["utilization"].get<double>(), 1.0);
     }
   }
 }

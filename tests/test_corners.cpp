@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <set>
 
+#include "report/report.hpp"
 #include "cut/cut.hpp"
 #include "mesh_catalogue.hpp"
 #include "param/param.hpp"
@@ -149,8 +150,8 @@ TEST(Corners, OptionReachesThePipeline) {
   opt.size = 64;
   opt.corners = CornerRule::kTurningAngle;
   const Result r = optimize(cat::disk(), opt);
-  EXPECT_EQ(r.report["options"]["corners"], "turning");
-  EXPECT_EQ(r.report["metrics"]["flipped"], 0);
+  EXPECT_EQ(report_json(r.report)["options"]["corners"], "turning");
+  EXPECT_EQ(report_json(r.report)["metrics"]["flipped"], 0);
 }
 
 }  // namespace

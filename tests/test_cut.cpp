@@ -6,9 +6,9 @@
 #include <algorithm>
 #include <string>
 
-#include "cut/cut_along_edges.hpp"
+#include "core/cut_along_edges.hpp"
 #include "cut/cut_graph.hpp"
-#include "cut/graph.hpp"
+#include "core/graph.hpp"
 #include "mesh_catalogue.hpp"
 #include "prepare/components.hpp"
 #include "prepare/holes.hpp"

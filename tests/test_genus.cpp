@@ -6,6 +6,7 @@
 
 #include <string>
 
+#include "report/report.hpp"
 #include "cut/cut.hpp"
 #include "genus_surfaces.hpp"
 #include "prepare/components.hpp"
@@ -76,12 +77,12 @@ TEST_P(Genus, OneChartEveryHandleFound) {
   Options options;
   options.size = 512;
   const Result r = optimize(m, options);
-  const nlohmann::json& comp = r.report["components"];
+  const nlohmann::json& comp = report_json(r.report)["components"];
   ASSERT_EQ(comp.size(), 1u);
   EXPECT_EQ(comp[0]["genus"].get<long>(), c.genus);
   EXPECT_EQ(comp[0]["handle_loops"].size(), size_t(c.genus));
   EXPECT_EQ(comp[0]["fallback"].get<std::string>(), "");
-  const nlohmann::json& mt = r.report["metrics"];
+  const nlohmann::json& mt = report_json(r.report)["metrics"];
   EXPECT_EQ(mt["charts"].get<size_t>(), 1u);
   EXPECT_EQ(mt["lost_triangles"].get<size_t>(), 0u);
   EXPECT_EQ(mt["flipped"].get<size_t>(), 0u);

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "cut/graph.hpp"
+#include "core/graph.hpp"
 #include "genus_surfaces.hpp"
 #include "mesh_catalogue.hpp"
 #include "prepare/components.hpp"

@@ -13,6 +13,7 @@
 
 #include <fmt/format.h>
 
+#include "report/report.hpp"
 #include "io/image_io.hpp"
 #include "io/obj_reader.hpp"
 #include "io/obj_writer.hpp"
@@ -29,7 +30,7 @@ namespace {
 /// Input triangles of component c of a plan.
 std::set<uint32_t> triangles_of(const Plan& plan, size_t c) {
   std::set<uint32_t> s;
-  for (uint32_t t : plan.state().components[c].input_face) s.insert(t);
+  for (uint32_t t : plan_state(plan).components[c].input_face) s.insert(t);
   return s;
 }
 
@@ -94,8 +95,8 @@ TEST(KeptComponent, KeepsInputUvsMaterialAndTextureAndLosesNothing) {
   Options opt;
   opt.size = 256;
   const Plan normal = plan_charts(in, opt);
-  ASSERT_GE(normal.state().components.size(), 3u);
-  for (const std::string& k : normal.state().kept) EXPECT_TRUE(k.empty());
+  ASSERT_GE(plan_state(normal).components.size(), 3u);
+  for (const std::string& k : plan_state(normal).kept) EXPECT_TRUE(k.empty());
   // Component 1 gets a material of its own, with a tiled and shifted texture of its own.
   const std::set<uint32_t> kept_tris = triangles_of(normal, 1);
   Material skin;
@@ -109,15 +110,15 @@ TEST(KeptComponent, KeepsInputUvsMaterialAndTextureAndLosesNothing) {
   for (uint32_t t : kept_tris) in.face_material[t] = 1;
 
   const Plan plan = plan_charts(in, opt, PlanHooks{{1}});
-  ASSERT_EQ(plan.state().kept.size(), plan.state().components.size());
-  for (size_t c = 0; c < plan.state().kept.size(); ++c) EXPECT_EQ(plan.state().kept[c].empty(), c != 1) << c;
+  ASSERT_EQ(plan_state(plan).kept.size(), plan_state(plan).components.size());
+  for (size_t c = 0; c < plan_state(plan).kept.size(); ++c) EXPECT_EQ(plan_state(plan).kept[c].empty(), c != 1) << c;
   EXPECT_EQ(triangles_of(plan, 1), kept_tris);
   const Result r = bake_plan(plan, in, opt);
-  const auto& comp = r.report["components"][1];
+  const auto& comp = report_json(r.report)["components"][1];
   EXPECT_TRUE(comp["kept_original_uvs"].get<bool>());
   EXPECT_NE(comp["kept_reason"].get<std::string>().find("forced"), std::string::npos);
-  EXPECT_FALSE(r.report["components"][0]["kept_original_uvs"].get<bool>());
-  EXPECT_EQ(r.report["preparation"]["components_kept_original_uvs"].get<size_t>(), 1u);
+  EXPECT_FALSE(report_json(r.report)["components"][0]["kept_original_uvs"].get<bool>());
+  EXPECT_EQ(report_json(r.report)["preparation"]["components_kept_original_uvs"].get<size_t>(), 1u);
 
   const TexturedMesh& out = r.output;
   EXPECT_EQ(out.num_triangles(), in.num_triangles());
@@ -158,7 +159,7 @@ TEST(KeptComponent, PerComponentLayoutWritesNoEmptyImage) {
   opt.size = 128;
   opt.layout = Layout::kPerComponent;
   const Plan plan = plan_charts(in, opt, PlanHooks{{0}});
-  const size_t nc = plan.state().components.size();
+  const size_t nc = plan_state(plan).components.size();
   const Result r = bake_plan(plan, in, opt);
   const TexturedMesh& out = r.output;
   // nc - 1 new images and the input's texture, copied once.
@@ -185,13 +186,13 @@ TEST(KeptComponent, AllKeptAndNoMaterial) {
   Options opt;
   opt.size = 64;
   const Plan plan = plan_charts(in, opt, PlanHooks{{0}});
-  ASSERT_EQ(plan.state().components.size(), 1u);
-  EXPECT_EQ(plan.state().set_aside.untextured, untextured);
+  ASSERT_EQ(plan_state(plan).components.size(), 1u);
+  EXPECT_EQ(plan_state(plan).set_aside.untextured, untextured);
   const Result r = bake_plan(plan, in, opt);
   const TexturedMesh& out = r.output;
   ASSERT_EQ(out.materials.size(), 2u);
   EXPECT_EQ(out.textures.size(), 1u);  // the input's, copied; no empty new image
-  EXPECT_EQ(r.report["preparation"]["untextured_kept"], untextured.size());
+  EXPECT_EQ(report_json(r.report)["preparation"]["untextured_kept"], untextured.size());
   EXPECT_EQ(measure(in, out, 20000).lost_triangles, 0u);
   expect_kept_as_input(in, out, triangles_of(plan, 0));
   expect_kept_as_input(in, out, std::set<uint32_t>(untextured.begin(), untextured.end()));

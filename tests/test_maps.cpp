@@ -11,6 +11,7 @@
 #include <fstream>
 
 #include <fmt/format.h>
+#include "report/report.hpp"
 #include "bake/bake.hpp"
 #include "core/raster.hpp"
 #include "core/tangents.hpp"
@@ -97,8 +98,8 @@ TEST(Maps, EverySlotIsRebakedAndOneImageInTwoSlotsStaysOne) {
   EXPECT_EQ(mat.maps[size_t(MapSlot::kOcclusion)], mat.maps[size_t(MapSlot::kMetallicRoughness)]);
   EXPECT_NE(mat.maps[size_t(MapSlot::kNormal)], mat.texture);
   EXPECT_EQ(out.corner_tangent.size(), 3 * out.num_triangles());
-  ASSERT_TRUE(r.report.contains("maps"));
-  EXPECT_EQ(r.report["maps"].size(), 2u);  // metallic-roughness with occlusion, and normal
+  ASSERT_TRUE(report_json(r.report).contains("maps"));
+  EXPECT_EQ(report_json(r.report)["maps"].size(), 2u);  // metallic-roughness with occlusion, and normal
   const std::vector<MapFigures> figures = measure_maps(in, out);
   const MapFigures* mr = figures_of(figures, MapSlot::kMetallicRoughness);
   ASSERT_NE(mr, nullptr);
@@ -108,7 +109,7 @@ TEST(Maps, EverySlotIsRebakedAndOneImageInTwoSlotsStaysOne) {
 TEST(Maps, NormalsAreReexpressedInTheNewFrameWhereCopiedTexelsFail) {
   const TexturedMesh in = plate_with_maps();
   const Plan plan = plan_charts(in, small_options());
-  OutputModel om = build_output_model(plan.state(), in);
+  OutputModel om = build_output_model(plan_state(plan), in);
   const OutputModel plain = om;
   bake_other_maps(in, small_options(), om);
   const MapFigures* ours = nullptr;
@@ -145,7 +146,7 @@ TEST(Maps, ObjMapsAreReadRebakedAndWritten) {
   const fs::path dir = fs::temp_directory_path() / fmt::format("tightex_maps_obj_{}", ::getpid());
   fs::remove_all(dir);
   write_obj(m, (dir / "in").string(), "plate", ImageFormat::kPng);
-  ObjReadStats stats;
+  ModelReadStats stats;
   const TexturedMesh in = read_obj((dir / "in" / "plate.obj").string(), {}, &stats);
   EXPECT_TRUE(stats.not_read.empty());
   ASSERT_EQ(in.materials.size(), 1u);
@@ -166,11 +167,12 @@ TEST(Maps, ObjMapsAreReadRebakedAndWritten) {
 
 TEST(Maps, AMapBelowTheBudgetIsBakedLargerUpToItsInputsTexels) {
   const TexturedMesh in = plate_with_maps();
-  Options defaulted = small_options();
-  defaulted.default_budget = true;  // the size stands for tightex's own budget, which maps may exceed
+  const Options defaulted = small_options();
   Options unsized = defaulted;
   unsized.map_budget_db = 0;  // every map at the base colour's size
-  const Result plain = optimize(in, unsized), sized = optimize(in, defaulted);
+  // The size stands for tightex's own budget, which maps may exceed.
+  auto at_default_budget = [&](const Options& o) { return bake_plan(plan_charts(in, o, TextureBudget{o.size, true}), in, o); };
+  const Result plain = at_default_budget(unsized), sized = at_default_budget(defaulted);
   auto image_of = [](const TexturedMesh& out, MapSlot slot) -> const Image& {
     return out.textures[size_t(out.materials[0].maps[size_t(slot)])].image;
   };
@@ -187,8 +189,8 @@ TEST(Maps, AMapBelowTheBudgetIsBakedLargerUpToItsInputsTexels) {
   EXPECT_GT(figures_of(figures_after, MapSlot::kOcclusion)->surface_psnr, figures_of(figures_before, MapSlot::kOcclusion)->surface_psnr);
   EXPECT_GT(figures_of(figures_after, MapSlot::kMetallicRoughness)->surface_psnr,
             figures_of(figures_before, MapSlot::kMetallicRoughness)->surface_psnr);
-  EXPECT_GT(sized.report["maps"][0]["scale"].get<double>(), 1.0);
-  EXPECT_EQ(sized.report["maps"][0]["sizes"][0][0].get<int>(), after.width);
+  EXPECT_GT(report_json(sized.report)["maps"][0]["scale"].get<double>(), 1.0);
+  EXPECT_EQ(report_json(sized.report)["maps"][0]["sizes"][0][0].get<int>(), after.width);
   Options capped = defaulted;
   capped.max_page_side = base.width;  // no page side beyond the base colour's
   const Result at_cap = optimize(in, capped);

@@ -50,8 +50,8 @@ class ObjReaderTest : public ::testing::Test {
 
   /// read_obj, checked against the same file parsed with every line a stretch of its own: the mesh,
   /// the stats and the error must not depend on how the file is cut.
-  static TexturedMesh read(const std::string& path, const ObjReadOptions& options = {}, ObjReadStats* stats = nullptr) {
-    ObjReadStats by_line_stats;
+  static TexturedMesh read(const std::string& path, const ModelReadOptions& options = {}, ModelReadStats* stats = nullptr) {
+    ModelReadStats by_line_stats;
     TexturedMesh by_line;
     std::string by_line_error;
     try {
@@ -90,7 +90,7 @@ class ObjReaderTest : public ::testing::Test {
     for (size_t t = 0; t < a.textures.size(); ++t) EXPECT_EQ(a.textures[t].path, b.textures[t].path);
   }
 
-  static void expect_same(const ObjReadStats& a, const ObjReadStats& b) {
+  static void expect_same(const ModelReadStats& a, const ModelReadStats& b) {
     EXPECT_EQ(a.polygons_triangulated, b.polygons_triangulated);
     EXPECT_EQ(a.lines, b.lines);
     EXPECT_EQ(a.paths_found, b.paths_found);
@@ -98,7 +98,7 @@ class ObjReaderTest : public ::testing::Test {
   }
 
   /// The message read_obj throws, or "" when it succeeds. Every message must be a single line.
-  static std::string error_of(const std::string& path, const ObjReadOptions& options = {}) {
+  static std::string error_of(const std::string& path, const ModelReadOptions& options = {}) {
     try {
       read(path, options);
     } catch (const InputError& e) {
@@ -109,8 +109,8 @@ class ObjReaderTest : public ::testing::Test {
     return "";
   }
 
-  static ObjReadOptions no_textures() {
-    ObjReadOptions o;
+  static ModelReadOptions no_textures() {
+    ModelReadOptions o;
     o.load_textures = false;
     return o;
   }
@@ -125,7 +125,7 @@ const char* const kSquareVerts =
 
 TEST_F(ObjReaderTest, QuadIsFanTriangulated) {
   const std::string path = write("quad.obj", std::string(kSquareVerts) + "f 1/1 2/2 3/3 4/4\n");
-  ObjReadStats stats;
+  ModelReadStats stats;
   const TexturedMesh mesh = read(path, {}, &stats);
   EXPECT_EQ(mesh.source, path);
   ASSERT_EQ(mesh.num_vertices(), 4u);
@@ -177,7 +177,7 @@ TEST_F(ObjReaderTest, CrlfTabsBlankLinesAndComments) {
                                  "f 1/1 2/2 3/3\t\r\n"
                                  "l 1 2\r\np 1\r\n"
                                  "f 1/1 2/2 3/3");  // last line without a newline
-  ObjReadStats stats;
+  ModelReadStats stats;
   const TexturedMesh mesh = read(path, {}, &stats);
   ASSERT_EQ(mesh.num_triangles(), 2u);
   EXPECT_EQ(mesh.positions[1], Vec3(1, 0, 0));
@@ -423,7 +423,7 @@ TEST_F(ObjReaderTest, TexturesAreLoaded) {
 
 // Files named as another machine saw them: a Windows exporter's absolute path in quotes, a name whose
 // case differs from the file's (case-insensitive file systems), an MTL library in other case. Each is
-// found under the model's folder, and the report lists how (ObjReadStats::paths_found).
+// found under the model's folder, and the report lists how (ModelReadStats::paths_found).
 TEST_F(ObjReaderTest, FilesNamedByAnotherMachineAreFound) {
   fs::create_directories(dir_ / "Textures");
   save_image((dir_ / "Textures/Tex_0.PNG").string(), Image(4, 2, Rgba8{10, 20, 30, 255}), ImageFormat::kPng);
@@ -433,7 +433,7 @@ TEST_F(ObjReaderTest, FilesNamedByAnotherMachineAreFound) {
         "newmtl b\nmap_Kd TEX_1.PNG\n");
   const std::string path = write("scan.obj", std::string("mtllib scan.mtl\n") + kSquareVerts +
                                                  "usemtl a\nf 1/1 2/2 3/3\nusemtl b\nf 1/1 3/3 4/4\n");
-  ObjReadStats stats;
+  ModelReadStats stats;
   const TexturedMesh mesh = read(path, {}, &stats);
   ASSERT_EQ(mesh.textures.size(), 2u);
   EXPECT_EQ(mesh.textures[0].image.width, 4);
@@ -596,7 +596,7 @@ TEST_F(ObjReaderTest, WrittenModelReadsBackCornerForCorner) {
 TEST_F(ObjReaderTest, MeshroomScan) {
   const fs::path obj = fs::path(TIGHTEX_SHARED_DATA) / "meshroom_esp32cam" / "texturedMesh.obj";
   if (!fs::exists(obj)) GTEST_SKIP() << obj << " not present";
-  ObjReadStats stats;
+  ModelReadStats stats;
   const auto start = std::chrono::steady_clock::now();
   const TexturedMesh mesh = read_obj(obj.string(), no_textures(), &stats);
   const double ms =
@@ -604,7 +604,7 @@ TEST_F(ObjReaderTest, MeshroomScan) {
   std::printf("read_obj(%s): %.1f ms\n", obj.filename().c_str(), ms);
   // Cut into many stretches or read as one: the same mesh.
   for (const size_t chunk_bytes : {size_t(4096), std::numeric_limits<size_t>::max()}) {
-    ObjReadStats chunk_stats;
+    ModelReadStats chunk_stats;
     expect_same(mesh, read_obj_in_chunks(obj.string(), no_textures(), &chunk_stats, chunk_bytes));
     expect_same(stats, chunk_stats);
   }

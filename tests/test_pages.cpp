@@ -12,6 +12,7 @@
 #include <set>
 #include <string>
 
+#include "report/report.hpp"
 #include "mesh_catalogue.hpp"
 #include "prepare/components.hpp"
 #include "prepare/repair.hpp"
@@ -63,7 +64,7 @@ Result optimized_with_pages(int max_side) {
 TEST(Pages, ABudgetBeyondThePageGoesOnSeveralPagesWithEveryPropertyKept) {
   const TexturedMesh in = cat::multi_component();
   const Result r = optimized_with_pages(200);
-  const nlohmann::json& pages = r.report["pages"];
+  const nlohmann::json& pages = report_json(r.report)["pages"];
   EXPECT_GE(pages["count"].get<size_t>(), 7u);  // 512^2 texels in pages of at most 200^2
   EXPECT_EQ(pages["count"].get<size_t>(), r.output.textures.size());
   EXPECT_GE(pages["components_split"].get<size_t>(), 1u) << "the torus alone holds more than a page";
@@ -78,13 +79,13 @@ TEST(Pages, ABudgetBeyondThePageGoesOnSeveralPagesWithEveryPropertyKept) {
   const Metrics m = measure(in, r.output, 20000);
   EXPECT_EQ(m.lost_triangles, 0u);
   EXPECT_EQ(m.flipped, 0u);
-  EXPECT_EQ(m.charts, r.report["preparation"]["components"].get<size_t>()) << "one chart per component or piece";
+  EXPECT_EQ(m.charts, report_json(r.report)["preparation"]["components"].get<size_t>()) << "one chart per component or piece";
   for (double u : m.output.image_utilization) EXPECT_GE(u, 0.99);
   // The same model without a cap below its budget: one page, nothing split.
   const Result one = optimized_with_pages(kDefaultMaxPageSide);
-  EXPECT_EQ(one.report["pages"]["count"], 1);
-  EXPECT_EQ(one.report["pages"]["components_split"], 0);
-  EXPECT_TRUE(one.report["pages"]["reason"].is_null());
+  EXPECT_EQ(report_json(one.report)["pages"]["count"], 1);
+  EXPECT_EQ(report_json(one.report)["pages"]["components_split"], 0);
+  EXPECT_TRUE(report_json(one.report)["pages"]["reason"].is_null());
   // Colour kept: each piece's border is a seam more, so the split model loses a little to the one-page
   // one (57.7 dB), but stays far above what the eye sees.
   EXPECT_GT(m.surface_psnr, 45.0);
@@ -98,13 +99,13 @@ TEST(Pages, AComponentOfMoreTrianglesThanAPieceMayHoldIsSplitInEitherLayout) {
   opt.max_page_side = 0;  // no page cap: the split is the triangles' alone
   opt.max_piece_faces = 300;
   const Result r = optimize(in, opt);
-  const nlohmann::json& pages = r.report["pages"];
+  const nlohmann::json& pages = report_json(r.report)["pages"];
   EXPECT_EQ(pages["count"], 1);
   EXPECT_EQ(pages["max_piece_faces"], 300);
   EXPECT_GE(pages["components_split"].get<size_t>(), 1u) << "the torus holds more than 300 triangles";
   EXPECT_GE(pages["pieces"].get<size_t>(), 3u) << "1024 triangles in pieces of at most 300: four pieces or more";
   size_t triangles = 0;
-  for (const nlohmann::json& c : r.report["components"]) {
+  for (const nlohmann::json& c : report_json(r.report)["components"]) {
     EXPECT_LE(c["triangles"].get<size_t>(), 300u);
     triangles += c["triangles"].get<size_t>();
   }
@@ -112,24 +113,24 @@ TEST(Pages, AComponentOfMoreTrianglesThanAPieceMayHoldIsSplitInEitherLayout) {
   const Metrics m = measure(in, r.output, 20000);
   EXPECT_EQ(m.lost_triangles, 0u);
   EXPECT_EQ(m.flipped, 0u);
-  EXPECT_EQ(m.charts, r.report["preparation"]["components"].get<size_t>()) << "one chart per component or piece";
+  EXPECT_EQ(m.charts, report_json(r.report)["preparation"]["components"].get<size_t>()) << "one chart per component or piece";
   for (double u : m.output.image_utilization) EXPECT_GE(u, 0.99);
   EXPECT_GT(m.surface_psnr, 45.0);
   // Per component: each piece its own chart and texture.
   Options per_component = opt;
   per_component.layout = Layout::kPerComponent;
   const Result each = optimize(in, per_component);
-  EXPECT_GE(each.report["pages"]["components_split"].get<size_t>(), 1u);
+  EXPECT_GE(report_json(each.report)["pages"]["components_split"].get<size_t>(), 1u);
   const Metrics me = measure(in, each.output, 20000);
   EXPECT_EQ(me.lost_triangles, 0u);
   EXPECT_EQ(me.flipped, 0u);
   EXPECT_EQ(me.charts, each.output.textures.size()) << "one texture per component or piece";
-  EXPECT_EQ(me.charts, each.report["preparation"]["components"].get<size_t>());
+  EXPECT_EQ(me.charts, report_json(each.report)["preparation"]["components"].get<size_t>());
   // No cap: the torus stays one chart.
   opt.max_piece_faces = 0;
   const Result whole = optimize(in, opt);
-  EXPECT_EQ(whole.report["pages"]["components_split"], 0);
-  EXPECT_TRUE(whole.report["pages"]["max_piece_faces"].is_null());
+  EXPECT_EQ(report_json(whole.report)["pages"]["components_split"], 0);
+  EXPECT_TRUE(report_json(whole.report)["pages"]["max_piece_faces"].is_null());
 }
 
 TEST(PagesCli, ANegativePieceCapIsRefusedAndNothingIsWritten) {

@@ -24,10 +24,10 @@ std::set<std::string> keys_of(const nlohmann::json& j) {
 }
 
 /// A report as a CLI run fills it: two listed components, one of them kept, one probed shape.
-Report filled_report() {
-  Report r;
+ReportData filled_report() {
+  ReportData r;
   r.input = {"in/model.obj", 502, 1000, 1, 1, std::nullopt};
-  ObjReadStats read;
+  ModelReadStats read;
   read.polygons_triangulated = 3;
   read.paths_found = {"A.PNG -> a.png"};
   read.lines = 99;
@@ -179,7 +179,7 @@ TEST(Report, WritesEachFieldsValue) {
   EXPECT_DOUBLE_EQ(j["aspect"]["probes"][0]["full_map_estimated_psnr_db"].get<double>(), 10 * std::log10(255.0 * 255.0 / 50.0));
   EXPECT_TRUE(j["aspect"]["probes"][1]["full_map_estimated_psnr_db"].is_null());  // no own map made
   EXPECT_EQ(j["aspect"]["square_texel_stretch"], 2.5);
-  EXPECT_TRUE(to_json(Report{})["aspect"]["square_texel_stretch"].is_null());
+  EXPECT_TRUE(to_json(ReportData{})["aspect"]["square_texel_stretch"].is_null());
   EXPECT_EQ(j["aspect"]["probes"][1]["width"], 520);
   EXPECT_EQ(j["preparation"]["zero_area_dropped"], 1);
   EXPECT_EQ(j["preparation"]["vertices_sliced"], 6);
@@ -234,7 +234,7 @@ TEST(Report, NumbersKeepTheirTypes) {
 }
 
 TEST(Report, LeavesOutWhatWasNotFilled) {
-  Report r;
+  ReportData r;
   r.options.aspect = 1.5;
   r.aspect.requested = 1.5;
   r.options.size_grown_from = 256;

@@ -8,10 +8,12 @@
 
 #include "tightex/image.hpp"
 #include "tightex/mesh.hpp"
+#include "tightex/options.hpp"
 
 namespace tightex {
 
-struct ObjReadOptions {
+/// The options of every model reader (read_obj, read_ply, read_gltf, read_model).
+struct ModelReadOptions {
   bool load_textures = true;  // false: materials keep their texture path, no pixels
   size_t max_texture_pixels = size_t(1) << 30;
   /// glTF: every mesh instance in world space (node transforms applied, each node that shows a mesh
@@ -21,7 +23,7 @@ struct ObjReadOptions {
 };
 
 /// What the reader did beyond plain reading, for the report.
-struct ObjReadStats {
+struct ModelReadStats {
   size_t polygons_triangulated = 0;  // faces with more than 3 corners, fan-triangulated
   size_t lines = 0;                  // text lines read (a binary PLY: its header's)
   /// Files the MTL (a PLY: its TextureFile comments) names that were found only by ignoring case or by a tail of the path as written
@@ -43,11 +45,7 @@ struct ObjReadStats {
 /// Guarantees: positions finite; triangle indices in range; corner_uv finite and 3 per triangle;
 /// face_material in range or -1; every material with map_Kd has a loaded texture.
 /// Throws InputError with "FILE:LINE: problem" for any malformed or unsupported content.
-TexturedMesh read_obj(const std::string& path, const ObjReadOptions& options = {}, ObjReadStats* stats = nullptr);
-
-/// The options and the report of every model reader (read_obj, read_ply, read_model).
-using ModelReadOptions = ObjReadOptions;
-using ModelReadStats = ObjReadStats;
+TexturedMesh read_obj(const std::string& path, const ModelReadOptions& options = {}, ModelReadStats* stats = nullptr);
 
 /// Reads a PLY file (ascii, binary_little_endian or binary_big_endian) as photogrammetry tools write
 /// it, with the textures its `comment TextureFile <name>` lines name (relative to the PLY's folder,
@@ -80,7 +78,7 @@ size_t texture_vertex_colours(TexturedMesh& mesh, size_t max_pixels = size_t(1) 
 /// indexed or not) of every mesh the scene reaches (the default scene, else scene 0, else every root
 /// node) is read, each mesh once and in its own local space (source_mesh: the glTF mesh; a mesh that
 /// two nodes use is one set of triangles, source_mesh_area_scale the area its nodes show of it), or
-/// with options.flatten_scene every instance in world space (ObjReadOptions::flatten_scene).
+/// with options.flatten_scene every instance in world space (ModelReadOptions::flatten_scene).
 /// Read: POSITION (exactly as stored), NORMAL, the TEXCOORD_n its material's baseColorTexture uses
 /// (with KHR_texture_transform's offset and scale applied: the corner UVs are what a renderer samples;
 /// a rotation is refused), COLOR_0 (into corner_color, converted from linear to sRGB), the base colour
@@ -111,8 +109,6 @@ std::vector<Texture> load_texture_pixels(const TexturedMesh& mesh, size_t max_pi
 /// as they do; a 3D Tiles payload (.b3dm, .i3dm, .pnts, .cmpt) is refused with an InputError naming the
 /// tile runner.
 TexturedMesh read_model(const std::string& path, const ModelReadOptions& options = {}, ModelReadStats* stats = nullptr);
-
-enum class ImageFormat { kPng, kJpeg, kWebp };
 
 /// ImageEncoding::png_level's default: zlib level 1, the Z_RLE strategy and the UP filter on every row:
 /// several times faster than level 6, files within about a tenth of level 9's (BENCHMARKS.md, "Options").

@@ -3,8 +3,10 @@
 #pragma once
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <optional>
+#include <string>
 #include <string_view>
 
 namespace tightex {
@@ -31,6 +33,12 @@ enum class CornerRule {
   kEqualArcs,     // four arcs of (nearly) equal boundary length
   kTurningAngle,  // where the boundary turns most, each arc at least 10% of the length
 };
+
+/// The model file a run writes: OBJ + MTL, binary PLY, glTF (.gltf + .bin + images) or GLB.
+enum class ModelFormat { kObj, kPly, kGltf, kGlb };
+
+/// The texture image codecs tightex writes.
+enum class ImageFormat { kPng, kJpeg, kWebp };
 
 /// The name of each choice, as the CLI takes it and the report writes it. The compiler checks that
 /// every value has one (-Wswitch); parse_* below read them back through the same switch.
@@ -65,6 +73,30 @@ constexpr std::string_view to_string(HoleMode v) {
   }
   return "";
 }
+constexpr std::string_view to_string(ModelFormat v) {
+  switch (v) {
+    case ModelFormat::kObj:
+      return "obj";
+    case ModelFormat::kPly:
+      return "ply";
+    case ModelFormat::kGltf:
+      return "gltf";
+    case ModelFormat::kGlb:
+      return "glb";
+  }
+  return "";
+}
+constexpr std::string_view to_string(ImageFormat v) {
+  switch (v) {
+    case ImageFormat::kPng:
+      return "png";
+    case ImageFormat::kJpeg:
+      return "jpg";
+    case ImageFormat::kWebp:
+      return "webp";
+  }
+  return "";
+}
 constexpr std::string_view to_string(CornerRule v) {
   switch (v) {
     case CornerRule::kEqualArcs:
@@ -80,6 +112,8 @@ inline constexpr std::array kLayouts{Layout::kAtlas, Layout::kPerComponent};
 inline constexpr std::array kMapKinds{MapKind::kDetail, MapKind::kArea, MapKind::kTexel, MapKind::kHarmonic};
 inline constexpr std::array kHoleModes{HoleMode::kFill, HoleMode::kCut};
 inline constexpr std::array kCornerRules{CornerRule::kEqualArcs, CornerRule::kTurningAngle};
+inline constexpr std::array kModelFormats{ModelFormat::kObj, ModelFormat::kPly, ModelFormat::kGltf, ModelFormat::kGlb};
+inline constexpr std::array kImageFormats{ImageFormat::kPng, ImageFormat::kJpeg, ImageFormat::kWebp};
 
 /// The value of `values` whose to_string is `name`; nullopt if none.
 template <typename Enum, size_t N>
@@ -96,80 +130,81 @@ constexpr std::optional<Enum> from_string(const std::array<Enum, N>& values, std
 /// throws tightex::Cancelled soon after, and nothing is returned.
 using ProgressCallback = std::function<bool(std::string_view stage, double fraction)>;
 
-/// What a caller chooses. Every default is the CLI's; 0 means "choose for this model".
-/// Options::max_page_side's default.
+/// Options::max_page_side's default: what WebGL and most engines accept.
 constexpr int kDefaultMaxPageSide = 8192;
 /// Options::max_piece_faces's default.
 constexpr size_t kDefaultMaxPieceFaces = 6000000;
 
+/// What a caller chooses, for the method (plan_charts, bake_plan, optimize) and for a whole run from
+/// file to files (run). Every default is the CLI's; 0 means "choose for this model". The reasons and
+/// figures behind the defaults: docs/decisions.md, "Options".
 struct Options {
-  /// Atlas: the texture's side; per-component: the largest texture's side. 0 (default): default_size,
-  /// as many texels as the input uses, so the output keeps the input's information.
+  // The texel budget and the texture's shape.
+  /// The texture's side (per-component: the largest texture's). 0: the input's used texels (default_size).
   int size = 0;
-  /// `size` is the default budget (the input's used texels; always so for `size` 0), not a side the
-  /// caller asked for. The CLI sets it when neither --size nor --texels is given. Then:
-  /// - the atlas grows where `size` cannot hold a 4 x 4 rectangle for every component, to the side that
-  ///   holds `size`^2 texels and 16 more per component, or more if the layout needs it (report
-  ///   "options": "size_grown_from"); an asked-for size that cannot hold them is an InputError;
-  /// - the per-component textures hold `size`^2 texels together (an asked-for size is the largest's side).
-  bool default_budget = false;
-  /// Width/height of the texture, which then holds about size x size texels (sides multiples of 4).
-  /// 0 (default): chosen per model for the area, texel and detail maps in the atlas layout: the
-  /// component that holds most of the texture is mapped into a square and, where its texels are
-  /// stretched along one axis, into the 2:1 or 1:2 texture the stretch points to, each map's colour
-  /// error estimated, and the square kept unless the other shape's is at least 5% lower
-  /// (report "aspect"; not probed beyond 100k triangles). Otherwise 1, the paper's square.
+  /// The texture holds this many texels (a square of side size_for_texels, or the shape `aspect` gives);
+  /// 0: `size` decides. Not together with `size`.
+  double texels = 0;
+  /// Width / height of the texture. 0: chosen per model (the square unless 2:1 or 1:2 keeps clearly
+  /// more of the input; atlas layout, area, texel and detail maps); else 1/16..16.
   double aspect = 0;
+  /// A default budget's texture may be wider than 16384 texels, and `size` above 16384 is allowed.
+  bool allow_large_textures = false;
   Layout layout = Layout::kAtlas;
-  /// Atlas: the largest side of one texture page; 0: no cap. A budget whose texture would be wider or
-  /// taller goes on several pages of at most max_page_side^2 texels, each component whole on one page;
-  /// a component whose share alone is more than a page holds is first split into pieces that fit, each
-  /// its own chart (report "pages"). 8192: what WebGL and most engines accept.
+  /// Atlas: the largest side of one texture page (0: no cap); a larger budget goes on several pages.
   int max_page_side = kDefaultMaxPageSide;
-  /// The most triangles one chart holds; 0: no cap. A component of more is split into pieces of at
-  /// most this many, each its own chart (and, per component, its own texture; report "pages"), as for
-  /// a page. The map's memory grows faster than its triangles (its factorisations' fill): a 10M-face
-  /// scan at its default budget peaks at 18.2 GiB in one piece, at 11.9 GiB in two (and takes 220 s,
-  /// not 316 s; BENCHMARKS.md, "Memory the run needs").
+  /// The most triangles one chart holds (0: no cap); a larger component is split into pieces.
   size_t max_piece_faces = kDefaultMaxPieceFaces;
+
+  // The method.
   HoleMode holes = HoleMode::kFill;
-  /// Default kDetail: the highest surface PSNR of the four maps on every model of ../shared/data at
-  /// the input's budget (BENCHMARKS.md, "Quality per map").
   MapKind map = MapKind::kDetail;
-  /// Angle/area trade-off of the area, texel and detail maps: 0 = the harmonic map's density (least
-  /// angle distortion), 1 = the target density exactly; between, the geometric blend of the two.
+  /// Area, texel and detail maps: 1 = the target density exactly, 0 = the harmonic map's; between, a blend.
   double balance = 1.0;
-  /// Which boundary vertices become the square's corners (docs/corners.md).
   CornerRule corners = CornerRule::kEqualArcs;
   /// Least-squares fit of the baked texels to the input under bilinear read-back.
   bool fit = true;
-  /// The fit on a 4 x 4 grid of points per texel instead of 2 x 2: a little higher surface PSNR at
-  /// about twice the bake time; the texture coordinates do not change. Ignored without `fit`.
+  /// The fit on 4 x 4 points per texel instead of 2 x 2: a little higher PSNR, about twice the bake time.
   bool fine_fit = false;
-  /// The base colour filtered in linear light (each bilinear tap decoded from sRGB, the footprint mean
-  /// encoded back), as the other colour maps are; off: filtered as stored (sRGB). An internal switch
-  /// for measurement (CLI: the hidden --linear-light-colour); docs/decisions.md has the figures.
-  bool linear_light_colour = false;
-  /// The maps other than the base colour (metallic-roughness, occlusion, emissive, normal, ...): each is
-  /// baked at the base colour's size and read back at 50k surface points, its PSNR taken against the
-  /// input's map over the channels its slots read. Below this, it is baked again larger (steps of 1/8,
-  /// 1/4 or 1/2 of the side, whichever divides the pages' sides) up to as many texels as its input
-  /// images hold, at the smallest step that reaches this or else the largest, when that gains at least
-  /// 0.25 dB; otherwise it is halved (down to 1/16 of the side) while its PSNR stays at or above this,
-  /// or within 0.25 dB of the base colour's size's. A normal map is never baked larger and is halved
-  /// while its PSNR against its own full-size bake stays at or above this. A flat or smooth map costs a
-  /// fraction of the texels; the default keeps a 1 dB margin above 50 dB, beyond which differences are
-  /// about 0.8 of an 8-bit level. 0: every map at the base colour's size (CLI --map-budget).
+  /// Maps other than the base colour: a map below this surface PSNR (dB) at the base colour's size is
+  /// baked larger, one above it smaller while it stays there; 0: every map at the base colour's size.
   double map_budget_db = 51;
-  /// Compute the METRICS.md figures into report["metrics"]. A caller that writes the result can turn
-  /// this off and measure beside the write (the CLI does).
-  bool measure = true;
-  /// Triangles with nothing to bake (no texture, no vertex colours) are written as they came, with
-  /// their material. false: their colour is baked into the new texture like any other (an output
-  /// format without materials, PLY, has no other place for it).
+  /// Triangles with nothing to bake (no texture, no vertex colours) are written as they came; false:
+  /// their colour is baked like any other (PLY has no material to keep it in).
   bool keep_untextured = true;
+  /// Compute the METRICS.md figures into the report (optimize, bake_plan; run always measures).
+  bool measure = true;
+
+  // The run's resources.
+  /// Refuse a run whose estimated memory exceeds this many MiB, before any pixel is allocated; 0: 90% of RAM.
+  double max_memory_mib = 0;
   /// Progress and cancellation (see ProgressCallback); empty: none.
   ProgressCallback progress;
+
+  // What run() writes.
+  /// The model's format; nullopt: the input's kind (.ply, .gltf, .glb as the input, anything else OBJ).
+  std::optional<ModelFormat> model_format;
+  /// The textures' codec; nullopt: the input's base colour's (PNG for vertex colours or mixed inputs).
+  std::optional<ImageFormat> texture_format;
+  /// PNG: zlib level 0..9 with the adaptive filter; nullopt: fast settings (level 1, run-length, Up filter).
+  std::optional<int> png_level;
+  /// JPEG quality 1..100; nullopt: rate control (the highest quality within the input's bytes, or below).
+  std::optional<int> jpeg_quality;
+  /// Lossy WebP quality 1..100; nullopt: rate control, as for JPEG.
+  std::optional<int> webp_quality;
+  /// WebP: lossless instead of lossy.
+  bool webp_lossless = false;
+  /// Lossy codecs: the fewest bytes whose written images reach this surface PSNR (dB; 0: none), choosing
+  /// the quality and, without `size` or `texels`, the texel budget.
+  double target_psnr_db = 0;
+  /// Lossy codecs: the highest quality whose images take at most this many bytes (0: none).
+  uint64_t max_bytes = 0;
+  /// report.json's path; empty: OUTDIR/report.json.
+  std::string report_path;
+  /// A PNG of the input texture(s) beside the output's; empty: none.
+  std::string preview_path;
+  /// Write OUTDIR/report.html (the figures, the atlases and a 3D before/after viewer in one page).
+  bool html = true;
 };
 
 }  // namespace tightex

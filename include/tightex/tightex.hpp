@@ -5,7 +5,6 @@
 // Everything here and in the headers it includes is installed; nothing comes from tightex's sources.
 #pragma once
 #include <memory>
-#include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
 #include <vector>
@@ -14,12 +13,13 @@
 #include "tightex/io.hpp"
 #include "tightex/mesh.hpp"
 #include "tightex/options.hpp"
+#include "tightex/report.hpp"
 
 namespace tightex {
 
 struct Result {
-  TexturedMesh output;    // geometry of the input (same corner positions), new UVs, new textures
-  nlohmann::json report;  // what was done and measured (see ../shared/METRICS.md)
+  TexturedMesh output;  // geometry of the input (same corner positions), new UVs, new textures
+  Report report;        // what was done and measured (see ../shared/METRICS.md)
 };
 
 /// The geometric half of the method (repair, components, handles, holes, cut, layout, map): it needs
@@ -35,7 +35,7 @@ class Plan {
   ~Plan();
 
   /// What was done so far (options used, preparation, each component's cut and map, timings).
-  const nlohmann::json& report() const;
+  Report report() const;
   /// Width and height of each texture the output will have.
   std::vector<std::pair<int, int>> texture_sizes() const;
   /// Components that could not be mapped and keep their input texture coordinates and material(s)
@@ -45,9 +45,9 @@ class Plan {
   size_t kept_triangles() const;
   std::string first_kept_reason() const;
 
-  const State& state() const;  // for tightex's own stages and tests
-
  private:
+  friend const State& plan_state(const Plan& plan);  // tightex's own stages and tests
+
   std::unique_ptr<State> state_;
 };
 
@@ -90,7 +90,10 @@ Plan plan_charts(const TexturedMesh& input, const Options& options, PreparedMesh
 /// mesh is an InputError.
 Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& options);
 
-/// Runs the whole method: bake_plan(plan_charts(input, options), input, options).
+/// Runs the whole method on a mesh in memory, as run() does from a file but writing nothing: refuses a
+/// run whose estimated memory is above Options::max_memory_mib (InputError), then
+/// bake_plan(plan_charts(input, options), input, options), with the wall time and peak memory in the
+/// report. Requires a mesh whose textures are loaded.
 Result optimize(const TexturedMesh& input, const Options& options);
 
 /// The texture side that holds `texels` texels in one square: sqrt rounded up to a multiple of 4
@@ -101,10 +104,8 @@ int size_for_texels(double texels);
 /// textures; METRICS.md "used texels"). Needs only the textures' sizes, not their pixels.
 double input_used_texels(const TexturedMesh& input);
 
-/// Texels the default budget gives each vertex-coloured triangle. A triangle's colours are linear across
-/// it, so its texels reproduce them ever more closely: on a vertex-coloured Meshroom scan (53k
-/// triangles) surface PSNR rises 38.1, 43.8, 47.6, 49.6 dB from 1.2 to 20 texels a triangle (docs/decisions.md);
-/// 8 keeps the colours at about 46 dB in a texture still small beside what a photographed one takes.
+/// Texels the default budget gives each vertex-coloured triangle: a triangle's colours are linear
+/// across it, so its texels reproduce them ever more closely (figures: docs/decisions.md).
 constexpr double kTexelsPerColouredTriangle = 8.0;
 
 /// The default budget in texels: the input's used texels in the textures read from files, plus
@@ -113,7 +114,7 @@ double default_texels(const TexturedMesh& input);
 
 /// The default texture side (Options::size 0): size_for_texels of default_texels rounded up to a
 /// multiple of 4 (1024 if no texture has a known size), at most max_side (by default
-/// kDefaultSizeMax, 1 GiB of RGBA; the CLI goes beyond only with --force).
+/// kDefaultSizeMax, 1 GiB of RGBA; beyond only with Options::allow_large_textures).
 constexpr int kDefaultSizeMax = 16384;
 int default_size(const TexturedMesh& input, int max_side = kDefaultSizeMax);
 

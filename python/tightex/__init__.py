@@ -1,18 +1,20 @@
 """tightex: one compact texture per surface, from a scan's fragmented UV atlas.
 
-The Python face of the tightex command and library (C++, pybind11):
+The Python face of the tightex library (C++, pybind11), on the library's own types:
 
-- ``optimize(input_path, output_dir, **options)`` runs the ``tightex`` command on a model file (OBJ or
-  PLY with its textures) and returns its report (``report.json``) as a dict.
+- ``Options``: what a run chooses, one typed attribute per field with the command's default and its
+  ``--help`` text as docstring (``Options(size=1024, map="area")``; a choice is given by name).
+- ``optimize(input_path, output_dir, options=None, **fields)`` runs the library's whole run on a model
+  file (OBJ, PLY, glTF or GLB with its textures) and returns its ``Report``.
 - ``optimize_arrays(positions, faces, uvs, images, ...)`` runs it on an in-memory mesh (NumPy arrays,
   as trimesh or Open3D hold them) and returns the new mesh as arrays, with the report.
-- ``estimate_memory(input_path, **options)`` is the memory the command's ``--max-memory`` guard
-  estimates for a run, from the model's geometry and its images' headers.
+- ``estimate_memory(input_path, options=None, **fields)`` is the memory the run's guard estimates, from
+  the model's geometry and its images' headers.
+- ``Report``: the main figures as attributes (``surface_psnr_db``, ``lost_triangles``, ``warnings``,
+  ...), ``to_dict()`` for the whole report as report.json holds it, and ``report["metrics"]`` for a section.
 
-Options are the command's (``tightex --help``) as keyword arguments, dashes as underscores:
-``size=1024``, ``map="area"``, ``no_fit=True``, ``output_format="ply"``, ``max_memory=2048``. They are
-parsed and checked by the command's own code, so defaults and limits are the same; a bad one raises
-``InputError``. A flag is given by ``True``; ``False`` or ``None`` leaves an option out.
+Fields given as keywords are set on a copy of ``options`` (or of the defaults): a field the library does
+not have raises ``InputError``, a value of the wrong type ``TypeError``, one out of range ``InputError``.
 
 Errors: ``InputError`` (bad input, one line naming the file or array, the element and the problem),
 ``InternalError`` (a bug), ``Cancelled`` (the progress callback returned False); all subclass ``Error``.
@@ -22,51 +24,68 @@ Errors: ``InputError`` (bad input, one line naming the file or array, the elemen
 works, so other Python threads run meanwhile.
 """
 
-import json
-
 from . import _tightex
-from ._tightex import Cancelled, Error, InputError, InternalError
+from ._tightex import Cancelled, Error, InputError, InternalError, Report
 
-__all__ = ["optimize", "optimize_arrays", "estimate_memory", "options_to_args", "set_max_threads", "Error", "InputError", "InternalError", "Cancelled"]
+__all__ = ["Options", "Report", "optimize", "optimize_arrays", "estimate_memory", "set_max_threads", "Error", "InputError",
+           "InternalError", "Cancelled"]
 
-
-def options_to_args(**options):
-    """The command-line arguments for keyword options: ``size=512`` -> ``["--size", "512"]``,
-    ``no_fit=True`` -> ``["--no-fit"]``; ``False`` and ``None`` are left out."""
-    args = []
-    for key, value in options.items():
-        name = "--" + key.replace("_", "-")
-        if value is None or value is False:
-            continue
-        if value is True:
-            args.append(name)
-        else:
-            args += [name, str(value)]
-    return args
+#: The fields of Options, as the library declares them.
+FIELDS = tuple(name for name in dir(_tightex.Options) if not name.startswith("_"))
 
 
-def optimize(input_path, output_dir, progress=None, **options):
+class Options(_tightex.Options):
+    __doc__ = _tightex.Options.__doc__
+
+    def __init__(self, **fields):
+        super().__init__()
+        for name, value in fields.items():
+            if name not in FIELDS:
+                raise InputError(f"options: {name}: not a field of tightex.Options (they are: {', '.join(FIELDS)})")
+            setattr(self, name, value)
+
+    def __repr__(self):
+        changed = {name: getattr(self, name) for name in FIELDS if getattr(self, name) != getattr(_DEFAULTS, name)}
+        return "tightex.Options(" + ", ".join(f"{k}={v!r}" for k, v in changed.items()) + ")"
+
+
+_DEFAULTS = _tightex.Options()
+
+
+def _with_fields(options, fields):
+    """A copy of ``options`` (the defaults where None) with ``fields`` set."""
+    copy = Options()
+    if options is not None:
+        for name in FIELDS:
+            setattr(copy, name, getattr(options, name))
+    for name, value in fields.items():
+        if name not in FIELDS:
+            raise InputError(f"options: {name}: not a field of tightex.Options (they are: {', '.join(FIELDS)})")
+        setattr(copy, name, value)
+    return copy
+
+
+def optimize(input_path, output_dir, options=None, progress=None, **fields):
     """Optimizes the model at ``input_path`` into ``output_dir``, as the ``tightex`` command does.
 
-    Writes ``output_dir/<name>.obj`` (or ``.ply``: the input's kind, or ``output_format``), its
-    material and ``<name>_tightex.png``, and ``report.json``, each atomically; the input is never
-    written to. Returns the report as a dict (the METRICS.md figures under "metrics").
+    Writes ``output_dir/<name>.obj`` (or ``.ply``, ``.gltf``, ``.glb``: the input's kind, or
+    ``model_format``) with its material and textures, ``report.json`` and ``report.html``, each
+    atomically; the input is never written to. Returns the ``Report``.
 
-    Raises InputError for a bad model, option or output folder, or a run above ``max_memory`` MiB;
+    Raises InputError for a bad model, option or output folder, or a run above ``max_memory_mib``;
     Cancelled when ``progress`` returned False (nothing is written then); InternalError for a bug.
     """
-    args = options_to_args(**options)
-    return json.loads(_tightex.optimize_file(str(input_path), str(output_dir), args, progress))
+    return _tightex.run(str(input_path), str(output_dir), _with_fields(options, fields), progress)
 
 
-def estimate_memory(input_path, **options):
-    """The bytes of memory the command's guard estimates for optimizing ``input_path`` with these
-    options (decoded input textures, the mesh and its stages, the output texture), from the model's
-    geometry and its images' headers alone. Raises InputError for a model that cannot be read."""
-    return int(_tightex.estimate_memory(str(input_path), options_to_args(**options)))
+def estimate_memory(input_path, options=None, **fields):
+    """The bytes of memory the run's guard estimates for optimizing ``input_path`` with these options
+    (decoded input textures, the mesh and its stages, the output texture), from the model's geometry
+    and its images' headers alone. Raises InputError for a model that cannot be read."""
+    return int(_tightex.estimate_memory(str(input_path), _with_fields(options, fields)))
 
 
-def optimize_arrays(positions, faces, uvs, images, material_ids=None, face_uvs=None, progress=None, **options):
+def optimize_arrays(positions, faces, uvs, images, material_ids=None, face_uvs=None, options=None, progress=None, **fields):
     """Optimizes an in-memory textured mesh; nothing is read or written.
 
     positions: (V, 3) float; faces: (F, 3) int, counter-clockwise front.
@@ -77,12 +96,12 @@ def optimize_arrays(positions, faces, uvs, images, material_ids=None, face_uvs=N
       - (V, 2) per vertex without ``face_uvs`` (trimesh's ``visual.uv``).
     images: a list of H x W x 3 or H x W x 4 uint8 arrays (one array alone is taken as a list of one).
     material_ids: (F,) int, the image of each face (-1: none); default: every face the first image.
-    options: the command's (see the module's doc), e.g. ``size=1024``, ``map="area"``.
+    options, fields: as for ``optimize`` (those about written files do nothing here).
 
     Returns a dict: "positions" (V, 3) float64, the input's; "faces" (F, 3) int64, the input's
     triangles (in another order, each maybe rotated, never flipped); "uvs" (F, 3, 2) float64 per
     corner, in [0, 1]; "material_ids" (F,) int64, the image of each face; "images", a list of
-    H x W x 4 uint8 arrays; "report", the report as a dict.
+    H x W x 4 uint8 arrays; "report", the ``Report``.
 
     Raises InputError naming the array and element for a bad shape or index; Cancelled; InternalError.
     """
@@ -94,9 +113,9 @@ def optimize_arrays(positions, faces, uvs, images, material_ids=None, face_uvs=N
     for i, image in enumerate(images):
         if image.dtype != np.uint8:
             raise InputError(f"arrays: images[{i}] is {image.dtype}, not uint8 (0..255 per channel)")
-    arrays, report = _tightex.optimize_arrays(positions, faces, uvs, images, material_ids, face_uvs,
-                                              options_to_args(**options), progress)
-    arrays["report"] = json.loads(report)
+    arrays, report = _tightex.optimize_arrays(positions, faces, uvs, images, material_ids, face_uvs, _with_fields(options, fields),
+                                              progress)
+    arrays["report"] = report
     return arrays
 
 

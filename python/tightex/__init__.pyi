@@ -1,4 +1,4 @@
-from typing import Any, Callable, Optional, Sequence, Union
+from typing import Any, Callable, Literal, Optional, Sequence, Union
 from os import PathLike
 
 import numpy as np
@@ -12,10 +12,69 @@ class InputError(Error): ...
 class InternalError(Error): ...
 class Cancelled(Error): ...
 
+FIELDS: tuple[str, ...]
+
+class Options:
+    size: int = 0
+    texels: float = 0.0
+    aspect: float = 0.0
+    allow_large_textures: bool = False
+    layout: Literal["atlas", "per-component"] = "atlas"
+    max_page_side: int = 8192
+    max_piece_faces: int = 6000000
+    holes: Literal["fill", "cut"] = "fill"
+    map: Literal["detail", "area", "texel", "harmonic"] = "detail"
+    balance: float = 1.0
+    corners: Literal["arcs", "turning"] = "arcs"
+    fit: bool = True
+    fine_fit: bool = False
+    map_budget_db: float = 51.0
+    keep_untextured: bool = True
+    measure: bool = True
+    max_memory_mib: float = 0.0
+    model_format: Optional[Literal["obj", "ply", "gltf", "glb"]] = None
+    texture_format: Optional[Literal["png", "jpg", "webp"]] = None
+    png_level: Optional[int] = None
+    jpeg_quality: Optional[int] = None
+    webp_quality: Optional[int] = None
+    webp_lossless: bool = False
+    target_psnr_db: float = 0.0
+    max_bytes: int = 0
+    report_path: str = ""
+    preview_path: str = ""
+    html: bool = True
+    def __init__(self, **fields: Any) -> None: ...
+
+class Report:
+    input_triangles: int
+    output_triangles: int
+    components: int
+    charts: int
+    lost_triangles: int
+    flipped_triangles: int
+    input_texels_used: float
+    output_texels_used: float
+    surface_psnr_db: float
+    surface_psnr_bake_db: float
+    texture_sizes: list[tuple[int, int]]
+    input_texture_bytes: int
+    output_texture_bytes: int
+    texture_format: str
+    model_path: str
+    report_path: str
+    wall_seconds: float
+    peak_rss_mib: float
+    warnings: list[str]
+    notes: list[str]
+    json: str
+    def to_dict(self) -> dict[str, Any]: ...
+    def __getitem__(self, key: str) -> Any: ...
+    def __contains__(self, key: str) -> bool: ...
+
 def set_max_threads(n: int) -> None: ...
-def options_to_args(**options: Any) -> list[str]: ...
-def optimize(input_path: Path, output_dir: Path, progress: Optional[ProgressCallback] = None, **options: Any) -> dict[str, Any]: ...
-def estimate_memory(input_path: Path, **options: Any) -> int: ...
+def optimize(input_path: Path, output_dir: Path, options: Optional[Options] = None, progress: Optional[ProgressCallback] = None,
+             **fields: Any) -> Report: ...
+def estimate_memory(input_path: Path, options: Optional[Options] = None, **fields: Any) -> int: ...
 def optimize_arrays(
     positions: npt.ArrayLike,
     faces: npt.ArrayLike,
@@ -23,6 +82,7 @@ def optimize_arrays(
     images: Union[npt.NDArray[np.uint8], Sequence[npt.NDArray[np.uint8]]],
     material_ids: Optional[npt.ArrayLike] = None,
     face_uvs: Optional[npt.ArrayLike] = None,
+    options: Optional[Options] = None,
     progress: Optional[ProgressCallback] = None,
-    **options: Any,
+    **fields: Any,
 ) -> dict[str, Any]: ...

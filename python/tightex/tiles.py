@@ -94,14 +94,15 @@ def _replace_folder(tmp, final):
         shutil.rmtree(old, ignore_errors=True)
 
 
-def _optimize_model(model, outdir, args):
-    """The command on one model file; returns the report and the output model's file name."""
-    from . import _tightex
-    report = json.loads(_tightex.optimize_file(model, outdir, list(args), None))
+def _optimize_model(model, outdir, options):
+    """The library's run on one model file with the option fields ``options`` (a dict); returns the
+    report (a dict) and the output model's file name."""
+    from . import Options, optimize
+    report = optimize(model, outdir, Options(**options)).to_dict()
     return report, report["output"]["model"]
 
 
-def _optimize_b3dm(path, outdir, args):
+def _optimize_b3dm(path, outdir, options):
     """A .b3dm tile: its GLB optimized and wrapped again with the input's tables. Returns the report
     and the output file's name."""
     from . import _tightex
@@ -114,7 +115,7 @@ def _optimize_b3dm(path, outdir, args):
     glb_in = os.path.join(work, stem + ".glb")
     with open(glb_in, "wb") as f:
         f.write(tile.glb)
-    report, model = _optimize_model(glb_in, outdir, args)
+    report, model = _optimize_model(glb_in, outdir, options)
     shutil.rmtree(work)
     if not model.lower().endswith(".glb"):
         raise _tightex.InputError(f"{path}: tightex wrote {model}, not a GLB, so it cannot go back into the b3dm")
@@ -160,10 +161,10 @@ def _figures(report):
     }
 
 
-def run_tile(tile, args):
+def run_tile(tile, options):
     """Optimizes one tile (a dict: "id", "input", "out_dir", "kind" "model" or "b3dm", "threads" for
-    tightex's parallel work, None: all cores) with the
-    command's arguments ``args``, into a temporary folder renamed to tile["out_dir"] when complete.
+    tightex's parallel work, None: all cores) with the option fields ``options`` (a dict of
+    tightex.Options fields), into a temporary folder renamed to tile["out_dir"] when complete.
     Returns its summary record; a tightex error or a file system error is the record's "error" (one
     line), anything else (a bug) is raised. Removes what an earlier attempt at the tile left (its
     worker killed mid-tile) first."""
@@ -184,7 +185,7 @@ def run_tile(tile, args):
     try:
         os.makedirs(tmp)
         run = _optimize_b3dm if tile["kind"] == "b3dm" else _optimize_model
-        report, content = run(tile["input"], tmp, args)
+        report, content = run(tile["input"], tmp, options)
         _replace_folder(tmp, final)
         record.update(_figures(report), status="done", content=os.path.join(final, content))
     except (Error, OSError) as e:
@@ -368,7 +369,7 @@ def _write_atomically(path, text):
 
 
 def read_manifest(output_root):
-    """The last record of each tile done in earlier runs: {tile id: {"hash", "args", "record"}}."""
+    """The last record of each tile done in earlier runs: {tile id: {"hash", "options", "record"}}."""
     done = {}
     try:
         with open(os.path.join(output_root, MANIFEST)) as f:
@@ -383,19 +384,19 @@ def read_manifest(output_root):
     return done
 
 
-def append_manifest(output_root, record, digest, args):
+def append_manifest(output_root, record, digest, options):
     """Records one tile done or refused as bad input (one JSON line, flushed at once, so a killed run loses no finished tile)."""
     with open(os.path.join(output_root, MANIFEST), "a") as f:
-        f.write(json.dumps({"tile": record["tile"], "hash": digest, "args": list(args), "record": record}) + "\n")
+        f.write(json.dumps({"tile": record["tile"], "hash": digest, "options": options, "record": record}) + "\n")
         f.flush()
         os.fsync(f.fileno())
 
 
-def is_done(tile, manifest, digest, args):
+def is_done(tile, manifest, digest, options):
     """Whether an earlier run settled this tile from the same input and options: done with its output
     still there, or refused as bad input (InputError: the same input fails the same way)."""
     entry = manifest.get(tile["id"])
-    if not entry or entry["hash"] != digest or entry["args"] != list(args):
+    if not entry or entry["hash"] != digest or entry.get("options") != options:
         return False
     record = entry["record"]
     if record.get("status") == "failed":
@@ -440,27 +441,27 @@ def _memory_offered(client):
     return max((w.get("resources", {}).get("memory", 0) for w in workers), default=0)
 
 
-def _estimate(tile, args):
+def _estimate(tile, options):
     """Bytes tightex's guard estimates for the tile; for a b3dm (whose GLB is read on the worker) or a
     model the estimate cannot read, 16 times its file size."""
-    from . import Error, _tightex
+    from . import Error, Options, estimate_memory
     if tile["kind"] == "model":
         try:
-            return _tightex.estimate_memory(tile["input"], list(args))
+            return estimate_memory(tile["input"], Options(**options))
         except Error:
             pass
     return 16.0 * os.path.getsize(tile["input"]) if os.path.isfile(tile["input"]) else 0.0
 
 
-def _prepare(tile, manifest, args):
+def _prepare(tile, manifest, options):
     """Hashes the tile's input; returns its record if an earlier run settled it (is_done), else None
     with tile["estimate"] set."""
     tile["hash"] = input_hash(tile["input"])
-    if is_done(tile, manifest, tile["hash"], args):
+    if is_done(tile, manifest, tile["hash"], options):
         earlier = manifest[tile["id"]]["record"]
         status = {"done": "skipped", "passed_through": "passed_through"}.get(earlier["status"], "failed")
         return dict(earlier, status=status, skipped=True)
-    tile["estimate"] = _estimate(tile, args)
+    tile["estimate"] = _estimate(tile, options)
     return None
 
 
@@ -503,14 +504,14 @@ def _error_record(tile, exc):
     return {"tile": tile["id"], "status": "failed", "error": f"{type(exc).__name__}: {exc}".replace("\n", " ")}
 
 
-def run_tiles(client, tiles, args, output_root, use_resources, skipped=0):
+def run_tiles(client, tiles, options, output_root, use_resources, skipped=0):
     """Submits one task per tile and waits for them, printing progress and recording each tile done
     in the manifest. Returns {tile id: record}."""
     from distributed import wait
     futures = {}
     for tile in tiles:
         resources = {"memory": min(tile["estimate"], use_resources)} if use_resources else None
-        futures[client.submit(run_tile, tile, list(args), key=f"tile-{uuid.uuid4().hex}", resources=resources, pure=False)] = tile
+        futures[client.submit(run_tile, tile, options, key=f"tile-{uuid.uuid4().hex}", resources=resources, pure=False)] = tile
     records, pending = {}, set(futures)
     progress = ProgressLine(len(tiles), skipped)
     done = failed = 0
@@ -529,7 +530,7 @@ def run_tiles(client, tiles, args, output_root, use_resources, skipped=0):
                 record = _error_record(tile, e)
             records[tile["id"]] = record
             if record["status"] in ("done", "passed_through") or str(record.get("error")).startswith("InputError"):
-                append_manifest(output_root, record, tile["hash"], args)
+                append_manifest(output_root, record, tile["hash"], options)
             done += record["status"] in ("done", "passed_through")
             failed += record["status"] not in ("done", "passed_through")
         running = sum(len(v) for v in client.processing().values()) if pending else 0
@@ -553,8 +554,52 @@ def write_summary(output_root, records, wall_seconds, workers):
     return summary
 
 
+#: The Options fields the tiles command sets itself (where each tile's files go; --html, --allow-large-size).
+_OWN_FIELDS = {"report_path", "preview_path", "html", "allow_large_textures"}
+#: The type of a flag whose field has no value by default.
+_FLAG_TYPES = {"png_level": int, "jpeg_quality": int, "webp_quality": int, "model_format": str, "texture_format": str}
+
+
+def _aspect(value):
+    """--aspect's value: "auto" (0) or a number."""
+    return 0.0 if value == "auto" else float(value)
+
+
+def _add_tightex_flags(ap):
+    """The tightex command's flags for the Options fields (the library's table of them), each its own
+    field's dest; a flag not given keeps the field's default."""
+    from . import _tightex
+    group = ap.add_argument_group("tightex options", "as the tightex command takes them (tightex --help)")
+    defaults = _tightex.Options()
+    for field, flag, text in _tightex.option_flags():
+        if not flag or field in _OWN_FIELDS:
+            continue
+        default = getattr(defaults, field)
+        if isinstance(default, bool):
+            action = "store_false" if flag.startswith("--no-") else "store_true"
+            group.add_argument(flag, dest=field, action=action, default=default, help=text.replace("%", "%%"))
+        else:
+            kind = _aspect if field == "aspect" else _FLAG_TYPES.get(field, type(default))
+            group.add_argument(flag, dest=field, type=kind, default=None, help=text.replace("%", "%%"))
+
+
+def _tightex_options(ap, opts):
+    """The Options fields the command line gives (a dict), checked by the library."""
+    from . import Error, FIELDS, Options, _tightex
+    fields = {f: getattr(opts, f) for f in FIELDS if getattr(opts, f, None) is not None}
+    if "size" in fields and "aspect" not in fields:
+        fields["aspect"] = 1.0  # --size promises a side: a square, unless a shape is asked for
+    fields["html"] = opts.html
+    fields["allow_large_textures"] = opts.allow_large_size
+    try:
+        _tightex.check_options(Options(**fields))
+    except (Error, TypeError) as e:
+        ap.error(str(e))
+    return fields
+
+
 def parse_command_line(argv):
-    """The tiles command's own options, and the tightex options after them."""
+    """The tiles command's own options, and the tightex Options fields (a dict) from the tightex flags."""
     ap = argparse.ArgumentParser(prog="python3 -m tightex.tiles", description=__doc__.split("\n")[0],
                                  epilog="tightex options (e.g. --size 1024 --map area) follow INPUT and OUTPUT.")
     ap.add_argument("input", help="a folder of models or a 3D Tiles tileset.json")
@@ -572,15 +617,14 @@ def parse_command_line(argv):
     ap.add_argument("--html", action="store_true",
                     help="write each tile's report.html too (off by default: a page of several MB per tile; summary.json "
                          "and each tile's report.json hold the figures)")
-    opts, tightex_args = ap.parse_known_args(argv)
-    if opts.allow_large_size:
-        tightex_args.append("--force")
-    if not opts.html and "--no-html" not in tightex_args:
-        tightex_args.append("--no-html")
-    for a in tightex_args:
+    _add_tightex_flags(ap)
+    opts, unknown = ap.parse_known_args(argv)
+    for a in unknown:
         if re.fullmatch(r"-o|--output|--report|--preview|-q|--quiet|-v|--verbose", a.split("=")[0]):
             ap.error(f"{a}: the tiles command sets where each tile's files go and prints its own progress")
-    return opts, tightex_args
+    if unknown:
+        ap.error(f"unrecognized arguments: {' '.join(unknown)}")
+    return opts, _tightex_options(ap, opts)
 
 
 def collect_tiles(opts, output_root):
@@ -596,10 +640,9 @@ def collect_tiles(opts, output_root):
 def main(argv=None):
     """The command; returns its exit status."""
     from . import Error, _tightex
-    opts, args = parse_command_line(argv)
+    opts, options = parse_command_line(argv)
     start = time.monotonic()
     try:
-        _tightex.check_arguments(args)
         output_root = os.path.abspath(opts.output)
         input_root = os.path.dirname(os.path.abspath(opts.input)) if os.path.isfile(opts.input) else os.path.abspath(opts.input)
         if output_root == input_root or output_root.startswith(input_root + os.sep):
@@ -612,7 +655,7 @@ def main(argv=None):
     manifest = {} if opts.force else read_manifest(output_root)
     records, todo = {}, []
     with ThreadPoolExecutor(os.cpu_count() or 1) as pool:  # hashing and tightex's estimate release the GIL
-        for tile, settled in zip(tiles, pool.map(lambda t: _prepare(t, manifest, args), tiles)):
+        for tile, settled in zip(tiles, pool.map(lambda t: _prepare(t, manifest, options), tiles)):
             if settled:
                 records[tile["id"]] = settled
             else:
@@ -634,7 +677,7 @@ def main(argv=None):
             if not offered:
                 print("tightex.tiles: note: no worker declares the resource \"memory\": tiles run without the memory check",
                       file=sys.stderr)
-            records.update(run_tiles(client, todo, args, output_root, offered, len(tiles) - len(todo)))
+            records.update(run_tiles(client, todo, options, output_root, offered, len(tiles) - len(todo)))
         finally:
             client.close()
             if cluster is not None:

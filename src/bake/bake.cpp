@@ -10,6 +10,7 @@
 #include "bake/fit.hpp"
 #include "bake/sampler.hpp"
 #include "core/error.hpp"
+#include "core/large_buffer.hpp"
 #include "core/progress.hpp"
 #include "core/raster.hpp"
 

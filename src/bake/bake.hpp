@@ -74,7 +74,7 @@ struct BakeOptions {
   /// by measurement (docs/decisions.md).
   double fit_lambda = 1.0;
   /// bake_texture only: the base colour filtered in linear light, as bake_map filters a kSrgbColour
-  /// map (Options::linear_light_colour); off: as stored.
+  /// map (no public option sets it: docs/decisions.md, "Bake and output"); off: as stored.
   bool linear_light_colour = false;
 };
 

@@ -11,6 +11,7 @@
 
 #include "bake/bake.hpp"
 #include "core/image.hpp"
+#include "core/large_buffer.hpp"
 #include "core/mesh.hpp"
 
 namespace tightex {

@@ -1,4 +1,4 @@
-// The tightex command: a thin shell over the library and the command (cli/command.hpp). Exit codes: 0 ok, 1 bad input (the message names
+// The tightex command: a thin shell over the library's run (tightex/run.hpp) and the command's flags (cli/command.hpp). Exit codes: 0 ok, 1 bad input (the message names
 // the file and element), 2 internal error.
 #include <malloc.h>
 #include <sys/auxv.h>
@@ -15,6 +15,7 @@
 #include "core/error.hpp"
 #include "report/metrics.hpp"
 #include "report/report.hpp"
+#include "tightex/run.hpp"
 #include "tightex/tightex.hpp"
 
 using namespace tightex;
@@ -37,8 +38,8 @@ int run_measure(int argc, char** argv) {
   // A glTF scene beside a model without a scene graph (OBJ, PLY) is compared in world space, as
   // tightex writes a scene to OBJ or PLY; two glTF models each mesh in its own space.
   auto is_gltf = [](const std::string& path) {
-    const cli::ModelFormat f = cli::model_format_of(path);
-    return f == cli::ModelFormat::kGltf || f == cli::ModelFormat::kGlb;
+    const ModelFormat f = model_format_of(path);
+    return f == ModelFormat::kGltf || f == ModelFormat::kGlb;
   };
   ModelReadOptions in_options, out_options;
   in_options.flatten_scene = is_gltf(in_path) && !is_gltf(out_path);

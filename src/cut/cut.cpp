@@ -7,9 +7,9 @@
 #include <optional>
 
 #include "core/error.hpp"
-#include "cut/cut_along_edges.hpp"
+#include "core/cut_along_edges.hpp"
 #include "cut/cut_graph.hpp"
-#include "cut/graph.hpp"
+#include "core/graph.hpp"
 #include "prepare/handles.hpp"
 #include "prepare/holes.hpp"
 

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "core/disk.hpp"
 #include "core/surface.hpp"
 #include "prepare/handles.hpp"
 #include "tightex/options.hpp"
@@ -35,13 +36,6 @@ struct CutStats {
   // Set by the pipeline where a small longest hole was tried both ways (kept as the boundary, then
   // capped too): each map's estimated colour error (resampling_mse); empty where not tried.
   std::vector<double> compared_mse;
-};
-
-/// A component cut to a topological disk: the chart-to-be.
-struct Disk {
-  Surface mesh;                    // a topological disk; face_parent -> component face (kNone: scaffolding)
-                                   // vertex_parent -> component vertex (kNone: scaffolding)
-  std::vector<uint32_t> boundary;  // boundary vertices in order (counter-clockwise w.r.t. the faces)
 };
 
 /// What cut_to_disk does to a component.

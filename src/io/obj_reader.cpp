@@ -356,7 +356,7 @@ struct ObjChunk {
   bool normals_finite = true;
   size_t first_face_without_vt = 0;  // line, 0 = none
   size_t polygons_triangulated = 0;
-  // Statements tightex does not know (curves, surfaces, vp, ...); counted, not fatal. ObjReadStats
+  // Statements tightex does not know (curves, surfaces, vp, ...); counted, not fatal. ModelReadStats
   // has no field for this yet.
   size_t unknown_statements = 0;
 
@@ -610,10 +610,10 @@ void ChunkParser::parse_usemtl(std::string_view rest) {
 
 class ObjParser {
  public:
-  ObjParser(const std::string& path, const ObjReadOptions& options, size_t chunk_bytes)
+  ObjParser(const std::string& path, const ModelReadOptions& options, size_t chunk_bytes)
       : path_(path), options_(options), chunk_bytes_(chunk_bytes) {}
 
-  TexturedMesh read(ObjReadStats* stats);
+  TexturedMesh read(ModelReadStats* stats);
 
  private:
   template <typename... Args>
@@ -636,7 +636,7 @@ class ObjParser {
   void assemble_materials(TexturedMesh& mesh);
 
   const std::string& path_;
-  const ObjReadOptions& options_;
+  const ModelReadOptions& options_;
   const size_t chunk_bytes_;
   size_t line_ = 0;  // of the mtllib being read
 
@@ -664,8 +664,8 @@ class ObjParser {
   std::vector<MaterialDef> defs_;
   std::unordered_map<std::string, size_t> def_by_name_;  // first definition of a name wins
   std::vector<std::string> loaded_mtls_;                 // each library is read once
-  std::vector<std::string> paths_found_;                 // ObjReadStats::paths_found
-  std::vector<std::string> not_read_;                    // ObjReadStats::not_read: maps whose file is missing
+  std::vector<std::string> paths_found_;                 // ModelReadStats::paths_found
+  std::vector<std::string> not_read_;                    // ModelReadStats::not_read: maps whose file is missing
   /// find_named_file, noting in paths_found_ a file found under another name than written.
   std::optional<fs::path> locate(const fs::path& folder, const std::string& written) {
     std::optional<fs::path> found = find_named_file(folder, written);
@@ -675,7 +675,7 @@ class ObjParser {
   bool saw_mtllib_ = false;
 };
 
-TexturedMesh ObjParser::read(ObjReadStats* stats) {
+TexturedMesh ObjParser::read(ModelReadStats* stats) {
   std::string data;
   std::string reason;
   if (!read_whole_file(path_, data, reason)) fail_input("{}: {}", path_, reason);
@@ -1011,12 +1011,12 @@ void ObjParser::assemble_materials(TexturedMesh& mesh) {
 
 }  // namespace
 
-TexturedMesh read_obj_in_chunks(const std::string& path, const ObjReadOptions& options, ObjReadStats* stats, size_t chunk_bytes) {
+TexturedMesh read_obj_in_chunks(const std::string& path, const ModelReadOptions& options, ModelReadStats* stats, size_t chunk_bytes) {
   ObjParser parser(path, options, chunk_bytes);
   return parser.read(stats);
 }
 
-TexturedMesh read_obj(const std::string& path, const ObjReadOptions& options, ObjReadStats* stats) {
+TexturedMesh read_obj(const std::string& path, const ModelReadOptions& options, ModelReadStats* stats) {
   return read_obj_in_chunks(path, options, stats, kObjChunkBytes);
 }
 

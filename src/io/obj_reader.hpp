@@ -18,6 +18,6 @@ constexpr size_t kObjChunkBytes = size_t(1) << 20;
 
 /// read_obj with the file cut into stretches of about chunk_bytes (whole lines), parsed on every core.
 /// The mesh, the stats and the error do not depend on chunk_bytes (tests compare 1 with the default).
-TexturedMesh read_obj_in_chunks(const std::string& path, const ObjReadOptions& options, ObjReadStats* stats, size_t chunk_bytes);
+TexturedMesh read_obj_in_chunks(const std::string& path, const ModelReadOptions& options, ModelReadStats* stats, size_t chunk_bytes);
 
 }  // namespace tightex

@@ -3,6 +3,7 @@
 #include <array>
 #include <vector>
 
+#include "core/disk.hpp"
 #include "param/square_map_options.hpp"
 
 namespace tightex {

@@ -3,7 +3,7 @@
 #pragma once
 #include <vector>
 
-#include "cut/cut.hpp"
+#include "core/disk.hpp"
 
 namespace tightex {
 

@@ -3,7 +3,8 @@
 #include <array>
 #include <vector>
 
-#include "cut/cut.hpp"
+#include "core/disk.hpp"
+#include "tightex/options.hpp"
 
 namespace tightex {
 

@@ -5,7 +5,7 @@
 
 #include "core/mesh.hpp"
 #include "core/surface.hpp"
-#include "cut/cut.hpp"
+#include "core/disk.hpp"
 #include "param/param.hpp"
 #include "tightex/options.hpp"
 

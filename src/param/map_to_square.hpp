@@ -30,8 +30,4 @@ namespace tightex {
 /// solved (a factorisation failed for each).
 std::vector<Vec2> map_to_square(const Disk& disk, const SquareMapOptions& options, SquareMapStats* stats);
 
-/// Steps 1-3 of map_to_square on the disk itself (never multilevel). `placed` (optional) gets the
-/// boundary's placement on the square (step 1). Same requirements, guarantees and throws.
-std::vector<Vec2> map_disk(const Disk& disk, const SquareMapOptions& options, SquareMapStats& stats, SquareBoundary* placed = nullptr);
-
 }  // namespace tightex

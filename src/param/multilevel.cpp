@@ -16,7 +16,7 @@
 #include "param/density_reweighting.hpp"
 #include "param/folds.hpp"
 #include "param/harmonic.hpp"
-#include "param/map_to_square.hpp"
+#include "param/map_disk.hpp"
 #include "param/slim.hpp"
 #include "param/sparse_cholesky.hpp"
 

@@ -7,7 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "cut/cut.hpp"
+#include "core/surface.hpp"
+#include "tightex/options.hpp"
 
 namespace tightex {
 

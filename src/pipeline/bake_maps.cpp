@@ -259,11 +259,6 @@ std::vector<MapScale> enlargements(const TexturedMesh& input, const MapSource& m
   return scales;
 }
 
-/// Whether the texel budget is tightex's default (the input's used texels) rather than a --size or
-/// --texels the caller chose: only then may a map grow beyond the base colour's pages, since a chosen
-/// budget is what the caller's engine or delivery can hold.
-bool budget_is_default(const Options& o) { return o.default_budget || o.size == 0; }
-
 /// Allocated black pages for a map at `scale` of the base colour's pages.
 std::vector<Image> blank_pages(const OutputModel& om, MapScale scale) {
   std::vector<Image> images;
@@ -285,7 +280,7 @@ struct SizedMap {
 /// The map baked at the base colour's size, then sized by `sizing`'s map_budget_db: below it, baked again larger (enlargements) at the
 /// smallest scale that reaches it, or the largest one when none does, provided that gains at least kMinEnlargementGainDb; otherwise reduced
 /// as far as choose_reduction allows. A normal map (judged against its own full-size bake) is never enlarged, nor any map under a budget
-/// the caller chose (budget_is_default); no page side grows beyond sizing.max_page_side.
+/// the caller chose (TextureBudget::is_default); no page side grows beyond sizing.max_page_side.
 SizedMap bake_sized_map(const TexturedMesh& input, const MapSource& map, const OutputModel& om, unsigned channels, const Options& sizing,
                         const BakeOptions& options) {
   const double min_psnr_db = sizing.map_budget_db;
@@ -296,7 +291,7 @@ SizedMap bake_sized_map(const TexturedMesh& input, const MapSource& map, const O
   const std::vector<JudgePoint> points = judge_points(om.bake_triangles, kJudgePoints);
   const bool normal = map.encoding == MapEncoding::kTangentNormal;
   best.psnr = normal ? 99.0 : judged_psnr(input, map, om.bake_triangles, points, best.pages, nullptr, channels);
-  const std::vector<MapScale> scales = normal || best.psnr >= min_psnr_db || !budget_is_default(sizing)
+  const std::vector<MapScale> scales = normal || best.psnr >= min_psnr_db || !om.budget_is_default
                                            ? std::vector<MapScale>{}
                                            : enlargements(input, map, om, sizing.max_page_side);
   // Binary search over the scales for the smallest that reaches the budget, starting from the largest.

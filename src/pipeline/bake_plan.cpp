@@ -20,7 +20,6 @@ BakeStats bake_new_textures(const TexturedMesh& input, const Options& options, c
   bo.fit = options.fit;
   if (options.fine_fit) bo.fit_samples = kFineFitSamples, bo.fit_lambda = kFineFitLambda;
   bo.progress = progress.of_stage("bake");
-  bo.linear_light_colour = options.linear_light_colour;
   bake_texture(input, om.bake_triangles, om.rects, images, &bs, bo);
   for (size_t i = 0; i < images.size(); ++i) om.mesh.textures[i].image = std::move(images[i]);
   return bs;
@@ -34,41 +33,41 @@ Plan::Plan(Plan&&) noexcept = default;
 Plan& Plan::operator=(Plan&&) noexcept = default;
 Plan::~Plan() = default;
 
-const Plan::State& Plan::state() const {
-  if (!state_) fail_input("the plan is empty (made by plan_charts?)");
-  return *state_;
+const Plan::State& plan_state(const Plan& plan) {
+  if (!plan.state_) fail_input("the plan is empty (made by plan_charts?)");
+  return *plan.state_;
 }
 
-const nlohmann::json& Plan::report() const { return state().report_json; }
+Report Plan::report() const { return public_report(plan_state(*this).report_json); }
 
-std::vector<std::pair<int, int>> Plan::texture_sizes() const { return state().image_size; }
+std::vector<std::pair<int, int>> Plan::texture_sizes() const { return plan_state(*this).image_size; }
 
 size_t Plan::kept_components() const {
   size_t n = 0;
-  for (const std::string& k : state().kept) n += !k.empty();
+  for (const std::string& k : plan_state(*this).kept) n += !k.empty();
   return n;
 }
 
 size_t Plan::kept_triangles() const {
   size_t n = 0;
-  for (size_t c = 0; c < state().kept.size(); ++c)
-    if (!state().kept[c].empty()) n += state().components[c].num_faces();
+  for (size_t c = 0; c < plan_state(*this).kept.size(); ++c)
+    if (!plan_state(*this).kept[c].empty()) n += plan_state(*this).components[c].num_faces();
   return n;
 }
 
 std::string Plan::first_kept_reason() const {
-  for (const std::string& k : state().kept)
+  for (const std::string& k : plan_state(*this).kept)
     if (!k.empty()) return k;
   return {};
 }
 
 Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& options) {
-  const Plan::State& state = plan.state();
+  const Plan::State& state = plan_state(plan);
   if (input_fingerprint(input) != state.input_fingerprint)
     fail_input("{}: not the mesh the plan was made from ({} triangles, {} vertices): bake_plan needs the planned mesh",
                input.source.empty() ? std::string("mesh") : input.source, input.num_triangles(), input.num_vertices());
   const StageProgress progress(options.progress);
-  Report rep = state.report;
+  ReportData rep = state.report;
   StageClock clock(rep.timings);
   // 5. The output model: the input's positions and triangles, new texture coordinates; components the
   //    plan could not map keep their input texture coordinates and materials.
@@ -89,11 +88,9 @@ Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& opt
     clock.done("measure");
   }
   rep.peak_rss_mib = peak_rss_mib();
-  result.report = to_json(rep);
+  result.report = public_report(to_json(rep), result.output, size_t(om.new_images));
   progress("done", 1);
   return result;
 }
-
-Result optimize(const TexturedMesh& input, const Options& options) { return bake_plan(plan_charts(input, options), input, options); }
 
 }  // namespace tightex

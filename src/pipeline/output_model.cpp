@@ -206,6 +206,7 @@ OutputModel build_output_model(const Plan::State& plan, const TexturedMesh& inpu
   om.mesh.source = input.source;
   om.mesh.positions = input.positions;
   om.mesh.gltf = input.gltf;
+  om.budget_is_default = plan.budget.is_default;
   om.bake_triangles.reserve(input.num_triangles());
   const std::vector<int> image_index = renumber_images(plan, &om.new_images);
   add_mapped_triangles(plan, input, image_index, om);

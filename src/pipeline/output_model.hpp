@@ -16,6 +16,7 @@ struct OutputModel {
   std::vector<Rect> rects;                   // every mapped component's rectangle (images renumbered)
   /// Per corner of mesh (3 per triangle): which corner of its input triangle (mesh.input_triangle) it is.
   std::vector<uint8_t> input_corner;
+  bool budget_is_default = true;  // the plan's TextureBudget::is_default
 };
 
 /// Builds the output model of `plan` for `input` (the mesh it was made from).

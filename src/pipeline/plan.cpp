@@ -28,13 +28,17 @@ constexpr double kPageFill = 0.8;
 /// The fewest triangles a piece of a component split for pages has on average (split_oversized_components).
 constexpr size_t kMinPieceFaces = 64;
 
-/// The texture side asked for, checked.
-int requested_size(const TexturedMesh& input, const Options& options) {
-  const int size = options.size == 0 ? default_size(input) : options.size;
-  if (size < 8 || size > 65536) fail_input("--size {} is out of range (8..65536)", size);
+/// The largest texture side a run makes without allow_large_textures: 1 GiB of RGBA.
+constexpr int kLargeSide = 16384;
+
+/// Checks the budget's side and the aspect.
+void check_budget(const TextureBudget& budget, const Options& options) {
+  if (budget.side < 8 || budget.side > 65536) fail_input("--size {} is out of range (8..65536)", budget.side);
+  if (budget.side > kLargeSide && !options.allow_large_textures)
+    fail_input("--size {} is above {} ({:.1f} GiB of RGBA texture); add --force (allow_large_textures) to allow it", budget.side,
+               kLargeSide, double(budget.side) * budget.side * 4 / double(1 << 30));
   if (options.aspect != 0 && !(options.aspect >= 1.0 / 16 && options.aspect <= 16))
     fail_input("aspect {} is out of range (0 for auto, or 1/16..16)", options.aspect);
-  return size;
 }
 
 std::vector<double> component_areas(const std::vector<Surface>& components) {
@@ -167,7 +171,7 @@ void lay_out_pages(const std::vector<double>& shares, int W, int H, double aspec
 /// The rectangles and texture sizes: one atlas of the chosen shape (on several pages where it is wider
 /// or taller than Options::max_page_side), or a texture per component.
 void lay_out(const Options& options, const std::vector<double>& shares, int size, double aspect, Plan::State& plan) {
-  const bool default_budget = options.size == 0 || options.default_budget;
+  const bool default_budget = plan.budget.is_default;
   if (options.layout == Layout::kAtlas) {
     const auto [W, H] = atlas_size(size, aspect);
     const AtlasShares mode = options.map == MapKind::kArea ? AtlasShares::kExact : AtlasShares::kLeastError;
@@ -293,7 +297,7 @@ std::vector<std::optional<CutInputs>> prepare_cut_inputs(const TexturedMesh& inp
 
 std::unique_ptr<PreparedMesh::State> prepare_state(const TexturedMesh& geometry, const Options& options) {
   validate_mesh(geometry);
-  requested_size(geometry, options);
+  texture_budget(geometry, options);  // the options checked before the work
   const StageProgress progress(options.progress);
   auto prepared = std::make_unique<PreparedMesh::State>();
   prepared->input_fingerprint = input_fingerprint(geometry);
@@ -333,12 +337,14 @@ PreparedMesh prepare_mesh(const TexturedMesh& geometry, const Options& options) 
 namespace {
 
 /// The rest of plan_charts after the preparation.
-Plan plan_prepared(const TexturedMesh& input, const Options& options, const PlanHooks& hooks,
+Plan plan_prepared(const TexturedMesh& input, const Options& options, const TextureBudget& budget, const PlanHooks& hooks,
                    std::unique_ptr<PreparedMesh::State> prepared) {
+  check_budget(budget, options);
   const StageProgress progress(options.progress);
   auto plan = std::make_unique<Plan::State>();
-  Report& rep = plan->report;
-  rep.options = options_used(options, requested_size(input, options));
+  plan->budget = budget;
+  ReportData& rep = plan->report;
+  rep.options = options_used(options, budget.side);
   int& size = rep.options.size;
   plan->input_fingerprint = prepared->input_fingerprint;
   rep.preparation.repair = prepared->repair;
@@ -352,7 +358,7 @@ Plan plan_prepared(const TexturedMesh& input, const Options& options, const Plan
   std::vector<std::optional<CutInputs>> cut_inputs = std::move(prepared->cut_inputs);
   prepared.reset();
   std::vector<double> areas = component_areas(plan->components);
-  if (options.layout == Layout::kAtlas && (options.size == 0 || options.default_budget)) {
+  if (options.layout == Layout::kAtlas && budget.is_default) {
     const int side = atlas_side_holding(areas, size);
     if (side != size) rep.options.size_grown_from = size, size = side;
   }
@@ -401,19 +407,36 @@ Plan plan_prepared(const TexturedMesh& input, const Options& options, const Plan
 
 }  // namespace
 
+TextureBudget texture_budget(const TexturedMesh& input, const Options& options) {
+  if (options.size > 0 && options.texels > 0) fail_input("options: --size and --texels go one without the other");
+  if (options.size < 0 || options.texels < 0) fail_input("options: --size and --texels must not be negative");
+  const int max_side = options.allow_large_textures ? 65536 : kLargeSide;
+  const TextureBudget budget = options.size > 0    ? TextureBudget{options.size, false}
+                               : options.texels > 0 ? TextureBudget{std::min(size_for_texels(options.texels), max_side), false}
+                                                    : TextureBudget{default_size(input, max_side), true};
+  check_budget(budget, options);
+  return budget;
+}
+
 Plan plan_charts(const TexturedMesh& input, const Options& options) { return plan_charts(input, options, PlanHooks{}); }
 
 Plan plan_charts(const TexturedMesh& input, const Options& options, const PlanHooks& hooks) {
-  return plan_prepared(input, options, hooks, prepare_state(input, options));
+  const TextureBudget budget = texture_budget(input, options);
+  return plan_prepared(input, options, budget, hooks, prepare_state(input, options));
 }
 
 Plan plan_charts(const TexturedMesh& input, const Options& options, PreparedMesh&& prepared) {
-  std::unique_ptr<PreparedMesh::State> state = prepared.take();
+  return plan_charts(input, options, texture_budget(input, options), &prepared);
+}
+
+Plan plan_charts(const TexturedMesh& input, const Options& options, const TextureBudget& budget, PreparedMesh* prepared) {
+  if (!prepared) return plan_prepared(input, options, budget, PlanHooks{}, prepare_state(input, options));
+  std::unique_ptr<PreparedMesh::State> state = prepared->take();
   if (!state) fail_input("{}: the preparation is empty (made by prepare_mesh? used already?)", input.source);
   validate_mesh(input);
   if (state->input_fingerprint != input_fingerprint(input))
     fail_input("{}: not the mesh the preparation was made from (its triangles, texture coordinates or materials differ)", input.source);
-  return plan_prepared(input, options, PlanHooks{}, std::move(state));
+  return plan_prepared(input, options, budget, PlanHooks{}, std::move(state));
 }
 
 }  // namespace tightex

@@ -45,7 +45,7 @@ void add_totals(const Plan::State& plan, const std::vector<CutStats>& cuts, Prep
 }  // namespace
 
 void fill_plan_report(const TexturedMesh& input, const Plan::State& plan, const std::vector<double>& areas,
-                      const std::vector<CutStats>& cuts, const std::vector<SquareMapStats>& maps, Report& report) {
+                      const std::vector<CutStats>& cuts, const std::vector<SquareMapStats>& maps, ReportData& report) {
   report.input = {input.source, input.num_vertices(), input.num_triangles(), input.materials.size(), input.textures.size(), std::nullopt};
   add_totals(plan, cuts, report.preparation);
   const std::vector<char> listed = listed_components(plan, cuts);

@@ -11,6 +11,6 @@ namespace tightex {
 /// Fills report.input, report.preparation and report.components from the plan's components, their
 /// 3D areas, cuts and maps (per component, in plan order).
 void fill_plan_report(const TexturedMesh& input, const Plan::State& plan, const std::vector<double>& areas,
-                      const std::vector<CutStats>& cuts, const std::vector<SquareMapStats>& maps, Report& report);
+                      const std::vector<CutStats>& cuts, const std::vector<SquareMapStats>& maps, ReportData& report);
 
 }  // namespace tightex

@@ -24,6 +24,20 @@ struct SetAside {
   std::vector<uint32_t> untextured;                    // no texture to bake from: kept as they are
 };
 
+/// The texel budget a plan is made for: the texture's side, and whether it is tightex's own (the
+/// input's used texels, or the fraction of them that --target-psnr tries) rather than a side or texel
+/// count the caller asked for. A default budget's atlas grows to hold a 4 x 4 rectangle per component,
+/// its per-component textures hold it together, and its maps may be baked larger than the base colour;
+/// an asked-for one is what the caller's engine or delivery holds.
+struct TextureBudget {
+  int side = 0;
+  bool is_default = true;
+};
+
+/// The budget `options` ask for: `size`, else the side for `texels`, else default_size (at most 16384
+/// without allow_large_textures). Throws InputError for both given, or a side out of range.
+TextureBudget texture_budget(const TexturedMesh& input, const Options& options);
+
 struct Plan::State {
   std::vector<Surface> components;    // Surface::input_face -> input triangle
   std::vector<Disk> disks;            // per component; face_parent -> component face (kNone: scaffolding)
@@ -38,10 +52,14 @@ struct Plan::State {
   /// triangle it repeats (written as a copy of it), and triangles with nothing to bake (no texture),
   /// written as they came.
   SetAside set_aside;
-  Report report;                   // what was done so far
+  TextureBudget budget;            // the budget asked for (before an atlas grew to hold every component)
+  ReportData report;               // what was done so far
   nlohmann::json report_json;      // the same, as Plan::report() gives it
   uint64_t input_fingerprint = 0;  // input_fingerprint() of the mesh planned
 };
+
+/// What `plan` holds. Throws InputError for an empty plan (one not made by plan_charts).
+const Plan::State& plan_state(const Plan& plan);
 
 /// A hash of what the plan depends on in the input (vertex and triangle counts, triangles, texture
 /// coordinates, materials), so bake_plan can refuse another mesh.
@@ -77,5 +95,9 @@ std::unique_ptr<PreparedMesh::State> prepare_state(const TexturedMesh& geometry,
 
 /// plan_charts with test hooks (tests only).
 Plan plan_charts(const TexturedMesh& input, const Options& options, const PlanHooks& hooks);
+
+/// plan_charts at `budget` instead of the one `options` ask for, its first part from `prepared` where
+/// given (as plan_charts(input, options, prepared) takes it).
+Plan plan_charts(const TexturedMesh& input, const Options& options, const TextureBudget& budget, PreparedMesh* prepared = nullptr);
 
 }  // namespace tightex

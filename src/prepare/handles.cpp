@@ -10,8 +10,8 @@
 
 #include "core/error.hpp"
 #include "core/hash.hpp"
-#include "cut/cut_along_edges.hpp"
-#include "cut/graph.hpp"
+#include "core/cut_along_edges.hpp"
+#include "core/graph.hpp"
 #include "prepare/loop_classes.hpp"
 
 namespace tightex {

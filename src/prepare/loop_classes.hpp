@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "core/surface.hpp"
-#include "cut/graph.hpp"
+#include "core/graph.hpp"
 
 namespace tightex {
 

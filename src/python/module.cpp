@@ -1,6 +1,5 @@
 // tightex._tightex: the C++ half of the Python module `tightex` (python/tightex/__init__.py wraps it).
-// Options arrive as the command's own arguments (cli::parse_arguments), so Python gets the CLI's names,
-// defaults and checks; errors arrive as tightex.InputError, InternalError and Cancelled, subclasses of
+// Options and Report are the library's own types (bind_options.cpp); errors arrive as tightex.InputError, InternalError and Cancelled, subclasses of
 // tightex.Error. The GIL is released while tightex works; the progress callback takes it back.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -14,7 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "cli/command.hpp"
+#include "python/bind_options.hpp"
+#include "tightex/run.hpp"
 #include "tightex/tightex.hpp"
 
 namespace py = pybind11;
@@ -66,29 +66,17 @@ auto without_gil(PythonProgress& progress, Work&& work) {
   }
 }
 
-/// The command line for `args` (the CLI's arguments after the input and -o OUTDIR).
-cli::CommandLine command_line(const std::string& input, const std::string& outdir, const std::vector<std::string>& args) {
-  std::vector<std::string> all{input, "-o", outdir};
-  all.insert(all.end(), args.begin(), args.end());
-  return cli::parse_arguments(all);
-}
-
-/// tightex.optimize: the command on a model file; the report as JSON text.
-std::string optimize_file(const std::string& input, const std::string& outdir, const std::vector<std::string>& args,
-                          py::object progress_callable) {
-  const cli::CommandLine line = command_line(input, outdir, args);
+/// tightex.run: the library's run on a model file.
+Report run_file(const std::string& input, const std::string& outdir, Options options, py::object progress_callable) {
   PythonProgress progress(std::move(progress_callable));
-  cli::CommandHooks hooks;
-  hooks.progress = progress.callback();
-  hooks.print = false;
-  return without_gil(progress, [&] { return cli::run_command(line, hooks).dump(); });
+  options.progress = progress.callback();
+  return without_gil(progress, [&] { return run(input, outdir, options); });
 }
 
-/// tightex.estimate_memory: the bytes the command's memory guard estimates for this run.
-double estimate_memory(const std::string& input, const std::vector<std::string>& args) {
-  const cli::CommandLine line = command_line(input, "-", args);
+/// tightex.estimate_memory: the bytes the run's memory guard estimates for this model and options.
+double estimate_file_memory(const std::string& input, const Options& options) {
   py::gil_scoped_release release;
-  return cli::estimate_memory_bytes(line);
+  return estimate_memory(input, options);
 }
 
 /// tightex.set_max_threads: at most `n` threads for tightex's parallel work in this process from now
@@ -98,9 +86,6 @@ void set_max_threads(int n) {
   limit.reset();
   if (n > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(n));
 }
-
-/// tightex.tiles: checks the command's options once, before any tile is sent out.
-void check_arguments(const std::vector<std::string>& args) { command_line("model.obj", "-", args); }
 
 using Doubles = py::array_t<double, py::array::c_style | py::array::forcecast>;
 using Indices = py::array_t<int64_t, py::array::c_style | py::array::forcecast>;
@@ -226,16 +211,15 @@ py::dict arrays_from_mesh(const TexturedMesh& mesh) {
   return out;
 }
 
-/// tightex.optimize_arrays: the library on an in-memory mesh; the arrays out and the report as JSON text.
+/// tightex.optimize_arrays: the library on an in-memory mesh; the arrays out and the report.
 py::tuple optimize_arrays(const Doubles& positions, const Indices& faces, const Doubles& uvs, const std::vector<Bytes>& images,
-                          const py::object& material_ids, const py::object& face_uvs, const std::vector<std::string>& args,
-                          py::object progress_callable) {
+                          const py::object& material_ids, const py::object& face_uvs, Options options, py::object progress_callable) {
   const TexturedMesh mesh = mesh_from_arrays(positions, faces, uvs, images, material_ids, face_uvs);
-  const cli::CommandLine line = command_line("arrays", "-", args);
   PythonProgress progress(std::move(progress_callable));
-  const ProgressCallback callback = progress.callback();
-  const Result result = without_gil(progress, [&] { return cli::optimize_mesh(line, mesh, callback); });
-  return py::make_tuple(arrays_from_mesh(result.output), result.report.dump());
+  options.progress = progress.callback();
+  options.measure = true;
+  const Result result = without_gil(progress, [&] { return optimize(mesh, options); });
+  return py::make_tuple(arrays_from_mesh(result.output), result.report);
 }
 
 }  // namespace
@@ -265,10 +249,12 @@ PYBIND11_MODULE(_tightex, m) {
       PyErr_SetString(cancelled.ptr(), e.what());
     }
   });
-  m.def("optimize_file", &optimize_file, py::arg("input"), py::arg("outdir"), py::arg("args"), py::arg("progress"));
+  bind_options(m);
+  bind_option_table(m);
+  bind_report(m);
+  m.def("run", &run_file, py::arg("input"), py::arg("outdir"), py::arg("options"), py::arg("progress"));
   m.def("set_max_threads", &set_max_threads, py::arg("n"));
-  m.def("check_arguments", &check_arguments, py::arg("args"));
-  m.def("estimate_memory", &estimate_memory, py::arg("input"), py::arg("args"));
+  m.def("estimate_memory", &estimate_file_memory, py::arg("input"), py::arg("options"));
   m.def("optimize_arrays", &optimize_arrays, py::arg("positions"), py::arg("faces"), py::arg("uvs"), py::arg("images"),
-        py::arg("material_ids"), py::arg("face_uvs"), py::arg("args"), py::arg("progress"));
+        py::arg("material_ids"), py::arg("face_uvs"), py::arg("options"), py::arg("progress"));
 }

@@ -19,6 +19,7 @@
 #include <tuple>
 
 #include "core/hash.hpp"
+#include "core/large_buffer.hpp"
 #include "core/raster.hpp"
 #include "core/statistics.hpp"
 #include "core/surface.hpp"

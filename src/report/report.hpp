@@ -10,12 +10,13 @@
 
 #include "bake/bake.hpp"
 #include "cut/cut.hpp"
-#include "io/obj_reader.hpp"
+#include "tightex/io.hpp"
 #include "layout/layout.hpp"
 #include "param/param.hpp"
 #include "prepare/repair.hpp"
 #include "report/metrics.hpp"
 #include "tightex/options.hpp"
+#include "tightex/report.hpp"
 
 namespace tightex {
 
@@ -25,7 +26,7 @@ struct InputSummary {
   size_t vertices = 0, triangles = 0, materials = 0, textures = 0;
   /// What the OBJ reader did beyond plain reading ("polygons_triangulated", "paths_found"); the CLI
   /// sets it (the library is given a mesh already read). `lines` is not written.
-  std::optional<ObjReadStats> reader;
+  std::optional<ModelReadStats> reader;
 };
 
 /// "options": the choices the run was made with, after defaults were resolved.
@@ -88,7 +89,7 @@ struct Preparation {
   size_t components_longest_hole_capped = 0;  // CutStats::longest_loop_capped
   size_t components_kept_original_uvs = 0;    // Plan::kept non-empty
   size_t untextured_kept = 0;                 // triangles with nothing to bake (no texture), written as they came
-  // "components_listed" is Report::components.size().
+  // "components_listed" is ReportData::components.size().
 };
 
 /// One entry of "components": a component as cut, mapped and placed.
@@ -137,7 +138,7 @@ struct OutputFiles {
 
 /// The whole report. Sections that only some callers fill are optional and not written when unset:
 /// a plan alone has no bake, metrics or peak RSS; only the CLI writes output files and wall time.
-struct Report {
+struct ReportData {
   InputSummary input;
   OptionsUsed options;
   AspectChoice aspect;
@@ -159,7 +160,22 @@ double estimated_psnr_db(double mse);
 
 /// The report as JSON: one key per field as named above ("aspect" and "requested" hold "auto" for 0,
 /// absent optional sections are left out). Never throws but for allocation.
-nlohmann::json to_json(const Report& report);
+nlohmann::json to_json(const ReportData& report);
+
+/// What tightex keeps behind a public Report: its every figure as JSON. Mutable so that a reader may
+/// index a key the report lacks (nlohmann's operator[] adds it as null), as tests do.
+struct ReportDetail {
+  mutable nlohmann::json json;
+};
+
+/// The public Report of a report's JSON and the output model it describes (its triangles and the
+/// sizes of its first `new_textures` textures; none for a plan): the main figures, warnings and notes
+/// read from the JSON, its text, and the JSON kept behind it (report_json).
+Report public_report(nlohmann::json json, const TexturedMesh& output = {}, size_t new_textures = 0);
+
+/// The whole report behind `report` (an empty object for a default Report). It lives as long as a
+/// Report holding it: `report_json(plan.report())[...]` is read within its expression.
+nlohmann::json& report_json(const Report& report);
 
 /// One "timings" entry as JSON (the CLI adds its own stages to a report the library wrote).
 nlohmann::json to_json(const StageTiming& timing);
@@ -169,6 +185,6 @@ nlohmann::json to_json(const OutputFiles& files);
 
 /// The reader's figures that "input" holds ("polygons_triangulated", "paths_found", and "not_read"
 /// where the reader left parts of the model as they were).
-nlohmann::json reader_json(const ObjReadStats& stats);
+nlohmann::json reader_json(const ModelReadStats& stats);
 
 }  // namespace tightex

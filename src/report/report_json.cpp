@@ -165,7 +165,7 @@ json to_json(const OutputFiles& files) {
   return j;
 }
 
-json reader_json(const ObjReadStats& stats) {
+json reader_json(const ModelReadStats& stats) {
   json j = {{"polygons_triangulated", stats.polygons_triangulated},
             {"paths_found", stats.paths_found},
             {"vertex_coloured_triangles", stats.vertex_coloured_triangles}};
@@ -175,7 +175,7 @@ json reader_json(const ObjReadStats& stats) {
   return j;
 }
 
-json to_json(const Report& report) {
+json to_json(const ReportData& report) {
   json j;
   j["input"] = input_json(report.input);
   j["options"] = options_json(report.options);
@@ -216,6 +216,57 @@ json to_json(const Report& report) {
   if (report.wall_seconds) j["wall_seconds"] = *report.wall_seconds;
   if (report.output) j["output"] = to_json(*report.output);
   return j;
+}
+
+}  // namespace tightex
+
+namespace tightex {
+
+namespace {
+
+/// The value at `path` (keys, each into an object) of `j`, or `fallback` where a key is absent or null.
+template <typename T>
+T value_at(const json& j, std::initializer_list<const char*> path, T fallback) {
+  const json* at = &j;
+  for (const char* key : path) {
+    if (!at->is_object() || !at->contains(key) || (*at)[key].is_null()) return fallback;
+    at = &(*at)[key];
+  }
+  return at->get<T>();
+}
+
+}  // namespace
+
+Report public_report(json j, const TexturedMesh& output, size_t new_textures) {
+  Report r;
+  r.output_triangles = output.num_triangles();
+  for (size_t i = 0; i < new_textures && i < output.textures.size(); ++i)
+    r.texture_sizes.emplace_back(output.textures[i].image.width, output.textures[i].image.height);
+  r.input_triangles = value_at<size_t>(j, {"input", "triangles"}, 0);
+  r.components = value_at<size_t>(j, {"preparation", "components"}, 0);
+  r.charts = value_at<size_t>(j, {"metrics", "charts"}, 0);
+  r.lost_triangles = value_at<size_t>(j, {"metrics", "lost_triangles"}, 0);
+  r.flipped_triangles = value_at<size_t>(j, {"metrics", "flipped"}, 0);
+  r.input_texels_used = value_at<double>(j, {"metrics", "input", "utilization"}, 0);
+  r.output_texels_used = value_at<double>(j, {"metrics", "output", "utilization"}, 0);
+  r.surface_psnr_db = value_at<double>(j, {"metrics", "surface_psnr_db"}, 0);
+  r.surface_psnr_bake_db = value_at<double>(j, {"metrics", "surface_psnr_bake_db"}, r.surface_psnr_db);
+  r.input_texture_bytes = value_at<uint64_t>(j, {"bytes", "input", "total"}, 0);
+  r.output_texture_bytes = value_at<uint64_t>(j, {"bytes", "output", "total"}, 0);
+  r.texture_format = value_at<std::string>(j, {"bytes", "encoding", "format"}, "");
+  r.wall_seconds = value_at<double>(j, {"wall_seconds"}, 0);
+  r.warnings = value_at<std::vector<std::string>>(j, {"warnings"}, {});
+  r.notes = value_at<std::vector<std::string>>(j, {"notes"}, {});
+  r.peak_rss_mib = value_at<double>(j, {"peak_rss_mib"}, 0);
+  r.json = j.dump(2) + "\n";
+  r.detail = std::make_shared<const ReportDetail>(ReportDetail{std::move(j)});
+  return r;
+}
+
+json& report_json(const Report& report) {
+  thread_local json empty;
+  if (report.detail) return report.detail->json;
+  return empty = json::object();
 }
 
 }  // namespace tightex

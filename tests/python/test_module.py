@@ -17,7 +17,7 @@ def check_output(report, folder, name):
     assert m["charts"] == report["preparation"]["components"]
     assert os.path.isfile(os.path.join(folder, name))
     with open(os.path.join(folder, "report.json")) as f:
-        assert json.load(f) == report
+        assert json.load(f) == report.to_dict()
 
 
 def test_errors_are_one_family(tightex):
@@ -39,7 +39,7 @@ def test_optimize_real_scan(tightex, tmp_path):
     model = os.path.join(SHARED_DATA, "fuze", "fuze.obj")
     if not os.path.isfile(model):
         pytest.skip("../shared/data/fuze not present")
-    report = tightex.optimize(model, tmp_path, output_format="ply")
+    report = tightex.optimize(model, tmp_path, model_format="ply")
     check_output(report, tmp_path, "fuze.ply")
     assert report["metrics"]["input"]["utilization"] < report["metrics"]["output"]["utilization"]
 
@@ -58,9 +58,9 @@ def test_optimize_reports_every_map(tightex, tmp_path):
 
 
 def test_texture_encoding_options(tightex, boxes_model, tmp_path):
-    tightex.optimize(boxes_model, tmp_path / "fast", map="area", size=128, no_html=True)
-    tightex.optimize(boxes_model, tmp_path / "best", map="area", size=128, no_html=True, png_level=9)
-    tightex.optimize(boxes_model, tmp_path / "jpg", map="area", size=128, no_html=True, format="jpg", jpeg_quality=40)
+    tightex.optimize(boxes_model, tmp_path / "fast", map="area", size=128, html=False)
+    tightex.optimize(boxes_model, tmp_path / "best", map="area", size=128, html=False, png_level=9)
+    tightex.optimize(boxes_model, tmp_path / "jpg", map="area", size=128, html=False, texture_format="jpg", jpeg_quality=40)
     fast, best = (os.path.getsize(tmp_path / d / "boxes_tightex.png") for d in ("fast", "best"))
     assert best <= fast
     assert os.path.getsize(tmp_path / "jpg" / "boxes_tightex.jpg") > 0
@@ -79,7 +79,7 @@ def test_bad_input_raises_input_error_and_writes_nothing(tightex, boxes_model, t
         tightex.optimize(boxes_model, out, png_level=10)
     with pytest.raises(tightex.InputError, match="--jpeg-quality does nothing"):
         tightex.optimize(boxes_model, out, jpeg_quality=80)
-    with pytest.raises(tightex.InputError, match="--no-such-option"):
+    with pytest.raises(tightex.InputError, match="no_such_option"):
         tightex.optimize(boxes_model, out, no_such_option=1)
     with pytest.raises(tightex.InputError, match="input's own folder"):
         tightex.optimize(boxes_model, os.path.dirname(boxes_model))
@@ -164,6 +164,56 @@ def test_estimate_memory_is_the_guards(tightex, boxes_model, tmp_path):
     assert large - small == pytest.approx(7 * (1024**2 - 256**2))
     limit_mib = (small + large) / 2 / 2**20
     with pytest.raises(tightex.InputError, match="--max-memory"):
-        tightex.optimize(boxes_model, tmp_path, size=1024, max_memory=limit_mib)
-    report = tightex.optimize(boxes_model, tmp_path, size=256, max_memory=limit_mib)
+        tightex.optimize(boxes_model, tmp_path, size=1024, max_memory_mib=limit_mib)
+    report = tightex.optimize(boxes_model, tmp_path, size=256, max_memory_mib=limit_mib)
     assert report["options"]["size"] == 256
+
+
+def stub_fields(cls_name):
+    """The attributes and defaults a class of __init__.pyi declares (None where it gives no default)."""
+    import ast
+    stub = os.path.join(os.path.dirname(__import__("tightex").__file__), "__init__.pyi")
+    tree = ast.parse(open(stub).read())
+    cls = next(n for n in tree.body if isinstance(n, ast.ClassDef) and n.name == cls_name)
+    return {n.target.id: (ast.literal_eval(n.value) if n.value is not None else None)
+            for n in cls.body if isinstance(n, ast.AnnAssign)}
+
+
+def test_options_are_the_librarys_typed_fields(tightex):
+    options = tightex.Options(size=512, map="area", texture_format="webp")
+    assert (options.size, options.map, options.texture_format) == (512, "area", "webp")
+    # The stub declares every field with the library's default, and nothing else.
+    declared = stub_fields("Options")
+    assert set(declared) == set(tightex.FIELDS)
+    defaults = tightex.Options()
+    for name, default in declared.items():
+        assert getattr(defaults, name) == default, name
+        assert getattr(tightex.Options, name).__doc__, name  # the --help text
+    with pytest.raises(TypeError):
+        tightex.Options(size="large")
+    with pytest.raises(tightex.InputError, match="map 'bumpy'"):
+        tightex.Options(map="bumpy")
+    with pytest.raises(tightex.InputError, match="no_such_field"):
+        tightex.Options(no_such_field=1)
+
+
+def test_report_attributes_are_its_figures(tightex, boxes_model, tmp_path):
+    options = tightex.Options(map="area", html=False)
+    report = tightex.optimize(boxes_model, tmp_path, options, size=128)
+    assert options.size == 0  # the keywords went to a copy
+    assert set(stub_fields("Report")) == {n for n in dir(report) if not n.startswith("_") and n not in ("to_dict",)}
+    d = report.to_dict()
+    assert report.lost_triangles == d["metrics"]["lost_triangles"] == 0
+    assert report.surface_psnr_db == d["metrics"]["surface_psnr_db"]
+    assert report.components == d["preparation"]["components"] == 12
+    assert report.texture_sizes == [(128, 128)] and report.input_triangles == report.output_triangles
+    assert report.report_path == str(tmp_path / "report.json") and os.path.isfile(report.model_path)
+    assert report.output_texture_bytes == d["bytes"]["output"]["total"] > 0
+
+
+def test_the_package_builds_no_command_line(tightex):
+    package = os.path.dirname(tightex.__file__)
+    for name in os.listdir(package):
+        if name.endswith(".py"):
+            text = open(os.path.join(package, name)).read()
+            assert "options_to_args" not in text and "check_arguments" not in text and "optimize_file" not in text, name

@@ -145,7 +145,7 @@ def test_glb_and_b3dm_tileset(tightex, tmp_path):
     children, tables = [], {}
     for i in range(39):
         obj = make_boxes(tmp_path / "src" / f"t{i}", 3 + i % 9, 200 + i)
-        tightex.optimize(obj, tmp_path / "glb" / f"t{i}", output_format="glb", size=64, no_html=True)
+        tightex.optimize(obj, tmp_path / "glb" / f"t{i}", model_format="glb", size=64, html=False)
         glb = glb_with_batch_ids((tmp_path / "glb" / f"t{i}" / "boxes.glb").read_bytes(), 5)
         if i % 2 == 0:
             tables[f"t{i}.b3dm"] = (b'{"BATCH_LENGTH":5}', b"", b'{"name":["a","b","c","d","e"]}', b"")

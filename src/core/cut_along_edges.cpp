@@ -1,4 +1,4 @@
-#include "cut/cut_along_edges.hpp"
+#include "core/cut_along_edges.hpp"
 
 namespace tightex {
 

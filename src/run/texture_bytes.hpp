@@ -13,9 +13,9 @@
 #include "tightex/io.hpp"
 #include "tightex/mesh.hpp"
 
-namespace tightex::cli {
+namespace tightex {
 
-/// What the command line asks of the output's images.
+/// What the options ask of the output's images (Options: texture_format, the codecs' settings, target_psnr_db, max_bytes).
 struct BytesRequest {
   std::optional<ImageFormat> format;  // --format; nullopt: the input's base colour codec (PNG where none)
   ImageEncoding encoding;             // the levels and qualities as given or defaulted
@@ -44,4 +44,4 @@ EncodingChoice choose_encoding(const BytesRequest& request, const TexturedMesh& 
 nlohmann::json bytes_json(const TexturedMesh& input, const std::vector<TextureSource>& sources, const TexturedMesh& output,
                           const EncodingChoice& choice, double bake_psnr_db);
 
-}  // namespace tightex::cli
+}  // namespace tightex

@@ -3,7 +3,7 @@
 #include <vector>
 
 #include "core/surface.hpp"
-#include "cut/graph.hpp"
+#include "core/graph.hpp"
 
 namespace tightex {
 

@@ -1,4 +1,4 @@
-#include "cli/texture_bytes.hpp"
+#include "run/texture_bytes.hpp"
 
 #include <tbb/parallel_for.h>
 
@@ -9,11 +9,9 @@
 #include "io/image_io.hpp"
 #include "report/metrics.hpp"
 
-namespace tightex::cli {
+namespace tightex {
 
 namespace {
-
-const char* format_name(ImageFormat f) { return f == ImageFormat::kJpeg ? "jpg" : f == ImageFormat::kWebp ? "webp" : "png"; }
 
 /// The quality setting of a lossy encoding.
 int& quality_of(ImageEncoding& e) { return e.format == ImageFormat::kJpeg ? e.jpeg_quality : e.webp_quality; }
@@ -107,8 +105,8 @@ EncodingChoice choose_encoding(const BytesRequest& request, const TexturedMesh& 
   c.encoding = request.encoding;
   const std::optional<ImageFormat> input_format = base_colour_format(input, sources);
   c.encoding.format = request.format.value_or(input_format.value_or(ImageFormat::kPng));
-  c.reason = request.format ? fmt::format("--format {}", format_name(c.encoding.format))
-                            : fmt::format("{}, as the input's base colour", format_name(c.encoding.format));
+  c.reason = request.format ? fmt::format("--format {}", to_string(c.encoding.format))
+                            : fmt::format("{}, as the input's base colour", to_string(c.encoding.format));
   if (c.encoding.lossy() && !request.quality_given) c.reason += "; " + pick_quality(request, input, sources, output, c.encoding);
   const std::vector<std::string> images = encoded(output, c.encoding);
   for (const std::string& b : images) c.bytes.push_back(b.size());
@@ -146,7 +144,7 @@ nlohmann::json bytes_json(const TexturedMesh& input, const std::vector<TextureSo
   std::vector<uint64_t> in_bytes;
   for (const TextureSource& s : sources) in_bytes.push_back(s.bytes);
   const ImageEncoding& e = choice.encoding;
-  nlohmann::json encoding = {{"format", format_name(e.format)}, {"reason", choice.reason}};
+  nlohmann::json encoding = {{"format", to_string(e.format)}, {"reason", choice.reason}};
   if (e.format == ImageFormat::kJpeg) encoding["quality"] = e.jpeg_quality;
   if (e.format == ImageFormat::kWebp)
     encoding[e.webp_lossless ? "lossless" : "quality"] = e.webp_lossless ? nlohmann::json(true) : nlohmann::json(e.webp_quality);
@@ -156,4 +154,4 @@ nlohmann::json bytes_json(const TexturedMesh& input, const std::vector<TextureSo
           {"surface_psnr_written_db", choice.written_psnr_db.value_or(bake_psnr_db)}};
 }
 
-}  // namespace tightex::cli
+}  // namespace tightex

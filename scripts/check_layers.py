@@ -1,0 +1,60 @@
+#!/usr/bin/env python3
+"""Checks docs/architecture.md's layering over the #include lines: each folder of src/ includes only
+itself, the public headers (include/tightex/) and the folders before it in the data flow's order; the
+public headers include nothing from src/ and no third-party header but Eigen's (the mesh's vectors).
+Prints each include that breaks a rule and exits 1 if any does.
+
+    python3 scripts/check_layers.py [ROOT]
+"""
+import pathlib
+import re
+import sys
+
+#: The stage folders in the order data flows; each may include the ones before it.
+ORDER = ["core", "io", "prepare", "cut", "param", "layout", "bake", "report", "pipeline", "run", "cli", "python"]
+#: Third-party headers a public header may include.
+PUBLIC_THIRD_PARTY = ("Eigen/",)
+INCLUDE = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]')
+
+
+def includes(path):
+    """(line number, delimiter, header) of each #include of a file."""
+    for number, line in enumerate(path.read_text(errors="replace").splitlines(), 1):
+        m = INCLUDE.match(line)
+        if m:
+            yield number, m.group(1), m.group(2)
+
+
+def stage_breaks(root):
+    """Each include of a later stage's header by an earlier stage."""
+    for folder in ORDER:
+        for path in sorted((root / "src" / folder).rglob("*.[ch]pp")):
+            for number, _, header in includes(path):
+                stage = header.split("/")[0]
+                if stage in ORDER and ORDER.index(stage) > ORDER.index(folder):
+                    yield f"{path.relative_to(root)}:{number}: {folder} includes {header}, a later stage"
+
+
+def public_breaks(root):
+    """Each include of src/ or of a third-party header (but Eigen) by a public header."""
+    for path in sorted((root / "include" / "tightex").glob("*.hpp")):
+        for number, delimiter, header in includes(path):
+            if delimiter == '"' and not header.startswith("tightex/"):
+                yield f"{path.relative_to(root)}:{number}: a public header includes {header}, not a public one"
+            if delimiter == "<" and "/" in header and not header.startswith(PUBLIC_THIRD_PARTY) and not header.startswith("sys/"):
+                yield f"{path.relative_to(root)}:{number}: a public header includes the third-party {header}"
+            if delimiter == "<" and header.startswith("sys/"):
+                yield f"{path.relative_to(root)}:{number}: a public header includes the system's {header}"
+
+
+def main():
+    root = pathlib.Path(sys.argv[1] if len(sys.argv) > 1 else pathlib.Path(__file__).resolve().parent.parent)
+    breaks = list(stage_breaks(root)) + list(public_breaks(root))
+    for b in breaks:
+        print(b)
+    print(f"check_layers: {len(breaks)} include(s) against the layering")
+    return 1 if breaks else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

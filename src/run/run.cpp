@@ -1,0 +1,307 @@
+// The library's whole run (tightex/run.hpp): read, guard, decode beside the repair, plan, bake, encode,
+// write, measure, report; and optimize(), the same on a mesh in memory.
+#include "tightex/run.hpp"
+
+#include <tbb/parallel_invoke.h>
+
+#include <fmt/ranges.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <numeric>
+#include <tuple>
+
+#include "core/error.hpp"
+#include "core/resources.hpp"
+#include "io/image_io.hpp"
+#include "io/model_files.hpp"
+#include "io/texture_sources.hpp"
+#include "pipeline/plan_state.hpp"
+#include "report/report.hpp"
+#include "run/memory_guard.hpp"
+#include "run/run_output.hpp"
+#include "run/run_warnings.hpp"
+#include "run/texture_bytes.hpp"
+#include "tightex/tightex.hpp"
+
+namespace fs = std::filesystem;
+
+namespace tightex {
+
+namespace {
+
+/// Seconds from t0 to now.
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// Throws InputError naming the option (as the CLI spells it) unless `value` is in [lo, hi].
+template <typename T>
+void check_range(T value, T lo, T hi, const char* option) {
+  if (!(value >= lo && value <= hi)) fail_input("options: {} {} is out of range ({}..{})", option, value, lo, hi);
+}
+
+/// The model format the run writes: Options::model_format, else the input's kind.
+ModelFormat output_format(const std::string& input, const Options& options) {
+  return options.model_format.value_or(model_format_of(input));
+}
+
+/// Refuses a codec option that does nothing with the codec written (`format`: Options::texture_format,
+/// else the input's base colour's), and rate control where the images are written losslessly.
+void check_codec_options(const std::string& input, const Options& o, ImageFormat format) {
+  const std::string_view name = to_string(format);
+  const auto refuse = [&](const char* option, ImageFormat needs) {
+    if (o.texture_format)
+      fail_input("{}: {} needs --format {} (does nothing with --format {})", input, option, to_string(needs), name);
+    fail_input("{}: {} does nothing: the images are written as {}, the input's codec (--format chooses another)", input, option, name);
+  };
+  if (o.png_level && format != ImageFormat::kPng) refuse("--png-level", ImageFormat::kPng);
+  if (o.jpeg_quality && format != ImageFormat::kJpeg) refuse("--jpeg-quality", ImageFormat::kJpeg);
+  if (o.webp_quality && format != ImageFormat::kWebp) refuse("--webp-quality", ImageFormat::kWebp);
+  if (o.webp_lossless && format != ImageFormat::kWebp) refuse("--webp-lossless", ImageFormat::kWebp);
+  const bool lossy = format == ImageFormat::kJpeg || (format == ImageFormat::kWebp && !o.webp_lossless);
+  if ((o.target_psnr_db > 0 || o.max_bytes > 0) && !lossy)
+    fail_input("{}: --target-psnr and --max-bytes choose a lossy codec's quality, and this input's images would be written as {}: "
+               "add --format webp or --format jpg",
+               input, o.webp_lossless ? "lossless WebP" : "PNG");
+}
+
+/// What the options ask of the output's images.
+BytesRequest bytes_request(const Options& o) {
+  ImageEncoding e(o.texture_format.value_or(ImageFormat::kPng));
+  e.png_level = o.png_level.value_or(kPngLevelFast);
+  e.jpeg_quality = o.jpeg_quality.value_or(kDefaultJpegQuality);
+  e.webp_quality = o.webp_quality.value_or(kDefaultWebpQuality);
+  e.webp_lossless = o.webp_lossless;
+  return {o.texture_format, e, o.jpeg_quality.has_value() || o.webp_quality.has_value(), o.target_psnr_db, o.max_bytes};
+}
+
+/// The model's geometry (no pixels) with its textures' sizes from their headers, checked against the
+/// memory limit; the reader's figures into `read_stats`.
+TexturedMesh read_geometry(const std::string& input, const Options& options, ModelReadStats* read_stats) {
+  ModelReadOptions geometry_only;
+  geometry_only.load_textures = false;
+  // OBJ and PLY have no scene graph: a glTF scene written as one is placed in world space.
+  const ModelFormat format = output_format(input, options);
+  geometry_only.flatten_scene = format == ModelFormat::kObj || format == ModelFormat::kPly;
+  TexturedMesh geometry = read_model(input, geometry_only, read_stats);
+  for (Texture& t : geometry.textures)
+    if (t.image.empty() && t.width == 0)  // a vertex-colour texture is made, a glTF's embedded image sized by its reader
+      std::tie(t.width, t.height) = image_dimensions(t.path);
+  check_texture_headers(memory_guard(input, options), geometry);
+  return geometry;
+}
+
+/// The options the method runs with in a run writing `format`: measured beside the write, and the
+/// untextured triangles baked into PLY, which has no material to keep their colour in.
+Options method_options(const Options& options, ModelFormat format) {
+  Options o = options;
+  o.measure = false;
+  o.keep_untextured = options.keep_untextured && format != ModelFormat::kPly;
+  return o;
+}
+
+/// The model with its texture pixels and the plan made from it.
+struct PlannedModel {
+  TexturedMesh mesh;
+  Plan plan;
+  double textures_s = 0;  // when the textures were read, in seconds from the start
+};
+
+/// Decodes the textures of `geometry` (read without pixels), which becomes the planned model, and plans
+/// the charts at `budget`. The geometric stages need no pixels, so the textures are decoded beside
+/// them, unless the plan needs the pixels (the detail map places texels by them, the auto aspect
+/// compares its shapes with them): then only the preparation (repair, components, seams, handles) is
+/// made beside them, and the rest after. A texture error is thrown before a plan error: a bad texture
+/// is the user's first problem.
+PlannedModel read_textures_and_plan(TexturedMesh geometry, const Options& opt, const TextureBudget& budget,
+                                    std::chrono::steady_clock::time_point t0) {
+  PlannedModel r;
+  std::exception_ptr texture_error, plan_error;
+  std::vector<Texture> textures;
+  auto read_textures = [&] {
+    try {
+      textures = load_texture_pixels(geometry, ModelReadOptions{}.max_texture_pixels);
+      r.textures_s = seconds_since(t0);
+    } catch (...) {
+      texture_error = std::current_exception();
+    }
+  };
+  auto planning = [&](auto&& step) {  // a step of the plan, its error kept for after the textures'
+    try {
+      step();
+    } catch (...) {
+      plan_error = std::current_exception();
+    }
+  };
+  const bool plan_needs_pixels =
+      opt.map == MapKind::kDetail || (opt.aspect == 0 && opt.map != MapKind::kHarmonic && opt.layout == Layout::kAtlas);
+  PreparedMesh prepared;
+  tbb::parallel_invoke(read_textures, [&] {
+    planning([&] {
+      if (plan_needs_pixels)
+        prepared = prepare_mesh(geometry, opt);
+      else
+        r.plan = plan_charts(geometry, opt, budget);
+    });
+  });
+  r.mesh = std::move(geometry);
+  if (!texture_error) r.mesh.textures = std::move(textures);
+  if (plan_needs_pixels && !texture_error && !plan_error) planning([&] { r.plan = plan_charts(r.mesh, opt, budget, &prepared); });
+  if (texture_error) std::rethrow_exception(texture_error);
+  if (plan_error) std::rethrow_exception(plan_error);
+  return r;
+}
+
+/// Whether --target-psnr chooses the texel budget too: a lossy codec, and tightex's own budget.
+bool budget_follows_target(const Options& options, const TextureBudget& budget, const EncodingChoice& choice) {
+  return options.target_psnr_db > 0 && choice.encoding.lossy() && budget.is_default;
+}
+
+/// The texel budgets --target-psnr tries, as fractions of the default's texels, largest first.
+constexpr double kTargetBudgetFractions[] = {0.7, 0.5, 0.35, 0.25, 0.18};
+
+uint64_t total_bytes(const EncodingChoice& c) { return std::accumulate(c.bytes.begin(), c.bytes.end(), uint64_t(0)); }
+
+/// --target-psnr's budget search: `result` and `choice` (the default budget's, at the lowest quality
+/// that reaches the target as written) are replaced by a smaller budget's, re-planned and baked, where
+/// it reaches the target in fewer bytes. Stops at the first budget that misses the target or takes more
+/// bytes than the best so far. Returns each budget tried (side, quality, bytes, written PSNR).
+nlohmann::json smallest_reaching_target(const Options& options, const TexturedMesh& input, const std::vector<TextureSource>& sources,
+                                        const TextureBudget& budget, Result& result, EncodingChoice& choice) {
+  auto entry = [&](int side, const EncodingChoice& c) {
+    return nlohmann::json{{"size", side},
+                          {"quality", c.encoding.format == ImageFormat::kJpeg ? c.encoding.jpeg_quality : c.encoding.webp_quality},
+                          {"bytes", total_bytes(c)},
+                          {"surface_psnr_written_db", c.written_psnr_db.value_or(0)}};
+  };
+  nlohmann::json tried = nlohmann::json::array({entry(budget.side, choice)});
+  if (!(choice.written_psnr_db.value_or(0) >= options.target_psnr_db)) return tried;  // the default budget misses it already
+  Options quiet = options;
+  quiet.progress = nullptr;
+  for (const double fraction : kTargetBudgetFractions) {
+    const TextureBudget smaller{std::max(8, int(std::lround(budget.side * std::sqrt(fraction) / 4)) * 4), true};
+    Result r = bake_plan(plan_charts(input, quiet, smaller), input, quiet);
+    EncodingChoice c = choose_encoding(bytes_request(quiet), input, sources, r.output);
+    tried.push_back(entry(smaller.side, c));
+    if (!(c.written_psnr_db.value_or(0) >= options.target_psnr_db) || total_bytes(c) >= total_bytes(choice)) break;
+    c.reason += fmt::format("; a texel budget of {}^2 (of the default {}^2) reaches the target in the fewest bytes", smaller.side,
+                            budget.side);
+    result = std::move(r), choice = std::move(c);
+  }
+  return tried;
+}
+
+/// The images' codec and quality (the input's codec; rate control; --target-psnr's budget search),
+/// chosen for `result`, which the search may replace. Returns the choice and the budgets tried (null
+/// where none was searched).
+/// `method` is the options the method ran with (method_options).
+std::pair<EncodingChoice, nlohmann::json> choose_images(const Options& options, const Options& method, const TexturedMesh& input,
+                                                        const std::vector<TextureSource>& sources, const TextureBudget& budget,
+                                                        Result& result) {
+  EncodingChoice choice = choose_encoding(bytes_request(options), input, sources, result.output);
+  nlohmann::json budgets;
+  if (budget_follows_target(options, budget, choice)) budgets = smallest_reaching_target(method, input, sources, budget, result, choice);
+  return {std::move(choice), std::move(budgets)};
+}
+
+}  // namespace
+
+void check_options(const Options& o) {
+  if (o.size != 0) check_range(o.size, 8, 65536, "--size");  // above 16384 without --force: texture_budget refuses it
+  if (o.size != 0 && o.texels != 0) fail_input("options: --size and --texels go one without the other");
+  if (o.texels < 0) fail_input("options: --texels {} must be positive", o.texels);
+  if (o.aspect != 0) check_range(o.aspect, 1.0 / 16, 16.0, "--aspect");
+  check_range(o.balance, 0.0, 1.0, "--balance");
+  check_range(o.map_budget_db, 0.0, 99.0, "--map-budget");
+  check_range(o.max_page_side, 0, 65536, "--max-size");
+  if (o.max_memory_mib < 0) fail_input("options: --max-memory {} must be positive", o.max_memory_mib);
+  if (o.png_level) check_range(*o.png_level, 0, 9, "--png-level");
+  if (o.jpeg_quality) check_range(*o.jpeg_quality, 1, 100, "--jpeg-quality");
+  if (o.webp_quality) check_range(*o.webp_quality, 1, 100, "--webp-quality");
+  if (o.target_psnr_db != 0) check_range(o.target_psnr_db, 1.0, 99.0, "--target-psnr");
+  if (o.target_psnr_db > 0 && o.max_bytes > 0) fail_input("options: --target-psnr goes without --max-bytes");
+  if ((o.target_psnr_db > 0 || o.max_bytes > 0) && (o.jpeg_quality || o.webp_quality))
+    fail_input("options: --target-psnr/--max-bytes choose the quality: they go without --jpeg-quality and --webp-quality");
+}
+
+ModelFormat model_format_of(const std::string& path) {
+  const std::string extension = fs::path(path).extension().string();
+  for (const ModelFormat f : kModelFormats)
+    if (f != ModelFormat::kObj && equals_ignoring_case(extension, "." + std::string(to_string(f)))) return f;
+  return ModelFormat::kObj;
+}
+
+Report run(const std::string& input, const std::string& outdir, const Options& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  check_options(options);
+  const ModelFormat format = output_format(input, options);
+  check_paths(input, outdir, format);
+  // Geometry first; the texture pixels are decoded while the geometric stages run, into the same model.
+  RunTimings timings;
+  ModelReadStats read_stats;
+  TexturedMesh geometry = read_geometry(input, options, &read_stats);
+  timings.read_s = seconds_since(t0);
+  timings.read_cpu = process_cpu_times();
+  const std::vector<TextureSource> geometry_sources = texture_sources(geometry);
+  check_codec_options(input, options,
+                      options.texture_format.value_or(base_colour_format(geometry, geometry_sources).value_or(ImageFormat::kPng)));
+  const TextureBudget budget = texture_budget(geometry, options);
+  const MemoryGuard guard = check_memory(input, options, geometry, budget.side);
+  const Options opt = method_options(options, format);
+  PlannedModel planned = read_textures_and_plan(std::move(geometry), opt, budget, t0);
+  timings.textures_s = planned.textures_s;
+  if (options.layout != Layout::kAtlas) check_per_component_memory(guard, planned.plan);
+  Result result = bake_plan(planned.plan, planned.mesh, opt);
+
+  const std::vector<TextureSource> sources = texture_sources(planned.mesh);
+  auto [choice, budgets] = choose_images(options, opt, planned.mesh, sources, budget, result);
+  const ModelTarget target{outdir, fs::path(input).stem().string(), format, choice.encoding, options.html};
+  WrittenAndMeasured written = write_and_measure(target, planned.mesh, result.output, timings);
+  // The surface PSNR of the files as written (a lossy codec's images decoded back), the bake's beside it.
+  if (choice.written_psnr_db) written.metrics.surface_psnr_bake = std::exchange(written.metrics.surface_psnr, *choice.written_psnr_db);
+  const Metrics& metrics = written.metrics;
+  nlohmann::json json = report_json(result.report);
+  add_run_figures(json, metrics, timings, seconds_since(t0), read_stats,
+                  OutputFiles{outdir, output_model_name(input, format), options.html ? kHtmlName : "", written.removed});
+  json["bytes"] = bytes_json(planned.mesh, sources, result.output, choice, metrics.surface_psnr);
+  json["bytes"]["surface_psnr_bake_db"] = metrics.surface_psnr_bake.value_or(metrics.surface_psnr);
+  if (!budgets.is_null()) json["bytes"]["budgets_tried"] = std::move(budgets);
+  add_warnings(planned.plan, planned.mesh, read_stats, format, written.removed, json);
+  if (!options.preview_path.empty()) write_preview(options.preview_path, planned.mesh, result.output);
+  Report report = public_report(std::move(json), result.output, result.report.texture_sizes.size());
+  const fs::path json_path = options.report_path.empty() ? fs::path(outdir) / "report.json" : fs::path(options.report_path);
+  report.report_path = write_reports(json_path, outdir, report.json, options.html ? &written.html_data : nullptr).string();
+  report.model_path = (fs::path(outdir) / output_model_name(input, format)).string();
+  return report;
+}
+
+double estimate_memory(const std::string& input, const Options& options) {
+  const TexturedMesh geometry = read_geometry(input, options, nullptr);
+  Options as_atlas = options;
+  as_atlas.layout = Layout::kAtlas;
+  as_atlas.max_memory_mib = std::numeric_limits<double>::max();
+  return check_memory(input, as_atlas, geometry, texture_budget(geometry, options).side).estimate;
+}
+
+Result optimize(const TexturedMesh& mesh, const Options& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  check_options(options);
+  const std::string name = mesh.source.empty() ? std::string("mesh") : mesh.source;
+  check_texture_headers(memory_guard(name, options), mesh);
+  const TextureBudget budget = texture_budget(mesh, options);
+  const MemoryGuard guard = check_memory(name, options, mesh, budget.side);
+  const Plan plan = plan_charts(mesh, options, budget);
+  if (options.layout != Layout::kAtlas) check_per_component_memory(guard, plan);
+  Result result = bake_plan(plan, mesh, options);
+  nlohmann::json json = report_json(result.report);
+  json["wall_seconds"] = seconds_since(t0);
+  json["peak_rss_mib"] = peak_rss_mib();
+  add_warnings(plan, mesh, ModelReadStats{}, std::nullopt, {}, json);
+  const size_t new_textures = result.report.texture_sizes.size();
+  result.report = public_report(std::move(json), result.output, new_textures);
+  return result;
+}
+
+}  // namespace tightex

@@ -1,0 +1,166 @@
+#include "run/run_output.hpp"
+
+#include <tbb/parallel_invoke.h>
+
+#include <chrono>
+#include <fstream>
+
+#include "core/error.hpp"
+#include "io/output_files.hpp"
+#include "report/html_report.hpp"
+#include "report/preview.hpp"
+#include "report/welded_edges.hpp"
+
+namespace fs = std::filesystem;
+
+namespace tightex {
+
+namespace {
+
+fs::path temporary_beside(const fs::path& path) { return path.parent_path() / ("." + path.filename().string() + ".tmp"); }
+
+/// Writes each text to its path under a temporary name, and only once all are written renames them
+/// into place, in order: a reader never sees one file of the set without the others written. Throws
+/// InputError naming the path that cannot be written or renamed (the temporary files are removed then).
+void write_texts_atomically(const std::vector<std::pair<fs::path, std::string>>& files) {
+  std::error_code ec;
+  auto remove_temporaries = [&] {
+    for (const auto& [path, text] : files) fs::remove(temporary_beside(path), ec);
+  };
+  for (const auto& [path, text] : files) {
+    std::ofstream f(temporary_beside(path), std::ios::binary);
+    if (f) f << text;
+    if (!f) {
+      f.close();
+      remove_temporaries();
+      fail_input("{}: cannot write", path.string());
+    }
+  }
+  for (const auto& [path, text] : files) {
+    fs::rename(temporary_beside(path), path, ec);
+    if (ec) {
+      remove_temporaries();
+      fail_input("{}: cannot rename into place", path.string());
+    }
+  }
+}
+
+/// Seconds from t0 to now.
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// Writes the output model in the target's format. Returns what the writer left out: what the glTF
+/// writer removed, or the map slots OBJ or PLY cannot bind.
+std::vector<std::string> write_model(const ModelTarget& target, const TexturedMesh& output) {
+  switch (target.format) {
+    case ModelFormat::kPly:
+      return write_ply(output, target.outdir, target.name, target.encoding);
+    case ModelFormat::kGltf:
+      return write_gltf(output, target.outdir, target.name, target.encoding, GltfContainer::kGltf);
+    case ModelFormat::kGlb:
+      return write_gltf(output, target.outdir, target.name, target.encoding, GltfContainer::kGlb);
+    case ModelFormat::kObj:
+      break;
+  }
+  return write_obj(output, target.outdir, target.name, target.encoding);
+}
+
+}  // namespace
+
+std::string output_model_name(const std::string& input, ModelFormat format) {
+  return fs::path(input).stem().string() + "." + std::string(to_string(format));
+}
+
+void check_paths(const std::string& input, const std::string& outdir, ModelFormat format) {
+  if (fs::is_directory(input)) fail_input("{}: is a directory, not a model file", input);
+  check_output_folder(outdir);
+  std::error_code ec;
+  const fs::path in_dir = fs::absolute(fs::path(input)).parent_path();
+  if (fs::exists(outdir, ec) && fs::exists(in_dir, ec) && fs::equivalent(outdir, in_dir, ec)) {
+    const std::string model = output_model_name(input, format);
+    const bool replaces = model == fs::path(input).filename().string();
+    fail_input("{}: the output folder {} is the input's own folder; {} would {} (choose another -o)", input, outdir, model,
+               replaces ? "replace the input" : "be written among the input's files");
+  }
+}
+
+WrittenAndMeasured write_and_measure(const ModelTarget& target, const TexturedMesh& input, const TexturedMesh& output,
+                                     RunTimings& timings) {
+  const auto tw = std::chrono::steady_clock::now();
+  const CpuTimes cpu_before = process_cpu_times();
+  const auto cpu_since = [&] {
+    const CpuTimes now = process_cpu_times();
+    return CpuTimes{now.user - cpu_before.user, now.sys - cpu_before.sys};
+  };
+  WrittenAndMeasured r;
+  nlohmann::json html_data;
+  auto measure_and_gather = [&] {
+    // The models' welded edges once, for the measure's charts and the page's seams.
+    WeldedEdges input_edges, output_edges;
+    tbb::parallel_invoke([&] { input_edges = welded_edges(input); }, [&] { output_edges = welded_edges(output); });
+    tbb::parallel_invoke(
+        [&] {
+          r.metrics = measure(input, output, input_edges, output_edges);
+          timings.measure_s = seconds_since(tw);
+          timings.measure_cpu = cpu_since();
+        },
+        [&] {
+          if (!target.html) return;
+          html_data = html_model_data_without_charts(input, output, input_edges, output_edges);
+          timings.html_s = seconds_since(tw);
+          timings.html_cpu = cpu_since();
+        });
+  };
+  tbb::parallel_invoke(
+      [&] {
+        r.removed = write_model(target, output);
+        timings.write_s = seconds_since(tw);
+        timings.write_cpu = cpu_since();
+      },
+      measure_and_gather);
+  // The page's chart counts are the measure's.
+  if (target.html) r.html_data = html_model_data(std::move(html_data), r.metrics.charts_input, r.metrics.charts);
+  return r;
+}
+
+void add_run_figures(nlohmann::json& rep, const Metrics& metrics, const RunTimings& t, double wall_seconds, const ModelReadStats& read_stats,
+                     const OutputFiles& files) {
+  rep["metrics"] = to_json(metrics);
+  nlohmann::json& timings = rep["timings"];
+  auto timing = [](const char* stage, double seconds, const CpuTimes& cpu) {
+    return to_json(StageTiming{stage, seconds, std::nullopt, cpu.user, cpu.sys});
+  };
+  timings.push_back(timing("write (beside measure)", t.write_s, t.write_cpu));
+  timings.push_back(timing("measure (beside write)", t.measure_s, t.measure_cpu));
+  if (t.html_s > 0) timings.push_back(timing("report.html data (beside write and measure)", t.html_s, t.html_cpu));
+  timings.insert(timings.begin(), timing("read geometry", t.read_s, t.read_cpu));
+  timings.insert(timings.begin() + 1, to_json(StageTiming{"read textures (beside the geometric stages, from start)", t.textures_s,
+                                                          std::nullopt, std::nullopt, std::nullopt}));
+  rep["wall_seconds"] = wall_seconds;
+  rep["peak_rss_mib"] = peak_rss_mib();
+  rep["input"].update(reader_json(read_stats));
+  rep["output"] = to_json(files);
+}
+
+fs::path write_reports(const fs::path& json_path, const std::string& outdir, const std::string& report_text, const std::string* model_data) {
+  if (!model_data) {
+    write_texts_atomically({{json_path, report_text}});
+    return json_path;
+  }
+  std::string page = html_report_page(report_text, *model_data);
+  const fs::path html_path = fs::path(outdir) / kHtmlName;
+  write_texts_atomically({{html_path, std::move(page)}, {json_path, report_text}});
+  return html_path;
+}
+
+void write_preview(const std::string& preview_path, const TexturedMesh& input, const TexturedMesh& output) {
+  const fs::path p(preview_path);
+  const fs::path tmp = temporary_beside(p);
+  save_image(tmp.string(), make_preview(input, output), ImageFormat::kPng);
+  std::error_code ec;
+  fs::rename(tmp, p, ec);
+  if (ec) fail_input("{}: cannot write preview ({})", preview_path, ec.message());
+}
+
+}  // namespace tightex
