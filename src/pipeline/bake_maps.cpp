@@ -152,22 +152,24 @@ std::vector<JudgePoint> judge_points(const std::vector<BakeTriangle>& triangles,
   return points;
 }
 
-/// PSNR over `channels` of the output map `pages` (of any size: read back bilinearly at the point's new
-/// texture coordinates) against `reference` at the same points: the input's map through the input
-/// coordinates, or (`reference_pages` set) the full-size bake.
+/// PSNR over `channels` of the output map `pages` (the pages `triangles` were laid out on, or those
+/// reduced by `reduction`: read back bilinearly at the point's new texture coordinates) against
+/// `reference` at the same points: the input's map through the input coordinates, or
+/// (`reference_pages` set) the full-size bake.
 double judged_psnr(const TexturedMesh& input, const MapSource& map, const std::vector<BakeTriangle>& triangles,
                    const std::vector<JudgePoint>& points, const std::vector<Image>& pages, const std::vector<Image>* reference_pages,
-                   unsigned channels) {
+                   unsigned channels, int reduction = 1) {
   double se = 0, n = 0;
   for (const JudgePoint& p : points) {
     const BakeTriangle& tri = triangles[p.triangle];
     if (tri.image >= pages.size()) continue;
     const Vec2 px = p.b[0] * tri.target_px[0] + p.b[1] * tri.target_px[1] + p.b[2] * tri.target_px[2];
-    const Image& full_size = reference_pages ? (*reference_pages)[tri.image] : pages[tri.image];
-    const double u = px.x() / full_size.width, v = 1.0 - px.y() / full_size.height;
+    // Texture coordinates from the pixel coordinates of the page the triangles were laid out on.
+    const double u = px.x() / (double(pages[tri.image].width) * reduction),
+                 v = 1.0 - px.y() / (double(pages[tri.image].height) * reduction);
     std::array<float, 4> ref;
     if (reference_pages) {
-      ref = sample_bilinear(full_size, u, v);
+      ref = sample_bilinear((*reference_pages)[tri.image], u, v);
     } else {
       const int tex =
           tri.material >= 0 && size_t(tri.material) < map.texture_of_material.size() ? map.texture_of_material[size_t(tri.material)] : -1;
@@ -202,7 +204,7 @@ std::pair<int, double> choose_reduction(const TexturedMesh& input, const MapSour
       if (page.width % factor != 0 || page.height % factor != 0) return {chosen, chosen_psnr};
       reduced.push_back(reduce_image(page, factor));
     }
-    const double psnr = judged_psnr(input, map, triangles, points, reduced, normal ? &full : nullptr, channels);
+    const double psnr = judged_psnr(input, map, triangles, points, reduced, normal ? &full : nullptr, channels, factor);
     if (psnr < min_psnr_db && (normal || psnr < full_psnr - kMaxReductionLossDb)) break;
     chosen = factor, chosen_psnr = psnr;
   }
