@@ -152,10 +152,16 @@ struct Options {
   bool linear_light_colour = false;
   /// The maps other than the base colour (metallic-roughness, occlusion, emissive, normal, ...): each is
   /// baked at the base colour's size and read back at 50k surface points, its PSNR taken against the
-  /// input's map over the channels its slots read. Below this, it is baked again larger (steps of 1/8,
-  /// 1/4 or 1/2 of the side, whichever divides the pages' sides) up to as many texels as its input
-  /// images hold, at the smallest step that reaches this or else the largest, when that gains at least
-  /// 0.25 dB; otherwise it is halved (down to 1/16 of the side) while its PSNR stays at or above this,
+  /// input's map for each slot over the channels that slot reads (a packed occlusion-roughness-metallic
+  /// image: the occlusion's red on its own). Where a slot is below this, on the default texel budget,
+  /// the map may be baked again larger (steps of 1/8, 1/4 or 1/2 of the side, whichever divides the
+  /// pages' sides, up to as many texels as its input images hold) while some slot falls short of what
+  /// its check asks (the base colour's PSNR plus the difference an ideal re-sampler at the input's own
+  /// density leaves between that slot and the base colour; at most this), in steps that about double
+  /// its texels, each taken only where it gains 0.25 dB and removes as much squared error per added
+  /// texel as the base colour's last texels do (its error at half its side); it stops at the first
+  /// step that reaches every target (within it, at the interpolated smallest size that does).
+  /// Otherwise it is halved (down to 1/16 of the side) while each slot's PSNR stays at or above this,
   /// or within 0.25 dB of the base colour's size's. A normal map is never baked larger and is halved
   /// while its PSNR against its own full-size bake stays at or above this. A flat or smooth map costs a
   /// fraction of the texels; the default keeps a 1 dB margin above 50 dB, beyond which differences are
