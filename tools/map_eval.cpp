@@ -6,7 +6,8 @@
 // occlusion-roughness-metallic image per page whose occlusion has fine dark creases, as an AO bake.
 //
 //   tightex_map_eval make-scan DEMO.obj OUTDIR      writes OUTDIR/scan_pbr.glb
-//   tightex_map_eval make-orm-scan SCAN.obj OUTDIR  writes OUTDIR/scan_orm.glb
+//   tightex_map_eval make-orm-scan SCAN.obj OUTDIR [CREASE_TEXELS [DEPTH]]
+//                                                   writes OUTDIR/scan_orm.glb (creases 6 texels, 0.4 deep)
 //   tightex_map_eval compare INPUT OUTPUT          one table row per map, exit 1 when a check fails
 //
 // The ideal re-sampler: every new texel the box average of 4 x 4 bilinear samples over its footprint,
@@ -236,11 +237,16 @@ double texel_length(const TexturedMesh& m) {
   return texels > 0 ? std::sqrt(area3 / texels) : 1.0;
 }
 
+/// The dark creases of occlusion_at: half-width in input texels and depth (0-1 of white).
+struct Creases {
+  double width = 6, depth = 0.4;
+};
+
 /// A baked ambient occlusion's look at surface point p (L: one input texel's 3D length): bright, with
-/// dark creases about six texels wide along the zero set of a sum of three plane waves (about 40 texels
-/// apart; the distance estimated as |f| / |grad f|, the gradient held off zero where the waves cancel)
-/// and a broad darkening in hollows.
-double occlusion_at(const Vec3& p, double L) {
+/// dark creases (`c`) along the zero set of a sum of three plane waves (about 40 texels apart; the
+/// distance estimated as |f| / |grad f|, the gradient held off zero where the waves cancel) and a
+/// broad darkening in hollows.
+double occlusion_at(const Vec3& p, double L, Creases c) {
   const Vec3 k[3] = {Vec3(1.0, 0.3, -0.5), Vec3(-0.4, 1.0, 0.6), Vec3(0.5, -0.7, 1.0)};
   const double scale = 2 * M_PI / (40 * L);
   double f = 0;
@@ -249,8 +255,8 @@ double occlusion_at(const Vec3& p, double L) {
     const Vec3 kk = scale * ki.normalized();
     f += std::sin(kk.dot(p)), grad += kk * std::cos(kk.dot(p));
   }
-  const double d = std::abs(f) / std::max(grad.norm(), 0.5 * scale) / (6 * L);  // crease half-widths to the crease
-  const double crease = 0.4 * std::exp(-d * d);
+  const double d = std::abs(f) / std::max(grad.norm(), 0.5 * scale) / (c.width * L);  // crease half-widths to the crease
+  const double crease = c.depth * std::exp(-d * d);
   const double hollow = 0.15 * (0.5 + 0.5 * std::sin(scale / 9 * (p.x() + 2 * p.y() - p.z())));
   return std::clamp(1.0 - crease - hollow, 0.0, 1.0);
 }
@@ -259,14 +265,14 @@ double occlusion_at(const Vec3& p, double L) {
 /// per page, bound as both occlusion (red: occlusion_at, fine dark creases) and metallic-roughness
 /// (green: a smooth roughness, blue: a hard metallic mask, both some hundreds of texels across), drawn
 /// through its atlas at each page's size: writes OUTDIR/scan_orm.glb.
-int make_orm_scan(const std::string& obj, const std::string& outdir) {
+int make_orm_scan(const std::string& obj, const std::string& outdir, Creases creases) {
   TexturedMesh m = read_obj(obj);
   const double L = texel_length(m), s = 2 * M_PI / (400 * L);
   std::vector<std::vector<Image>> maps =
       paint_pages(m, {Rgba8{255, 128, 0, 255}}, [&](size_t, const Vec3& p, const Vec3&, const Vec3&, std::vector<Rgba8>& v) {
         const bool metal = std::sin(s * (1.1 * p.x() + 0.2 * p.z())) * std::sin(s * 1.3 * p.y()) > 0.2;
         const double rough = 0.5 + 0.4 * std::sin(s * 0.5 * (p.y() + 0.6 * p.x()));
-        v[0] = {uint8_t(std::lround(255 * occlusion_at(p, L))), uint8_t(std::lround(255 * rough)), uint8_t(metal ? 255 : 0), 255};
+        v[0] = {uint8_t(std::lround(255 * occlusion_at(p, L, creases))), uint8_t(std::lround(255 * rough)), uint8_t(metal ? 255 : 0), 255};
       });
   const size_t colour_textures = m.textures.size();
   std::vector<int> orm_of(colour_textures, -1);
@@ -328,11 +334,18 @@ int main(int argc, char** argv) {
   try {
     if (argc == 4 && std::string(argv[1]) == "compare") return compare(argv[2], argv[3]);
     if (argc == 4 && std::string(argv[1]) == "make-scan") return make_scan(argv[2], argv[3]);
-    if (argc == 4 && std::string(argv[1]) == "make-orm-scan") return make_orm_scan(argv[2], argv[3]);
+    if (argc >= 4 && argc <= 6 && std::string(argv[1]) == "make-orm-scan") {
+      Creases c;
+      if (argc >= 5) c.width = std::stod(argv[4]);
+      if (argc == 6) c.depth = std::stod(argv[5]);
+      return make_orm_scan(argv[2], argv[3], c);
+    }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "tightex_map_eval: %s\n", e.what());
     return 2;
   }
-  std::fprintf(stderr, "usage: tightex_map_eval compare INPUT OUTPUT | make-scan DEMO.obj OUTDIR | make-orm-scan SCAN.obj OUTDIR\n");
+  std::fprintf(
+      stderr,
+      "usage: tightex_map_eval compare INPUT OUTPUT | make-scan DEMO.obj OUTDIR | make-orm-scan SCAN.obj OUTDIR [CREASE_TEXELS [DEPTH]]\n");
   return 2;
 }
