@@ -9,10 +9,12 @@
 //   tightex_map_eval make-orm-scan SCAN.obj OUTDIR [CREASE_TEXELS [DEPTH]]
 //                                                   writes OUTDIR/scan_orm.glb (creases 6 texels, 0.4 deep)
 //   tightex_map_eval compare INPUT OUTPUT          one table row per map, exit 1 when a check fails
+//   tightex_map_eval crushed INPUT                 where each map's error sits: triangles crushed 20:1 or not
 //
 // The ideal re-sampler: every new texel the box average of 4 x 4 bilinear samples over its footprint,
 // on a grid rotated 30 degrees at the input's own texel density, read back bilinearly.
 #include <Eigen/Geometry>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -28,6 +30,7 @@
 #include "core/tangents.hpp"
 #include "report/metrics.hpp"
 #include "tightex/io.hpp"
+#include "tightex/tightex.hpp"
 
 using namespace tightex;
 
@@ -328,12 +331,87 @@ int compare(const std::string& input_path, const std::string& output_path) {
   return ok ? 0 : 1;
 }
 
+/// How much output triangle o's texture coordinates stretch one direction of its 3D surface against
+/// the other: the ratio of the singular values of its map from 3D to texture space (1: no shear).
+double anisotropy(const TexturedMesh& out, size_t o) {
+  const Vec3 &a = out.positions[out.triangles[o][0]], &b = out.positions[out.triangles[o][1]], &c = out.positions[out.triangles[o][2]];
+  const Vec3 e1 = (b - a).normalized(), e2 = (b - a).cross(c - a).normalized().cross(e1);
+  Eigen::Matrix2d surface, texture;
+  surface << (b - a).dot(e1), (c - a).dot(e1), (b - a).dot(e2), (c - a).dot(e2);
+  texture.col(0) = out.sampled_uv(o, 1) - out.sampled_uv(o, 0), texture.col(1) = out.sampled_uv(o, 2) - out.sampled_uv(o, 0);
+  const Eigen::Vector2d sv = Eigen::JacobiSVD<Eigen::Matrix2d>(texture * surface.inverse()).singularValues();
+  const double r = sv(0) / sv(1);
+  return std::isfinite(r) ? r : 1e9;
+}
+
+/// The corner of input triangle t at output triangle o's corner k (the same position), or k.
+int input_corner_of(const TexturedMesh& in, const TexturedMesh& out, size_t t, size_t o, int k) {
+  for (int j = 0; j < 3; ++j)
+    if ((out.positions[out.triangles[o][size_t(k)]] - in.positions[in.triangles[t][size_t(j)]]).norm() < 1e-9) return j;
+  return k;
+}
+
+/// `crushed INPUT`: tightex's default run, every map at the base colour's size (--map-budget 0), and
+/// where each map's error sits: at kSamples area-weighted points of the output, squared error split
+/// between the triangles whose texture coordinates are crushed more than 20:1 (anisotropy) and the
+/// rest, tightex's and the ideal re-sampler's, per slot over its channels.
+int crushed(const std::string& input_path) {
+  const TexturedMesh in = read_model(input_path);
+  Options o;
+  o.default_budget = true, o.map_budget_db = 0, o.measure = false;
+  const TexturedMesh out = optimize(in, o).output;
+  std::vector<double> cdf(out.num_triangles()), ratio(out.num_triangles());
+  double acc = 0, crushed_area = 0;
+  for (size_t t = 0; t < out.num_triangles(); ++t) {
+    const double a3 = triangle_area(out.positions, out.triangles[t]);
+    cdf[t] = acc += a3, ratio[t] = anisotropy(out, t);
+    if (ratio[t] > 20) crushed_area += a3;
+  }
+  std::printf("%s: output triangles crushed more than 20:1: %.2f%% of the area\n", input_path.c_str(), 100 * crushed_area / acc);
+  std::printf("| slot | PSNR crushed (ideal) | PSNR rest (ideal) | crushed share of the squared error |\n");
+  for (int slot = -1; slot < int(kMapSlots); ++slot) {
+    bool bound = slot < 0;
+    for (const Material& mat : in.materials) bound |= slot >= 0 && mat.maps[size_t(slot)] >= 0;
+    if (!bound || (slot >= 0 && map_encoding(MapSlot(slot)) == MapEncoding::kTangentNormal)) continue;
+    const unsigned channels = slot < 0 ? 7u : map_slot_channels(MapSlot(slot));
+    double se[2][2] = {{0, 0}, {0, 0}}, n[2] = {0, 0};  // [crushed][ours, ideal]
+    std::mt19937_64 rng(kSeed);
+    std::uniform_real_distribution<double> uni(0.0, 1.0);
+    for (size_t s = 0; s < kSamples; ++s) {
+      const size_t q = std::min(out.num_triangles() - 1, size_t(std::upper_bound(cdf.begin(), cdf.end(), uni(rng) * acc) - cdf.begin()));
+      double r1 = uni(rng), r2 = uni(rng);
+      if (r1 + r2 > 1) r1 = 1 - r1, r2 = 1 - r2;
+      const double b[3] = {1 - r1 - r2, r1, r2};
+      if (q >= out.input_triangle.size()) continue;
+      const size_t t = out.input_triangle[q];
+      const Image *io = slot_image(in, t, slot), *oo = slot_image(out, q, slot);
+      if (!io || !oo) continue;
+      Vec2 ui = Vec2::Zero(), uo = Vec2::Zero();
+      for (int k = 0; k < 3; ++k) uo += b[k] * out.sampled_uv(q, k), ui += b[k] * in.sampled_uv(t, input_corner_of(in, out, t, q, k));
+      const auto exact = sample_bilinear(*io, ui.x(), ui.y()), ours = sample_bilinear(*oo, uo.x(), uo.y()), ideal = ideal_resample(*io, ui);
+      const int c = ratio[q] > 20;
+      for (int k = 0; k < 3; ++k)
+        if (channels & (1u << k)) {
+          const double d0 = std::lround(ours[size_t(k)]) - std::lround(exact[size_t(k)]),
+                       d1 = std::lround(ideal[size_t(k)]) - std::lround(exact[size_t(k)]);
+          se[c][0] += d0 * d0, se[c][1] += d1 * d1, n[c] += 1;
+        }
+    }
+    auto psnr = [](double e, double m) { return e > 0 && m > 0 ? 10 * std::log10(255.0 * 255.0 * m / e) : 99.0; };
+    std::printf("| %s | %.1f (%.1f) | %.1f (%.1f) | %.0f%% |\n", slot < 0 ? "base_colour" : map_slot_name(MapSlot(slot)),
+                psnr(se[1][0], n[1]), psnr(se[1][1], n[1]), psnr(se[0][0], n[0]), psnr(se[0][1], n[0]),
+                100 * se[1][0] / std::max(se[0][0] + se[1][0], 1e-300));
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   try {
     if (argc == 4 && std::string(argv[1]) == "compare") return compare(argv[2], argv[3]);
     if (argc == 4 && std::string(argv[1]) == "make-scan") return make_scan(argv[2], argv[3]);
+    if (argc == 3 && std::string(argv[1]) == "crushed") return crushed(argv[2]);
     if (argc >= 4 && argc <= 6 && std::string(argv[1]) == "make-orm-scan") {
       Creases c;
       if (argc >= 5) c.width = std::stod(argv[4]);
@@ -344,8 +422,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "tightex_map_eval: %s\n", e.what());
     return 2;
   }
-  std::fprintf(
-      stderr,
-      "usage: tightex_map_eval compare INPUT OUTPUT | make-scan DEMO.obj OUTDIR | make-orm-scan SCAN.obj OUTDIR [CREASE_TEXELS [DEPTH]]\n");
+  std::fprintf(stderr,
+               "usage: tightex_map_eval compare INPUT OUTPUT | make-scan DEMO.obj OUTDIR | make-orm-scan SCAN.obj OUTDIR [CREASE_TEXELS "
+               "[DEPTH]] | crushed INPUT\n");
   return 2;
 }
