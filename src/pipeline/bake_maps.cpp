@@ -460,31 +460,35 @@ bool step_pays(const ScaledBake& from, const ScaledBake& to, const Sizing& z) {
   return false;
 }
 
+/// Within a step from `from` to `to` (z.scales[last]) that reaches every target: the scale of
+/// z.scales[first, last) where the shortfall, interpolated over log2 of the texels, reaches 0 (rounded
+/// up), baked, if that reaches every target; else `to`.
+ScaledBake smallest_reaching(const TexturedMesh& input, const MapSource& map, const OutputModel& om, const Sizing& z,
+                             const BakeOptions& options, const ScaledBake& from, ScaledBake to, size_t first, size_t last) {
+  const double before = shortfall(from.errors, z), after = shortfall(to.errors, z);
+  const double lo = std::log2(texels_at(from.scale, z)), hi = std::log2(texels_at(to.scale, z));
+  const double want = lo + before / (before - after) * (hi - lo);
+  size_t j = first;
+  while (j < last && std::log2(texels_at(z.scales[j], z)) < want) ++j;
+  if (j == last) return to;
+  ScaledBake between = bake_at(input, map, om, z.scales[j], z, options);
+  return shortfall(between.errors, z) <= 0 ? std::move(between) : std::move(to);
+}
+
 /// `best` (the map at the base colour's size, short of its targets) baked larger while each step pays
 /// (step_pays), in steps that about double its texels (the smallest of z.scales with twice the texels,
-/// else the largest), stopping at the first step that reaches every target; within that step, at the
-/// smallest scale where the shortfall, interpolated over log2 of the texels, reaches 0, if that one is
-/// enough. Returns whether it grew.
+/// else the largest), stopping at the first step that reaches every target (smallest_reaching within
+/// it). Returns whether it grew.
 bool enlarge(const TexturedMesh& input, const MapSource& map, const OutputModel& om, const Sizing& z, const BakeOptions& options,
              ScaledBake& best) {
-  auto log_texels = [&](size_t i) { return std::log2(texels_at(z.scales[i], z)); };
   bool grew = false;
   for (size_t next = 0; next < z.scales.size();) {
     size_t i = next;
     while (i + 1 < z.scales.size() && texels_at(z.scales[i], z) < 2 * texels_at(best.scale, z)) ++i;
     ScaledBake step = bake_at(input, map, om, z.scales[i], z, options);
     if (!step_pays(best, step, z)) break;
-    const double before = shortfall(best.errors, z), after = shortfall(step.errors, z);
-    if (after <= 0) {
-      const double want =
-          std::log2(texels_at(best.scale, z)) + before / (before - after) * (log_texels(i) - std::log2(texels_at(best.scale, z)));
-      size_t j = next;
-      while (j < i && log_texels(j) < want) ++j;
-      if (j < i) {
-        ScaledBake between = bake_at(input, map, om, z.scales[j], z, options);
-        if (shortfall(between.errors, z) <= 0) step = std::move(between);
-      }
-      best = std::move(step);
+    if (shortfall(step.errors, z) <= 0) {
+      best = smallest_reaching(input, map, om, z, options, best, std::move(step), next, i);
       return true;
     }
     best = std::move(step), grew = true, next = i + 1;
