@@ -166,8 +166,8 @@ struct Options {
   bool fit = true;
   /// The fit on 4 x 4 points per texel instead of 2 x 2: a little higher PSNR, about twice the bake time.
   bool fine_fit = false;
-  /// Maps other than the base colour: a map below this surface PSNR (dB) at the base colour's size is
-  /// baked larger, one above it smaller while it stays there; 0: every map at the base colour's size.
+  /// Maps other than the base colour: a map short of its check is baked larger where its texels pay
+  /// for themselves, one at or above this PSNR (dB) smaller while it stays there; 0: all at the base colour's size.
   double map_budget_db = 51;
   /// Triangles with nothing to bake (no texture, no vertex colours) are written as they came; false:
   /// their colour is baked like any other (PLY has no material to keep it in).

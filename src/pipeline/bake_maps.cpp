@@ -2,9 +2,13 @@
 
 #include <tbb/parallel_for.h>
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
+#include <optional>
 #include <random>
 
 #include "core/image.hpp"
@@ -21,8 +25,12 @@ constexpr int kMaxReduction = 16;
 constexpr size_t kJudgePoints = 50000;
 constexpr uint64_t kJudgeSeed = 20240606;
 constexpr double kMaxReductionLossDb = 0.25;
-/// A map below Options::map_budget_db is baked larger only where that gains at least this much PSNR.
+/// A map below Options::map_budget_db is baked larger only by steps that gain at least this much PSNR
+/// on a slot short of its target (besides paying for their texels: step_pays).
 constexpr double kMinEnlargementGainDb = 0.25;
+/// The ideal re-sampler's grid is turned by this angle against the input's texels (BENCHMARKS.md, "Every
+/// map"), so that it is not the input's own grid.
+constexpr double kIdealRotation = 30.0 * M_PI / 180.0;
 
 /// The slots that read the same input textures the same way: one output map.
 struct MapGroup {
@@ -152,61 +160,147 @@ std::vector<JudgePoint> judge_points(const std::vector<BakeTriangle>& triangles,
   return points;
 }
 
-/// PSNR over `channels` of the output map `pages` (of any size: read back bilinearly at the point's new
-/// texture coordinates) against `reference` at the same points: the input's map through the input
-/// coordinates, or (`reference_pages` set) the full-size bake.
-double judged_psnr(const TexturedMesh& input, const MapSource& map, const std::vector<BakeTriangle>& triangles,
-                   const std::vector<JudgePoint>& points, const std::vector<Image>& pages, const std::vector<Image>* reference_pages,
-                   unsigned channels) {
-  double se = 0, n = 0;
+/// Squared 8-bit differences per channel (red, green, blue) summed over the judge points that count,
+/// and how many counted.
+struct ChannelErrors {
+  std::array<double, 3> se{0, 0, 0};
+  double points = 0;
+  /// Mean squared difference over `channels` (0 where nothing counted).
+  double mse(unsigned channels) const {
+    double sum = 0, n = 0;
+    for (int ch = 0; ch < 3; ++ch)
+      if (channels & (1u << ch)) sum += se[size_t(ch)], n += points;
+    return n > 0 ? sum / n : 0.0;
+  }
+  /// PSNR over `channels` (99 where nothing differs).
+  double psnr(unsigned channels) const {
+    const double m = mse(channels);
+    return m > 0 ? 10 * std::log10(255.0 * 255.0 / m) : 99.0;
+  }
+  void add(const std::array<float, 4>& out, const std::array<float, 4>& ref) {
+    for (size_t ch = 0; ch < 3; ++ch) {
+      const double d = double(std::lround(out[ch]) - std::lround(ref[ch]));
+      se[ch] += d * d;
+    }
+    points += 1;
+  }
+};
+
+/// Each page of `images`, by address.
+std::vector<const Image*> page_pointers(const std::vector<Image>& images) {
+  std::vector<const Image*> pages;
+  for (const Image& img : images) pages.push_back(&img);
+  return pages;
+}
+
+/// The input's map image that judge point p reads and its texture coordinates there, or nullptr.
+const Image* input_image_at(const TexturedMesh& input, const MapSource& map, const BakeTriangle& tri, const JudgePoint& p, Vec2& uv) {
+  const int tex =
+      tri.material >= 0 && size_t(tri.material) < map.texture_of_material.size() ? map.texture_of_material[size_t(tri.material)] : -1;
+  if (tex < 0 || input.textures[size_t(tex)].image.empty()) return nullptr;
+  uv = p.b[0] * tri.source_uv[0] + p.b[1] * tri.source_uv[1] + p.b[2] * tri.source_uv[2];
+  return &input.textures[size_t(tex)].image;
+}
+
+/// The errors of the output map `pages` (the pages `triangles` were laid out on, or those reduced by
+/// `reduction`: read back bilinearly at the point's new texture coordinates) against `reference` at the
+/// same points: the input's map through the input coordinates, or (`reference_pages` set) the
+/// full-size bake.
+ChannelErrors judged_errors(const TexturedMesh& input, const MapSource& map, const std::vector<BakeTriangle>& triangles,
+                            const std::vector<JudgePoint>& points, const std::vector<const Image*>& pages,
+                            const std::vector<const Image*>* reference_pages, int reduction = 1) {
+  ChannelErrors errors;
   for (const JudgePoint& p : points) {
     const BakeTriangle& tri = triangles[p.triangle];
     if (tri.image >= pages.size()) continue;
     const Vec2 px = p.b[0] * tri.target_px[0] + p.b[1] * tri.target_px[1] + p.b[2] * tri.target_px[2];
-    const Image& full_size = reference_pages ? (*reference_pages)[tri.image] : pages[tri.image];
-    const double u = px.x() / full_size.width, v = 1.0 - px.y() / full_size.height;
+    // Texture coordinates from the pixel coordinates of the page the triangles were laid out on.
+    const double u = px.x() / (double(pages[tri.image]->width) * reduction),
+                 v = 1.0 - px.y() / (double(pages[tri.image]->height) * reduction);
     std::array<float, 4> ref;
     if (reference_pages) {
-      ref = sample_bilinear(full_size, u, v);
+      ref = sample_bilinear(*(*reference_pages)[tri.image], u, v);
     } else {
-      const int tex =
-          tri.material >= 0 && size_t(tri.material) < map.texture_of_material.size() ? map.texture_of_material[size_t(tri.material)] : -1;
-      if (tex < 0 || input.textures[size_t(tex)].image.empty()) continue;
-      const Vec2 uv = p.b[0] * tri.source_uv[0] + p.b[1] * tri.source_uv[1] + p.b[2] * tri.source_uv[2];
-      ref = sample_bilinear(input.textures[size_t(tex)].image, uv.x(), uv.y());
+      Vec2 uv;
+      const Image* img = input_image_at(input, map, tri, p, uv);
+      if (!img) continue;
+      ref = sample_bilinear(*img, uv.x(), uv.y());
     }
-    const auto out = sample_bilinear(pages[tri.image], u, v);
-    for (int ch = 0; ch < 3; ++ch)
-      if (channels & (1u << ch)) {
-        const double d = double(std::lround(out[size_t(ch)]) - std::lround(ref[size_t(ch)]));
-        se += d * d, n += 1;
-      }
+    errors.add(sample_bilinear(*pages[tri.image], u, v), ref);
   }
-  return n > 0 && se > 0 ? 10 * std::log10(255.0 * 255.0 * n / se) : 99.0;
+  return errors;
+}
+
+/// The ideal re-sampler's value of `img` at uv: each new texel the box average of 4 x 4 bilinear samples
+/// over its footprint, on a grid rotated 30 degrees at the image's own texel density, rounded to 8 bits,
+/// read back bilinearly. The reference of the maps' check (BENCHMARKS.md, "Every map"); the evaluator,
+/// tools/map_eval.cpp, keeps its own copy so that it stays independent of what it checks.
+std::array<float, 4> ideal_resample(const Image& img, const Vec2& uv) {
+  const Eigen::Rotation2Dd rot(kIdealRotation);
+  const Vec2 q = rot.inverse() * Vec2(uv.x() * img.width, (1 - uv.y()) * img.height);  // rotated grid units
+  const double gx = q.x() - 0.5, gy = q.y() - 0.5;
+  const double fx = std::floor(gx), fy = std::floor(gy), tx = gx - fx, ty = gy - fy;
+  std::array<float, 4> out{0, 0, 0, 0};
+  for (int dj = 0; dj < 2; ++dj)
+    for (int di = 0; di < 2; ++di) {
+      const double w = (di ? tx : 1 - tx) * (dj ? ty : 1 - ty);
+      std::array<float, 4> texel{0, 0, 0, 0};
+      for (int b = 0; b < 4; ++b)
+        for (int a = 0; a < 4; ++a) {
+          const Vec2 x = rot * Vec2(fx + di + (a + 0.5) / 4, fy + dj + (b + 0.5) / 4);
+          const auto c = sample_bilinear(img, x.x() / img.width, 1 - x.y() / img.height);
+          for (size_t k = 0; k < 4; ++k) texel[k] += c[k] / 16;
+        }
+      for (size_t k = 0; k < 4; ++k) out[k] += float(w * std::round(texel[k]));
+    }
+  return out;
+}
+
+/// The ideal re-sampler's errors for `map` at the judge points, against the input's map read bilinearly.
+ChannelErrors ideal_errors(const TexturedMesh& input, const MapSource& map, const std::vector<BakeTriangle>& triangles,
+                           const std::vector<JudgePoint>& points) {
+  std::vector<std::array<float, 4>> ideal(points.size()), exact(points.size());
+  std::vector<uint8_t> counts(points.size(), 0);
+  tbb::parallel_for(size_t(0), points.size(), [&](size_t i) {
+    Vec2 uv;
+    const Image* img = input_image_at(input, map, triangles[points[i].triangle], points[i], uv);
+    if (!img) return;
+    ideal[i] = ideal_resample(*img, uv), exact[i] = sample_bilinear(*img, uv.x(), uv.y()), counts[i] = 1;
+  });
+  ChannelErrors errors;
+  for (size_t i = 0; i < points.size(); ++i)
+    if (counts[i]) errors.add(ideal[i], exact[i]);
+  return errors;
 }
 
 /// The largest reduction (a power of two up to kMaxReduction that divides every page's sides) at which
-/// the map, read back at the judge points, keeps at least `min_psnr_db` against the input or loses at
-/// most kMaxReductionLossDb against its full-size bake's PSNR `full_psnr`; a normal map (whose new
-/// texels are in another frame than the input's) against its full-size bake, at least `min_psnr_db`.
-/// Returns the reduction and its PSNR.
-std::pair<int, double> choose_reduction(const TexturedMesh& input, const MapSource& map, const std::vector<BakeTriangle>& triangles,
-                                        const std::vector<JudgePoint>& points, const std::vector<Image>& full, unsigned channels,
-                                        double full_psnr, double min_psnr_db) {
+/// each of the map's slots (`slot_channels`), read back at the judge points, keeps at least
+/// `min_psnr_db` against the input or loses at most kMaxReductionLossDb against its full-size bake's
+/// errors `full`; a normal map (whose new texels are in another frame than the input's) against its
+/// full-size bake, at least `min_psnr_db`. Returns the reduction and its errors.
+std::pair<int, ChannelErrors> choose_reduction(const TexturedMesh& input, const MapSource& map, const std::vector<BakeTriangle>& triangles,
+                                               const std::vector<JudgePoint>& points, const std::vector<Image>& full_pages,
+                                               const std::vector<unsigned>& slot_channels, const ChannelErrors& full, double min_psnr_db) {
   const bool normal = map.encoding == MapEncoding::kTangentNormal;
+  const std::vector<const Image*> full_size = page_pointers(full_pages);
   int chosen = 1;
-  double chosen_psnr = full_psnr;
+  ChannelErrors chosen_errors = full;
   for (int factor = 2; factor <= kMaxReduction; factor *= 2) {
     std::vector<Image> reduced;
-    for (const Image& page : full) {
-      if (page.width % factor != 0 || page.height % factor != 0) return {chosen, chosen_psnr};
+    for (const Image& page : full_pages) {
+      if (page.width % factor != 0 || page.height % factor != 0) return {chosen, chosen_errors};
       reduced.push_back(reduce_image(page, factor));
     }
-    const double psnr = judged_psnr(input, map, triangles, points, reduced, normal ? &full : nullptr, channels);
-    if (psnr < min_psnr_db && (normal || psnr < full_psnr - kMaxReductionLossDb)) break;
-    chosen = factor, chosen_psnr = psnr;
+    const ChannelErrors errors =
+        judged_errors(input, map, triangles, points, page_pointers(reduced), normal ? &full_size : nullptr, factor);
+    const bool kept = std::all_of(slot_channels.begin(), slot_channels.end(), [&](unsigned ch) {
+      const double psnr = errors.psnr(ch);
+      return psnr >= min_psnr_db || (!normal && psnr >= full.psnr(ch) - kMaxReductionLossDb);
+    });
+    if (!kept) break;
+    chosen = factor, chosen_errors = errors;
   }
-  return {chosen, chosen_psnr};
+  return {chosen, chosen_errors};
 }
 
 /// A map's side over the base colour's: num / den (den divides every page's sides, so that the same
@@ -269,7 +363,136 @@ std::vector<Image> blank_pages(const OutputModel& om, MapScale scale) {
   return images;
 }
 
-/// A map baked and sized: its pages, its scale (one of them 1) and PSNR at the judge points.
+/// The base colour's figures at the judge points, against which the other maps are sized.
+struct BaseColour {
+  ChannelErrors baked, ideal;  // the new pages', and the ideal re-sampler's, against the input
+  double texels = 0;           // the new pages' texels
+  /// The squared error (per channel, in 8-bit levels squared) that the base colour's last texels remove,
+  /// per texel: its mean squared error at half its side (box-filtered) less that at its size, over the
+  /// three quarters of its texels that halving takes away. 0 where a page side is odd.
+  double mse_per_texel = 0;
+};
+
+BaseColour base_colour_figures(const TexturedMesh& input, const OutputModel& om, const std::vector<JudgePoint>& points) {
+  MapSource colour;
+  for (const Material& m : input.materials) colour.texture_of_material.push_back(m.texture);
+  BaseColour b;
+  std::vector<const Image*> pages;
+  bool even = true;
+  for (int p = 0; p < om.new_images; ++p) {
+    const Image& page = om.mesh.textures[size_t(p)].image;
+    pages.push_back(&page);
+    b.texels += double(page.width) * page.height;
+    even = even && page.width % 2 == 0 && page.height % 2 == 0;
+  }
+  b.baked = judged_errors(input, colour, om.bake_triangles, points, pages, nullptr);
+  b.ideal = ideal_errors(input, colour, om.bake_triangles, points);
+  if (!even || !(b.texels > 0)) return b;
+  std::vector<Image> halved;
+  for (const Image* page : pages) halved.push_back(reduce_image(*page, 2));
+  const ChannelErrors half = judged_errors(input, colour, om.bake_triangles, points, page_pointers(halved), nullptr, 2);
+  b.mse_per_texel = std::max(0.0, half.mse(7u) - b.baked.mse(7u)) / (0.75 * b.texels);
+  return b;
+}
+
+/// What sizing one map needs: its judge points, its slots (the channels each reads) and the PSNR each
+/// slot's check asks (slot_targets), the larger scales it may take, and the base colour's figures.
+struct Sizing {
+  const std::vector<JudgePoint>& points;
+  std::vector<unsigned> slot_channels;
+  std::vector<double> targets;
+  std::vector<MapScale> scales;
+  const BaseColour* base = nullptr;
+};
+
+/// Per slot: the PSNR its check asks at the judge points (BENCHMARKS.md, "Every map"): the base
+/// colour's, plus the difference that the ideal re-sampler leaves between the slot and the base colour
+/// (what a re-sampling at the input's own density keeps of each); at most `budget_db`.
+std::vector<double> slot_targets(const BaseColour& base, const ChannelErrors& map_ideal, const std::vector<unsigned>& slot_channels,
+                                 double budget_db) {
+  std::vector<double> targets;
+  for (unsigned ch : slot_channels) targets.push_back(std::min(budget_db, base.baked.psnr(7u) + map_ideal.psnr(ch) - base.ideal.psnr(7u)));
+  return targets;
+}
+
+/// How far the map with `errors` falls short of its slots' targets: the largest target less PSNR (dB);
+/// at most 0 where every slot reaches its target.
+double shortfall(const ChannelErrors& errors, const Sizing& z) {
+  double worst = -99;
+  for (size_t s = 0; s < z.slot_channels.size(); ++s) worst = std::max(worst, z.targets[s] - errors.psnr(z.slot_channels[s]));
+  return worst;
+}
+
+/// A map baked at `scale` of the base colour's pages, and its errors at the judge points.
+struct ScaledBake {
+  std::vector<Image> pages;
+  MapScale scale;
+  ChannelErrors errors;
+};
+
+ScaledBake bake_at(const TexturedMesh& input, const MapSource& map, const OutputModel& om, MapScale scale, const Sizing& z,
+                   const BakeOptions& options) {
+  auto [triangles, rects] = scaled_layout(om, scale);
+  ScaledBake b{blank_pages(om, scale), scale, {}};
+  bake_map(input, map, triangles, rects, b.pages, nullptr, options);
+  b.errors = judged_errors(input, map, triangles, z.points, page_pointers(b.pages), nullptr);
+  return b;
+}
+
+/// The texels of a map at `scale` of the base colour's pages.
+double texels_at(MapScale scale, const Sizing& z) { return scale.value() * scale.value() * z.base->texels; }
+
+/// Whether growing the map from `from` to `to` pays for its texels: for some slot still short of its
+/// target, the step gains at least kMinEnlargementGainDb and removes at least as much squared error per
+/// added texel as the base colour's last texels remove (BaseColour::mse_per_texel).
+bool step_pays(const ScaledBake& from, const ScaledBake& to, const Sizing& z) {
+  const double added = texels_at(to.scale, z) - texels_at(from.scale, z);
+  for (size_t s = 0; s < z.slot_channels.size(); ++s) {
+    const unsigned ch = z.slot_channels[s];
+    if (from.errors.psnr(ch) >= z.targets[s] || to.errors.psnr(ch) < from.errors.psnr(ch) + kMinEnlargementGainDb) continue;
+    if ((from.errors.mse(ch) - to.errors.mse(ch)) / added >= z.base->mse_per_texel) return true;
+  }
+  return false;
+}
+
+/// Within a step from `from` to `to` (z.scales[last]) that reaches every target: the scale of
+/// z.scales[first, last) where the shortfall, interpolated over log2 of the texels, reaches 0 (rounded
+/// up), baked, if that reaches every target; else `to`.
+ScaledBake smallest_reaching(const TexturedMesh& input, const MapSource& map, const OutputModel& om, const Sizing& z,
+                             const BakeOptions& options, const ScaledBake& from, ScaledBake to, size_t first, size_t last) {
+  const double before = shortfall(from.errors, z), after = shortfall(to.errors, z);
+  const double lo = std::log2(texels_at(from.scale, z)), hi = std::log2(texels_at(to.scale, z));
+  const double want = lo + before / (before - after) * (hi - lo);
+  size_t j = first;
+  while (j < last && std::log2(texels_at(z.scales[j], z)) < want) ++j;
+  if (j == last) return to;
+  ScaledBake between = bake_at(input, map, om, z.scales[j], z, options);
+  return shortfall(between.errors, z) <= 0 ? std::move(between) : std::move(to);
+}
+
+/// `best` (the map at the base colour's size, short of its targets) baked larger while each step pays
+/// (step_pays), in steps that about double its texels (the smallest of z.scales with twice the texels,
+/// else the largest), stopping at the first step that reaches every target (smallest_reaching within
+/// it). Returns whether it grew.
+bool enlarge(const TexturedMesh& input, const MapSource& map, const OutputModel& om, const Sizing& z, const BakeOptions& options,
+             ScaledBake& best) {
+  bool grew = false;
+  for (size_t next = 0; next < z.scales.size();) {
+    size_t i = next;
+    while (i + 1 < z.scales.size() && texels_at(z.scales[i], z) < 2 * texels_at(best.scale, z)) ++i;
+    ScaledBake step = bake_at(input, map, om, z.scales[i], z, options);
+    if (!step_pays(best, step, z)) break;
+    if (shortfall(step.errors, z) <= 0) {
+      best = smallest_reaching(input, map, om, z, options, best, std::move(step), next, i);
+      return true;
+    }
+    best = std::move(step), grew = true, next = i + 1;
+  }
+  return grew;
+}
+
+/// A map baked and sized: its pages, its scale (one of them 1) and the PSNR of its worst slot at the
+/// judge points.
 struct SizedMap {
   std::vector<Image> pages;
   MapScale enlarged;
@@ -277,45 +500,36 @@ struct SizedMap {
   double psnr = 99;
 };
 
-/// The map baked at the base colour's size, then sized by `sizing`'s map_budget_db: below it, baked again larger (enlargements) at the
-/// smallest scale that reaches it, or the largest one when none does, provided that gains at least kMinEnlargementGainDb; otherwise reduced
-/// as far as choose_reduction allows. A normal map (judged against its own full-size bake) is never enlarged, nor any map under a budget
-/// the caller chose (TextureBudget::is_default); no page side grows beyond sizing.max_page_side.
-SizedMap bake_sized_map(const TexturedMesh& input, const MapSource& map, const OutputModel& om, unsigned channels, const Options& sizing,
-                        const BakeOptions& options) {
+/// The map baked at the base colour's size, then sized by `sizing`'s map_budget_db. Where some slot is
+/// below it and the budget is tightex's own (TextureBudget::is_default), the map is baked larger (enlarge) while
+/// some slot falls short of what its check asks (slot_targets) and the added texels pay for themselves
+/// (step_pays), within its input images' texels (enlargements); otherwise it is reduced as far as
+/// choose_reduction allows. A normal map (judged against its own full-size bake) is never enlarged.
+/// `base` gives the base colour's figures (computed once, on first use).
+SizedMap bake_sized_map(const TexturedMesh& input, const MapSource& map, const OutputModel& om, const std::vector<unsigned>& slot_channels,
+                        const Options& sizing, const BakeOptions& options, const std::vector<JudgePoint>& points,
+                        const std::function<const BaseColour&()>& base) {
   const double min_psnr_db = sizing.map_budget_db;
-  SizedMap best;
-  best.pages = blank_pages(om, {});
+  ScaledBake best{blank_pages(om, {}), {}, {}};
   bake_map(input, map, om.bake_triangles, om.rects, best.pages, nullptr, options);
-  if (!(min_psnr_db > 0)) return best;
-  const std::vector<JudgePoint> points = judge_points(om.bake_triangles, kJudgePoints);
+  if (!(min_psnr_db > 0)) return {std::move(best.pages), {}, 1, 99};
   const bool normal = map.encoding == MapEncoding::kTangentNormal;
-  best.psnr = normal ? 99.0 : judged_psnr(input, map, om.bake_triangles, points, best.pages, nullptr, channels);
-  const std::vector<MapScale> scales = normal || best.psnr >= min_psnr_db || !om.budget_is_default
-                                           ? std::vector<MapScale>{}
-                                           : enlargements(input, map, om, sizing.max_page_side);
-  // Binary search over the scales for the smallest that reaches the budget, starting from the largest.
-  size_t lo = 0, hi = scales.size();  // scales below lo were not enough; scales[hi] (if any) is enough
-  const double gained_floor = best.psnr + kMinEnlargementGainDb;
-  bool largest = true;
-  while (lo < hi) {
-    const size_t mid = largest ? hi - 1 : (lo + hi) / 2;
-    auto [triangles, rects] = scaled_layout(om, scales[mid]);
-    std::vector<Image> pages = blank_pages(om, scales[mid]);
-    bake_map(input, map, triangles, rects, pages, nullptr, options);
-    const double psnr = judged_psnr(input, map, triangles, points, pages, nullptr, channels);
-    if (largest && psnr < gained_floor) break;  // more texels do not help this map
-    if (largest || psnr >= min_psnr_db) best = {std::move(pages), scales[mid], 1, psnr};
-    if (psnr >= min_psnr_db)
-      hi = mid;
-    else
-      lo = mid + 1;
-    largest = false;
+  if (!normal) best.errors = judged_errors(input, map, om.bake_triangles, points, page_pointers(best.pages), nullptr);
+  const bool below =
+      std::any_of(slot_channels.begin(), slot_channels.end(), [&](unsigned ch) { return best.errors.psnr(ch) < min_psnr_db; });
+  bool grew = false;
+  if (!normal && below && om.budget_is_default) {
+    Sizing z{points, slot_channels, {}, enlargements(input, map, om, sizing.max_page_side), &base()};
+    z.targets = slot_targets(*z.base, ideal_errors(input, map, om.bake_triangles, points), slot_channels, min_psnr_db);
+    if (shortfall(best.errors, z) > 0) grew = enlarge(input, map, om, z, options, best);
   }
-  if (best.enlarged.num != best.enlarged.den) return best;
-  std::tie(best.reduction, best.psnr) =
-      choose_reduction(input, map, om.bake_triangles, points, best.pages, channels, best.psnr, min_psnr_db);
-  return best;
+  SizedMap sized{std::move(best.pages), best.scale, 1, 99};
+  ChannelErrors errors = best.errors;
+  if (!grew)
+    std::tie(sized.reduction, errors) =
+        choose_reduction(input, map, om.bake_triangles, points, sized.pages, slot_channels, errors, min_psnr_db);
+  for (unsigned ch : slot_channels) sized.psnr = std::min(sized.psnr, normal ? 99.0 : errors.psnr(ch));
+  return sized;
 }
 
 }  // namespace
@@ -334,6 +548,14 @@ std::vector<MapEntry> bake_other_maps(const TexturedMesh& input, const Options& 
   BakeOptions bo;
   bo.fit = options.fit;
   if (options.fine_fit) bo.fit_samples = kFineFitSamples, bo.fit_lambda = kFineFitLambda;
+  // The judge points and the base colour's figures are shared by every map that is sized.
+  const std::vector<JudgePoint> points =
+      options.map_budget_db > 0 && !groups.empty() ? judge_points(om.bake_triangles, kJudgePoints) : std::vector<JudgePoint>{};
+  std::optional<BaseColour> base;
+  const std::function<const BaseColour&()> base_colour = [&]() -> const BaseColour& {
+    if (!base) base = base_colour_figures(input, om, points);
+    return *base;
+  };
   std::vector<MapEntry> entries;
   for (MapGroup& g : groups) {
     const auto start = std::chrono::steady_clock::now();
@@ -343,9 +565,9 @@ std::vector<MapEntry> bake_other_maps(const TexturedMesh& input, const Options& 
     // a frame that turns across the texel; without it the angles are about as good, at a fraction of
     // the time (measured in BENCHMARKS.md, "Every map").
     if (g.source.encoding == MapEncoding::kTangentNormal) map_options.fit = false;
-    unsigned channels = 0;
-    for (MapSlot s : g.slots) channels |= map_slot_channels(s);
-    SizedMap sized = bake_sized_map(input, g.source, om, channels, options, map_options);
+    std::vector<unsigned> slot_channels;
+    for (MapSlot s : g.slots) slot_channels.push_back(map_slot_channels(s));
+    SizedMap sized = bake_sized_map(input, g.source, om, slot_channels, options, map_options, points, base_colour);
     MapEntry entry;
     entry.name = map_slot_name(g.slots[0]);
     for (MapSlot s : g.slots) entry.slots.push_back(map_slot_name(s));
