@@ -70,7 +70,7 @@ TEST(GltfReader, ReadsTheHandBuiltGlbOnceInLocalSpace) {
   ASSERT_EQ(m.textures.size(), 2u);  // the base colour, then the normal map (another slot)
   EXPECT_EQ(m.textures[0].image.width, 16);
   EXPECT_EQ(m.materials[0].texture, 0);
-  EXPECT_EQ(m.materials[0].maps[size_t(MapSlot::kNormal)], 1);
+  EXPECT_EQ(m.materials[0].maps[size_t(MaterialSlot::kNormal)], 1);
   ASSERT_EQ(stats.not_read.size(), 1u);
   EXPECT_NE(stats.not_read[0].find("meshes[0].primitives[1] (points)"), std::string::npos);
   ASSERT_NE(m.gltf, nullptr);
@@ -577,15 +577,15 @@ TEST(GltfRealData, KhronosGlbModelsGiveGlbs) {
     // Every map slot of the input, in the output; normals through both TANGENTs.
     EXPECT_EQ(back.corner_tangent.size(), 3 * back.num_triangles()) << model;
     size_t normal_maps = 0;
-    for (const MapFigures& f : m.maps) {
-      if (f.slot != MapSlot::kNormal) continue;
+    for (const MaterialMapFigures& f : m.maps) {
+      if (f.slot != MaterialSlot::kNormal) continue;
       ++normal_maps;
       EXPECT_LT(f.angle_median, 2.0) << model;
       EXPECT_LT(f.angle_p95, 8.0) << model;
     }
     EXPECT_EQ(normal_maps, 1u) << model;
-    for (size_t s = 0; s < kMapSlots; ++s)
-      EXPECT_EQ(in.materials[0].maps[s] >= 0, back.materials[0].maps[s] >= 0) << model << " " << map_slot_name(MapSlot(s));
+    for (size_t s = 0; s < kMaterialSlots; ++s)
+      EXPECT_EQ(in.materials[0].maps[s] >= 0, back.materials[0].maps[s] >= 0) << model << " " << material_slot_name(MaterialSlot(s));
     expect_valid_and_loading(out / (input.stem().string() + ".glb"), in.num_triangles());
   }
 }

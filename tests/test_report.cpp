@@ -126,7 +126,7 @@ TEST(Report, HasEveryKeyOfTheSchema) {
   EXPECT_EQ(keys_of(j["input"]), (std::set<std::string>{"file", "vertices", "triangles", "materials", "textures",
                                                          "polygons_triangulated", "paths_found", "vertex_coloured_triangles"}));
   EXPECT_EQ(keys_of(j["options"]), (std::set<std::string>{"size", "size_grown_from", "layout", "holes", "map", "balance", "fit",
-                                                           "fine_fit", "corners", "aspect", "map_budget_db"}));
+                                                           "fine_fit", "corners", "aspect", "material_map_budget_db"}));
   EXPECT_EQ(keys_of(j["aspect"]), (std::set<std::string>{"requested", "chosen", "probed_component", "probes", "square_texel_stretch"}));
   EXPECT_EQ(keys_of(j["pages"]), (std::set<std::string>{"max_side", "max_piece_faces", "count", "components_split", "pieces", "reason"}));
   EXPECT_EQ(keys_of(j["aspect"]["probes"][0]),

@@ -87,8 +87,8 @@ struct IdealFigures {
 /// The ideal re-sampler's PSNR of slot (-1: base colour) over its channels, or for a normal map its
 /// angular error, at kSamples area-weighted points of the input.
 IdealFigures ideal_figures(const TexturedMesh& in, int slot) {
-  const bool normal = slot >= 0 && map_encoding(MapSlot(slot)) == MapEncoding::kTangentNormal;
-  const unsigned channels = slot < 0 ? 7u : map_slot_channels(MapSlot(slot));
+  const bool normal = slot >= 0 && slot_encoding(MaterialSlot(slot)) == SlotEncoding::kTangentNormal;
+  const unsigned channels = slot < 0 ? 7u : material_slot_channels(MaterialSlot(slot));
   const std::vector<Eigen::Vector4d> tg = normal ? completed_corner_tangents(in) : std::vector<Eigen::Vector4d>{};
   std::vector<double> cdf(in.num_triangles());
   double acc = 0;
@@ -215,8 +215,8 @@ int make_scan(const std::string& demo_obj, const std::string& outdir) {
                     v[1] = {q(e.x()), q(e.y()), q(e.z()), 255};
                   });
   for (Material& mat : m.materials) {
-    mat.maps[size_t(MapSlot::kMetallicRoughness)] = int(m.textures.size());
-    mat.maps[size_t(MapSlot::kNormal)] = int(m.textures.size()) + 1;
+    mat.maps[size_t(MaterialSlot::kMetallicRoughness)] = int(m.textures.size());
+    mat.maps[size_t(MaterialSlot::kNormal)] = int(m.textures.size()) + 1;
   }
   m.textures.push_back(Texture{"scan_pbr_metallic_roughness", std::move(maps[0][0])});
   m.textures.push_back(Texture{"scan_pbr_normal", std::move(maps[0][1])});
@@ -287,7 +287,7 @@ int make_orm_scan(const std::string& obj, const std::string& outdir, Creases cre
   }
   for (Material& mat : m.materials)
     if (mat.texture >= 0 && orm_of[size_t(mat.texture)] >= 0)
-      mat.maps[size_t(MapSlot::kOcclusion)] = mat.maps[size_t(MapSlot::kMetallicRoughness)] = orm_of[size_t(mat.texture)];
+      mat.maps[size_t(MaterialSlot::kOcclusion)] = mat.maps[size_t(MaterialSlot::kMetallicRoughness)] = orm_of[size_t(mat.texture)];
   m.source = "scan_orm.obj";
   std::filesystem::create_directories(outdir);
   write_gltf(m, outdir, "scan_orm", ImageFormat::kPng, GltfContainer::kGlb);
@@ -303,19 +303,19 @@ int compare(const std::string& input_path, const std::string& output_path) {
   std::printf("| %s | base_colour | %.1f | 0 | %.1f | 0 | | lost %zu, flipped %zu |\n", model.c_str(), ideal_base, m.surface_psnr,
               m.lost_triangles, m.flipped);
   bool ok = m.lost_triangles == 0 && m.flipped == 0;
-  for (size_t s = 0; s < kMapSlots; ++s) {
+  for (size_t s = 0; s < kMaterialSlots; ++s) {
     bool in_has = false;
     for (const Material& mat : in.materials) in_has |= mat.maps[s] >= 0;
     if (!in_has) continue;
-    const auto f = std::find_if(m.maps.begin(), m.maps.end(), [&](const MapFigures& x) { return size_t(x.slot) == s; });
-    const char* name = map_slot_name(MapSlot(s));
+    const auto f = std::find_if(m.maps.begin(), m.maps.end(), [&](const MaterialMapFigures& x) { return size_t(x.slot) == s; });
+    const char* name = material_slot_name(MaterialSlot(s));
     if (f == m.maps.end()) {
       std::printf("| %s | %s | | | lost | | | FAIL |\n", model.c_str(), name);
       ok = false;
       continue;
     }
     const IdealFigures ideal = ideal_figures(in, int(s));
-    if (map_encoding(MapSlot(s)) == MapEncoding::kTangentNormal) {
+    if (slot_encoding(MaterialSlot(s)) == SlotEncoding::kTangentNormal) {
       const bool pass = f->angle_median < 2 && f->angle_p95 < 8;
       std::printf("| %s | %s (angle median / P95, deg) | %.2f / %.2f | | %.2f / %.2f | | %s |\n", model.c_str(), name, ideal.median,
                   ideal.p95, f->angle_median, f->angle_p95, pass ? "pass" : "FAIL");
@@ -351,14 +351,14 @@ int input_corner_of(const TexturedMesh& in, const TexturedMesh& out, size_t t, s
   return k;
 }
 
-/// `crushed INPUT`: tightex's default run, every map at the base colour's size (--map-budget 0), and
+/// `crushed INPUT`: tightex's default run, every map at the base colour's size (--material-map-budget 0), and
 /// where each map's error sits: at kSamples area-weighted points of the output, squared error split
 /// between the triangles whose texture coordinates are crushed more than 20:1 (anisotropy) and the
 /// rest, tightex's and the ideal re-sampler's, per slot over its channels.
 int crushed(const std::string& input_path) {
   const TexturedMesh in = read_model(input_path);
   Options o;
-  o.map_budget_db = 0, o.measure = false;  // size 0: the default budget
+  o.material_map_budget_db = 0, o.measure = false;  // size 0: the default budget
   const TexturedMesh out = optimize(in, o).output;
   std::vector<double> cdf(out.num_triangles()), ratio(out.num_triangles());
   double acc = 0, crushed_area = 0;
@@ -369,11 +369,11 @@ int crushed(const std::string& input_path) {
   }
   std::printf("%s: output triangles crushed more than 20:1: %.2f%% of the area\n", input_path.c_str(), 100 * crushed_area / acc);
   std::printf("| slot | PSNR crushed (ideal) | PSNR rest (ideal) | crushed share of the squared error |\n");
-  for (int slot = -1; slot < int(kMapSlots); ++slot) {
+  for (int slot = -1; slot < int(kMaterialSlots); ++slot) {
     bool bound = slot < 0;
     for (const Material& mat : in.materials) bound |= slot >= 0 && mat.maps[size_t(slot)] >= 0;
-    if (!bound || (slot >= 0 && map_encoding(MapSlot(slot)) == MapEncoding::kTangentNormal)) continue;
-    const unsigned channels = slot < 0 ? 7u : map_slot_channels(MapSlot(slot));
+    if (!bound || (slot >= 0 && slot_encoding(MaterialSlot(slot)) == SlotEncoding::kTangentNormal)) continue;
+    const unsigned channels = slot < 0 ? 7u : material_slot_channels(MaterialSlot(slot));
     double se[2][2] = {{0, 0}, {0, 0}}, n[2] = {0, 0};  // [crushed][ours, ideal]
     std::mt19937_64 rng(kSeed);
     std::uniform_real_distribution<double> uni(0.0, 1.0);
@@ -398,7 +398,7 @@ int crushed(const std::string& input_path) {
         }
     }
     auto psnr = [](double e, double m) { return e > 0 && m > 0 ? 10 * std::log10(255.0 * 255.0 * m / e) : 99.0; };
-    std::printf("| %s | %.1f (%.1f) | %.1f (%.1f) | %.0f%% |\n", slot < 0 ? "base_colour" : map_slot_name(MapSlot(slot)),
+    std::printf("| %s | %.1f (%.1f) | %.1f (%.1f) | %.0f%% |\n", slot < 0 ? "base_colour" : material_slot_name(MaterialSlot(slot)),
                 psnr(se[1][0], n[1]), psnr(se[1][1], n[1]), psnr(se[0][0], n[0]), psnr(se[0][1], n[0]),
                 100 * se[1][0] / std::max(se[0][0] + se[1][0], 1e-300));
   }

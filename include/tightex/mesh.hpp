@@ -23,20 +23,20 @@ constexpr uint32_t kNone = UINT32_MAX;
 /// the same texture coordinates. glTF: metallic-roughness (G roughness, B metallic), occlusion (R),
 /// emissive, normal (tangent space); OBJ: map_Ks, map_Ke, map_Pr, map_Pm, norm (tangent space) and
 /// map_Bump / bump (a height map, baked as data).
-enum class MapSlot : uint8_t { kMetallicRoughness, kOcclusion, kEmissive, kNormal, kSpecular, kRoughness, kMetallic, kBump };
-constexpr size_t kMapSlots = 8;
+enum class MaterialSlot : uint8_t { kMetallicRoughness, kOcclusion, kEmissive, kNormal, kSpecular, kRoughness, kMetallic, kBump };
+constexpr size_t kMaterialSlots = 8;
 
 /// How a map's texels are filtered: colour maps in linear light (sRGB decoded, filtered, re-encoded),
 /// data maps as stored, tangent-space normal maps through the tangent frames (decoded to object space,
 /// filtered there, encoded in the output's frame).
-enum class MapEncoding : uint8_t { kSrgbColour, kData, kTangentNormal };
+enum class SlotEncoding : uint8_t { kSrgbColour, kData, kTangentNormal };
 
 /// Each slot's encoding, and its name in reports ("metallic_roughness", "occlusion", ...).
-MapEncoding map_encoding(MapSlot slot);
-const char* map_slot_name(MapSlot slot);
+SlotEncoding slot_encoding(MaterialSlot slot);
+const char* material_slot_name(MaterialSlot slot);
 /// The channels a renderer reads from a slot's image: bit 0 red, 1 green, 2 blue (metallic-roughness
 /// green and blue, occlusion and the OBJ scalar maps red, the others all three).
-unsigned map_slot_channels(MapSlot slot);
+unsigned material_slot_channels(MaterialSlot slot);
 
 /// One material: a name, a constant diffuse colour and optionally a diffuse texture image.
 struct Material {
@@ -45,9 +45,9 @@ struct Material {
   int texture = -1;                           // index into TexturedMesh::textures, -1 = constant colour
   std::array<double, 2> uv_scale{1.0, 1.0};   // map_Kd -s
   std::array<double, 2> uv_offset{0.0, 0.0};  // map_Kd -o
-  /// Per MapSlot: index into TexturedMesh::textures, -1 = not bound. A map is sampled at the same
+  /// Per MaterialSlot: index into TexturedMesh::textures, -1 = not bound. A map is sampled at the same
   /// (transformed) texture coordinates as `texture`. One image bound to two slots is one texture.
-  std::array<int, kMapSlots> maps{-1, -1, -1, -1, -1, -1, -1, -1};
+  std::array<int, kMaterialSlots> maps{-1, -1, -1, -1, -1, -1, -1, -1};
 };
 
 /// A texture image and the path it came from (or will be written to).

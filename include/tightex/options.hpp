@@ -168,7 +168,7 @@ struct Options {
   bool fine_fit = false;
   /// Maps other than the base colour: a map short of its check is baked larger where its texels pay
   /// for themselves, one at or above this PSNR (dB) smaller while it stays there; 0: all at the base colour's size.
-  double map_budget_db = 51;
+  double material_map_budget_db = 51;
   /// Triangles with nothing to bake (no texture, no vertex colours) are written as they came; false:
   /// their colour is baked like any other (PLY has no material to keep it in).
   bool keep_untextured = true;

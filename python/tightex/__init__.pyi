@@ -28,7 +28,7 @@ class Options:
     corners: Literal["arcs", "turning"] = "arcs"
     fit: bool = True
     fine_fit: bool = False
-    map_budget_db: float = 51.0
+    material_map_budget_db: float = 51.0
     keep_untextured: bool = True
     measure: bool = True
     max_memory_mib: float = 0.0

@@ -69,14 +69,14 @@ Samplers make_samplers(const TexturedMesh& input, const std::vector<BakeTriangle
     }
     smp.init(tri, src, flat);
     smp.corner_samples = from_vertex_colours;
-    if (linear_light) smp.encoding = MapEncoding::kSrgbColour;
+    if (linear_light) smp.encoding = SlotEncoding::kSrgbColour;
   });
   return samplers;
 }
 
 /// The sampler of every triangle for `map`: its material's texture for the map where it has one with
 /// pixels, else the map's flat value; with the map's encoding and the triangle's frames.
-Samplers make_map_samplers(const TexturedMesh& input, const MapSource& map, const std::vector<BakeTriangle>& triangles) {
+Samplers make_map_samplers(const TexturedMesh& input, const MaterialMapSource& map, const std::vector<BakeTriangle>& triangles) {
   Samplers samplers(triangles.size());  // constructed below
   tbb::parallel_for(size_t(0), triangles.size(), [&](size_t t) {
     const BakeTriangle& tri = triangles[t];
@@ -88,7 +88,7 @@ Samplers make_map_samplers(const TexturedMesh& input, const MapSource& map, cons
     }
     smp.init(tri, src, map.flat);
     smp.encoding = map.encoding;
-    if (map.encoding == MapEncoding::kTangentNormal) smp.frames = &(*map.frames)[t];
+    if (map.encoding == SlotEncoding::kTangentNormal) smp.frames = &(*map.frames)[t];
   });
   return samplers;
 }
@@ -167,7 +167,7 @@ void scan_convert_triangle(const BakeTriangle& tri, const TriangleSampler& smp, 
   scan_triangle(tri.target_px[0], tri.target_px[1], tri.target_px[2], tile.x0, tile.x1, tile.y0, tile.y1, EdgeRule::kInclusive,
                 [&](long x, long y, double w0, double w1, double w2) {
                   Rgba8 c = smp.flat;
-                  if (smp.src && (smp.encoding != MapEncoding::kData || smp.frames)) {
+                  if (smp.src && (smp.encoding != SlotEncoding::kData || smp.frames)) {
                     if (smp.valid) c = to_rgba(smp.footprint_colour(double(x) + 0.5, double(y) + 0.5, 1.0, max_samples));
                     counts.filtered += minified && smp.valid;
                   } else if (smp.src) {
@@ -326,10 +326,10 @@ void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& tr
   bake_with_samplers(make_samplers(input, triangles, options.linear_light_colour), triangles, rects, images, stats, options);
 }
 
-void bake_map(const TexturedMesh& input, const MapSource& map, const std::vector<BakeTriangle>& triangles, const std::vector<Rect>& rects,
+void bake_material_map(const TexturedMesh& input, const MaterialMapSource& map, const std::vector<BakeTriangle>& triangles, const std::vector<Rect>& rects,
               std::vector<Image>& images, BakeStats* stats, const BakeOptions& options) {
-  if (map.encoding == MapEncoding::kTangentNormal && (!map.frames || map.frames->size() != triangles.size()))
-    fail_internal("bake_map: a normal map needs one frame per triangle ({} for {})", map.frames ? map.frames->size() : 0, triangles.size());
+  if (map.encoding == SlotEncoding::kTangentNormal && (!map.frames || map.frames->size() != triangles.size()))
+    fail_internal("bake_material_map: a normal map needs one frame per triangle ({} for {})", map.frames ? map.frames->size() : 0, triangles.size());
   bake_with_samplers(make_map_samplers(input, map, triangles), triangles, rects, images, stats, options);
 }
 

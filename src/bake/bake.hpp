@@ -35,10 +35,10 @@ struct NormalFrames {
   std::array<CornerFrame, 3> input, output;
 };
 
-/// Which of the input's maps a bake reads (bake_map): per input material its texture for the map, and
-/// how the texels are filtered (MapEncoding).
-struct MapSource {
-  MapEncoding encoding = MapEncoding::kData;
+/// Which of the input's maps a bake reads (bake_material_map): per input material its texture for the map, and
+/// how the texels are filtered (SlotEncoding).
+struct MaterialMapSource {
+  SlotEncoding encoding = SlotEncoding::kData;
   std::vector<int> texture_of_material;  // per input material: index into input.textures, -1: `flat`
   Rgba8 flat{255, 255, 255, 255};        // the value of a triangle without the map (or without a material)
   /// kTangentNormal: one per bake triangle (the same order). Required then.
@@ -73,7 +73,7 @@ struct BakeOptions {
   /// weaker pull over-fits the sample points of each texel; a stronger one gives the fit away. Chosen
   /// by measurement (docs/decisions.md).
   double fit_lambda = 1.0;
-  /// bake_texture only: the base colour filtered in linear light, as bake_map filters a kSrgbColour
+  /// bake_texture only: the base colour filtered in linear light, as bake_material_map filters a kSrgbColour
   /// map (no public option sets it: docs/decisions.md, "Bake and output"); off: as stored.
   bool linear_light_colour = false;
 };
@@ -117,7 +117,7 @@ void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& tr
 /// Requires: as bake_texture, and map.texture_of_material has one entry per input material; with
 /// kTangentNormal, map.frames has one entry per triangle.
 /// Guarantees and throws: as bake_texture.
-void bake_map(const TexturedMesh& input, const MapSource& map, const std::vector<BakeTriangle>& triangles, const std::vector<Rect>& rects,
+void bake_material_map(const TexturedMesh& input, const MaterialMapSource& map, const std::vector<BakeTriangle>& triangles, const std::vector<Rect>& rects,
               std::vector<Image>& images, BakeStats* stats, const BakeOptions& options = {});
 
 }  // namespace tightex

@@ -36,8 +36,8 @@ struct TriangleSampler {
   /// the fit also samples the corners, so that the output reproduces each vertex's colour there.
   bool corner_samples = false;
   std::array<Vec2, 3> corner_uv;
-  /// How the texels are filtered (bake_map); kData without `frames` is the base colour's plain path.
-  MapEncoding encoding = MapEncoding::kData;
+  /// How the texels are filtered (bake_material_map); kData without `frames` is the base colour's plain path.
+  SlotEncoding encoding = SlotEncoding::kData;
   const NormalFrames* frames = nullptr;  // kTangentNormal only
 
   /// Requires: `source` outlives the sampler (or is nullptr). Guarantees: `valid` says whether the
@@ -123,11 +123,11 @@ struct TriangleSampler {
   /// linear light for sRGB colour, as stored for data.
   std::array<float, 4> map_sample(double x, double y) const {
     const Vec2 uv = source_uv_at(x, y);
-    return encoding == MapEncoding::kSrgbColour ? sample_bilinear_linear_light(*src, uv.x(), uv.y())
+    return encoding == SlotEncoding::kSrgbColour ? sample_bilinear_linear_light(*src, uv.x(), uv.y())
                                                 : sample_bilinear(*src, uv.x(), uv.y());
   }
 
-  /// footprint_colour of a map other than the plain base colour (see bake_map).
+  /// footprint_colour of a map other than the plain base colour (see bake_material_map).
   std::array<float, 4> footprint_map_value(double x, double y, double box, int max_samples) const {
     auto samples_along = [&](double footprint) {
       const double n = std::ceil(footprint * box - 1e-9);
@@ -139,17 +139,17 @@ struct TriangleSampler {
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i) {
         const double sx = x + box * ((i + 0.5) / nx - 0.5), sy = y + box * ((j + 0.5) / ny - 0.5);
-        if (encoding == MapEncoding::kTangentNormal) {
+        if (encoding == SlotEncoding::kTangentNormal) {
           normal_sum += object_normal_at(barycentrics_at(sx, sy));
           continue;
         }
         const auto c = map_sample(sx, sy);
         for (int ch = 0; ch < 4; ++ch) sum[size_t(ch)] += c[size_t(ch)];
       }
-    if (encoding == MapEncoding::kTangentNormal) return encode_normal(normal_sum, barycentrics_at(x, y));
+    if (encoding == SlotEncoding::kTangentNormal) return encode_normal(normal_sum, barycentrics_at(x, y));
     const float inv = 1.0f / float(nx * ny);
     for (float& c : sum) c *= inv;
-    if (encoding == MapEncoding::kSrgbColour)
+    if (encoding == SlotEncoding::kSrgbColour)
       for (int ch = 0; ch < 3; ++ch) sum[size_t(ch)] = srgb_encode_255(sum[size_t(ch)]);
     return sum;
   }
@@ -161,7 +161,7 @@ struct TriangleSampler {
   /// Requires: `valid` when `src` is set. Returns `flat` without a source texture.
   std::array<float, 4> footprint_colour(double x, double y, double box, int max_samples) const {
     if (!src) return {float(flat.r), float(flat.g), float(flat.b), float(flat.a)};
-    if (encoding != MapEncoding::kData || frames) return footprint_map_value(x, y, box, max_samples);
+    if (encoding != SlotEncoding::kData || frames) return footprint_map_value(x, y, box, max_samples);
     // Clamped before the conversion to int: a material's -s can make the footprint 1e300, and a NaN
     // footprint takes one sample.
     auto samples_along = [&](double footprint) {

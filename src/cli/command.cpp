@@ -107,7 +107,7 @@ void define_flags(CLI::App& app, CommandLine& line, GivenFlags& given) {
   add(app, "corners", given.corners)->check(CLI::IsMember(names_of(kCornerRules)));
   auto* no_fit = add_flag(app, "fit", given.no_fit);
   add_flag(app, "fine_fit", o.fine_fit)->excludes(no_fit);
-  add(app, "map_budget_db", o.map_budget_db)->check(CLI::Range(0.0, 99.0));
+  add(app, "material_map_budget_db", o.material_map_budget_db)->check(CLI::Range(0.0, 99.0));
   add_flag(app, "allow_large_textures", o.allow_large_textures);
   add(app, "max_memory_mib", o.max_memory_mib)->check(CLI::PositiveNumber);
   add(app, "layout", given.layout)->check(CLI::IsMember(names_of(kLayouts)));

@@ -7,34 +7,34 @@
 
 namespace tightex {
 
-MapEncoding map_encoding(MapSlot slot) {
+SlotEncoding slot_encoding(MaterialSlot slot) {
   switch (slot) {
-    case MapSlot::kEmissive:
-    case MapSlot::kSpecular:
-      return MapEncoding::kSrgbColour;
-    case MapSlot::kNormal:
-      return MapEncoding::kTangentNormal;
+    case MaterialSlot::kEmissive:
+    case MaterialSlot::kSpecular:
+      return SlotEncoding::kSrgbColour;
+    case MaterialSlot::kNormal:
+      return SlotEncoding::kTangentNormal;
     default:
-      return MapEncoding::kData;
+      return SlotEncoding::kData;
   }
 }
 
-unsigned map_slot_channels(MapSlot slot) {
+unsigned material_slot_channels(MaterialSlot slot) {
   switch (slot) {
-    case MapSlot::kMetallicRoughness:
+    case MaterialSlot::kMetallicRoughness:
       return 6;
-    case MapSlot::kOcclusion:
-    case MapSlot::kRoughness:
-    case MapSlot::kMetallic:
-    case MapSlot::kBump:
+    case MaterialSlot::kOcclusion:
+    case MaterialSlot::kRoughness:
+    case MaterialSlot::kMetallic:
+    case MaterialSlot::kBump:
       return 1;
     default:
       return 7;
   }
 }
 
-const char* map_slot_name(MapSlot slot) {
-  static constexpr const char* kNames[kMapSlots] = {"metallic_roughness", "occlusion", "emissive", "normal",
+const char* material_slot_name(MaterialSlot slot) {
+  static constexpr const char* kNames[kMaterialSlots] = {"metallic_roughness", "occlusion", "emissive", "normal",
                                                     "specular",           "roughness", "metallic", "bump"};
   return kNames[size_t(slot)];
 }
@@ -111,10 +111,10 @@ double input_detail(const TexturedMesh& mesh, size_t t) {
   // material binds adds its own, brought to the colour's three channels (each slot's PSNR is a mean
   // over its own channels, so one channel's error counts as much as three of the colour's).
   double squared = squared_detail_texels(img, a, b, c, 7u) / a3;
-  for (size_t s = 0; s < kMapSlots; ++s) {
+  for (size_t s = 0; s < kMaterialSlots; ++s) {
     const int tex = mat.maps[s];
     if (tex < 0 || mesh.textures[size_t(tex)].image.empty()) continue;
-    const unsigned channels = map_slot_channels(MapSlot(s));
+    const unsigned channels = material_slot_channels(MaterialSlot(s));
     const double per_colour = 3.0 / double(std::popcount(channels));
     squared += per_colour * squared_detail_texels(mesh.textures[size_t(tex)].image, a, b, c, channels) / a3;
   }

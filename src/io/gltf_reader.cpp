@@ -762,12 +762,12 @@ std::pair<int64_t, json> uv_source(const json* info) {
   return {set, transform};
 }
 
-/// The material's other maps (MapSlot) that read the same texture coordinates as its base colour:
+/// The material's other maps (MaterialSlot) that read the same texture coordinates as its base colour:
 /// metallicRoughnessTexture, occlusionTexture, emissiveTexture, normalTexture. A map on another UV set
 /// or under another transform is left out (write_gltf removes it, saying so).
 void GltfReader::read_map_slots(const json& g, const json* base, const std::string& element, ReadState& state, Material& m) {
   const auto base_source = uv_source(base);
-  auto read_slot = [&](const json& holder, const char* key, const std::string& slot_element, MapSlot slot) {
+  auto read_slot = [&](const json& holder, const char* key, const std::string& slot_element, MaterialSlot slot) {
     if (!holder.is_object() || !holder.contains(key)) return;
     const json& info = holder[key];
     if (uv_source(&info) != base_source) return;
@@ -775,10 +775,10 @@ void GltfReader::read_map_slots(const json& g, const json* base, const std::stri
   };
   if (g.contains("pbrMetallicRoughness"))
     read_slot(g["pbrMetallicRoughness"], "metallicRoughnessTexture", element + ".pbrMetallicRoughness.metallicRoughnessTexture",
-              MapSlot::kMetallicRoughness);
-  read_slot(g, "occlusionTexture", element + ".occlusionTexture", MapSlot::kOcclusion);
-  read_slot(g, "emissiveTexture", element + ".emissiveTexture", MapSlot::kEmissive);
-  read_slot(g, "normalTexture", element + ".normalTexture", MapSlot::kNormal);
+              MaterialSlot::kMetallicRoughness);
+  read_slot(g, "occlusionTexture", element + ".occlusionTexture", MaterialSlot::kOcclusion);
+  read_slot(g, "emissiveTexture", element + ".emissiveTexture", MaterialSlot::kEmissive);
+  read_slot(g, "normalTexture", element + ".normalTexture", MaterialSlot::kNormal);
 }
 
 /// The TexturedMesh material of glTF material `material` (-1: the default one), made on first use with

@@ -111,16 +111,16 @@ void DocumentBuilder::start_fresh_document() {
     else
       pbr["baseColorTexture"] = {{"index", texture_index(m.texture)}};
     json material = {{"name", m.name}, {"pbrMetallicRoughness", pbr}};
-    if (const int t = m.maps[size_t(MapSlot::kMetallicRoughness)]; t >= 0)
+    if (const int t = m.maps[size_t(MaterialSlot::kMetallicRoughness)]; t >= 0)
       material["pbrMetallicRoughness"]["metallicRoughnessTexture"] = {{"index", texture_index(t)}},
       material["pbrMetallicRoughness"]["metallicFactor"] = 1.0;
-    if (const int t = m.maps[size_t(MapSlot::kOcclusion)]; t >= 0) material["occlusionTexture"] = {{"index", texture_index(t)}};
-    if (const int t = m.maps[size_t(MapSlot::kEmissive)]; t >= 0)
+    if (const int t = m.maps[size_t(MaterialSlot::kOcclusion)]; t >= 0) material["occlusionTexture"] = {{"index", texture_index(t)}};
+    if (const int t = m.maps[size_t(MaterialSlot::kEmissive)]; t >= 0)
       material["emissiveTexture"] = {{"index", texture_index(t)}}, material["emissiveFactor"] = {1.0, 1.0, 1.0};
-    if (const int t = m.maps[size_t(MapSlot::kNormal)]; t >= 0) material["normalTexture"] = {{"index", texture_index(t)}};
+    if (const int t = m.maps[size_t(MaterialSlot::kNormal)]; t >= 0) material["normalTexture"] = {{"index", texture_index(t)}};
     // glTF's core has no slot for OBJ's specular colour, roughness or metallic images alone, or a height map.
-    for (const MapSlot slot : {MapSlot::kSpecular, MapSlot::kRoughness, MapSlot::kMetallic, MapSlot::kBump})
-      if (m.maps[size_t(slot)] >= 0) removed_.insert(fmt::format("material {}: its {} map (no glTF slot)", m.name, map_slot_name(slot)));
+    for (const MaterialSlot slot : {MaterialSlot::kSpecular, MaterialSlot::kRoughness, MaterialSlot::kMetallic, MaterialSlot::kBump})
+      if (m.maps[size_t(slot)] >= 0) removed_.insert(fmt::format("material {}: its {} map (no glTF slot)", m.name, material_slot_name(slot)));
     materials.push_back(std::move(material));
   }
 }
@@ -188,16 +188,16 @@ bool refers_to_texture(const json& j) {
   return false;
 }
 
-/// The glTF slots of MapSlot, where they sit in a material.
+/// The glTF slots of MaterialSlot, where they sit in a material.
 struct GltfSlot {
-  MapSlot slot;
+  MaterialSlot slot;
   const char* key;
   bool in_pbr;  // under pbrMetallicRoughness
 };
-constexpr GltfSlot kGltfSlots[] = {{MapSlot::kMetallicRoughness, "metallicRoughnessTexture", true},
-                                   {MapSlot::kOcclusion, "occlusionTexture", false},
-                                   {MapSlot::kEmissive, "emissiveTexture", false},
-                                   {MapSlot::kNormal, "normalTexture", false}};
+constexpr GltfSlot kGltfSlots[] = {{MaterialSlot::kMetallicRoughness, "metallicRoughnessTexture", true},
+                                   {MaterialSlot::kOcclusion, "occlusionTexture", false},
+                                   {MaterialSlot::kEmissive, "emissiveTexture", false},
+                                   {MaterialSlot::kNormal, "normalTexture", false}};
 
 /// Each texture slot of material copy `m`: pointed at output material `out_material`'s map for it (on
 /// TEXCOORD_0, without a transform: the new coordinates are what it samples; scale and strength kept),

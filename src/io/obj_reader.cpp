@@ -211,18 +211,18 @@ struct MaterialDef {
   std::string texture_written;   // map_Kd file name as written; empty: no texture
   std::string texture_resolved;  // resolved against the MTL's folder
   size_t texture_line = 0;
-  /// The other maps (MapSlot: map_Ks, map_Ke, map_Pr, map_Pm, norm, map_Bump / bump), as map_Kd's.
-  std::array<std::string, kMapSlots> map_written, map_resolved;
-  std::array<size_t, kMapSlots> map_line{};
+  /// The other maps (MaterialSlot: map_Ks, map_Ke, map_Pr, map_Pm, norm, map_Bump / bump), as map_Kd's.
+  std::array<std::string, kMaterialSlots> map_written, map_resolved;
+  std::array<size_t, kMaterialSlots> map_line{};
 };
 
-/// The MapSlot an MTL keyword binds (matched without case), or -1: map_Ks specular colour, map_Ke
+/// The MaterialSlot an MTL keyword binds (matched without case), or -1: map_Ks specular colour, map_Ke
 /// emissive, map_Pr roughness, map_Pm metallic, norm a tangent-space normal map, map_Bump / bump a
 /// height map.
 int mtl_map_slot(std::string_view keyword) {
-  static constexpr std::pair<const char*, MapSlot> kKeywords[] = {
-      {"map_Ks", MapSlot::kSpecular}, {"map_Ke", MapSlot::kEmissive}, {"map_Pr", MapSlot::kRoughness}, {"map_Pm", MapSlot::kMetallic},
-      {"norm", MapSlot::kNormal},     {"map_Bump", MapSlot::kBump},   {"bump", MapSlot::kBump}};
+  static constexpr std::pair<const char*, MaterialSlot> kKeywords[] = {
+      {"map_Ks", MaterialSlot::kSpecular}, {"map_Ke", MaterialSlot::kEmissive}, {"map_Pr", MaterialSlot::kRoughness}, {"map_Pm", MaterialSlot::kMetallic},
+      {"norm", MaterialSlot::kNormal},     {"map_Bump", MaterialSlot::kBump},   {"bump", MaterialSlot::kBump}};
   for (const auto& [word, slot] : kKeywords)
     if (equals_ignoring_case(keyword, word)) return int(slot);
   return -1;
@@ -1002,7 +1002,7 @@ void ObjParser::assemble_materials(TexturedMesh& mesh) {
     if (!def->texture_resolved.empty()) m.texture = texture_of(def, def->texture_resolved, def->texture_line, def->texture_written);
   }
   for (size_t u = 0; u < used_defs.size(); ++u)  // after every map_Kd: their textures keep their numbers
-    for (size_t s = 0; s < kMapSlots; ++s)
+    for (size_t s = 0; s < kMaterialSlots; ++s)
       if (!used_defs[u]->map_resolved[s].empty())
         mesh.materials[u].maps[s] =
             texture_of(used_defs[u], used_defs[u]->map_resolved[s], used_defs[u]->map_line[s], used_defs[u]->map_written[s]);

@@ -43,31 +43,31 @@ void append(std::string& s, double v) {
 /// metallic-roughness image as map_Pr and map_Pm reading its green and blue (-imfchan). glTF's
 /// occlusion has no MTL statement and is not written.
 std::string map_lines(const Material& m, const std::string& options, const std::vector<std::string>& texture_file) {
-  static constexpr std::pair<MapSlot, const char*> kStatements[] = {{MapSlot::kSpecular, "map_Ks"},  {MapSlot::kEmissive, "map_Ke"},
-                                                                    {MapSlot::kRoughness, "map_Pr"}, {MapSlot::kMetallic, "map_Pm"},
-                                                                    {MapSlot::kNormal, "norm"},      {MapSlot::kBump, "map_Bump"}};
+  static constexpr std::pair<MaterialSlot, const char*> kStatements[] = {{MaterialSlot::kSpecular, "map_Ks"},  {MaterialSlot::kEmissive, "map_Ke"},
+                                                                    {MaterialSlot::kRoughness, "map_Pr"}, {MaterialSlot::kMetallic, "map_Pm"},
+                                                                    {MaterialSlot::kNormal, "norm"},      {MaterialSlot::kBump, "map_Bump"}};
   std::string lines;
   for (const auto& [slot, keyword] : kStatements) {
     const int tex = m.maps[size_t(slot)];
     if (tex < 0) continue;
-    if (slot == MapSlot::kSpecular) lines += "Ks 1 1 1\n";
-    if (slot == MapSlot::kEmissive) lines += "Ke 1 1 1\n";
+    if (slot == MaterialSlot::kSpecular) lines += "Ks 1 1 1\n";
+    if (slot == MaterialSlot::kEmissive) lines += "Ke 1 1 1\n";
     lines += fmt::format("{} {}{}\n", keyword, options, texture_file[size_t(tex)]);
   }
-  const int mr = m.maps[size_t(MapSlot::kMetallicRoughness)];
-  if (mr >= 0 && m.maps[size_t(MapSlot::kRoughness)] < 0 && m.maps[size_t(MapSlot::kMetallic)] < 0)
+  const int mr = m.maps[size_t(MaterialSlot::kMetallicRoughness)];
+  if (mr >= 0 && m.maps[size_t(MaterialSlot::kRoughness)] < 0 && m.maps[size_t(MaterialSlot::kMetallic)] < 0)
     lines += fmt::format("map_Pr -imfchan g {}{}\nmap_Pm -imfchan b {}{}\n", options, texture_file[size_t(mr)], options,
                          texture_file[size_t(mr)]);
   return lines;
 }
 
 /// Whether map_lines writes a statement for `slot` of `m`.
-bool map_written(const Material& m, MapSlot slot) {
+bool map_written(const Material& m, MaterialSlot slot) {
   switch (slot) {
-    case MapSlot::kOcclusion:
+    case MaterialSlot::kOcclusion:
       return false;
-    case MapSlot::kMetallicRoughness:
-      return m.maps[size_t(MapSlot::kRoughness)] < 0 && m.maps[size_t(MapSlot::kMetallic)] < 0;
+    case MaterialSlot::kMetallicRoughness:
+      return m.maps[size_t(MaterialSlot::kRoughness)] < 0 && m.maps[size_t(MaterialSlot::kMetallic)] < 0;
     default:
       return true;
   }

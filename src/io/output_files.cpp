@@ -70,17 +70,17 @@ std::vector<OutputFile> texture_output_files(const TexturedMesh& mesh, const Ima
   return files;
 }
 
-std::vector<std::string> unbound_maps(const TexturedMesh& mesh, const std::function<bool(const Material&, MapSlot)>& written,
+std::vector<std::string> unbound_maps(const TexturedMesh& mesh, const std::function<bool(const Material&, MaterialSlot)>& written,
                                       const std::string& reason) {
   std::vector<std::string> lines;
-  for (size_t s = 0; s < kMapSlots; ++s) {
+  for (size_t s = 0; s < kMaterialSlots; ++s) {
     std::vector<const Material*> dropped;
     for (const Material& m : mesh.materials)
-      if (m.maps[s] >= 0 && !written(m, MapSlot(s))) dropped.push_back(&m);
+      if (m.maps[s] >= 0 && !written(m, MaterialSlot(s))) dropped.push_back(&m);
     if (dropped.empty()) continue;
     const std::string of =
         dropped.size() == 1 ? fmt::format("material \"{}\"", dropped[0]->name) : fmt::format("{} materials", dropped.size());
-    lines.push_back(fmt::format("the {} map of {} is not bound in the output ({})", map_slot_name(MapSlot(s)), of, reason));
+    lines.push_back(fmt::format("the {} map of {} is not bound in the output ({})", material_slot_name(MaterialSlot(s)), of, reason));
   }
   return lines;
 }

@@ -51,7 +51,7 @@ std::vector<OutputFile> texture_output_files(const TexturedMesh& mesh, const Ima
 /// `mesh` binds and `written` says the format does not carry ("the occlusion map of material \"m\" is
 /// not bound in the output (REASON)"; "of N materials" when more than one), in slot order.
 /// Throws: nothing but std::bad_alloc.
-std::vector<std::string> unbound_maps(const TexturedMesh& mesh, const std::function<bool(const Material&, MapSlot)>& written,
+std::vector<std::string> unbound_maps(const TexturedMesh& mesh, const std::function<bool(const Material&, MaterialSlot)>& written,
                                       const std::string& reason);
 
 }  // namespace tightex

@@ -93,7 +93,7 @@ std::vector<std::string> write_ply(const TexturedMesh& mesh, const std::string& 
   files.push_back({ply_name, [&](const fs::path& tmp) { write_whole_file(tmp, ply_bytes(mesh, texture_file, page)); }});
   write_files_atomically(outdir, files);
   return unbound_maps(
-      mesh, [](const Material&, MapSlot) { return false; }, "PLY has no material maps; its image is written beside the model");
+      mesh, [](const Material&, MaterialSlot) { return false; }, "PLY has no material maps; its image is written beside the model");
 }
 
 }  // namespace tightex

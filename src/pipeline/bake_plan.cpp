@@ -1,7 +1,7 @@
 // bake_plan: the texture half of the method, the output model, the bake (§4.3) and the metrics.
 #include "core/error.hpp"
 #include "core/progress.hpp"
-#include "pipeline/bake_maps.hpp"
+#include "pipeline/bake_material_maps.hpp"
 #include "pipeline/output_model.hpp"
 #include "pipeline/plan_state.hpp"
 #include "pipeline/stage_clock.hpp"
@@ -77,7 +77,7 @@ Result bake_plan(const Plan& plan, const TexturedMesh& input, const Options& opt
   rep.bake = bake_new_textures(input, options, progress, om);
   clock.done("bake");
   // 6b. Every other map the materials bind, through the same layout.
-  rep.maps = bake_other_maps(input, options, om);
+  rep.maps = bake_material_maps(input, options, om);
   if (!rep.maps.empty()) clock.done("bake_maps");
   Result result;
   result.output = std::move(om.mesh);

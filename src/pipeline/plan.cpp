@@ -224,7 +224,7 @@ void map_components(const MapContext& ctx, std::optional<Mapped>& probed, size_t
 }
 
 OptionsUsed options_used(const Options& o, int size) {
-  return {size, 0, o.layout, o.holes, o.map, o.balance, o.fit, o.fit && o.fine_fit, o.corners, o.aspect, o.map_budget_db};
+  return {size, 0, o.layout, o.holes, o.map, o.balance, o.fit, o.fit && o.fine_fit, o.corners, o.aspect, o.material_map_budget_db};
 }
 
 }  // namespace

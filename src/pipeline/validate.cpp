@@ -27,9 +27,9 @@ void validate_mesh(const TexturedMesh& m) {
   for (size_t i = 0; i < m.materials.size(); ++i) {
     if (m.materials[i].texture >= int(m.textures.size()))
       fail_input("{}: material {} uses texture {} (mesh has {})", f, i, m.materials[i].texture, m.textures.size());
-    for (size_t s = 0; s < kMapSlots; ++s)
+    for (size_t s = 0; s < kMaterialSlots; ++s)
       if (m.materials[i].maps[s] < -1 || m.materials[i].maps[s] >= int(m.textures.size()))
-        fail_input("{}: material {} binds texture {} as its {} map (mesh has {})", f, i, m.materials[i].maps[s], map_slot_name(MapSlot(s)),
+        fail_input("{}: material {} binds texture {} as its {} map (mesh has {})", f, i, m.materials[i].maps[s], material_slot_name(MaterialSlot(s)),
                    m.textures.size());
   }
   if (!m.source_mesh.empty()) {

@@ -70,7 +70,7 @@ void bind_options(py::module_& m) {
   choice(c, "corners", &Options::corners, kCornerRules);
   c.def_readwrite("fit", &Options::fit, doc("fit").c_str());
   c.def_readwrite("fine_fit", &Options::fine_fit, doc("fine_fit").c_str());
-  c.def_readwrite("map_budget_db", &Options::map_budget_db, doc("map_budget_db").c_str());
+  c.def_readwrite("material_map_budget_db", &Options::material_map_budget_db, doc("material_map_budget_db").c_str());
   c.def_readwrite("keep_untextured", &Options::keep_untextured, doc("keep_untextured").c_str());
   c.def_readwrite("measure", &Options::measure, doc("measure").c_str());
   c.def_readwrite("max_memory_mib", &Options::max_memory_mib, doc("max_memory_mib").c_str());

@@ -143,9 +143,9 @@ std::string map_slots_of(const TexturedMesh& mesh, int i) {
   std::string slots;
   for (const Material& m : mesh.materials)
     if (m.texture == i) return "";
-  for (size_t s = 0; s < kMapSlots; ++s) {
+  for (size_t s = 0; s < kMaterialSlots; ++s) {
     const bool bound = std::any_of(mesh.materials.begin(), mesh.materials.end(), [&](const Material& m) { return m.maps[s] == i; });
-    if (bound) slots += (slots.empty() ? "" : " + ") + std::string(map_slot_name(MapSlot(s)));
+    if (bound) slots += (slots.empty() ? "" : " + ") + std::string(material_slot_name(MaterialSlot(s)));
   }
   return slots;
 }

@@ -96,7 +96,7 @@ ModelFigures measure_texture_space(const TexturedMesh& mesh) {
     const int tex = texture_of(mesh, t);
     if (tex >= 0) tris[size_t(tex)].push_back(t);
   }
-  // A texture bound only as another map (MapSlot) shares the base colour's layout: not counted again.
+  // A texture bound only as another map (MaterialSlot) shares the base colour's layout: not counted again.
   std::vector<uint8_t> map_only(mesh.textures.size(), 0);
   for (const Material& m : mesh.materials)
     for (int tex : m.maps)
@@ -564,7 +564,7 @@ std::pair<double, size_t> measure_surface_psnr(const TexturedMesh& in, const Tex
 }
 
 /// The image triangle t of `m` binds in `slot`; nullptr when none (or not loaded).
-const Image* map_image_of(const TexturedMesh& m, size_t t, MapSlot slot) {
+const Image* map_image_of(const TexturedMesh& m, size_t t, MaterialSlot slot) {
   const int32_t mat = m.face_material[t];
   if (mat < 0) return nullptr;
   const int tex = m.materials[size_t(mat)].maps[size_t(slot)];
@@ -584,14 +584,14 @@ Vec3 decoded_normal(const TexturedMesh& m, size_t t, const double* b, const std:
   return n.norm() > 0 ? Vec3(n.normalized()) : Vec3(normal.normalized());
 }
 
-/// One slot's MapFigures at the surface PSNR's points (those whose input triangle binds the map).
-MapFigures measure_map_slot(const TexturedMesh& in, const TexturedMesh& out, const Correspondence& c, MapSlot slot,
+/// One slot's MaterialMapFigures at the surface PSNR's points (those whose input triangle binds the map).
+MaterialMapFigures measure_map_slot(const TexturedMesh& in, const TexturedMesh& out, const Correspondence& c, MaterialSlot slot,
                             const std::vector<SurfacePoint>& points, const std::vector<Eigen::Vector4d>& in_tangents,
                             const std::vector<Eigen::Vector4d>& out_tangents) {
-  MapFigures f;
+  MaterialMapFigures f;
   f.slot = slot;
-  const bool normal_map = map_encoding(slot) == MapEncoding::kTangentNormal;
-  const unsigned channels = map_slot_channels(slot);
+  const bool normal_map = slot_encoding(slot) == SlotEncoding::kTangentNormal;
+  const unsigned channels = material_slot_channels(slot);
   double se = 0, n = 0;
   std::vector<double> angles;
   for (const SurfacePoint& p : points) {
@@ -632,20 +632,20 @@ MapFigures measure_map_slot(const TexturedMesh& in, const TexturedMesh& out, con
 }
 
 /// Whether some material of m binds `slot` to a loaded image.
-bool binds(const TexturedMesh& m, MapSlot slot) {
+bool binds(const TexturedMesh& m, MaterialSlot slot) {
   for (const Material& mat : m.materials)
     if (mat.maps[size_t(slot)] >= 0 && !m.textures[size_t(mat.maps[size_t(slot)])].image.empty()) return true;
   return false;
 }
 
-std::vector<MapFigures> measure_maps(const TexturedMesh& in, const TexturedMesh& out, const Correspondence& c,
+std::vector<MaterialMapFigures> measure_material_maps(const TexturedMesh& in, const TexturedMesh& out, const Correspondence& c,
                                      const std::vector<SurfacePoint>& points) {
-  std::vector<MapFigures> figures;
+  std::vector<MaterialMapFigures> figures;
   std::vector<Eigen::Vector4d> in_tangents, out_tangents;
-  for (size_t s = 0; s < kMapSlots; ++s) {
-    const MapSlot slot = MapSlot(s);
+  for (size_t s = 0; s < kMaterialSlots; ++s) {
+    const MaterialSlot slot = MaterialSlot(s);
     if (!binds(in, slot) || !binds(out, slot)) continue;
-    if (map_encoding(slot) == MapEncoding::kTangentNormal && in_tangents.empty())
+    if (slot_encoding(slot) == SlotEncoding::kTangentNormal && in_tangents.empty())
       in_tangents = completed_corner_tangents(in), out_tangents = completed_corner_tangents(out);
     figures.push_back(measure_map_slot(in, out, c, slot, points, in_tangents, out_tangents));
   }
@@ -678,7 +678,7 @@ Metrics measure(const TexturedMesh& in, const TexturedMesh& out, const WeldedEdg
                        },
                        [&] { std::tie(r.angle_distortion_mean, r.angle_distortion_p95) = measure_angle_distortion(in, out, c); },
                        [&] { std::tie(r.surface_psnr, r.psnr_samples) = measure_surface_psnr(in, out, c, points); },
-                       [&] { r.maps = measure_maps(in, out, c, points); });
+                       [&] { r.maps = measure_material_maps(in, out, c, points); });
   return r;
 }
 
@@ -709,9 +709,9 @@ nlohmann::json to_json(const Metrics& m) {
   j["psnr_samples"] = m.psnr_samples;
   if (!m.maps.empty()) {
     nlohmann::json maps = nlohmann::json::array();
-    for (const MapFigures& f : m.maps) {
-      nlohmann::json e = {{"slot", map_slot_name(f.slot)}, {"samples", f.samples}};
-      if (map_encoding(f.slot) == MapEncoding::kTangentNormal)
+    for (const MaterialMapFigures& f : m.maps) {
+      nlohmann::json e = {{"slot", material_slot_name(f.slot)}, {"samples", f.samples}};
+      if (slot_encoding(f.slot) == SlotEncoding::kTangentNormal)
         e["normal_angle_median_deg"] = f.angle_median, e["normal_angle_p95_deg"] = f.angle_p95;
       else
         e["surface_psnr_db"] = f.surface_psnr;
@@ -726,9 +726,9 @@ nlohmann::json to_json(const Metrics& m) {
 
 namespace tightex {
 
-std::vector<MapFigures> measure_maps(const TexturedMesh& input, const TexturedMesh& output, size_t samples) {
+std::vector<MaterialMapFigures> measure_material_maps(const TexturedMesh& input, const TexturedMesh& output, size_t samples) {
   const Correspondence c = match_triangles(input, output);
-  return measure_maps(input, output, c, surface_points(input, c, samples));
+  return measure_material_maps(input, output, c, surface_points(input, c, samples));
 }
 
 }  // namespace tightex

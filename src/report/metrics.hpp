@@ -24,8 +24,8 @@ struct ModelFigures {
 /// One map slot's figures (METRICS.md's surface PSNR, over the channels the slot reads; for a
 /// tangent-space normal map the angle between the object-space normals decoded from input and output
 /// through their own tangent frames, in degrees).
-struct MapFigures {
-  MapSlot slot = MapSlot::kMetallicRoughness;
+struct MaterialMapFigures {
+  MaterialSlot slot = MaterialSlot::kMetallicRoughness;
   double surface_psnr = 0;                   // not for normal maps
   double angle_median = -1, angle_p95 = -1;  // normal maps only
   size_t samples = 0;                        // points where the input binds the map
@@ -48,7 +48,7 @@ struct Metrics {
   /// images as written (decoded back) and this the bake's before encoding; unset otherwise.
   std::optional<double> surface_psnr_bake;
   size_t psnr_samples = 0;
-  std::vector<MapFigures> maps;  // each slot bound in the input and in the output
+  std::vector<MaterialMapFigures> maps;  // each slot bound in the input and in the output
 };
 
 /// Texel utilization of a model (texel centres inside at least one triangle sampling that image,
@@ -78,8 +78,8 @@ Metrics measure(const TexturedMesh& input, const TexturedMesh& output, const Wel
 /// encodings of the same output's images.
 double surface_psnr(const TexturedMesh& input, const TexturedMesh& output, size_t psnr_samples = 200000);
 
-/// The figures of every map slot that both models bind (MapFigures), at the surface PSNR's points.
-std::vector<MapFigures> measure_maps(const TexturedMesh& input, const TexturedMesh& output, size_t samples = 200000);
+/// The figures of every map slot that both models bind (MaterialMapFigures), at the surface PSNR's points.
+std::vector<MaterialMapFigures> measure_material_maps(const TexturedMesh& input, const TexturedMesh& output, size_t samples = 200000);
 
 /// The metrics as report.json's "metrics" section (and `tightex measure`'s output).
 nlohmann::json to_json(const Metrics& m);

@@ -41,7 +41,7 @@ struct OptionsUsed {
   bool fine_fit = false;  // in effect: false without `fit`
   CornerRule corners = CornerRule::kEqualArcs;
   double aspect = 0;          // as asked (Options::aspect); 0: "auto"
-  double map_budget_db = 51;  // Options::map_budget_db
+  double material_map_budget_db = 51;  // Options::material_map_budget_db
 };
 
 /// One shape the auto aspect tried ("aspect"/"probes").
@@ -113,14 +113,14 @@ struct StageTiming {
   std::optional<double> user_seconds, sys_seconds;
 };
 
-/// "maps": one output map besides the base colour (bake_other_maps).
-struct MapEntry {
-  std::string name;                        // the first slot's name (map_slot_name)
+/// "maps": one output map besides the base colour (bake_material_maps).
+struct MaterialMapEntry {
+  std::string name;                        // the first slot's name (material_slot_name)
   std::vector<std::string> slots;          // every slot it serves ("metallic_roughness", "occlusion")
   std::string encoding;                    // "srgb_colour", "data" or "tangent_normal"
   std::vector<std::pair<int, int>> sizes;  // per page
   double scale = 1;                        // each side is the base colour's times this (below 1: reduced)
-  /// The chosen size's PSNR at the judging points (bake_other_maps) of its worst slot, each over the
+  /// The chosen size's PSNR at the judging points (bake_material_maps) of its worst slot, each over the
   /// channels it reads: against the input's map (a normal map: against its full-size bake); 99 when not
   /// judged.
   double judged_psnr_db = 99;
@@ -148,7 +148,7 @@ struct ReportData {
   std::vector<ComponentEntry> components;  // the listed ones, in plan order
   std::vector<StageTiming> timings;        // in the order the stages ran
   std::optional<BakeStats> bake;
-  std::vector<MapEntry> maps;  // written only when not empty
+  std::vector<MaterialMapEntry> maps;  // written only when not empty
   std::optional<Metrics> metrics;
   std::optional<double> peak_rss_mib;
   std::optional<double> wall_seconds;

@@ -31,7 +31,7 @@ json options_json(const OptionsUsed& o) {
           {"fine_fit", o.fine_fit},
           {"corners", std::string(to_string(o.corners))},
           {"aspect", aspect_json(o.aspect)},
-          {"map_budget_db", o.map_budget_db}};
+          {"material_map_budget_db", o.material_map_budget_db}};
 }
 
 json aspect_choice_json(const AspectChoice& a) {
@@ -201,7 +201,7 @@ json to_json(const ReportData& report) {
   if (report.bake) j["bake"] = bake_json(*report.bake);
   if (!report.maps.empty()) {
     json maps = json::array();
-    for (const MapEntry& m : report.maps)
+    for (const MaterialMapEntry& m : report.maps)
       maps.push_back({{"name", m.name},
                       {"slots", m.slots},
                       {"encoding", m.encoding},

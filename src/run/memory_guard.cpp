@@ -22,9 +22,9 @@ constexpr double kBytesPerOutputTexel = 7.0;
 /// The output images baked per base colour texel: the base colour's and one per map slot some
 /// material binds (a slot may share another's image, or be baked larger: one each is the estimate).
 double output_images(const TexturedMesh& geometry) {
-  std::array<bool, kMapSlots> bound{};
+  std::array<bool, kMaterialSlots> bound{};
   for (const Material& m : geometry.materials)
-    for (size_t s = 0; s < kMapSlots; ++s) bound[s] = bound[s] || m.maps[s] >= 0;
+    for (size_t s = 0; s < kMaterialSlots; ++s) bound[s] = bound[s] || m.maps[s] >= 0;
   return 1.0 + double(std::count(bound.begin(), bound.end(), true));
 }
 

@@ -46,7 +46,7 @@ constexpr std::array kHelps{
                "sampling only)"},
     OptionHelp{"fine_fit", "--fine-fit",
                "fit on 4x4 points per texel instead of 2x2: a little higher surface PSNR, about twice the bake time"},
-    OptionHelp{"map_budget_db", "--map-budget",
+    OptionHelp{"material_map_budget_db", "--material-map-budget",
                "maps other than the base colour (metallic-roughness, occlusion, emissive, normal, specular, ...): a map some "
                "slot of which (each over the channels it reads) is below this many surface-PSNR dB against the input's map at "
                "the base colour's size may be baked larger, up to as many texels as its input image has, while a slot falls "

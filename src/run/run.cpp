@@ -214,7 +214,7 @@ void check_options(const Options& o) {
   if (o.texels < 0) fail_input("options: --texels {} must be positive", o.texels);
   if (o.aspect != 0) check_range(o.aspect, 1.0 / 16, 16.0, "--aspect");
   check_range(o.balance, 0.0, 1.0, "--balance");
-  check_range(o.map_budget_db, 0.0, 99.0, "--map-budget");
+  check_range(o.material_map_budget_db, 0.0, 99.0, "--material-map-budget");
   check_range(o.max_page_side, 0, 65536, "--max-size");
   if (o.max_memory_mib < 0) fail_input("options: --max-memory {} must be positive", o.max_memory_mib);
   if (o.png_level) check_range(*o.png_level, 0, 9, "--png-level");

@@ -119,11 +119,11 @@ namespace {
 /// The bytes of a model's images by the slot its materials bind them to (each image once, under its
 /// first slot: the base colour first), and in total.
 nlohmann::json slot_bytes(const TexturedMesh& mesh, const std::vector<uint64_t>& bytes) {
-  std::vector<int> slot(mesh.textures.size(), -2);  // -1: base colour, else the MapSlot
+  std::vector<int> slot(mesh.textures.size(), -2);  // -1: base colour, else the MaterialSlot
   for (const Material& m : mesh.materials)
     if (m.texture >= 0) slot[size_t(m.texture)] = -1;
   for (const Material& m : mesh.materials)
-    for (size_t s = 0; s < kMapSlots; ++s)
+    for (size_t s = 0; s < kMaterialSlots; ++s)
       if (m.maps[s] >= 0 && slot[size_t(m.maps[s])] == -2) slot[size_t(m.maps[s])] = int(s);
   nlohmann::json j = {{"base_colour", 0}, {"maps", nlohmann::json::object()}, {"total", 0}};
   for (size_t i = 0; i < slot.size() && i < bytes.size(); ++i) {
@@ -131,7 +131,7 @@ nlohmann::json slot_bytes(const TexturedMesh& mesh, const std::vector<uint64_t>&
     if (slot[i] == -1)
       j["base_colour"] = j["base_colour"].get<uint64_t>() + bytes[i];
     else
-      j["maps"][map_slot_name(MapSlot(slot[i]))] = j["maps"].value(map_slot_name(MapSlot(slot[i])), uint64_t(0)) + bytes[i];
+      j["maps"][material_slot_name(MaterialSlot(slot[i]))] = j["maps"].value(material_slot_name(MaterialSlot(slot[i])), uint64_t(0)) + bytes[i];
     j["total"] = j["total"].get<uint64_t>() + bytes[i];
   }
   return j;

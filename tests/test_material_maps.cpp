@@ -18,7 +18,7 @@
 #include "core/tangents.hpp"
 
 #include "genus_surfaces.hpp"
-#include "pipeline/bake_maps.hpp"
+#include "pipeline/bake_material_maps.hpp"
 #include "pipeline/output_model.hpp"
 #include "pipeline/plan_state.hpp"
 #include "report/metrics.hpp"
@@ -80,9 +80,9 @@ TexturedMesh plate_with_maps(const std::function<uint8_t(const Vec3&)>& occlusio
   }
   m.textures.push_back(Texture{"normal", std::move(normal)});
   m.textures.push_back(Texture{"orm", std::move(orm)});
-  m.materials[0].maps[size_t(MapSlot::kNormal)] = 1;
-  m.materials[0].maps[size_t(MapSlot::kMetallicRoughness)] = 2;
-  m.materials[0].maps[size_t(MapSlot::kOcclusion)] = 2;
+  m.materials[0].maps[size_t(MaterialSlot::kNormal)] = 1;
+  m.materials[0].maps[size_t(MaterialSlot::kMetallicRoughness)] = 2;
+  m.materials[0].maps[size_t(MaterialSlot::kOcclusion)] = 2;
   return m;
 }
 
@@ -93,8 +93,8 @@ Options small_options() {
   return opt;
 }
 
-const MapFigures* figures_of(const std::vector<MapFigures>& all, MapSlot slot) {
-  for (const MapFigures& f : all)
+const MaterialMapFigures* figures_of(const std::vector<MaterialMapFigures>& all, MaterialSlot slot) {
+  for (const MaterialMapFigures& f : all)
     if (f.slot == slot) return &f;
   return nullptr;
 }
@@ -103,58 +103,58 @@ const MapFigures* figures_of(const std::vector<MapFigures>& all, MapSlot slot) {
 /// a map may be baked larger than the base colour.
 Result at_default_budget(const TexturedMesh& in, const Options& o) { return bake_plan(plan_charts(in, o, TextureBudget{o.size, true}), in, o); }
 
-TEST(Maps, EverySlotIsRebakedAndOneImageInTwoSlotsStaysOne) {
+TEST(MaterialMaps, EverySlotIsRebakedAndOneImageInTwoSlotsStaysOne) {
   const TexturedMesh in = plate_with_maps();
   const Result r = optimize(in, small_options());
   const TexturedMesh& out = r.output;
   const Material& mat = out.materials[0];
-  ASSERT_GE(mat.maps[size_t(MapSlot::kNormal)], 0);
-  ASSERT_GE(mat.maps[size_t(MapSlot::kMetallicRoughness)], 0);
-  EXPECT_EQ(mat.maps[size_t(MapSlot::kOcclusion)], mat.maps[size_t(MapSlot::kMetallicRoughness)]);
-  EXPECT_NE(mat.maps[size_t(MapSlot::kNormal)], mat.texture);
+  ASSERT_GE(mat.maps[size_t(MaterialSlot::kNormal)], 0);
+  ASSERT_GE(mat.maps[size_t(MaterialSlot::kMetallicRoughness)], 0);
+  EXPECT_EQ(mat.maps[size_t(MaterialSlot::kOcclusion)], mat.maps[size_t(MaterialSlot::kMetallicRoughness)]);
+  EXPECT_NE(mat.maps[size_t(MaterialSlot::kNormal)], mat.texture);
   EXPECT_EQ(out.corner_tangent.size(), 3 * out.num_triangles());
   ASSERT_TRUE(report_json(r.report).contains("maps"));
   EXPECT_EQ(report_json(r.report)["maps"].size(), 2u);  // metallic-roughness with occlusion, and normal
-  const std::vector<MapFigures> figures = measure_maps(in, out);
-  const MapFigures* mr = figures_of(figures, MapSlot::kMetallicRoughness);
+  const std::vector<MaterialMapFigures> figures = measure_material_maps(in, out);
+  const MaterialMapFigures* mr = figures_of(figures, MaterialSlot::kMetallicRoughness);
   ASSERT_NE(mr, nullptr);
   EXPECT_GT(mr->surface_psnr, 25.0);  // the hard mask where it belongs
 }
 
-TEST(Maps, NormalsAreReexpressedInTheNewFrameWhereCopiedTexelsFail) {
+TEST(MaterialMaps, NormalsAreReexpressedInTheNewFrameWhereCopiedTexelsFail) {
   const TexturedMesh in = plate_with_maps();
   const Plan plan = plan_charts(in, small_options());
   OutputModel om = build_output_model(plan_state(plan), in);
   const OutputModel plain = om;
-  bake_other_maps(in, small_options(), om);
-  const MapFigures* ours = nullptr;
-  const std::vector<MapFigures> figures = measure_maps(in, om.mesh);
-  ours = figures_of(figures, MapSlot::kNormal);
+  bake_material_maps(in, small_options(), om);
+  const MaterialMapFigures* ours = nullptr;
+  const std::vector<MaterialMapFigures> figures = measure_material_maps(in, om.mesh);
+  ours = figures_of(figures, MaterialSlot::kNormal);
   ASSERT_NE(ours, nullptr);
   EXPECT_LT(ours->angle_median, 2.0);
   EXPECT_LT(ours->angle_p95, 8.0);
   // The same layout with the tangent-space texels carried as data: the frames of the new charts differ
   // from the input's, so the decoded normals turn away.
   OutputModel copied = plain;
-  MapSource as_data;
-  as_data.encoding = MapEncoding::kData;
+  MaterialMapSource as_data;
+  as_data.encoding = SlotEncoding::kData;
   as_data.texture_of_material = {1};
   std::vector<Image> pages;
   for (int p = 0; p < copied.new_images; ++p)
     pages.emplace_back(copied.mesh.textures[size_t(p)].image.width, copied.mesh.textures[size_t(p)].image.height);
-  bake_map(in, as_data, copied.bake_triangles, copied.rects, pages, nullptr);
+  bake_material_map(in, as_data, copied.bake_triangles, copied.rects, pages, nullptr);
   for (int p = 0; p < copied.new_images; ++p) {
-    copied.mesh.materials[size_t(p)].maps[size_t(MapSlot::kNormal)] = int(copied.mesh.textures.size());
+    copied.mesh.materials[size_t(p)].maps[size_t(MaterialSlot::kNormal)] = int(copied.mesh.textures.size());
     copied.mesh.textures.push_back(Texture{"copied", std::move(pages[size_t(p)])});
   }
   copied.mesh.corner_tangent = compute_corner_tangents(copied.mesh);
-  const std::vector<MapFigures> copied_figures = measure_maps(in, copied.mesh);
-  const MapFigures* copy = figures_of(copied_figures, MapSlot::kNormal);
+  const std::vector<MaterialMapFigures> copied_figures = measure_material_maps(in, copied.mesh);
+  const MaterialMapFigures* copy = figures_of(copied_figures, MaterialSlot::kNormal);
   ASSERT_NE(copy, nullptr);
   EXPECT_GT(copy->angle_median, 2.0);
 }
 
-TEST(Maps, ObjMapsAreReadRebakedAndWritten) {
+TEST(MaterialMaps, ObjMapsAreReadRebakedAndWritten) {
   TexturedMesh m = plate_with_maps();
   // As an OBJ scan's MTL binds them: a normal map (norm), a specular colour and a height map.
   m.materials[0].maps = {-1, -1, -1, 1, 2, -1, -1, 2};
@@ -166,21 +166,21 @@ TEST(Maps, ObjMapsAreReadRebakedAndWritten) {
   EXPECT_TRUE(stats.not_read.empty());
   ASSERT_EQ(in.materials.size(), 1u);
   EXPECT_EQ(in.textures.size(), 3u);  // map_Ks and map_Bump name one file: one texture
-  EXPECT_GE(in.materials[0].maps[size_t(MapSlot::kNormal)], 0);
-  EXPECT_EQ(in.materials[0].maps[size_t(MapSlot::kSpecular)], in.materials[0].maps[size_t(MapSlot::kBump)]);
+  EXPECT_GE(in.materials[0].maps[size_t(MaterialSlot::kNormal)], 0);
+  EXPECT_EQ(in.materials[0].maps[size_t(MaterialSlot::kSpecular)], in.materials[0].maps[size_t(MaterialSlot::kBump)]);
   const Result r = optimize(in, small_options());
   write_obj(r.output, (dir / "out").string(), "plate", ImageFormat::kPng);
   const TexturedMesh back = read_obj((dir / "out" / "plate.obj").string());
-  for (const MapSlot slot : {MapSlot::kNormal, MapSlot::kSpecular, MapSlot::kBump})
-    EXPECT_GE(back.materials[0].maps[size_t(slot)], 0) << map_slot_name(slot);
-  const std::vector<MapFigures> figures = measure_maps(in, back);
-  const MapFigures* normal = figures_of(figures, MapSlot::kNormal);
+  for (const MaterialSlot slot : {MaterialSlot::kNormal, MaterialSlot::kSpecular, MaterialSlot::kBump})
+    EXPECT_GE(back.materials[0].maps[size_t(slot)], 0) << material_slot_name(slot);
+  const std::vector<MaterialMapFigures> figures = measure_material_maps(in, back);
+  const MaterialMapFigures* normal = figures_of(figures, MaterialSlot::kNormal);
   ASSERT_NE(normal, nullptr);  // OBJ has no TANGENT: both sides take the computed frames
   EXPECT_LT(normal->angle_median, 2.0);
   fs::remove_all(dir);
 }
 
-TEST(Maps, AMapShortOfItsCheckIsBakedLargerWhereItsTexelsPay) {
+TEST(MaterialMaps, AMapShortOfItsCheckIsBakedLargerWhereItsTexelsPay) {
   // The occlusion has detail (8 input texels a period) that the input's density holds and the base
   // colour's size (half the input's side) does not; the base colour is flat, so that its own texels
   // remove no error and the map's added texels pay.
@@ -188,35 +188,35 @@ TEST(Maps, AMapShortOfItsCheckIsBakedLargerWhereItsTexelsPay) {
   Options defaulted = small_options();
   defaulted.size = 64;  // as tightex's own budget (at_default_budget), which maps may exceed
   Options unsized = defaulted;
-  unsized.map_budget_db = 0;  // every map at the base colour's size
+  unsized.material_map_budget_db = 0;  // every map at the base colour's size
   const Result plain = at_default_budget(in, unsized), sized = at_default_budget(in, defaulted);
-  auto image_of = [](const TexturedMesh& out, MapSlot slot) -> const Image& {
+  auto image_of = [](const TexturedMesh& out, MaterialSlot slot) -> const Image& {
     return out.textures[size_t(out.materials[0].maps[size_t(slot)])].image;
   };
   const Image& base = sized.output.textures[size_t(sized.output.materials[0].texture)].image;
-  const Image& before = image_of(plain.output, MapSlot::kMetallicRoughness);
-  const Image& after = image_of(sized.output, MapSlot::kMetallicRoughness);
-  const Image& input = in.textures[size_t(in.materials[0].maps[size_t(MapSlot::kMetallicRoughness)])].image;
+  const Image& before = image_of(plain.output, MaterialSlot::kMetallicRoughness);
+  const Image& after = image_of(sized.output, MaterialSlot::kMetallicRoughness);
+  const Image& input = in.textures[size_t(in.materials[0].maps[size_t(MaterialSlot::kMetallicRoughness)])].image;
   EXPECT_EQ(before.width, base.width);
   ASSERT_GT(after.width, before.width);
   EXPECT_EQ(int64_t(after.width) * base.height, int64_t(after.height) * base.width);  // the same texture coordinates
   EXPECT_LE(int64_t(after.width) * after.height, int64_t(input.width) * input.height);
-  EXPECT_EQ(image_of(sized.output, MapSlot::kNormal).width, base.width);  // judged against itself: never larger
-  const std::vector<MapFigures> figures_before = measure_maps(in, plain.output), figures_after = measure_maps(in, sized.output);
-  EXPECT_GT(figures_of(figures_after, MapSlot::kOcclusion)->surface_psnr,
-            figures_of(figures_before, MapSlot::kOcclusion)->surface_psnr + 0.5);
+  EXPECT_EQ(image_of(sized.output, MaterialSlot::kNormal).width, base.width);  // judged against itself: never larger
+  const std::vector<MaterialMapFigures> figures_before = measure_material_maps(in, plain.output), figures_after = measure_material_maps(in, sized.output);
+  EXPECT_GT(figures_of(figures_after, MaterialSlot::kOcclusion)->surface_psnr,
+            figures_of(figures_before, MaterialSlot::kOcclusion)->surface_psnr + 0.5);
   EXPECT_GT(report_json(sized.report)["maps"][0]["scale"].get<double>(), 1.0);
   EXPECT_EQ(report_json(sized.report)["maps"][0]["sizes"][0][0].get<int>(), after.width);
   Options capped = defaulted;
   capped.max_page_side = base.width;  // no page side beyond the base colour's
   const Result at_cap = at_default_budget(in, capped);
-  EXPECT_EQ(image_of(at_cap.output, MapSlot::kMetallicRoughness).width, base.width);
+  EXPECT_EQ(image_of(at_cap.output, MaterialSlot::kMetallicRoughness).width, base.width);
   const Result chosen = optimize(in, small_options());  // a budget the caller chose (--size): kept by every map
-  EXPECT_EQ(image_of(chosen.output, MapSlot::kMetallicRoughness).width,
+  EXPECT_EQ(image_of(chosen.output, MaterialSlot::kMetallicRoughness).width,
             chosen.output.textures[size_t(chosen.output.materials[0].texture)].image.width);
 }
 
-TEST(Maps, AMapNoFinerThanTheBaseColourKeepsItsSize) {
+TEST(MaterialMaps, AMapNoFinerThanTheBaseColourKeepsItsSize) {
   // The same occlusion below the budget, beside a base colour with the same detail at more contrast: the
   // base colour's texels remove more error than the map's added texels would, and the check asks the
   // map no more than the base colour's size gives. (Growing while any step gained 0.25 dB took it larger.)
@@ -225,11 +225,11 @@ TEST(Maps, AMapNoFinerThanTheBaseColourKeepsItsSize) {
   const Options opt = small_options();
   const Result r = at_default_budget(in, opt);
   const Material& mat = r.output.materials[0];
-  EXPECT_EQ(r.output.textures[size_t(mat.maps[size_t(MapSlot::kOcclusion)])].image.width,
+  EXPECT_EQ(r.output.textures[size_t(mat.maps[size_t(MaterialSlot::kOcclusion)])].image.width,
             r.output.textures[size_t(mat.texture)].image.width);
-  const MapFigures* occlusion = figures_of(measure_maps(in, r.output), MapSlot::kOcclusion);
+  const MaterialMapFigures* occlusion = figures_of(measure_material_maps(in, r.output), MaterialSlot::kOcclusion);
   ASSERT_NE(occlusion, nullptr);
-  EXPECT_LT(occlusion->surface_psnr, opt.map_budget_db);  // below the budget: not held there by it
+  EXPECT_LT(occlusion->surface_psnr, opt.material_map_budget_db);  // below the budget: not held there by it
 }
 
 /// The report's entry of the map named `name`, or nullptr.
@@ -239,7 +239,7 @@ const nlohmann::json* map_entry(const Result& r, const std::string& name) {
   return nullptr;
 }
 
-TEST(Maps, APackedImageIsJudgedByItsWorstSlot) {
+TEST(MaterialMaps, APackedImageIsJudgedByItsWorstSlot) {
   // One image for metallic-roughness (green and blue, flat here) and occlusion (red, with detail): the
   // size is chosen by the occlusion's own PSNR, not by the mean over the three channels, which the flat
   // channels would lift by about 4.8 dB.
@@ -251,12 +251,12 @@ TEST(Maps, APackedImageIsJudgedByItsWorstSlot) {
   const Result r = at_default_budget(in, opt);
   const nlohmann::json* entry = map_entry(r, "metallic_roughness");
   ASSERT_NE(entry, nullptr);
-  const MapFigures* occlusion = figures_of(measure_maps(in, r.output), MapSlot::kOcclusion);
+  const MaterialMapFigures* occlusion = figures_of(measure_material_maps(in, r.output), MaterialSlot::kOcclusion);
   ASSERT_NE(occlusion, nullptr);
   EXPECT_NEAR((*entry)["judged_psnr_db"].get<double>(), occlusion->surface_psnr, 1.5);
 }
 
-TEST(Maps, AReducedMapIsJudgedAtItsOwnTextureCoordinates) {
+TEST(MaterialMaps, AReducedMapIsJudgedAtItsOwnTextureCoordinates) {
   // An emissive map that is smooth over the surface (the occlusion's red, grey elsewhere): at half the
   // base colour's side it still reads back within the budget, so it is reduced, and the reduced map
   // holds what the judge measured.
@@ -264,28 +264,28 @@ TEST(Maps, AReducedMapIsJudgedAtItsOwnTextureCoordinates) {
   Image emissive = in.textures[2].image;
   for (int y = 0; y < emissive.height; ++y)
     for (int x = 0; x < emissive.width; ++x) emissive.at(x, y).g = emissive.at(x, y).b = 128;
-  in.materials[0].maps[size_t(MapSlot::kEmissive)] = int(in.textures.size());
+  in.materials[0].maps[size_t(MaterialSlot::kEmissive)] = int(in.textures.size());
   in.textures.push_back(Texture{"emissive", std::move(emissive)});
   const Result r = optimize(in, small_options());
   const nlohmann::json* entry = map_entry(r, "emissive");
   ASSERT_NE(entry, nullptr);
   EXPECT_LT((*entry)["scale"].get<double>(), 1.0);
-  const MapFigures* figures = figures_of(measure_maps(in, r.output), MapSlot::kEmissive);
+  const MaterialMapFigures* figures = figures_of(measure_material_maps(in, r.output), MaterialSlot::kEmissive);
   ASSERT_NE(figures, nullptr);
   EXPECT_GE(figures->surface_psnr, (*entry)["judged_psnr_db"].get<double>() - 3.0);
   EXPECT_GE(figures->surface_psnr, 45.0);
 }
 
 /// The warning lines of `stderr_file` that name `slot`'s map.
-size_t warnings_naming(const fs::path& stderr_file, MapSlot slot) {
+size_t warnings_naming(const fs::path& stderr_file, MaterialSlot slot) {
   std::ifstream f(stderr_file);
   size_t n = 0;
   for (std::string line; std::getline(f, line);)
-    n += line.starts_with("tightex: warning: ") && line.find(fmt::format("the {} map", map_slot_name(slot))) != std::string::npos;
+    n += line.starts_with("tightex: warning: ") && line.find(fmt::format("the {} map", material_slot_name(slot))) != std::string::npos;
   return n;
 }
 
-TEST(Maps, PlyAndObjOutputsNameEachMapSlotTheyCannotBind) {
+TEST(MaterialMaps, PlyAndObjOutputsNameEachMapSlotTheyCannotBind) {
   const TexturedMesh in = plate_with_maps();  // normal, and one image as metallic-roughness and occlusion
   const fs::path dir = fs::temp_directory_path() / fmt::format("tightex_maps_unbound_{}", ::getpid());
   fs::remove_all(dir);
@@ -307,8 +307,8 @@ TEST(Maps, PlyAndObjOutputsNameEachMapSlotTheyCannotBind) {
     const std::string cmd = fmt::format("{} '{}' -o '{}' --size 128 --output-format {} --no-html > /dev/null 2> '{}'", TIGHTEX_CLI, input,
                                         out.string(), format, err.string());
     ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
-    EXPECT_EQ(warnings_naming(err, MapSlot::kOcclusion), 1u) << format;
-    EXPECT_EQ(warnings_naming(err, MapSlot::kNormal), unbound == 3u ? 1u : 0u) << format;
+    EXPECT_EQ(warnings_naming(err, MaterialSlot::kOcclusion), 1u) << format;
+    EXPECT_EQ(warnings_naming(err, MaterialSlot::kNormal), unbound == 3u ? 1u : 0u) << format;
     std::ifstream report_file(out / "report.json");
     const nlohmann::json report = nlohmann::json::parse(report_file);
     EXPECT_EQ(report["output"]["not_written"].size(), unbound) << format;
@@ -316,7 +316,7 @@ TEST(Maps, PlyAndObjOutputsNameEachMapSlotTheyCannotBind) {
   fs::remove_all(dir);
 }
 
-TEST(Maps, ComputedTangentsAgreeWithAnExportersTangentAttribute) {
+TEST(MaterialMaps, ComputedTangentsAgreeWithAnExportersTangentAttribute) {
   const fs::path file = fs::path(TIGHTEX_SHARED_DATA) / "khronos_waterbottle" / "WaterBottle.glb";
   if (!fs::exists(file)) GTEST_SKIP() << file << " is absent";
   ModelReadOptions ro;

@@ -1,4 +1,4 @@
-#include "pipeline/bake_maps.hpp"
+#include "pipeline/bake_material_maps.hpp"
 
 #include <tbb/parallel_for.h>
 
@@ -21,11 +21,11 @@ namespace {
 /// The smallest reduction tried: a map's side is at least the base colour's over this.
 constexpr int kMaxReduction = 16;
 /// A map is judged at this many surface points (fixed seed), and may lose this much PSNR to a smaller
-/// size (below Options::map_budget_db).
+/// size (below Options::material_map_budget_db).
 constexpr size_t kJudgePoints = 50000;
 constexpr uint64_t kJudgeSeed = 20240606;
 constexpr double kMaxReductionLossDb = 0.25;
-/// A map below Options::map_budget_db is baked larger only by steps that gain at least this much PSNR
+/// A map below Options::material_map_budget_db is baked larger only by steps that gain at least this much PSNR
 /// on a slot short of its target (besides paying for their texels: step_pays).
 constexpr double kMinEnlargementGainDb = 0.25;
 /// The ideal re-sampler's grid is turned by this angle against the input's texels (BENCHMARKS.md, "Every
@@ -34,36 +34,36 @@ constexpr double kIdealRotation = 30.0 * M_PI / 180.0;
 
 /// The slots that read the same input textures the same way: one output map.
 struct MapGroup {
-  std::vector<MapSlot> slots;
-  MapSource source;
+  std::vector<MaterialSlot> slots;
+  MaterialMapSource source;
 };
 
 /// What a triangle without the map reads: a neutral value (white for factors that multiply, black for
 /// light and specular colour, the unperturbed normal, mid-grey height).
-Rgba8 flat_value(MapSlot slot) {
+Rgba8 flat_value(MaterialSlot slot) {
   switch (slot) {
-    case MapSlot::kEmissive:
-    case MapSlot::kSpecular:
+    case MaterialSlot::kEmissive:
+    case MaterialSlot::kSpecular:
       return {0, 0, 0, 255};
-    case MapSlot::kNormal:
+    case MaterialSlot::kNormal:
       return {128, 128, 255, 255};
-    case MapSlot::kBump:
+    case MaterialSlot::kBump:
       return {128, 128, 128, 255};
     default:
       return {255, 255, 255, 255};
   }
 }
 
-const char* encoding_name(MapEncoding e) {
-  return e == MapEncoding::kSrgbColour ? "srgb_colour" : e == MapEncoding::kData ? "data" : "tangent_normal";
+const char* encoding_name(SlotEncoding e) {
+  return e == SlotEncoding::kSrgbColour ? "srgb_colour" : e == SlotEncoding::kData ? "data" : "tangent_normal";
 }
 
 /// The slots some material binds to a loaded texture, grouped by the textures they read (per material)
 /// and their encoding, in slot order.
 std::vector<MapGroup> map_groups(const TexturedMesh& input) {
   std::vector<MapGroup> groups;
-  for (size_t s = 0; s < kMapSlots; ++s) {
-    const MapSlot slot = MapSlot(s);
+  for (size_t s = 0; s < kMaterialSlots; ++s) {
+    const MaterialSlot slot = MaterialSlot(s);
     std::vector<int> textures(input.materials.size(), -1);
     bool any = false;
     for (size_t m = 0; m < input.materials.size(); ++m) {
@@ -74,7 +74,7 @@ std::vector<MapGroup> map_groups(const TexturedMesh& input) {
     }
     if (!any) continue;
     auto same = std::find_if(groups.begin(), groups.end(), [&](const MapGroup& g) {
-      return g.source.texture_of_material == textures && g.source.encoding == map_encoding(slot);
+      return g.source.texture_of_material == textures && g.source.encoding == slot_encoding(slot);
     });
     if (same != groups.end()) {
       same->slots.push_back(slot);
@@ -82,7 +82,7 @@ std::vector<MapGroup> map_groups(const TexturedMesh& input) {
     }
     MapGroup g;
     g.slots = {slot};
-    g.source.encoding = map_encoding(slot);
+    g.source.encoding = slot_encoding(slot);
     g.source.texture_of_material = std::move(textures);
     g.source.flat = flat_value(slot);
     groups.push_back(std::move(g));
@@ -194,7 +194,7 @@ std::vector<const Image*> page_pointers(const std::vector<Image>& images) {
 }
 
 /// The input's map image that judge point p reads and its texture coordinates there, or nullptr.
-const Image* input_image_at(const TexturedMesh& input, const MapSource& map, const BakeTriangle& tri, const JudgePoint& p, Vec2& uv) {
+const Image* input_image_at(const TexturedMesh& input, const MaterialMapSource& map, const BakeTriangle& tri, const JudgePoint& p, Vec2& uv) {
   const int tex =
       tri.material >= 0 && size_t(tri.material) < map.texture_of_material.size() ? map.texture_of_material[size_t(tri.material)] : -1;
   if (tex < 0 || input.textures[size_t(tex)].image.empty()) return nullptr;
@@ -206,7 +206,7 @@ const Image* input_image_at(const TexturedMesh& input, const MapSource& map, con
 /// `reduction`: read back bilinearly at the point's new texture coordinates) against `reference` at the
 /// same points: the input's map through the input coordinates, or (`reference_pages` set) the
 /// full-size bake.
-ChannelErrors judged_errors(const TexturedMesh& input, const MapSource& map, const std::vector<BakeTriangle>& triangles,
+ChannelErrors judged_errors(const TexturedMesh& input, const MaterialMapSource& map, const std::vector<BakeTriangle>& triangles,
                             const std::vector<JudgePoint>& points, const std::vector<const Image*>& pages,
                             const std::vector<const Image*>* reference_pages, int reduction = 1) {
   ChannelErrors errors;
@@ -257,7 +257,7 @@ std::array<float, 4> ideal_resample(const Image& img, const Vec2& uv) {
 }
 
 /// The ideal re-sampler's errors for `map` at the judge points, against the input's map read bilinearly.
-ChannelErrors ideal_errors(const TexturedMesh& input, const MapSource& map, const std::vector<BakeTriangle>& triangles,
+ChannelErrors ideal_errors(const TexturedMesh& input, const MaterialMapSource& map, const std::vector<BakeTriangle>& triangles,
                            const std::vector<JudgePoint>& points) {
   std::vector<std::array<float, 4>> ideal(points.size()), exact(points.size());
   std::vector<uint8_t> counts(points.size(), 0);
@@ -278,10 +278,10 @@ ChannelErrors ideal_errors(const TexturedMesh& input, const MapSource& map, cons
 /// `min_psnr_db` against the input or loses at most kMaxReductionLossDb against its full-size bake's
 /// errors `full`; a normal map (whose new texels are in another frame than the input's) against its
 /// full-size bake, at least `min_psnr_db`. Returns the reduction and its errors.
-std::pair<int, ChannelErrors> choose_reduction(const TexturedMesh& input, const MapSource& map, const std::vector<BakeTriangle>& triangles,
+std::pair<int, ChannelErrors> choose_reduction(const TexturedMesh& input, const MaterialMapSource& map, const std::vector<BakeTriangle>& triangles,
                                                const std::vector<JudgePoint>& points, const std::vector<Image>& full_pages,
                                                const std::vector<unsigned>& slot_channels, const ChannelErrors& full, double min_psnr_db) {
-  const bool normal = map.encoding == MapEncoding::kTangentNormal;
+  const bool normal = map.encoding == SlotEncoding::kTangentNormal;
   const std::vector<const Image*> full_size = page_pointers(full_pages);
   int chosen = 1;
   ChannelErrors chosen_errors = full;
@@ -305,7 +305,7 @@ std::pair<int, ChannelErrors> choose_reduction(const TexturedMesh& input, const 
 
 /// A map's side over the base colour's: num / den (den divides every page's sides, so that the same
 /// texture coordinates address the same point of the larger page).
-struct MapScale {
+struct MaterialMapScale {
   int num = 1, den = 1;
   double value() const { return double(num) / den; }
 };
@@ -313,7 +313,7 @@ struct MapScale {
 /// The pages' bake triangles and rectangles at `scale`: pixel coordinates times the scale, rectangle
 /// edges floored. For a scale >= 1 every texel centre inside a chart stays inside its rectangle, and
 /// rectangles that did not overlap still do not.
-std::pair<std::vector<BakeTriangle>, std::vector<Rect>> scaled_layout(const OutputModel& om, MapScale scale) {
+std::pair<std::vector<BakeTriangle>, std::vector<Rect>> scaled_layout(const OutputModel& om, MaterialMapScale scale) {
   std::vector<BakeTriangle> triangles = om.bake_triangles;
   for (BakeTriangle& t : triangles)
     for (Vec2& px : t.target_px) px *= scale.value();
@@ -329,7 +329,7 @@ std::pair<std::vector<BakeTriangle>, std::vector<Rect>> scaled_layout(const Outp
 /// The larger scales a map may take: steps of 1/den (den the largest of 8, 4, 2, 1 dividing every new
 /// page's sides) above 1, up to as many texels as the map's input images hold together and no page
 /// side above `max_side` (Options::max_page_side; 0: no cap). In increasing order; empty when none fits.
-std::vector<MapScale> enlargements(const TexturedMesh& input, const MapSource& map, const OutputModel& om, int max_side) {
+std::vector<MaterialMapScale> enlargements(const TexturedMesh& input, const MaterialMapSource& map, const OutputModel& om, int max_side) {
   double input_texels = 0, page_texels = 0;
   std::vector<int> seen;
   for (int tex : map.texture_of_material)
@@ -344,9 +344,9 @@ std::vector<MapScale> enlargements(const TexturedMesh& input, const MapSource& m
     longest_side = std::max({longest_side, page.width, page.height});
     while (den > 1 && (page.width % den != 0 || page.height % den != 0)) den /= 2;
   }
-  std::vector<MapScale> scales;
+  std::vector<MaterialMapScale> scales;
   for (int num = den + 1; page_texels > 0; ++num) {
-    const MapScale s{num, den};
+    const MaterialMapScale s{num, den};
     if (s.value() * s.value() * page_texels > input_texels || (max_side > 0 && int64_t(longest_side) * num / den > max_side)) break;
     scales.push_back(s);
   }
@@ -354,7 +354,7 @@ std::vector<MapScale> enlargements(const TexturedMesh& input, const MapSource& m
 }
 
 /// Allocated black pages for a map at `scale` of the base colour's pages.
-std::vector<Image> blank_pages(const OutputModel& om, MapScale scale) {
+std::vector<Image> blank_pages(const OutputModel& om, MaterialMapScale scale) {
   std::vector<Image> images;
   for (int p = 0; p < om.new_images; ++p) {
     const Image& colour = om.mesh.textures[size_t(p)].image;
@@ -374,7 +374,7 @@ struct BaseColour {
 };
 
 BaseColour base_colour_figures(const TexturedMesh& input, const OutputModel& om, const std::vector<JudgePoint>& points) {
-  MapSource colour;
+  MaterialMapSource colour;
   for (const Material& m : input.materials) colour.texture_of_material.push_back(m.texture);
   BaseColour b;
   std::vector<const Image*> pages;
@@ -401,7 +401,7 @@ struct Sizing {
   const std::vector<JudgePoint>& points;
   std::vector<unsigned> slot_channels;
   std::vector<double> targets;
-  std::vector<MapScale> scales;
+  std::vector<MaterialMapScale> scales;
   const BaseColour* base = nullptr;
 };
 
@@ -426,21 +426,21 @@ double shortfall(const ChannelErrors& errors, const Sizing& z) {
 /// A map baked at `scale` of the base colour's pages, and its errors at the judge points.
 struct ScaledBake {
   std::vector<Image> pages;
-  MapScale scale;
+  MaterialMapScale scale;
   ChannelErrors errors;
 };
 
-ScaledBake bake_at(const TexturedMesh& input, const MapSource& map, const OutputModel& om, MapScale scale, const Sizing& z,
+ScaledBake bake_at(const TexturedMesh& input, const MaterialMapSource& map, const OutputModel& om, MaterialMapScale scale, const Sizing& z,
                    const BakeOptions& options) {
   auto [triangles, rects] = scaled_layout(om, scale);
   ScaledBake b{blank_pages(om, scale), scale, {}};
-  bake_map(input, map, triangles, rects, b.pages, nullptr, options);
+  bake_material_map(input, map, triangles, rects, b.pages, nullptr, options);
   b.errors = judged_errors(input, map, triangles, z.points, page_pointers(b.pages), nullptr);
   return b;
 }
 
 /// The texels of a map at `scale` of the base colour's pages.
-double texels_at(MapScale scale, const Sizing& z) { return scale.value() * scale.value() * z.base->texels; }
+double texels_at(MaterialMapScale scale, const Sizing& z) { return scale.value() * scale.value() * z.base->texels; }
 
 /// Whether growing the map from `from` to `to` pays for its texels: for some slot still short of its
 /// target, the step gains at least kMinEnlargementGainDb and removes at least as much squared error per
@@ -458,7 +458,7 @@ bool step_pays(const ScaledBake& from, const ScaledBake& to, const Sizing& z) {
 /// Within a step from `from` to `to` (z.scales[last]) that reaches every target: the scale of
 /// z.scales[first, last) where the shortfall, interpolated over log2 of the texels, reaches 0 (rounded
 /// up), baked, if that reaches every target; else `to`.
-ScaledBake smallest_reaching(const TexturedMesh& input, const MapSource& map, const OutputModel& om, const Sizing& z,
+ScaledBake smallest_reaching(const TexturedMesh& input, const MaterialMapSource& map, const OutputModel& om, const Sizing& z,
                              const BakeOptions& options, const ScaledBake& from, ScaledBake to, size_t first, size_t last) {
   const double before = shortfall(from.errors, z), after = shortfall(to.errors, z);
   const double lo = std::log2(texels_at(from.scale, z)), hi = std::log2(texels_at(to.scale, z));
@@ -474,7 +474,7 @@ ScaledBake smallest_reaching(const TexturedMesh& input, const MapSource& map, co
 /// (step_pays), in steps that about double its texels (the smallest of z.scales with twice the texels,
 /// else the largest), stopping at the first step that reaches every target (smallest_reaching within
 /// it). Returns whether it grew.
-bool enlarge(const TexturedMesh& input, const MapSource& map, const OutputModel& om, const Sizing& z, const BakeOptions& options,
+bool enlarge(const TexturedMesh& input, const MaterialMapSource& map, const OutputModel& om, const Sizing& z, const BakeOptions& options,
              ScaledBake& best) {
   bool grew = false;
   for (size_t next = 0; next < z.scales.size();) {
@@ -495,25 +495,25 @@ bool enlarge(const TexturedMesh& input, const MapSource& map, const OutputModel&
 /// judge points.
 struct SizedMap {
   std::vector<Image> pages;
-  MapScale enlarged;
+  MaterialMapScale enlarged;
   int reduction = 1;
   double psnr = 99;
 };
 
-/// The map baked at the base colour's size, then sized by `sizing`'s map_budget_db. Where some slot is
+/// The map baked at the base colour's size, then sized by `sizing`'s material_map_budget_db. Where some slot is
 /// below it and the budget is tightex's own (TextureBudget::is_default), the map is baked larger (enlarge) while
 /// some slot falls short of what its check asks (slot_targets) and the added texels pay for themselves
 /// (step_pays), within its input images' texels (enlargements); otherwise it is reduced as far as
 /// choose_reduction allows. A normal map (judged against its own full-size bake) is never enlarged.
 /// `base` gives the base colour's figures (computed once, on first use).
-SizedMap bake_sized_map(const TexturedMesh& input, const MapSource& map, const OutputModel& om, const std::vector<unsigned>& slot_channels,
+SizedMap bake_sized_map(const TexturedMesh& input, const MaterialMapSource& map, const OutputModel& om, const std::vector<unsigned>& slot_channels,
                         const Options& sizing, const BakeOptions& options, const std::vector<JudgePoint>& points,
                         const std::function<const BaseColour&()>& base) {
-  const double min_psnr_db = sizing.map_budget_db;
+  const double min_psnr_db = sizing.material_map_budget_db;
   ScaledBake best{blank_pages(om, {}), {}, {}};
-  bake_map(input, map, om.bake_triangles, om.rects, best.pages, nullptr, options);
+  bake_material_map(input, map, om.bake_triangles, om.rects, best.pages, nullptr, options);
   if (!(min_psnr_db > 0)) return {std::move(best.pages), {}, 1, 99};
-  const bool normal = map.encoding == MapEncoding::kTangentNormal;
+  const bool normal = map.encoding == SlotEncoding::kTangentNormal;
   if (!normal) best.errors = judged_errors(input, map, om.bake_triangles, points, page_pointers(best.pages), nullptr);
   const bool below =
       std::any_of(slot_channels.begin(), slot_channels.end(), [&](unsigned ch) { return best.errors.psnr(ch) < min_psnr_db; });
@@ -534,10 +534,10 @@ SizedMap bake_sized_map(const TexturedMesh& input, const MapSource& map, const O
 
 }  // namespace
 
-std::vector<MapEntry> bake_other_maps(const TexturedMesh& input, const Options& options, OutputModel& om) {
+std::vector<MaterialMapEntry> bake_material_maps(const TexturedMesh& input, const Options& options, OutputModel& om) {
   std::vector<MapGroup> groups = map_groups(input);
   const bool normal_map =
-      std::any_of(groups.begin(), groups.end(), [](const MapGroup& g) { return g.source.encoding == MapEncoding::kTangentNormal; });
+      std::any_of(groups.begin(), groups.end(), [](const MapGroup& g) { return g.source.encoding == SlotEncoding::kTangentNormal; });
   std::vector<NormalFrames> frames;
   if (normal_map || !input.corner_tangent.empty()) {
     const std::vector<Eigen::Vector4d> input_tangents = completed_corner_tangents(input);
@@ -550,13 +550,13 @@ std::vector<MapEntry> bake_other_maps(const TexturedMesh& input, const Options& 
   if (options.fine_fit) bo.fit_samples = kFineFitSamples, bo.fit_lambda = kFineFitLambda;
   // The judge points and the base colour's figures are shared by every map that is sized.
   const std::vector<JudgePoint> points =
-      options.map_budget_db > 0 && !groups.empty() ? judge_points(om.bake_triangles, kJudgePoints) : std::vector<JudgePoint>{};
+      options.material_map_budget_db > 0 && !groups.empty() ? judge_points(om.bake_triangles, kJudgePoints) : std::vector<JudgePoint>{};
   std::optional<BaseColour> base;
   const std::function<const BaseColour&()> base_colour = [&]() -> const BaseColour& {
     if (!base) base = base_colour_figures(input, om, points);
     return *base;
   };
-  std::vector<MapEntry> entries;
+  std::vector<MaterialMapEntry> entries;
   for (MapGroup& g : groups) {
     const auto start = std::chrono::steady_clock::now();
     g.source.frames = &frames;
@@ -564,13 +564,13 @@ std::vector<MapEntry> bake_other_maps(const TexturedMesh& input, const Options& 
     // A normal map without the fit: the fit would match encoded texels, which a renderer decodes through
     // a frame that turns across the texel; without it the angles are about as good, at a fraction of
     // the time (measured in BENCHMARKS.md, "Every map").
-    if (g.source.encoding == MapEncoding::kTangentNormal) map_options.fit = false;
+    if (g.source.encoding == SlotEncoding::kTangentNormal) map_options.fit = false;
     std::vector<unsigned> slot_channels;
-    for (MapSlot s : g.slots) slot_channels.push_back(map_slot_channels(s));
+    for (MaterialSlot s : g.slots) slot_channels.push_back(material_slot_channels(s));
     SizedMap sized = bake_sized_map(input, g.source, om, slot_channels, options, map_options, points, base_colour);
-    MapEntry entry;
-    entry.name = map_slot_name(g.slots[0]);
-    for (MapSlot s : g.slots) entry.slots.push_back(map_slot_name(s));
+    MaterialMapEntry entry;
+    entry.name = material_slot_name(g.slots[0]);
+    for (MaterialSlot s : g.slots) entry.slots.push_back(material_slot_name(s));
     entry.encoding = encoding_name(g.source.encoding);
     entry.scale = sized.enlarged.value() / sized.reduction;
     entry.judged_psnr_db = sized.psnr;
@@ -579,7 +579,7 @@ std::vector<MapEntry> bake_other_maps(const TexturedMesh& input, const Options& 
       tex.path = om.mesh.textures[size_t(p)].path + "_" + entry.name;
       tex.image = sized.reduction > 1 ? reduce_image(sized.pages[size_t(p)], sized.reduction) : std::move(sized.pages[size_t(p)]);
       entry.sizes.push_back({tex.image.width, tex.image.height});
-      for (MapSlot s : g.slots) om.mesh.materials[size_t(p)].maps[size_t(s)] = int(om.mesh.textures.size());
+      for (MaterialSlot s : g.slots) om.mesh.materials[size_t(p)].maps[size_t(s)] = int(om.mesh.textures.size());
       om.mesh.textures.push_back(std::move(tex));
     }
     entry.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

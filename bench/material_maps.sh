@@ -5,7 +5,7 @@
 # surface PSNR against the ideal re-sampler (tools/map_eval.cpp), the normal maps' angular error, and the Khronos
 # glTF-Validator on every GLB written.
 #
-#   bash bench/maps.sh [OUT]      (needs a build with TIGHTEX_BUILD_TOOLS, the default)
+#   bash bench/material_maps.sh [OUT]      (needs a build with TIGHTEX_BUILD_TOOLS, the default)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-build/maps-bench}

@@ -1,7 +1,7 @@
-// The maps a material binds besides its base colour (MapSlot), re-baked through the same layout as the
+// The maps a material binds besides its base colour (MaterialSlot), re-baked through the same layout as the
 // base colour: one output map per group of slots that read the same input textures (glTF's occlusion
 // and metallic-roughness in one image stay one image), one image per page, each at the size its content
-// needs (Options::map_budget_db).
+// needs (Options::material_map_budget_db).
 #pragma once
 #include <string>
 #include <vector>
@@ -17,6 +17,6 @@ namespace tightex {
 /// when the input has a tangent-space normal map or tangents. Returns the report's "maps" entries.
 /// Requires: `om` built by build_output_model from `input`, its first om.new_images textures baked.
 /// Throws: nothing but std::bad_alloc.
-std::vector<MapEntry> bake_other_maps(const TexturedMesh& input, const Options& options, OutputModel& om);
+std::vector<MaterialMapEntry> bake_material_maps(const TexturedMesh& input, const Options& options, OutputModel& om);
 
 }  // namespace tightex
