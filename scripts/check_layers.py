@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
 """Checks docs/architecture.md's layering over the #include lines: each folder of src/ includes only
 itself, the public headers (include/tightex/) and the folders before it in the data flow's order; the
-public headers include nothing from src/ and no third-party header but Eigen's (the mesh's vectors).
+report's headers include only core's, the report's own and the public ones (the stages' records live in
+core/stage_stats.hpp); the public headers include nothing from src/ and no third-party header but
+Eigen's (the mesh's vectors).
 Prints each include that breaks a rule and exits 1 if any does.
 
     python3 scripts/check_layers.py [ROOT]
@@ -35,6 +37,20 @@ def stage_breaks(root):
                     yield f"{path.relative_to(root)}:{number}: {folder} includes {header}, a later stage"
 
 
+#: Folders whose headers may include only core's, their own and the public headers.
+CORE_ONLY_HEADERS = ["report"]
+
+
+def header_breaks(root):
+    """Each include of a stage's header (but core's and its own) by a header of CORE_ONLY_HEADERS."""
+    for folder in CORE_ONLY_HEADERS:
+        for path in sorted((root / "src" / folder).glob("*.hpp")):
+            for number, delimiter, header in includes(path):
+                stage = header.split("/")[0]
+                if delimiter == '"' and stage in ORDER and stage not in ("core", folder):
+                    yield f"{path.relative_to(root)}:{number}: a {folder} header includes {header}, a stage's interface"
+
+
 def public_breaks(root):
     """Each include of src/ or of a third-party header (but Eigen) by a public header."""
     for path in sorted((root / "include" / "tightex").glob("*.hpp")):
@@ -49,7 +65,7 @@ def public_breaks(root):
 
 def main():
     root = pathlib.Path(sys.argv[1] if len(sys.argv) > 1 else pathlib.Path(__file__).resolve().parent.parent)
-    breaks = list(stage_breaks(root)) + list(public_breaks(root))
+    breaks = list(stage_breaks(root)) + list(header_breaks(root)) + list(public_breaks(root))
     for b in breaks:
         print(b)
     print(f"check_layers: {len(breaks)} include(s) against the layering")

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/mesh.hpp"
+#include "core/stage_stats.hpp"
 #include "layout/layout.hpp"
 
 namespace tightex {
@@ -83,12 +84,6 @@ struct BakeOptions {
 constexpr int kFineFitSamples = 4;
 constexpr double kFineFitLambda = 0.3;
 
-struct BakeStats {
-  size_t texels_filled = 0;              // texel centres inside some triangle
-  size_t texels_dilated = 0;             // texels of a rectangle that no triangle covers (scaffolding, rounding)
-  size_t texels_footprint_filtered = 0;  // texels averaged over more than one sample (minified input)
-  size_t tiles_fitted = 0, tiles = 0;    // least-squares fit
-};
 
 /// The new texture (paper §4.3, Alg. 3, scan-line texture generation), then footprint filtering,
 /// dilation and the least-squares fit for bilinear read-back.

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/disk.hpp"
+#include "core/stage_stats.hpp"
 #include "core/surface.hpp"
 #include "prepare/handles.hpp"
 #include "tightex/options.hpp"
@@ -16,27 +17,6 @@ namespace tightex {
 /// Chosen by measurement: docs/decisions.md.
 constexpr double kFillBudget = 0.005;
 
-/// What cut_to_disk did to a component (the report shows it).
-struct CutStats {
-  Topology before;  // of the component as given (holes not yet filled)
-  size_t holes_filled = 0;
-  size_t holes_cut = 0;              // joined into the disk boundary
-  double fill_budget = 0;            // the cap budget it was cut with (fraction of the component's area)
-  double filled_area = 0;            // the caps' area (fraction of the component's area)
-  size_t cut_edges = 0;              // interior edges cut open
-  double cut_length = 0;             // their 3D length
-  double seam_length = 0;            // 3D length of the seam the output gets here (handle loops, holes joined, cut, slits)
-  double seam_on_input_seams = 0;    // the part of it on the input's texture seams
-  std::string method;                // CutGraph::method, with "+slit" when deep parts were slit (see cut_to_disk)
-  size_t slits = 0;                  // slits from the boundary to deep vertices
-  std::string fallback_reason;       // non-empty: the full method failed here and the plain cut was used
-  std::vector<double> handle_loops;  // 3D length of each handle loop cut (see remove_handles)
-  size_t longest_loop_edges = 0;     // edges of the longest boundary loop (handles removed, before any cap; 0: closed)
-  bool longest_loop_capped = false;  // cap_longest_loop asked for it and the longest loop was capped too
-  // Set by the pipeline where a small longest hole was tried both ways (kept as the boundary, then
-  // capped too): each map's estimated colour error (resampling_mse); empty where not tried.
-  std::vector<double> compared_mse;
-};
 
 /// What cut_to_disk does to a component.
 enum class CutMethod {

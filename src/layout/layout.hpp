@@ -5,14 +5,10 @@
 #include <vector>
 
 #include "core/mesh.hpp"
+#include "core/stage_stats.hpp"
 
 namespace tightex {
 
-/// A rectangle of texels: columns [x, x+w), rows [y, y+h) (row 0 at the top of the image).
-struct Rect {
-  int image = 0;
-  int x = 0, y = 0, w = 0, h = 0;
-};
 
 /// Where the unit square's point s (u right, v up) lands in rectangle r, in pixel coordinates (x right,
 /// y down, texel centres at +0.5): the square's corners on the corner texels' centres, pushed outward

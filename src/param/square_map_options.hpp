@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "core/stage_stats.hpp"
 #include "core/surface.hpp"
 #include "tightex/options.hpp"
 
@@ -84,34 +85,6 @@ struct SquareMapOptions {
   std::function<void(double)> progress;
 };
 
-struct SquareMapStats {
-  std::string weights;                    // "cotangent", "clamped-cotangent" or "uniform": the first that gave no fold
-  size_t flipped = 0;                     // triangles with UV area <= 0 in the returned map (0 unless every weight failed)
-  size_t negative_weights = 0;            // interior edges whose cotangent weight was negative
-  std::array<uint32_t, 4> corners{};      // boundary vertices at (0,0), (1,0), (1,1), (0,1)
-  std::vector<size_t> folds_per_attempt;  // folded triangles of each weighting tried, in order
-  size_t bumped_vertices = 0;
-  /// A vertex of a triangle that folded even with positive weights: the map crowded a region below
-  /// floating-point precision there (harmonic maps crowd exponentially in protrusions). kNone if none.
-  uint32_t crowded_vertex = kNone;
-  // Density iterations (face_target given): P5/P95 of log2(area / target), weighted by target, before
-  // (the harmonic map with the density-placed boundary) and after.
-  int iterations = 0;
-  double spread_before_p5 = 0, spread_before_p95 = 0, spread_p5 = 0, spread_p95 = 0;
-  std::string stopped;                 // "converged", "iterations", "stalled" or "fold" (the last fold-free iterate is kept)
-  std::vector<double> blended_target;  // internal: the targets the iterations aimed at (cleared on return)
-  int refine_iterations = 0, correction_rounds = 0;
-  double refine_energy_before = 0, refine_energy = 0;
-  std::string refine_stopped;
-  int flow_steps = 0;
-  int flow_lead_steps = 0;   // symmetric Dirichlet steps before the flow (fewer than asked if they converged)
-  int flow_shape_steps = 0;  // symmetric Dirichlet steps towards the flowed shapes (0: each flowed map was kept as it was)
-  std::string flow_stopped;  // FlowStats::stopped, ", reverted" added if it was undone; empty if not run
-  /// Multilevel maps: the coarse copy's vertices (0: mapped at full resolution) and the reweighting and
-  /// symmetric Dirichlet steps on the full mesh (iterations and refine_iterations count the coarse copy's).
-  size_t coarse_vertices = 0;
-  int fine_reweighting = 0, fine_steps = 0;
-};
 
 /// The width/height of the texel rectangle the map is computed for (texel spacing the same both ways):
 /// the options' rectangle for a map with a density target, 1 (the square) for the paper's map.

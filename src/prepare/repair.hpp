@@ -4,22 +4,11 @@
 #include <utility>
 #include <vector>
 
+#include "core/stage_stats.hpp"
 #include "core/surface.hpp"
 
 namespace tightex {
 
-struct RepairStats {
-  size_t input_vertices = 0;
-  size_t welded_vertices = 0;       // vertices after welding equal positions
-  size_t zero_area_triangles = 0;   // dropped: repeated vertex or exactly zero 3D area
-  size_t repeated_triangles = 0;   // set aside: an exact repeat of an earlier triangle (the output repeats its copy)
-  size_t layered_triangles = 0;     // the corners of an earlier triangle with other texture coordinates or material: a surface of their own
-  size_t reoriented_triangles = 0;  // wound against the rest of their patch: corners 1 and 2 swapped
-  size_t non_manifold_edges = 0;    // edges used by more than two triangles, sliced apart
-  size_t inconsistent_edges = 0;    // edges whose two triangles disagree on orientation, sliced apart
-  size_t sliced_vertices = 0;       // welded vertices that became more than one vertex
-  size_t slits_closed = 0;          // sliced edges glued back within one sheet (see prepare_surface)
-};
 
 /// Makes the input a clean manifold surface (paper §4.1), in six steps: welds vertices with bit-equal
 /// positions within each source mesh (TexturedMesh::source_mesh), drops zero-area triangles, sets

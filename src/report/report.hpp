@@ -8,13 +8,10 @@
 #include <string>
 #include <vector>
 
-#include "bake/bake.hpp"
-#include "cut/cut.hpp"
-#include "tightex/io.hpp"
-#include "layout/layout.hpp"
-#include "param/param.hpp"
-#include "prepare/repair.hpp"
+#include "core/stage_stats.hpp"
+#include "core/surface.hpp"
 #include "report/metrics.hpp"
+#include "tightex/io.hpp"
 #include "tightex/options.hpp"
 #include "tightex/report.hpp"
 
