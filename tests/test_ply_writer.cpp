@@ -17,6 +17,7 @@
 #include <string>
 
 #include "core/error.hpp"
+#include "io/output_files.hpp"
 #include "mesh_catalogue.hpp"
 #include "report/metrics.hpp"
 #include "tightex/io.hpp"
@@ -194,6 +195,48 @@ TEST_F(PlyWriterTest, CommandLineRefusesToWriteOverAPlyInput) {
   const std::string message((std::istreambuf_iterator<char>(f)), {});
   EXPECT_NE(message.find("multi.ply would replace the input"), std::string::npos) << message;
   EXPECT_FALSE(fs::exists(dir_ / "in" / "report.json"));
+}
+
+}  // namespace
+}  // namespace tightex
+
+namespace tightex {
+namespace {
+
+// round_uvs_as_stored: the texture coordinates a run measures are those its written file holds, so the
+// report's flipped and degenerate counts are the file's (glTF stores the float of 1 - v, PLY floats).
+TEST(StoredUvs, RoundedAsTheFileHoldsThem) {
+  const fs::path dir = fs::temp_directory_path() / "tightex_stored_uvs";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  TexturedMesh mesh = cat::multi_component();
+  for (Vec2& uv : mesh.corner_uv) uv = Vec2(uv.x() / 3.0 + 1e-9, uv.y() / 7.0 + 1e-9);  // values no float holds
+  for (const ModelFormat format : {ModelFormat::kPly, ModelFormat::kGlb}) {
+    const std::string name = std::string(to_string(format));
+    if (format == ModelFormat::kPly)
+      write_ply(mesh, dir.string(), name, ImageFormat::kPng);
+    else
+      write_gltf(mesh, dir.string(), name, ImageFormat::kPng, GltfContainer::kGlb);
+    const TexturedMesh back = read_model((dir / (name + "." + name)).string());
+    TexturedMesh rounded = mesh;
+    round_uvs_as_stored(rounded, format);
+    ASSERT_EQ(back.num_triangles(), rounded.num_triangles()) << name;
+    // Each written triangle's corners, found by position, carry the rounded coordinates exactly.
+    size_t compared = 0;
+    for (size_t t = 0; t < back.num_triangles(); ++t)
+      for (size_t s = 0; s < rounded.num_triangles(); ++s) {
+        bool same = true;
+        for (int k = 0; k < 3; ++k)  // glTF stores positions as floats
+          same = same && (back.positions[back.triangles[t][k]] - rounded.positions[rounded.triangles[s][k]]).norm() < 1e-6;
+        if (!same) continue;
+        for (int k = 0; k < 3; ++k) EXPECT_EQ(back.corner_uv[3 * t + size_t(k)], rounded.corner_uv[3 * s + size_t(k)]) << name << " triangle " << t;
+        ++compared;
+        break;
+      }
+    EXPECT_EQ(compared, back.num_triangles()) << name;
+    EXPECT_NE(rounded.corner_uv, mesh.corner_uv) << name << ": the rounding changed nothing";
+  }
+  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -60,6 +60,23 @@ std::string texture_file_name(const Texture& texture, ImageFormat format) {
   return texture.path + image_extension(format);
 }
 
+void round_uvs_as_stored(TexturedMesh& mesh, ModelFormat format) {
+  if (format == ModelFormat::kObj) return;
+  const bool gltf = format == ModelFormat::kGltf || format == ModelFormat::kGlb;
+  for (size_t t = 0; t < mesh.num_triangles(); ++t) {
+    const int32_t m = mesh.face_material[t];
+    if (m >= 0) {
+      const Material& mat = mesh.materials[size_t(m)];
+      if (mat.uv_scale[0] != 1 || mat.uv_scale[1] != 1 || mat.uv_offset[0] != 0 || mat.uv_offset[1] != 0) continue;
+    }
+    for (int c = 0; c < 3; ++c) {
+      Vec2& uv = mesh.corner_uv[3 * t + size_t(c)];
+      const float u = float(uv.x()), v = float(gltf ? 1.0 - uv.y() : uv.y());
+      uv = Vec2(double(u), gltf ? 1.0 - double(v) : double(v));
+    }
+  }
+}
+
 std::vector<OutputFile> texture_output_files(const TexturedMesh& mesh, const ImageEncoding& encoding) {
   std::vector<OutputFile> files;
   for (const Texture& tex : mesh.textures) {

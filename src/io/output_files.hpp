@@ -42,6 +42,12 @@ void write_whole_file(const std::filesystem::path& path, std::span<const std::st
 /// extension of `format` (.png or .jpg).
 std::string texture_file_name(const Texture& texture, ImageFormat format);
 
+/// Rounds `mesh`'s texture coordinates to what a model file of `format` stores and its reader reads
+/// back (glTF: the float of 1 - v; PLY: floats; OBJ: shortest round-trip text, unchanged), on every
+/// triangle whose material has no texture scale or offset (those store the transformed coordinate).
+/// Measured after it, a map's figures (flipped, degenerate, coverage) are those of the written file.
+void round_uvs_as_stored(TexturedMesh& mesh, ModelFormat format);
+
 /// One OutputFile per texture of `mesh`, in its order, named by texture_file_name and writing the image
 /// as `encoding` says. The writers refer to `mesh`, which must outlive them.
 /// Throws InputError for an encoding save_image refuses (check_image_encoding), before anything is written.

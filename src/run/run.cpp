@@ -16,6 +16,7 @@
 #include "core/resources.hpp"
 #include "io/image_io.hpp"
 #include "io/model_files.hpp"
+#include "io/output_files.hpp"
 #include "io/texture_sources.hpp"
 #include "pipeline/plan_state.hpp"
 #include "report/report.hpp"
@@ -169,7 +170,7 @@ uint64_t total_bytes(const EncodingChoice& c) { return std::accumulate(c.bytes.b
 /// it reaches the target in fewer bytes. Stops at the first budget that misses the target or takes more
 /// bytes than the best so far. Returns each budget tried (side, quality, bytes, written PSNR).
 nlohmann::json smallest_reaching_target(const Options& options, const TexturedMesh& input, const std::vector<TextureSource>& sources,
-                                        const TextureBudget& budget, Result& result, EncodingChoice& choice) {
+                                        const TextureBudget& budget, ModelFormat format, Result& result, EncodingChoice& choice) {
   auto entry = [&](int side, const EncodingChoice& c) {
     return nlohmann::json{{"size", side},
                           {"quality", c.encoding.format == ImageFormat::kJpeg ? c.encoding.jpeg_quality : c.encoding.webp_quality},
@@ -183,6 +184,7 @@ nlohmann::json smallest_reaching_target(const Options& options, const TexturedMe
   for (const double fraction : kTargetBudgetFractions) {
     const TextureBudget smaller{std::max(8, int(std::lround(budget.side * std::sqrt(fraction) / 4)) * 4), true};
     Result r = bake_plan(plan_charts(input, quiet, smaller), input, quiet);
+    round_uvs_as_stored(r.output, format);
     EncodingChoice c = choose_encoding(bytes_request(quiet), input, sources, r.output);
     tried.push_back(entry(smaller.side, c));
     if (!(c.written_psnr_db.value_or(0) >= options.target_psnr_db) || total_bytes(c) >= total_bytes(choice)) break;
@@ -199,10 +201,11 @@ nlohmann::json smallest_reaching_target(const Options& options, const TexturedMe
 /// `method` is the options the method ran with (method_options).
 std::pair<EncodingChoice, nlohmann::json> choose_images(const Options& options, const Options& method, const TexturedMesh& input,
                                                         const std::vector<TextureSource>& sources, const TextureBudget& budget,
-                                                        Result& result) {
+                                                        ModelFormat format, Result& result) {
   EncodingChoice choice = choose_encoding(bytes_request(options), input, sources, result.output);
   nlohmann::json budgets;
-  if (budget_follows_target(options, budget, choice)) budgets = smallest_reaching_target(method, input, sources, budget, result, choice);
+  if (budget_follows_target(options, budget, choice))
+    budgets = smallest_reaching_target(method, input, sources, budget, format, result, choice);
   return {std::move(choice), std::move(budgets)};
 }
 
@@ -254,9 +257,10 @@ Report run(const std::string& input, const std::string& outdir, const Options& o
   timings.textures_s = planned.textures_s;
   if (options.layout != Layout::kAtlas) check_per_component_memory(guard, planned.plan);
   Result result = bake_plan(planned.plan, planned.mesh, opt);
+  round_uvs_as_stored(result.output, format);
 
   const std::vector<TextureSource> sources = texture_sources(planned.mesh);
-  auto [choice, budgets] = choose_images(options, opt, planned.mesh, sources, budget, result);
+  auto [choice, budgets] = choose_images(options, opt, planned.mesh, sources, budget, format, result);
   const ModelTarget target{outdir, fs::path(input).stem().string(), format, choice.encoding, options.html};
   WrittenAndMeasured written = write_and_measure(target, planned.mesh, result.output, timings);
   // The surface PSNR of the files as written (a lossy codec's images decoded back), the bake's beside it.
