@@ -14,6 +14,7 @@
 #include <functional>
 #include <iterator>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <set>
 #include <string>
 
@@ -66,7 +67,7 @@ TEST(GltfReader, ReadsTheHandBuiltGlbOnceInLocalSpace) {
   EXPECT_TRUE(m.corner_color.empty());
   ASSERT_EQ(m.materials.size(), 1u);
   EXPECT_EQ(m.materials[0].name, "grid material");
-  EXPECT_NEAR(m.materials[0].kd[0], linear_to_srgb(0.5), 1e-12);
+  EXPECT_EQ(m.materials[0].kd[0], 0.5);  // the linear factor, as OBJ's Kd holds it
   ASSERT_EQ(m.textures.size(), 2u);  // the base colour, then the normal map (another slot)
   EXPECT_EQ(m.textures[0].image.width, 16);
   EXPECT_EQ(m.materials[0].texture, 0);
@@ -141,7 +142,7 @@ TEST(GltfReader, ImagesDecodedAfterTheReadAreThoseTheReadGives) {
   }
 }
 
-TEST(GltfReader, AppliesTextureTransformAndRefusesItsRotation) {
+TEST(GltfReader, AppliesTextureTransformWithItsRotation) {
   const fs::path dir = scratch("transform");
   GridGltf g = testing::grid_gltf();
   json& info = g.doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"];
@@ -149,10 +150,16 @@ TEST(GltfReader, AppliesTextureTransformAndRefusesItsRotation) {
   const TexturedMesh m = read_gltf(grid_glb(dir, g).string());
   EXPECT_NEAR(m.corner_uv[0].x(), 0.25 + 0.5 * double(0.1f), 1e-12);
   EXPECT_NEAR(m.corner_uv[0].y(), 1.0 - 2.0 * double(0.1f), 1e-12);
-  info["extensions"]["KHR_texture_transform"]["rotation"] = 0.5;
+  // A quarter turn takes u to -v and v to u (glTF's v down): the point (0.1, 0.1) scaled to (0.05, 0.2)
+  // lands on offset + (0.2, -0.05), as TextureTransformTest's "correct" marker asks.
+  info["extensions"]["KHR_texture_transform"]["rotation"] = std::numbers::pi / 2;
+  const TexturedMesh turned = read_gltf(grid_glb(dir, g).string());
+  EXPECT_NEAR(turned.corner_uv[0].x(), 0.25 + 2.0 * double(0.1f), 1e-12);
+  EXPECT_NEAR(turned.corner_uv[0].y(), 1.0 - (0.0 - 0.5 * double(0.1f)), 1e-12);
+  info["extensions"]["KHR_texture_transform"]["rotation"] = "half";
   try {
     read_gltf(grid_glb(dir, g).string());
-    ADD_FAILURE() << "a rotated texture transform was read";
+    ADD_FAILURE() << "a rotation that is not a number was read";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("rotation"), std::string::npos) << e.what();
   }

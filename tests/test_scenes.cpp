@@ -15,6 +15,7 @@
 #include "report/report.hpp"
 #include "command_line.hpp"
 #include "core/error.hpp"
+#include "core/image.hpp"
 #include "gltf_builder.hpp"
 #include "gltf_checks.hpp"
 #include "io/gltf_document.hpp"
@@ -165,6 +166,30 @@ TEST(Scenes, ObjAndPlyHoldEveryInstanceInWorldSpace) {
 
 // ---- 3. Nothing to bake ----
 
+/// How many triangles of `baked` (the written model of the glTF at `in_path`, in world space) lie
+/// where the input's untextured ones lie, each checked to show `factor` at its centre as an sRGB texel.
+size_t plain_triangle_colours(const fs::path& in_path, const TexturedMesh& baked, const std::array<double, 3>& factor) {
+  ModelReadOptions world;
+  world.flatten_scene = true;
+  const TexturedMesh in = read_gltf(in_path.string(), world);
+  auto centroid = [](const TexturedMesh& m, size_t t) {
+    return Vec3((m.positions[m.triangles[t][0]] + m.positions[m.triangles[t][1]] + m.positions[m.triangles[t][2]]) / 3);
+  };
+  size_t found = 0;
+  for (size_t t = 0; t < in.num_triangles(); ++t) {
+    if (in.face_material[t] < 0 || in.materials[size_t(in.face_material[t])].texture >= 0) continue;
+    for (size_t b = 0; b < baked.num_triangles(); ++b) {
+      if ((centroid(baked, b) - centroid(in, t)).norm() > 1e-5) continue;
+      ++found;
+      const Vec2 centre = (baked.corner_uv[3 * b] + baked.corner_uv[3 * b + 1] + baked.corner_uv[3 * b + 2]) / 3;
+      const Image& page = baked.textures[size_t(baked.materials[size_t(baked.face_material[b])].texture)].image;
+      const std::array<float, 4> texel = sample_bilinear(page, centre.x(), centre.y());
+      for (int k = 0; k < 3; ++k) EXPECT_NEAR(texel[size_t(k)], 255 * linear_to_srgb(factor[size_t(k)]), 1.5) << k;
+    }
+  }
+  return found;
+}
+
 TEST(Scenes, UntexturedPartsAreWrittenAsTheyCame) {
   const fs::path dir = testing::scratch_folder("scene_untextured");
   const fs::path in_path = scene_glb(dir, true);
@@ -185,14 +210,24 @@ TEST(Scenes, UntexturedPartsAreWrittenAsTheyCame) {
   }
   EXPECT_EQ(plain, 2u);
   testing::expect_valid_and_loading(dir / "out" / "scene.glb", 3 * kGridTriangles + 2);
-  // PLY has no material for their colour: it is baked into the new texture with the rest.
+  // OBJ keeps the factor as the same number in Kd (as Blender and assimp convert the two).
+  const std::array<double, 3> factor{0.2, 0.4, 0.6};
+  ASSERT_EQ(run_quietly(in_path, dir / "obj", "--output-format obj"), 0) << read_whole(dir / "obj.stderr");
+  const TexturedMesh obj = read_obj((dir / "obj" / "scene.obj").string());
+  size_t plain_in_obj = 0;
+  for (const Material& m : obj.materials) plain_in_obj += m.texture < 0 && m.kd == factor;
+  EXPECT_EQ(plain_in_obj, 1u);
+  // PLY has no material for their colour: it is baked into the new texture with the rest, as the
+  // texel that shows the factor (sRGB-encoded).
   ASSERT_EQ(run_quietly(in_path, dir / "ply", "--output-format ply"), 0) << read_whole(dir / "ply.stderr");
   const json ply_report = json::parse(read_whole(dir / "ply" / "report.json"));
   EXPECT_EQ(ply_report["preparation"]["untextured_kept"], 0);
   EXPECT_EQ(ply_report["metrics"]["lost_triangles"], 0);
-  const TexturedMesh ply = read_ply((dir / "ply" / "scene.ply").string());
+  TexturedMesh ply = read_ply((dir / "ply" / "scene.ply").string());
   EXPECT_EQ(ply.num_triangles(), 3 * kGridTriangles + 2);
   for (const int32_t m : ply.face_material) EXPECT_GE(ply.materials[size_t(m)].texture, 0);
+  ply.textures = load_texture_pixels(ply);
+  EXPECT_EQ(plain_triangle_colours(in_path, ply, factor), 2u);
 }
 
 TEST(Scenes, NothingToBakeIsRefusedWithNothingWritten) {

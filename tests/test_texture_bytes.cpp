@@ -115,6 +115,33 @@ TEST(TextureBytes, WebpGlbDeclaresItsExtensionAndValidates) {
   testing::expect_valid_and_loading(dir / "lossless" / "grid.glb", 2 * g.triangles);
 }
 
+TEST(TextureBytes, EachImageKeepsItsInputsCodec) {
+  const fs::path dir = testing::scratch_folder("bytes_per_image");
+  testing::GridGltf g = testing::grid_gltf();
+  // The base colour as JPEG, the normal map as the PNG it is.
+  Image gradient(16, 16);
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 16; ++x) gradient.at(x, y) = {uint8_t(x * 16), uint8_t(y * 16), 96, 255};
+  const std::string jpeg = encode_image(gradient, ImageFormat::kJpeg);
+  while (g.bin.size() % 4 != 0) g.bin.push_back('\0');
+  g.doc["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", g.bin.size()}, {"byteLength", jpeg.size()}});
+  g.bin += jpeg;
+  g.doc["buffers"][0]["byteLength"] = g.bin.size();
+  g.doc["images"][0] = {{"bufferView", g.doc["bufferViews"].size() - 1}, {"mimeType", "image/jpeg"}};
+  testing::write_whole(dir / "grid.glb", testing::make_glb(g.doc, g.bin));
+  const json report = run(dir / "grid.glb", dir / "out", "--size 64 --output-format gltf");
+  const json out = json::parse(read_whole(dir / "out" / "grid.gltf"));
+  const json& material = out["materials"][0];
+  auto uri_of = [&](const json& info) {
+    return out["images"][out["textures"][info["index"].get<size_t>()]["source"].get<size_t>()]["uri"].get<std::string>();
+  };
+  EXPECT_EQ(fs::path(uri_of(material["pbrMetallicRoughness"]["baseColorTexture"])).extension(), ".jpg");
+  EXPECT_EQ(fs::path(uri_of(material["normalTexture"])).extension(), ".png");
+  EXPECT_EQ(report["bytes"]["encoding"]["format"], "jpg");
+  EXPECT_EQ(report["bytes"]["encoding"]["per_image"].size(), 2u);
+  testing::expect_valid_and_loading(dir / "out" / "grid.gltf", 2 * g.triangles);
+}
+
 TEST(TextureBytes, QualityOptionsRefusedBesideAnotherFormat) {
   const fs::path dir = testing::scratch_folder("bytes_options");
   const fs::path in = scan_obj(dir / "in", ImageFormat::kPng);

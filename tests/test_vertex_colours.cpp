@@ -201,9 +201,10 @@ TEST(VertexColourTexture, TexturedFacesKeepTheirTextureAndKdMultipliesTheColours
   EXPECT_EQ(m.face_material[0], 0);
   EXPECT_EQ(m.corner_uv[0], original.corner_uv[0]);
   const Image& colours = m.textures.back().image;
-  const Vec2 corner = m.corner_uv[3];  // triangle 1, corner 0: its texel is the colour times Kd
+  // Triangle 1, corner 0: its texel is the colour times Kd in linear light.
+  const Vec2 corner = m.corner_uv[3];
   const std::array<float, 4> got = sample_bilinear(colours, corner.x(), corner.y());
-  EXPECT_NEAR(got[0] / 255.0, 0.5 * m.corner_color[3][0], 0.6 / 255.0);
+  EXPECT_NEAR(got[0] / 255.0, linear_to_srgb(0.5 * srgb_to_linear(m.corner_color[3][0])), 0.6 / 255.0);
   EXPECT_NEAR(got[1] / 255.0, m.corner_color[3][1], 0.6 / 255.0);
 }
 

@@ -80,10 +80,10 @@ size_t texture_vertex_colours(TexturedMesh& mesh, size_t max_pixels = size_t(1) 
 /// two nodes use is one set of triangles, source_mesh_area_scale the area its nodes show of it), or
 /// with options.flatten_scene every instance in world space (ModelReadOptions::flatten_scene).
 /// Read: POSITION (exactly as stored), NORMAL, the TEXCOORD_n its material's baseColorTexture uses
-/// (with KHR_texture_transform's offset and scale applied: the corner UVs are what a renderer samples;
-/// a rotation is refused), COLOR_0 (into corner_color, converted from linear to sRGB), the base colour
+/// (with KHR_texture_transform's offset, rotation and scale applied: the corner UVs are what a
+/// renderer samples), COLOR_0 (into corner_color, converted from linear to sRGB), the base colour
 /// texture (PNG, JPEG, WebP; one Texture per glTF image; a KTX2 or DDS texture from its fallback
-/// source, stats->warnings saying so) and baseColorFactor (Material::kd, as sRGB).
+/// source, stats->warnings saying so) and baseColorFactor (Material::kd).
 /// A sampler other than REPEAT is accepted while the texture coordinates stay in [0,1]. Points and
 /// lines primitives are left as they are (stats->not_read). The document itself is kept in
 /// TexturedMesh::gltf for write_gltf.
@@ -126,12 +126,17 @@ struct ImageEncoding {
   int jpeg_quality = kDefaultJpegQuality;  // JPEG: 1..100
   int webp_quality = kDefaultWebpQuality;  // WebP: 1..100 (lossy)
   bool webp_lossless = false;              // WebP: lossless instead
+  /// Per texture of the model written, its codec (empty: every texture as `format`), for an output
+  /// whose images keep their input's codecs: a PNG normal map beside a JPEG base colour stays PNG.
+  std::vector<ImageFormat> formats;
 
   ImageEncoding() = default;
   ImageEncoding(ImageFormat image_format) : format(image_format) {}  // NOLINT(google-explicit-constructor): see above
   ImageEncoding(ImageFormat image_format, int png, int jpeg) : format(image_format), png_level(png), jpeg_quality(jpeg) {}
-  /// Whether a written image may differ from the pixels (JPEG, lossy WebP).
-  bool lossy() const { return format == ImageFormat::kJpeg || (format == ImageFormat::kWebp && !webp_lossless); }
+  /// Whether a written image may differ from its pixels (JPEG, lossy WebP), for any texture.
+  bool lossy() const;
+  /// The encoding of texture i: this one, with formats[i] where given.
+  ImageEncoding of_texture(size_t i) const;
 };
 
 /// The image encoded as `encoding` says, in memory: the bytes save_image writes. Throws as save_image

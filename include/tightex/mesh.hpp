@@ -41,6 +41,9 @@ unsigned material_slot_channels(MaterialSlot slot);
 /// One material: a name, a constant diffuse colour and optionally a diffuse texture image.
 struct Material {
   std::string name;
+  /// The base colour factor, linear as glTF's baseColorFactor; OBJ's Kd is read and written as the same
+  /// number (as Blender and assimp convert between the two). An untextured face shows it as the texel
+  /// linear_to_srgb(kd) would.
   std::array<double, 3> kd{1.0, 1.0, 1.0};
   int texture = -1;                           // index into TexturedMesh::textures, -1 = constant colour
   std::array<double, 2> uv_scale{1.0, 1.0};   // map_Kd -s

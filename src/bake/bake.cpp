@@ -10,6 +10,7 @@
 #include "bake/fit.hpp"
 #include "bake/sampler.hpp"
 #include "core/error.hpp"
+#include "core/image.hpp"
 #include "core/large_buffer.hpp"
 #include "core/progress.hpp"
 #include "core/raster.hpp"
@@ -49,7 +50,8 @@ Samplers make_samplers(const TexturedMesh& input, const std::vector<BakeTriangle
   std::vector<Rgba8> flat_colour(input.materials.size());
   for (size_t m = 0; m < input.materials.size(); ++m) {
     const auto& kd = input.materials[m].kd;
-    flat_colour[m] = to_rgba({float(kd[0] * 255), float(kd[1] * 255), float(kd[2] * 255), 255.f});
+    auto stored = [&](int k) { return float(linear_to_srgb(kd[size_t(k)]) * 255); };
+    flat_colour[m] = to_rgba({stored(0), stored(1), stored(2), 255.f});
   }
   Samplers samplers(triangles.size());  // constructed below
   tbb::parallel_for(size_t(0), triangles.size(), [&](size_t t) {

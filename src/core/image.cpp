@@ -30,6 +30,16 @@ const std::array<float, 256> &srgb_decode_table() {
 }
 }  // namespace
 
+double linear_to_srgb(double linear) {
+  const double c = std::clamp(linear, 0.0, 1.0);
+  return c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055;
+}
+
+double srgb_to_linear(double encoded) {
+  const double c = std::clamp(encoded, 0.0, 1.0);
+  return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
+}
+
 float srgb_encode_255(float linear) {
   // A table of 4096 steps over [0, 255] read linearly: within 0.01 of an 8-bit level of the formula
   // above the darkest steps, where the curve is steepest, and far closer beyond.

@@ -20,4 +20,8 @@ std::array<float, 4> sample_bilinear_linear_light(const Image& image, double u, 
 /// The 8-bit sRGB value (as a float in [0,255], unrounded) of a linear intensity given in [0,255].
 float srgb_encode_255(float linear);
 
+/// sRGB encoding of a linear intensity in [0, 1] (clamped), and its inverse.
+double linear_to_srgb(double linear);
+double srgb_to_linear(double encoded);
+
 }  // namespace tightex

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/image.hpp"
 #include "io/gltf_document.hpp"
 #include "io/image_io.hpp"
 #include "io/model_files.hpp"
@@ -98,12 +99,6 @@ std::string percent_decoded(std::string_view uri) {
     }
   }
   return out;
-}
-
-/// glTF colours and factors are linear; an 8-bit texture stores sRGB.
-double linear_to_srgb(double c) {
-  c = std::clamp(c, 0.0, 1.0);
-  return c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055;
 }
 
 /// The bytes of one accessor, checked: `count` elements of `components` values each, `stride` apart.
@@ -798,7 +793,7 @@ int32_t GltfReader::material_for(int material, ReadState& state) {
       if (!f.is_array() || f.size() != 4) fail(element, "baseColorFactor is not 4 numbers");
       for (int k = 0; k < 3; ++k) {
         if (!f[size_t(k)].is_number()) fail(element, "baseColorFactor is not 4 numbers");
-        m.kd[size_t(k)] = linear_to_srgb(f[size_t(k)].get<double>());
+        m.kd[size_t(k)] = f[size_t(k)].get<double>();
       }
     }
     const json* base = base_color_info(array("materials"), material);
@@ -840,18 +835,31 @@ std::array<double, 2> pair_of(const json& t, const char* key, double fallback) {
   return v;
 }
 
+/// KHR_texture_transform's offset + R * S * uv, R turning u towards -v by `rotation` radians: the
+/// direction the extension's TextureTransformTest marks correct and three.js draws (its GLSL, read
+/// column-major, turns the other way, which that test marks as the error).
+Vec2 transformed_uv(double u, double v, const std::array<double, 2>& offset, double rotation, const std::array<double, 2>& scale) {
+  const double su = scale[0] * u, sv = scale[1] * v;
+  if (rotation == 0) return Vec2(offset[0] + su, offset[1] + sv);
+  const double c = std::cos(rotation), s = std::sin(rotation);
+  return Vec2(offset[0] + c * su + s * sv, offset[1] - s * su + c * sv);
+}
+
 /// Corner UVs of the primitive's triangles, in tightex's convention (v up): the UV set the base colour
-/// texture uses, with its KHR_texture_transform (scale and offset) applied, so the corner UVs are what
-/// the renderer samples; TEXCOORD_0 (or zero) without a texture. Returns the name of the set read.
+/// texture uses, with its KHR_texture_transform applied (offset + rotation * scale * uv, the rotation
+/// turning u towards -v as glTF viewers draw it), so the corner UVs are what the renderer samples;
+/// TEXCOORD_0 (or zero) without a texture. Returns the name of the set read.
 std::string GltfReader::read_corner_uvs(const json& primitive, int material, const std::vector<Tri>& tris, size_t n,
                                         const std::string& element, ReadState& state) {
   const json* info = base_color_info(array("materials"), material);
   int64_t set = info != nullptr ? int64_t(unsigned_of(*info, "texCoord", 0, element + " material's baseColorTexture")) : 0;
   std::array<double, 2> offset{0, 0}, scale{1, 1};
+  double rotation = 0;
   if (info != nullptr && info->contains("extensions") && (*info)["extensions"].contains("KHR_texture_transform")) {
     const json& t = (*info)["extensions"]["KHR_texture_transform"];
     if (!t.is_object()) fail(element, "its material's KHR_texture_transform is not an object");
-    if (t.value("rotation", 0.0) != 0.0) fail(element, "its material's KHR_texture_transform has a rotation, which is not supported");
+    if (t.contains("rotation") && !t["rotation"].is_number()) fail(element, "its material's KHR_texture_transform rotation is not a number");
+    rotation = t.value("rotation", 0.0);
     offset = pair_of(t, "offset", 0.0), scale = pair_of(t, "scale", 1.0);
     if (t.contains("texCoord")) set = int64_t(unsigned_of(t, "texCoord", 0, element + " KHR_texture_transform"));
   }
@@ -868,7 +876,7 @@ std::string GltfReader::read_corner_uvs(const json& primitive, int material, con
   for (const Tri& t : tris)
     for (const uint32_t v : t) {
       Vec2 g(0, 0);
-      if (uv.data != nullptr) g = Vec2(offset[0] + scale[0] * uv.get(v, 0), offset[1] + scale[1] * uv.get(v, 1));
+      if (uv.data != nullptr) g = transformed_uv(uv.get(v, 0), uv.get(v, 1), offset, rotation, scale);
       if (!std::isfinite(g.x()) || !std::isfinite(g.y())) fail(element, "{} entry {} is not finite", name, v);
       for (int k = 0; k < 2; ++k)
         if (wrap[size_t(k)] != kRepeat && (g[k] < -kWrapSlack || g[k] > 1 + kWrapSlack))

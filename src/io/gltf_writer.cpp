@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/image.hpp"
 #include "core/tangents.hpp"
 #include "io/gltf_document.hpp"
 #include "io/image_io.hpp"
@@ -32,11 +33,6 @@ constexpr const char* kNewView = "__tightex_new_view";
 
 void pad_to_4(std::string& s, char fill = '\0') {
   while (s.size() % 4 != 0) s.push_back(fill);
-}
-
-double srgb_to_linear(double c) {
-  c = std::clamp(c, 0.0, 1.0);
-  return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
 }
 
 std::string mime_of(std::string_view bytes) {
@@ -107,7 +103,7 @@ void DocumentBuilder::start_fresh_document() {
   for (const Material& m : mesh_.materials) {
     json pbr = {{"metallicFactor", 0.0}, {"roughnessFactor", 1.0}};
     if (m.texture < 0)
-      pbr["baseColorFactor"] = {srgb_to_linear(m.kd[0]), srgb_to_linear(m.kd[1]), srgb_to_linear(m.kd[2]), 1.0};
+      pbr["baseColorFactor"] = {m.kd[0], m.kd[1], m.kd[2], 1.0};
     else
       pbr["baseColorTexture"] = {{"index", texture_index(m.texture)}};
     json material = {{"name", m.name}, {"pbrMetallicRoughness", pbr}};
@@ -671,8 +667,9 @@ std::vector<TextureImage> encoded_textures(const TexturedMesh& mesh, const Image
   for (size_t i = 0; i < mesh.textures.size(); ++i) {
     const fs::path file = tmp.string() + fmt::format(".image{}", i);
     TextureImage ti;
+    const ImageEncoding own = encoding.of_texture(i);
     try {
-      save_image(file.string(), mesh.textures[i].image, encoding);
+      save_image(file.string(), mesh.textures[i].image, own);
       std::string reason;
       if (!read_whole_file(file, ti.bytes, reason)) fail_input("{}: {}", file.string(), reason);
     } catch (...) {
@@ -682,8 +679,8 @@ std::vector<TextureImage> encoded_textures(const TexturedMesh& mesh, const Image
     }
     std::error_code ec;
     fs::remove(file, ec);
-    ti.mime = encoding.format == ImageFormat::kPng ? "image/png" : encoding.format == ImageFormat::kJpeg ? "image/jpeg" : "image/webp";
-    ti.webp = encoding.format == ImageFormat::kWebp;
+    ti.mime = own.format == ImageFormat::kPng ? "image/png" : own.format == ImageFormat::kJpeg ? "image/jpeg" : "image/webp";
+    ti.webp = own.format == ImageFormat::kWebp;
     images.push_back(std::move(ti));
   }
   return images;
@@ -706,7 +703,7 @@ std::vector<std::string> write_gltf(const TexturedMesh& mesh, const std::string&
   }
   std::vector<OutputFile> files = texture_output_files(mesh, encoding);
   std::vector<TextureImage> images(files.size());
-  for (size_t i = 0; i < files.size(); ++i) images[i].uri = files[i].name, images[i].webp = encoding.format == ImageFormat::kWebp;
+  for (size_t i = 0; i < files.size(); ++i) images[i].uri = files[i].name, images[i].webp = encoding.of_texture(i).format == ImageFormat::kWebp;
   std::string bin;
   json doc = DocumentBuilder(mesh, images).build(bin, removed);
   if (!bin.empty()) {

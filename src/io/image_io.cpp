@@ -790,6 +790,18 @@ std::string encode_webp(const Image& image, const ImageEncoding& encoding, const
 
 }  // namespace
 
+bool ImageEncoding::lossy() const {
+  auto lossy_format = [&](ImageFormat f) { return f == ImageFormat::kJpeg || (f == ImageFormat::kWebp && !webp_lossless); };
+  return lossy_format(format) || std::any_of(formats.begin(), formats.end(), lossy_format);
+}
+
+ImageEncoding ImageEncoding::of_texture(size_t i) const {
+  ImageEncoding e = *this;
+  e.formats.clear();
+  if (i < formats.size()) e.format = formats[i];
+  return e;
+}
+
 const char* image_extension(ImageFormat format) {
   switch (format) {
     case ImageFormat::kJpeg:

@@ -79,10 +79,12 @@ void round_uvs_as_stored(TexturedMesh& mesh, ModelFormat format) {
 
 std::vector<OutputFile> texture_output_files(const TexturedMesh& mesh, const ImageEncoding& encoding) {
   std::vector<OutputFile> files;
-  for (const Texture& tex : mesh.textures) {
-    const std::string name = texture_file_name(tex, encoding.format);
-    check_image_encoding(encoding, name);
-    files.push_back({name, [&tex, encoding](const fs::path& tmp) { save_image(tmp.string(), tex.image, encoding); }});
+  for (size_t i = 0; i < mesh.textures.size(); ++i) {
+    const Texture& tex = mesh.textures[i];
+    const ImageEncoding own = encoding.of_texture(i);
+    const std::string name = texture_file_name(tex, own.format);
+    check_image_encoding(own, name);
+    files.push_back({name, [&tex, own](const fs::path& tmp) { save_image(tmp.string(), tex.image, own); }});
   }
   return files;
 }

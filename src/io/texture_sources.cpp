@@ -3,6 +3,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 
 #include "io/gltf_document.hpp"
 
@@ -48,16 +49,31 @@ std::vector<TextureSource> texture_sources(const TexturedMesh& mesh) {
   return sources;
 }
 
-std::optional<ImageFormat> base_colour_format(const TexturedMesh& mesh, const std::vector<TextureSource>& sources) {
+namespace {
+
+/// The codec shared by the images `bound` gives for each material (-1: none), or nullopt.
+std::optional<ImageFormat> shared_format(const TexturedMesh& mesh, const std::vector<TextureSource>& sources,
+                                         const std::function<int(const Material&)>& bound) {
   std::optional<ImageFormat> shared;
   bool any = false;
   for (const Material& m : mesh.materials) {
-    if (m.texture < 0) continue;
-    const std::optional<ImageFormat> f = sources[size_t(m.texture)].format;
+    const int t = bound(m);
+    if (t < 0) continue;
+    const std::optional<ImageFormat> f = sources[size_t(t)].format;
     if (!f || (any && f != shared)) return std::nullopt;
     shared = f, any = true;
   }
   return shared;
+}
+
+}  // namespace
+
+std::optional<ImageFormat> base_colour_format(const TexturedMesh& mesh, const std::vector<TextureSource>& sources) {
+  return shared_format(mesh, sources, [](const Material& m) { return m.texture; });
+}
+
+std::optional<ImageFormat> material_map_format(const TexturedMesh& mesh, const std::vector<TextureSource>& sources, MaterialSlot slot) {
+  return shared_format(mesh, sources, [slot](const Material& m) { return m.maps[size_t(slot)]; });
 }
 
 }  // namespace tightex

@@ -24,4 +24,7 @@ std::vector<TextureSource> texture_sources(const TexturedMesh& mesh);
 /// (JPEG, WebP or PNG); nullopt where they differ, none is bound, or one is made from vertex colours.
 std::optional<ImageFormat> base_colour_format(const TexturedMesh& mesh, const std::vector<TextureSource>& sources);
 
+/// The same for the images a model's materials bind to `slot`.
+std::optional<ImageFormat> material_map_format(const TexturedMesh& mesh, const std::vector<TextureSource>& sources, MaterialSlot slot);
+
 }  // namespace tightex

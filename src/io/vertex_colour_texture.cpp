@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "core/error.hpp"
+#include "core/image.hpp"
 #include "tightex/io.hpp"
 
 namespace tightex {
@@ -17,8 +18,8 @@ bool takes_corner_colours(const TexturedMesh& mesh, size_t t) {
   return m < 0 || mesh.materials[size_t(m)].texture < 0;
 }
 
-/// The material's constant colour, which multiplies the corner colours (as glTF's baseColorFactor
-/// multiplies COLOR_0, and as an untextured face's Kd is its colour).
+/// The material's constant colour (linear), which multiplies the corner colours in linear light (as
+/// glTF's baseColorFactor multiplies COLOR_0, and as an untextured face's Kd is its colour).
 std::array<double, 3> face_factor(const TexturedMesh& mesh, size_t t) {
   const int32_t m = mesh.face_material[t];
   return m < 0 ? std::array<double, 3>{1.0, 1.0, 1.0} : mesh.materials[size_t(m)].kd;
@@ -33,8 +34,10 @@ void fill_cell(const TexturedMesh& mesh, size_t t, int x, int y, Image& image) {
   const std::array<double, 3> kd = face_factor(mesh, t);
   std::array<std::array<double, 4>, 3> c;
   for (int k = 0; k < 3; ++k)
-    for (int ch = 0; ch < 4; ++ch)
-      c[size_t(k)][size_t(ch)] = mesh.corner_color[3 * t + size_t(k)][size_t(ch)] * (ch < 3 ? kd[size_t(ch)] : 1.0);
+    for (int ch = 0; ch < 4; ++ch) {
+      const double stored = mesh.corner_color[3 * t + size_t(k)][size_t(ch)];
+      c[size_t(k)][size_t(ch)] = ch == 3 || kd[size_t(ch)] == 1.0 ? stored : linear_to_srgb(srgb_to_linear(stored) * kd[size_t(ch)]);
+    }
   auto texel = [&](const std::array<double, 4>& v) { return Rgba8{to_byte(v[0]), to_byte(v[1]), to_byte(v[2]), to_byte(v[3])}; };
   std::array<double, 4> fourth;
   for (size_t ch = 0; ch < 4; ++ch) fourth[ch] = c[1][ch] + c[2][ch] - c[0][ch];

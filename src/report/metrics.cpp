@@ -19,6 +19,7 @@
 #include <tuple>
 
 #include "core/hash.hpp"
+#include "core/image.hpp"
 #include "core/large_buffer.hpp"
 #include "core/raster.hpp"
 #include "core/statistics.hpp"
@@ -78,7 +79,7 @@ std::array<uint8_t, 3> colour_at(const TexturedMesh& m, size_t t, const Vec2& uv
     const int32_t mat = m.face_material[t];
     if (mat < 0) return {255, 255, 255};
     const auto& kd = m.materials[size_t(mat)].kd;
-    auto q = [](double x) { return uint8_t(std::clamp(std::lround(x * 255), 0l, 255l)); };
+    auto q = [](double x) { return uint8_t(std::clamp(std::lround(linear_to_srgb(x) * 255), 0l, 255l)); };
     return {q(kd[0]), q(kd[1]), q(kd[2])};
   }
   const auto c = sample_bilinear(*img, uv.x(), uv.y());

@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <functional>
 
 #include "io/image_io.hpp"
@@ -13,14 +14,14 @@ namespace tightex {
 
 namespace {
 
-/// The quality setting of a lossy encoding.
-int& quality_of(ImageEncoding& e) { return e.format == ImageFormat::kJpeg ? e.jpeg_quality : e.webp_quality; }
+/// Rate control's one quality, for every lossy image (JPEG or WebP).
+void set_quality(ImageEncoding& e, int quality) { e.jpeg_quality = e.webp_quality = quality; }
 
 /// Each texture of `output` encoded as `encoding` says (on every core).
 std::vector<std::string> encoded(const TexturedMesh& output, const ImageEncoding& encoding) {
   std::vector<std::string> bytes(output.textures.size());
   tbb::parallel_for(size_t(0), bytes.size(), [&](size_t i) {
-    if (!output.textures[i].image.empty()) bytes[i] = encode_image(output.textures[i].image, encoding, output.textures[i].path);
+    if (!output.textures[i].image.empty()) bytes[i] = encode_image(output.textures[i].image, encoding.of_texture(i), output.textures[i].path);
   });
   return bytes;
 }
@@ -74,27 +75,54 @@ int lowest_quality(const std::function<bool(int)>& good) {
 /// Rate control of a lossy encoding: the quality and why.
 std::string pick_quality(const BytesRequest& request, const TexturedMesh& input, const std::vector<TextureSource>& sources,
                          TexturedMesh& output, ImageEncoding& e) {
-  int& q = quality_of(e);
   if (request.target_psnr_db > 0) {
     const int lowest = lowest_quality([&](int quality) {
-      q = quality;
+      set_quality(e, quality);
       return psnr_as_written(input, output, encoded(output, e)) >= request.target_psnr_db;
     });
-    q = std::min(lowest, 100);
+    set_quality(e, std::min(lowest, 100));
     return lowest <= 100 ? fmt::format("the lowest quality whose written images reach --target-psnr {} dB", request.target_psnr_db)
                          : fmt::format("no quality reaches --target-psnr {} dB at this texel budget: the highest", request.target_psnr_db);
   }
   const uint64_t bound = request.max_bytes > 0 ? request.max_bytes : bound_input_bytes(input, sources);
   const char* what = request.max_bytes > 0 ? "--max-bytes" : "the input's own texture bytes";
-  if (bound == 0) return fmt::format("quality {} (no bound: the input's images have no bytes on disk)", q);
+  if (bound == 0) return "the default quality (no bound: the input's images have no bytes on disk)";
   // The highest quality within the bound: one above the lowest that exceeds it.
   const int over = lowest_quality([&](int quality) {
-    q = quality;
+    set_quality(e, quality);
     return total(encoded(output, e)) > bound;
   });
-  q = std::max(over - 1, 1);
+  set_quality(e, std::max(over - 1, 1));
   return over > 1 ? fmt::format("the highest quality whose images take at most {} ({} bytes)", what, bound)
                   : fmt::format("even quality 1 takes more than {} ({} bytes): quality 1", what, bound);
+}
+
+/// Per texture of `output`, the codec of the input's images in the same role (base colour, or the
+/// material map slot its materials bind it to; PNG where the input's differ or none is bound); empty
+/// where every texture takes `base`.
+std::vector<ImageFormat> codecs_by_role(const TexturedMesh& input, const std::vector<TextureSource>& sources, const TexturedMesh& output,
+                                        ImageFormat base) {
+  std::vector<ImageFormat> formats(output.textures.size(), base);
+  for (const Material& m : output.materials)
+    for (size_t s = 0; s < kMaterialSlots; ++s)
+      if (m.maps[s] >= 0 && m.maps[s] != m.texture)
+        formats[size_t(m.maps[s])] = material_map_format(input, sources, MaterialSlot(s)).value_or(ImageFormat::kPng);
+  const bool all_base = std::all_of(formats.begin(), formats.end(), [base](ImageFormat f) { return f == base; });
+  return all_base ? std::vector<ImageFormat>{} : formats;
+}
+
+/// The codecs and why: --format's for every image, else each image its input's.
+std::string choose_codecs(const BytesRequest& request, const TexturedMesh& input, const std::vector<TextureSource>& sources,
+                          const TexturedMesh& output, ImageEncoding& e) {
+  if (request.format) {
+    e.format = *request.format;
+    return fmt::format("--format {}", to_string(e.format));
+  }
+  e.format = base_colour_format(input, sources).value_or(ImageFormat::kPng);
+  e.formats = codecs_by_role(input, sources, output, e.format);
+  std::string reason = fmt::format("{}, as the input's base colour", to_string(e.format));
+  if (!e.formats.empty()) reason += "; each other map as the input's map in its slot";
+  return reason;
 }
 
 }  // namespace
@@ -103,10 +131,7 @@ EncodingChoice choose_encoding(const BytesRequest& request, const TexturedMesh& 
                                TexturedMesh& output) {
   EncodingChoice c;
   c.encoding = request.encoding;
-  const std::optional<ImageFormat> input_format = base_colour_format(input, sources);
-  c.encoding.format = request.format.value_or(input_format.value_or(ImageFormat::kPng));
-  c.reason = request.format ? fmt::format("--format {}", to_string(c.encoding.format))
-                            : fmt::format("{}, as the input's base colour", to_string(c.encoding.format));
+  c.reason = choose_codecs(request, input, sources, output, c.encoding);
   if (c.encoding.lossy() && !request.quality_given) c.reason += "; " + pick_quality(request, input, sources, output, c.encoding);
   const std::vector<std::string> images = encoded(output, c.encoding);
   for (const std::string& b : images) c.bytes.push_back(b.size());
@@ -145,7 +170,12 @@ nlohmann::json bytes_json(const TexturedMesh& input, const std::vector<TextureSo
   for (const TextureSource& s : sources) in_bytes.push_back(s.bytes);
   const ImageEncoding& e = choice.encoding;
   nlohmann::json encoding = {{"format", to_string(e.format)}, {"reason", choice.reason}};
-  if (e.format == ImageFormat::kJpeg) encoding["quality"] = e.jpeg_quality;
+  if (!e.formats.empty()) {
+    encoding["per_image"] = nlohmann::json::array();
+    for (const ImageFormat f : e.formats) encoding["per_image"].push_back(to_string(f));
+  }
+  const bool jpeg = e.format == ImageFormat::kJpeg || std::count(e.formats.begin(), e.formats.end(), ImageFormat::kJpeg) > 0;
+  if (jpeg) encoding["quality"] = e.jpeg_quality;
   if (e.format == ImageFormat::kWebp)
     encoding[e.webp_lossless ? "lossless" : "quality"] = e.webp_lossless ? nlohmann::json(true) : nlohmann::json(e.webp_quality);
   return {{"input", slot_bytes(input, in_bytes)},
