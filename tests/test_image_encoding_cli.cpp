@@ -1,5 +1,5 @@
-// Tests for the command line's texture encoding options on a small generated model: --png-level 9
-// writes a PNG no larger than the default's with the same pixels; --jpeg-quality changes the JPEG; a bad
+// Tests for the command line's texture encoding options on a small generated model: --png-level fast,
+// the default (6) and 9 write smaller PNGs in that order with the same pixels; --jpeg-quality changes the JPEG; a bad
 // value, or an option beside the other format, is refused with exit 1 and nothing written.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -51,14 +51,16 @@ class ImageEncodingCli : public ::testing::Test {
   fs::path dir_;
 };
 
-TEST_F(ImageEncodingCli, PngLevelNineIsNoLargerAndDecodesToTheSamePixels) {
-  ASSERT_EQ(run("fast", ""), 0);
+TEST_F(ImageEncodingCli, PngLevelsOrderTheirFilesAndDecodeToTheSamePixels) {
+  ASSERT_EQ(run("fast", "--png-level fast"), 0);
+  ASSERT_EQ(run("default", ""), 0);
   ASSERT_EQ(run("best", "--png-level 9"), 0);
   ASSERT_EQ(run("stored", "--png-level 0"), 0);
-  EXPECT_LE(texture_bytes("best", ".png"), texture_bytes("fast", ".png"));
-  EXPECT_LT(texture_bytes("best", ".png"), texture_bytes("stored", ".png"));
+  EXPECT_LE(texture_bytes("best", ".png"), texture_bytes("default", ".png"));
+  EXPECT_LT(texture_bytes("default", ".png"), texture_bytes("fast", ".png"));
+  EXPECT_LT(texture_bytes("fast", ".png"), texture_bytes("stored", ".png"));
   const Image fast = load_image((dir_ / "fast" / "multi_tightex.png").string());
-  for (const char* out : {"best", "stored"}) {
+  for (const char* out : {"default", "best", "stored"}) {
     const Image other = load_image((dir_ / out / "multi_tightex.png").string());
     EXPECT_EQ(other.width, fast.width);
     EXPECT_EQ(other.height, fast.height);
@@ -67,7 +69,7 @@ TEST_F(ImageEncodingCli, PngLevelNineIsNoLargerAndDecodesToTheSamePixels) {
 }
 
 TEST_F(ImageEncodingCli, JpegQualityChangesTheFile) {
-  ASSERT_EQ(run("q92", "--format jpg"), 0);
+  ASSERT_EQ(run("q92", "--format jpg --jpeg-quality 92"), 0);
   ASSERT_EQ(run("q30", "--format jpg --jpeg-quality 30"), 0);
   ASSERT_EQ(run("q100", "--format jpg --jpeg-quality 100"), 0);
   EXPECT_LT(texture_bytes("q30", ".jpg"), texture_bytes("q92", ".jpg"));
@@ -79,7 +81,7 @@ TEST_F(ImageEncodingCli, BadValuesAreRefusedAndNothingIsWritten) {
     const char* options;
     const char* message;
   } cases[] = {
-      {"--png-level 10", "--png-level"},  {"--png-level -1", "--png-level"},   {"--png-level fast", "--png-level"},
+      {"--png-level 10", "--png-level"},  {"--png-level -1", "--png-level"},   {"--png-level quick", "--png-level"},
       {"--jpeg-quality 0", "--jpeg-quality"}, {"--format jpg --jpeg-quality 101", "--jpeg-quality"},
       {"--format jpg --png-level 9", "--png-level needs --format png"}, {"--jpeg-quality 80", "--jpeg-quality does nothing"},
       {"--webp-lossless", "--webp-lossless does nothing"}, {"--format png --webp-quality 60", "--webp-quality needs --format webp"},

@@ -110,9 +110,12 @@ std::vector<Texture> load_texture_pixels(const TexturedMesh& mesh, size_t max_pi
 /// tile runner.
 TexturedMesh read_model(const std::string& path, const ModelReadOptions& options = {}, ModelReadStats* stats = nullptr);
 
-/// ImageEncoding::png_level's default: zlib level 1, the Z_RLE strategy and the UP filter on every row:
-/// several times faster than level 6, files within about a tenth of level 9's (BENCHMARKS.md, "Options").
+/// ImageEncoding::png_level's fast setting: zlib level 1, the Z_RLE strategy and the UP filter on every
+/// row: several times faster than level 6, files about a tenth larger (BENCHMARKS.md, "Options").
 constexpr int kPngLevelFast = -1;
+/// ImageEncoding::png_level's default: zlib's and libpng's own default level, with the adaptive row
+/// filter, so that re-saving with the usual tools gives no smaller file.
+constexpr int kDefaultPngLevel = 6;
 constexpr int kDefaultJpegQuality = 92;
 constexpr int kDefaultWebpQuality = 90;
 
@@ -122,7 +125,7 @@ struct ImageEncoding {
   ImageFormat format = ImageFormat::kPng;
   /// PNG: kPngLevelFast, or 0..9: that zlib level with zlib's default strategy and libspng's adaptive
   /// choice of filter per row (9: the smallest file, the slowest).
-  int png_level = kPngLevelFast;
+  int png_level = kDefaultPngLevel;
   int jpeg_quality = kDefaultJpegQuality;  // JPEG: 1..100
   int webp_quality = kDefaultWebpQuality;  // WebP: 1..100 (lossy)
   bool webp_lossless = false;              // WebP: lossless instead

@@ -57,7 +57,8 @@ struct GivenFlags {
   std::string layout, format, holes, map, corners;  // format empty: the input's
   std::string output_format;                        // empty: not given
   std::string aspect;                               // empty, "auto" or a number
-  int png_level = 0, jpeg_quality = 0, webp_quality = 0;
+  std::string png_level;  // 0..9 or "fast"
+  int jpeg_quality = 0, webp_quality = 0;
   bool no_fit = false, no_html = false;
   CLI::Option *size = nullptr, *png = nullptr, *jpeg = nullptr, *webp = nullptr;
 };
@@ -77,7 +78,7 @@ CLI::Option* add_flag(CLI::App& app, std::string_view field, bool& value) {
 /// Declares the texture codec flags.
 void define_encoding_flags(CLI::App& app, Options& o, GivenFlags& given) {
   add(app, "texture_format", given.format)->check(CLI::IsMember(names_of(kImageFormats)));
-  given.png = add(app, "png_level", given.png_level)->check(CLI::Range(0, 9));
+  given.png = add(app, "png_level", given.png_level)->check(CLI::IsMember({"fast", "0", "1", "2", "3", "4", "5", "6", "7", "8", "9"}));
   given.jpeg = add(app, "jpeg_quality", given.jpeg_quality)->check(CLI::Range(1, 100));
   given.webp = add(app, "webp_quality", given.webp_quality)->check(CLI::Range(1, 100));
   add_flag(app, "webp_lossless", o.webp_lossless);
@@ -135,7 +136,7 @@ void finish_command_line(CommandLine& line, const GivenFlags& given) {
   o.corners = parsed(kCornerRules, given.corners);
   if (!given.format.empty()) o.texture_format = parsed(kImageFormats, given.format);
   if (!given.output_format.empty()) o.model_format = parsed(kModelFormats, given.output_format);
-  if (given.png->count() > 0) o.png_level = given.png_level;
+  if (given.png->count() > 0) o.png_level = given.png_level == "fast" ? kPngLevelFast : std::stoi(given.png_level);
   if (given.jpeg->count() > 0) o.jpeg_quality = given.jpeg_quality;
   if (given.webp->count() > 0) o.webp_quality = given.webp_quality;
   // --size promises a side: a square, unless a shape is asked for.

@@ -660,25 +660,13 @@ std::string glb_bytes(const json& doc, const std::string& bin) {
   return out;
 }
 
-/// Encodes every texture of `mesh` as `encoding` says through a temporary file beside `tmp` (the
-/// encoders write files), for embedding in a GLB.
-std::vector<TextureImage> encoded_textures(const TexturedMesh& mesh, const ImageEncoding& encoding, const fs::path& tmp) {
+/// Every texture of `mesh` as `encoding` says (or `encoded`'s bytes), for embedding in a GLB.
+std::vector<TextureImage> encoded_textures(const TexturedMesh& mesh, const ImageEncoding& encoding, const EncodedImages& encoded) {
   std::vector<TextureImage> images;
   for (size_t i = 0; i < mesh.textures.size(); ++i) {
-    const fs::path file = tmp.string() + fmt::format(".image{}", i);
     TextureImage ti;
     const ImageEncoding own = encoding.of_texture(i);
-    try {
-      save_image(file.string(), mesh.textures[i].image, own);
-      std::string reason;
-      if (!read_whole_file(file, ti.bytes, reason)) fail_input("{}: {}", file.string(), reason);
-    } catch (...) {
-      std::error_code ec;
-      fs::remove(file, ec);
-      throw;
-    }
-    std::error_code ec;
-    fs::remove(file, ec);
+    ti.bytes = i < encoded.size() && !encoded[i].empty() ? encoded[i] : encode_image(mesh.textures[i].image, own, mesh.textures[i].path);
     ti.mime = own.format == ImageFormat::kPng ? "image/png" : own.format == ImageFormat::kJpeg ? "image/jpeg" : "image/webp";
     ti.webp = own.format == ImageFormat::kWebp;
     images.push_back(std::move(ti));
@@ -690,18 +678,23 @@ std::vector<TextureImage> encoded_textures(const TexturedMesh& mesh, const Image
 
 std::vector<std::string> write_gltf(const TexturedMesh& mesh, const std::string& outdir, const std::string& name,
                                     const ImageEncoding& encoding, GltfContainer container) {
+  return write_gltf(mesh, outdir, name, encoding, container, EncodedImages{});
+}
+
+std::vector<std::string> write_gltf(const TexturedMesh& mesh, const std::string& outdir, const std::string& name,
+                                    const ImageEncoding& encoding, GltfContainer container, const EncodedImages& encoded) {
   std::vector<std::string> removed;
   if (container == GltfContainer::kGlb) {
     check_image_encoding(encoding, (fs::path(outdir) / (name + ".glb")).string());
     write_files_atomically(outdir, {{name + ".glb", [&](const fs::path& tmp) {
-                                       const std::vector<TextureImage> images = encoded_textures(mesh, encoding, tmp);
+                                       const std::vector<TextureImage> images = encoded_textures(mesh, encoding, encoded);
                                        std::string bin;
                                        const json doc = DocumentBuilder(mesh, images).build(bin, removed);
                                        write_whole_file(tmp, glb_bytes(doc, bin));
                                      }}});
     return removed;
   }
-  std::vector<OutputFile> files = texture_output_files(mesh, encoding);
+  std::vector<OutputFile> files = texture_output_files(mesh, encoding, encoded);
   std::vector<TextureImage> images(files.size());
   for (size_t i = 0; i < files.size(); ++i) images[i].uri = files[i].name, images[i].webp = encoding.of_texture(i).format == ImageFormat::kWebp;
   std::string bin;

@@ -31,6 +31,7 @@
 
 #include "core/error.hpp"
 #include "io/png_one_pass.hpp"
+#include "io/png_parallel.hpp"
 
 // stb_image is the fallback for formats other than PNG and JPEG, which have hardened decoders above.
 // STB_IMAGE_STATIC keeps its functions private to this file, so another translation unit that also
@@ -83,7 +84,6 @@ constexpr int kMaxJpegScans = 500;
 // also avoids trying all five on every row.
 constexpr int kPngFastCompressionLevel = 1;
 constexpr int kPngFastCompressionStrategy = Z_RLE;
-constexpr int kPngFastFilterChoice = SPNG_FILTER_CHOICE_UP;
 
 // From this quality on, JPEG keeps full-resolution chroma (4:4:4). A texture atlas packs unrelated
 // charts side by side, so sharp colour edges are everywhere; 4:2:0 averages chroma over 2x2 texels and
@@ -287,55 +287,17 @@ bool is_opaque(const Image& image) {
   return std::all_of(image.pixels.begin(), image.pixels.end(), [](const Rgba8& p) { return p.a == 255; });
 }
 
-// The zlib level, strategy and filter choice for ImageEncoding::png_level: the fast settings, or that
-// level with zlib's default strategy and libspng's adaptive filter (each row tries all five).
-struct PngSettings {
-  int level, strategy, filter_choice;
-};
+// The zlib level, strategy and row filter for ImageEncoding::png_level: the fast settings, or that
+// level with zlib's default strategy and the adaptive filter (each row tries all five).
 PngSettings png_settings(int png_level) {
-  if (png_level == kPngLevelFast) return {kPngFastCompressionLevel, kPngFastCompressionStrategy, kPngFastFilterChoice};
-  return {png_level, Z_DEFAULT_STRATEGY, SPNG_FILTER_CHOICE_ALL};
+  if (png_level == kPngLevelFast) return {kPngFastCompressionLevel, kPngFastCompressionStrategy, PngRowFilter::kUp};
+  return {png_level, Z_DEFAULT_STRATEGY, PngRowFilter::kAdaptive};
 }
 
 void save_png(OutputFile& out, const Image& image, int png_level) {
-  const PngSettings settings = png_settings(png_level);
-  SpngContext ctx = make_spng_context(SPNG_CTX_ENCODER);
-  const bool opaque = is_opaque(image);
-  spng_ihdr ihdr{};
-  ihdr.width = uint32_t(image.width);
-  ihdr.height = uint32_t(image.height);
-  ihdr.bit_depth = 8;
-  ihdr.color_type = opaque ? SPNG_COLOR_TYPE_TRUECOLOR : SPNG_COLOR_TYPE_TRUECOLOR_ALPHA;
-
-  int error = spng_set_png_file(ctx.get(), out.get());
-  if (error == 0) error = spng_set_ihdr(ctx.get(), &ihdr);
-  if (error == 0) error = spng_set_option(ctx.get(), SPNG_IMG_COMPRESSION_LEVEL, settings.level);
-  if (error == 0) error = spng_set_option(ctx.get(), SPNG_IMG_COMPRESSION_STRATEGY, settings.strategy);
-  if (error == 0) error = spng_set_option(ctx.get(), SPNG_FILTER_CHOICE, settings.filter_choice);
-  // Row by row, so dropping alpha needs one row of scratch memory instead of a copy of the image.
-  if (error == 0) {
-    error = spng_encode_image(ctx.get(), nullptr, 0, SPNG_FMT_PNG, SPNG_ENCODE_PROGRESSIVE | SPNG_ENCODE_FINALIZE);
-  }
-  if (error != 0) out.fail(fmt::format("spng: {}", spng_strerror(error)));
-
-  const size_t width = size_t(image.width);
-  std::vector<unsigned char> rgb_row(opaque ? width * 3 : 0);
-  for (size_t y = 0; y < size_t(image.height); ++y) {
-    const Rgba8* row = image.pixels.data() + y * width;
-    if (opaque) {
-      for (size_t x = 0; x < width; ++x) {
-        rgb_row[3 * x + 0] = row[x].r;
-        rgb_row[3 * x + 1] = row[x].g;
-        rgb_row[3 * x + 2] = row[x].b;
-      }
-      error = spng_encode_row(ctx.get(), rgb_row.data(), rgb_row.size());
-    } else {
-      error = spng_encode_row(ctx.get(), row, width * sizeof(Rgba8));
-    }
-    // SPNG_EOI marks the last row, after which libspng has written IEND (SPNG_ENCODE_FINALIZE).
-    const bool last_row = y + 1 == size_t(image.height);
-    if (error != 0 && !(last_row && error == SPNG_EOI)) out.fail(fmt::format("spng: {}", spng_strerror(error)));
-  }
+  if (image.width <= 0 || image.height <= 0) out.fail(fmt::format("a PNG needs pixels ({}x{})", image.width, image.height));
+  const std::string bytes = encode_png(image, png_settings(png_level));
+  if (std::fwrite(bytes.data(), 1, bytes.size(), out.get()) != bytes.size()) out.fail("fwrite");
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -856,7 +818,7 @@ void save_image(const std::string& path, const Image& image, const ImageEncoding
 }
 
 void save_image(const std::string& path, const Image& image, ImageFormat format, int jpeg_quality) {
-  save_image(path, image, ImageEncoding(format, kPngLevelFast, jpeg_quality));
+  save_image(path, image, ImageEncoding(format, kDefaultPngLevel, jpeg_quality));
 }
 
 std::string encode_jpeg(const Image& image, int quality) {

@@ -228,7 +228,12 @@ std::vector<std::string> obj_pieces(const TexturedMesh& mesh, const std::string&
 
 std::vector<std::string> write_obj(const TexturedMesh& mesh, const std::string& outdir, const std::string& name,
                                    const ImageEncoding& encoding) {
-  std::vector<OutputFile> files = texture_output_files(mesh, encoding);
+  return write_obj(mesh, outdir, name, encoding, EncodedImages{});
+}
+
+std::vector<std::string> write_obj(const TexturedMesh& mesh, const std::string& outdir, const std::string& name,
+                                   const ImageEncoding& encoding, const EncodedImages& encoded) {
+  std::vector<OutputFile> files = texture_output_files(mesh, encoding, encoded);
   std::vector<std::string> texture_file;
   for (const OutputFile& f : files) texture_file.push_back(f.name);
   files.push_back({name + ".mtl", [&](const fs::path& tmp) { write_whole_file(tmp, mtl_text(mesh, texture_file)); }});

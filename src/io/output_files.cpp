@@ -77,14 +77,17 @@ void round_uvs_as_stored(TexturedMesh& mesh, ModelFormat format) {
   }
 }
 
-std::vector<OutputFile> texture_output_files(const TexturedMesh& mesh, const ImageEncoding& encoding) {
+std::vector<OutputFile> texture_output_files(const TexturedMesh& mesh, const ImageEncoding& encoding, const EncodedImages& encoded) {
   std::vector<OutputFile> files;
   for (size_t i = 0; i < mesh.textures.size(); ++i) {
     const Texture& tex = mesh.textures[i];
     const ImageEncoding own = encoding.of_texture(i);
     const std::string name = texture_file_name(tex, own.format);
     check_image_encoding(own, name);
-    files.push_back({name, [&tex, own](const fs::path& tmp) { save_image(tmp.string(), tex.image, own); }});
+    if (i < encoded.size() && !encoded[i].empty())
+      files.push_back({name, [bytes = &encoded[i]](const fs::path& tmp) { write_whole_file(tmp, *bytes); }});
+    else
+      files.push_back({name, [&tex, own](const fs::path& tmp) { save_image(tmp.string(), tex.image, own); }});
   }
   return files;
 }

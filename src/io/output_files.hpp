@@ -48,10 +48,24 @@ std::string texture_file_name(const Texture& texture, ImageFormat format);
 /// Measured after it, a map's figures (flipped, degenerate, coverage) are those of the written file.
 void round_uvs_as_stored(TexturedMesh& mesh, ModelFormat format);
 
+/// Per texture of a model, its file's bytes where the caller has encoded it already as the writer's
+/// encoding says (rate control measured them); written as they are. An empty entry, or a missing one,
+/// is encoded when written.
+using EncodedImages = std::vector<std::string>;
+
 /// One OutputFile per texture of `mesh`, in its order, named by texture_file_name and writing the image
-/// as `encoding` says. The writers refer to `mesh`, which must outlive them.
+/// as `encoding` says (or `encoded`'s bytes). The writers refer to `mesh` and `encoded`, which must
+/// outlive them.
 /// Throws InputError for an encoding save_image refuses (check_image_encoding), before anything is written.
-std::vector<OutputFile> texture_output_files(const TexturedMesh& mesh, const ImageEncoding& encoding);
+std::vector<OutputFile> texture_output_files(const TexturedMesh& mesh, const ImageEncoding& encoding, const EncodedImages& encoded = {});
+
+/// write_obj, write_ply and write_gltf (tightex/io.hpp) with the images that are encoded already.
+std::vector<std::string> write_obj(const TexturedMesh& mesh, const std::string& outdir, const std::string& name,
+                                   const ImageEncoding& encoding, const EncodedImages& encoded);
+std::vector<std::string> write_ply(const TexturedMesh& mesh, const std::string& outdir, const std::string& name,
+                                   const ImageEncoding& encoding, const EncodedImages& encoded);
+std::vector<std::string> write_gltf(const TexturedMesh& mesh, const std::string& outdir, const std::string& name,
+                                    const ImageEncoding& encoding, GltfContainer container, const EncodedImages& encoded);
 
 /// What a writer leaves out of a model's materials: one sentence per map slot that some material of
 /// `mesh` binds and `written` says the format does not carry ("the occlusion map of material \"m\" is

@@ -81,11 +81,16 @@ std::string ply_bytes(const TexturedMesh& mesh, const std::vector<std::string>& 
 
 std::vector<std::string> write_ply(const TexturedMesh& mesh, const std::string& outdir, const std::string& name,
                                    const ImageEncoding& encoding) {
+  return write_ply(mesh, outdir, name, encoding, EncodedImages{});
+}
+
+std::vector<std::string> write_ply(const TexturedMesh& mesh, const std::string& outdir, const std::string& name,
+                                   const ImageEncoding& encoding, const EncodedImages& encoded) {
   const std::string ply_name = name + ".ply";
   if (mesh.num_vertices() > size_t(INT32_MAX))
     fail_input("{}: {} vertices are more than a PLY's int vertex indices can name", (fs::path(outdir) / ply_name).string(),
                mesh.num_vertices());
-  std::vector<OutputFile> files = texture_output_files(mesh, encoding);
+  std::vector<OutputFile> files = texture_output_files(mesh, encoding, encoded);
   const std::vector<int32_t> page = texture_pages(mesh);
   std::vector<std::string> texture_file;
   for (size_t i = 0; i < files.size(); ++i)

@@ -71,7 +71,7 @@ void check_codec_options(const std::string& input, const Options& o, ImageFormat
 /// What the options ask of the output's images.
 BytesRequest bytes_request(const Options& o) {
   ImageEncoding e(o.texture_format.value_or(ImageFormat::kPng));
-  e.png_level = o.png_level.value_or(kPngLevelFast);
+  e.png_level = o.png_level.value_or(kDefaultPngLevel);
   e.jpeg_quality = o.jpeg_quality.value_or(kDefaultJpegQuality);
   e.webp_quality = o.webp_quality.value_or(kDefaultWebpQuality);
   e.webp_lossless = o.webp_lossless;
@@ -220,7 +220,7 @@ void check_options(const Options& o) {
   check_range(o.material_map_budget_db, 0.0, 99.0, "--material-map-budget");
   check_range(o.max_page_side, 0, 65536, "--max-size");
   if (o.max_memory_mib < 0) fail_input("options: --max-memory {} must be positive", o.max_memory_mib);
-  if (o.png_level) check_range(*o.png_level, 0, 9, "--png-level");
+  if (o.png_level && *o.png_level != kPngLevelFast) check_range(*o.png_level, 0, 9, "--png-level");
   if (o.jpeg_quality) check_range(*o.jpeg_quality, 1, 100, "--jpeg-quality");
   if (o.webp_quality) check_range(*o.webp_quality, 1, 100, "--webp-quality");
   if (o.target_psnr_db != 0) check_range(o.target_psnr_db, 1.0, 99.0, "--target-psnr");
@@ -261,7 +261,7 @@ Report run(const std::string& input, const std::string& outdir, const Options& o
 
   const std::vector<TextureSource> sources = texture_sources(planned.mesh);
   auto [choice, budgets] = choose_images(options, opt, planned.mesh, sources, budget, format, result);
-  const ModelTarget target{outdir, fs::path(input).stem().string(), format, choice.encoding, options.html};
+  const ModelTarget target{outdir, fs::path(input).stem().string(), format, choice.encoding, &choice.images, options.html};
   WrittenAndMeasured written = write_and_measure(target, planned.mesh, result.output, timings);
   // The surface PSNR of the files as written (a lossy codec's images decoded back), the bake's beside it.
   if (choice.written_psnr_db) written.metrics.surface_psnr_bake = std::exchange(written.metrics.surface_psnr, *choice.written_psnr_db);

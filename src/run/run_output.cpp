@@ -53,17 +53,19 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 /// Writes the output model in the target's format. Returns what the writer left out: what the glTF
 /// writer removed, or the map slots OBJ or PLY cannot bind.
 std::vector<std::string> write_model(const ModelTarget& target, const TexturedMesh& output) {
+  static const EncodedImages kNone;
+  const EncodedImages& images = target.images != nullptr ? *target.images : kNone;
   switch (target.format) {
     case ModelFormat::kPly:
-      return write_ply(output, target.outdir, target.name, target.encoding);
+      return write_ply(output, target.outdir, target.name, target.encoding, images);
     case ModelFormat::kGltf:
-      return write_gltf(output, target.outdir, target.name, target.encoding, GltfContainer::kGltf);
+      return write_gltf(output, target.outdir, target.name, target.encoding, GltfContainer::kGltf, images);
     case ModelFormat::kGlb:
-      return write_gltf(output, target.outdir, target.name, target.encoding, GltfContainer::kGlb);
+      return write_gltf(output, target.outdir, target.name, target.encoding, GltfContainer::kGlb, images);
     case ModelFormat::kObj:
       break;
   }
-  return write_obj(output, target.outdir, target.name, target.encoding);
+  return write_obj(output, target.outdir, target.name, target.encoding, images);
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 
 #include "core/resources.hpp"
 #include "io/obj_reader.hpp"
+#include "io/output_files.hpp"
 #include "report/metrics.hpp"
 #include "report/report.hpp"
 #include "tightex/io.hpp"
@@ -46,7 +47,8 @@ struct ModelTarget {
   std::string outdir, name;  // the folder, and the model's file stem
   ModelFormat format = ModelFormat::kObj;
   ImageEncoding encoding;
-  bool html = true;  // gather report.html's model data
+  const EncodedImages* images = nullptr;  // the textures as `encoding` gives them, encoded already (or null)
+  bool html = true;                       // gather report.html's model data
 };
 
 /// Writes the output model, measures it and gathers report.html's model data (the models' shown

@@ -133,9 +133,9 @@ EncodingChoice choose_encoding(const BytesRequest& request, const TexturedMesh& 
   c.encoding = request.encoding;
   c.reason = choose_codecs(request, input, sources, output, c.encoding);
   if (c.encoding.lossy() && !request.quality_given) c.reason += "; " + pick_quality(request, input, sources, output, c.encoding);
-  const std::vector<std::string> images = encoded(output, c.encoding);
-  for (const std::string& b : images) c.bytes.push_back(b.size());
-  if (c.encoding.lossy()) c.written_psnr_db = psnr_as_written(input, output, images);
+  c.images = encoded(output, c.encoding);
+  for (const std::string& b : c.images) c.bytes.push_back(b.size());
+  if (c.encoding.lossy()) c.written_psnr_db = psnr_as_written(input, output, c.images);
   return c;
 }
 

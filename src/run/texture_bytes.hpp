@@ -24,11 +24,12 @@ struct BytesRequest {
   uint64_t max_bytes = 0;             // --max-bytes (0: none)
 };
 
-/// The encoding chosen and what it gives: each output texture's encoded bytes, the surface PSNR of the
+/// The encoding chosen and what it gives: each output texture's encoded file, the surface PSNR of the
 /// images as written (decoded back; for a lossless codec the bake's, unset here), and why.
 struct EncodingChoice {
   ImageEncoding encoding;
-  std::vector<uint64_t> bytes;  // per output texture
+  std::vector<std::string> images;  // per output texture, its file's bytes (for the writer)
+  std::vector<uint64_t> bytes;      // per output texture
   std::optional<double> written_psnr_db;
   std::string reason;
 };
