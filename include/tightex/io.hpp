@@ -123,8 +123,8 @@ constexpr int kDefaultWebpQuality = 90;
 /// to it with the defaults, so a writer call that names only a format means the fast PNG or quality 92.
 struct ImageEncoding {
   ImageFormat format = ImageFormat::kPng;
-  /// PNG: kPngLevelFast, or 0..9: that zlib level with zlib's default strategy and libspng's adaptive
-  /// choice of filter per row (9: the smallest file, the slowest).
+  /// PNG: kPngLevelFast, or 0..9: that zlib level with zlib's default strategy and the adaptive choice
+  /// of filter per row (9: the smallest file, the slowest).
   int png_level = kDefaultPngLevel;
   int jpeg_quality = kDefaultJpegQuality;  // JPEG: 1..100
   int webp_quality = kDefaultWebpQuality;  // WebP: 1..100 (lossy)

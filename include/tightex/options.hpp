@@ -186,7 +186,8 @@ struct Options {
   std::optional<ModelFormat> model_format;
   /// The textures' codec; nullopt: the input's base colour's (PNG for vertex colours or mixed inputs).
   std::optional<ImageFormat> texture_format;
-  /// PNG: zlib level 0..9 with the adaptive filter; nullopt: fast settings (level 1, run-length, Up filter).
+  /// PNG: zlib level 0..9 with the adaptive filter, or kPngLevelFast (-1: level 1, run-length, Up
+  /// filter); nullopt: kDefaultPngLevel (6).
   std::optional<int> png_level;
   /// JPEG quality 1..100; nullopt: rate control (the highest quality within the input's bytes, or below).
   std::optional<int> jpeg_quality;
