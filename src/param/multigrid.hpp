@@ -25,14 +25,16 @@ struct IterativeSolve {
   bool converged = false;        // the residual reached the tolerance (false also on a breakdown)
 };
 
-/// A symmetric positive definite system over a mesh's vertex coordinates (unknown k: coordinate
-/// unknown_axis[k] of vertex unknown_vertex[k]), solved by conjugate gradients preconditioned by one
-/// V-cycle per iteration: the system's Galerkin restrictions to the aggregates of each level (the
-/// unknowns of one axis at the vertices one vertex stands for summed into one; piecewise constant
-/// prolongation), a forward Gauss-Seidel sweep before the coarser level's correction and a backward
-/// one after it (so the preconditioner is symmetric), the coarsest level solved by a sparse Cholesky
+/// A symmetric positive definite (or semi-definite: a projected Hessian) system over a mesh's vertex
+/// coordinates (unknown k: coordinate unknown_axis[k] of vertex unknown_vertex[k]), solved by
+/// conjugate gradients preconditioned by one V-cycle per iteration: the system's Galerkin
+/// restrictions to the aggregates of each level (the unknowns of one axis at the vertices one vertex
+/// stands for summed into one; piecewise constant prolongation), a forward block Gauss-Seidel sweep
+/// (a vertex's coordinates one block) before the coarser level's correction and a backward one after
+/// it (so the preconditioner is symmetric), the coarsest level solved by a sparse Cholesky
 /// factorisation. The pattern is fixed at construction; the values may change (update) between solves.
-/// Memory: the matrix's levels, about a third of the system's own entries, and a few vectors.
+/// Memory: the coarser levels' matrices (about a third of the system's entries), one int per entry
+/// of every level but the coarsest (where it lands in the next), and a few vectors per solve.
 class MultilevelSolver {
  public:
   using Matrix = Eigen::SparseMatrix<double>;  // the lower triangle, compressed, rows sorted in each column
