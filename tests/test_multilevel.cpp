@@ -49,6 +49,17 @@ SquareMapOptions multilevel_options(const Disk& disk) {
   return options;
 }
 
+/// uv (with stats st) is a multilevel map, fold-free, its corners on the square's, with the density of
+/// the map `like` reports (within 0.05 in log2).
+void expect_multilevel_map_like(const Disk& disk, const std::vector<Vec2>& uv, const SquareMapStats& st, const SquareMapStats& like) {
+  ASSERT_GT(st.coarse_vertices, 0u) << "the multilevel path was taken";
+  EXPECT_EQ(st.flipped, 0u);
+  EXPECT_EQ(count_folds(disk.mesh, uv), 0u);
+  for (size_t k = 0; k < 4; ++k) EXPECT_EQ(uv[st.corners[k]], kSquareCorners[k]);
+  EXPECT_NEAR(st.spread_p5, like.spread_p5, 0.05);
+  EXPECT_NEAR(st.spread_p95, like.spread_p95, 0.05);
+}
+
 TEST(Multilevel, CoarseDiskKeepsTheBoundaryTopologyAndTargets) {
   const Disk fine = torus_disk();
   const std::vector<double> target = varying_targets(fine.mesh);
@@ -142,16 +153,32 @@ TEST(Multilevel, OneVertexOrderForEverySystemGivesTheSameMap) {
   options.vertex_order_from = 0;
   SquareMapStats ordered;
   const std::vector<Vec2> uv = map_to_square(disk, options, &ordered);
-  ASSERT_GT(ordered.coarse_vertices, 0u) << "the multilevel path was taken";
-  EXPECT_EQ(ordered.flipped, 0u);
-  EXPECT_EQ(count_folds(disk.mesh, uv), 0u);
-  for (size_t k = 0; k < 4; ++k) EXPECT_EQ(uv[ordered.corners[k]], kSquareCorners[k]);
-  EXPECT_NEAR(ordered.spread_p5, own.spread_p5, 0.05);
-  EXPECT_NEAR(ordered.spread_p95, own.spread_p95, 0.05);
+  expect_multilevel_map_like(disk, uv, ordered, own);
   double worst = 0;
   for (size_t v = 0; v < uv.size(); ++v) worst = std::max(worst, (uv[v] - own_uv[v]).norm());
   EXPECT_LT(worst, 1e-6) << "the same map but for the rounding of another elimination order";
   EXPECT_GT(worst, 0.0) << "the order was taken (another elimination order rounds otherwise)";
+}
+
+// The full mesh's symmetric Dirichlet steps solved by conjugate gradients over the collapses'
+// aggregates (as from iterative_from vertices), the Laplacians too (iterative_laplacians): fold-free on
+// the square, with the density of the map whose systems are factorised.
+TEST(Multilevel, IterativeFineStageGivesTheFactorisedMapsDensity) {
+  const Disk disk = torus_disk();
+  SquareMapOptions options = multilevel_options(disk);
+  options.refine_keeps_density = false;  // every step taken
+  SquareMapStats factorised;
+  map_to_square(disk, options, &factorised);
+  ASSERT_GT(factorised.fine_steps, 0);
+  for (bool laplacians : {false, true}) {
+    options.iterative_from = 0;
+    options.iterative_laplacians = laplacians;
+    SquareMapStats st;
+    const std::vector<Vec2> uv = map_to_square(disk, options, &st);
+    expect_multilevel_map_like(disk, uv, st, factorised);
+    EXPECT_EQ(st.fine_reweighting, factorised.fine_reweighting);
+    EXPECT_EQ(st.fine_steps, factorised.fine_steps);
+  }
 }
 
 // A model's pieces are mapped side by side (their supernodal factorisations one at a time, blas_mutex;

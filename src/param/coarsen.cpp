@@ -97,6 +97,7 @@ class Collapser {
         vertex_alive_(m_.num_vertices(), 1),
         locked_(boundary_mask(m_.num_vertices(), fine.boundary)),
         on_boundary_(locked_),
+        merged_into_(m_.num_vertices()),
         faces_(m_.num_vertices()),
         queue_(m_.num_vertices()) {
     for (uint32_t f = 0; f < tri_.size(); ++f)
@@ -105,6 +106,7 @@ class Collapser {
         if (m_.face_parent[f] == kNone) locked_[v] = 1;
       }
     alive_ = m_.num_vertices();
+    for (uint32_t v = 0; v < m_.num_vertices(); ++v) merged_into_[v] = v;
   }
 
   /// Collapses until at most max_vertices are left or nothing more may collapse. A later call goes on
@@ -136,7 +138,21 @@ class Collapser {
 
   CoarseDisk result(const Disk& fine) const;
 
+  /// Per vertex, the vertex it has been moved onto, through every later collapse of that one (itself
+  /// where it is still there).
+  std::vector<uint32_t> standing_for() {
+    std::vector<uint32_t> stands(m_.num_vertices());
+    for (uint32_t v = 0; v < m_.num_vertices(); ++v) stands[v] = find(v);
+    return stands;
+  }
+
  private:
+  /// The live vertex v has been moved onto (union-find with path halving).
+  uint32_t find(uint32_t v) {
+    while (merged_into_[v] != v) v = merged_into_[v] = merged_into_[merged_into_[v]];
+    return v;
+  }
+
   double dist(uint32_t a, uint32_t b) const { return (m_.positions[a] - m_.positions[b]).norm(); }
 
   /// v's neighbours, sorted, into r (a buffer reused: the collapses ask hundreds of thousands of times).
@@ -213,6 +229,7 @@ class Collapser {
     }
     faces_[v].clear();
     vertex_alive_[v] = 0;
+    merged_into_[v] = u;
     --alive_;
   }
 
@@ -220,6 +237,7 @@ class Collapser {
   std::vector<Tri> tri_;
   std::vector<double> mass_;
   std::vector<char> face_alive_, vertex_alive_, locked_, on_boundary_;
+  std::vector<uint32_t> merged_into_;  // per vertex, the one it was moved onto (itself while it is there)
   std::vector<std::vector<uint32_t>> faces_;
   std::vector<uint32_t> apex_, nv_, nu_, common_, removed_, kept_;         // scratch of run(), allowed() and collapse()
   std::vector<std::pair<double, uint32_t>> by_distance_;                   // scratch of run()
@@ -259,12 +277,22 @@ CoarseDisk coarsen_disk(const Disk& fine, const std::vector<double>& face_target
 }
 
 std::vector<CoarseDisk> coarsen_disk_in_steps(const Disk& fine, const std::vector<double>& face_target,
-                                              const std::vector<size_t>& max_vertices) {
+                                              const std::vector<size_t>& max_vertices, const std::vector<size_t>& aggregate_sizes,
+                                              VertexAggregates* aggregates) {
   Collapser collapser(fine, face_target);
   std::vector<CoarseDisk> copies;
-  for (size_t size : max_vertices) {
-    collapser.run(size);
-    copies.push_back(collapser.result(fine));
+  auto copy = max_vertices.begin();
+  auto level = aggregate_sizes.begin();
+  while (copy != max_vertices.end() || (aggregates && level != aggregate_sizes.end())) {
+    const bool copy_next = copy != max_vertices.end() && (!aggregates || level == aggregate_sizes.end() || *copy >= *level);
+    collapser.run(copy_next ? *copy : *level);
+    if (copy_next) {
+      copies.push_back(collapser.result(fine));
+      ++copy;
+    } else {
+      aggregates->levels.push_back(collapser.standing_for());
+      ++level;
+    }
   }
   return copies;
 }

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "core/disk.hpp"
+#include "param/multigrid.hpp"
 
 namespace tightex {
 
@@ -26,8 +27,12 @@ CoarseDisk coarsen_disk(const Disk& fine, const std::vector<double>& face_target
 
 /// coarsen_disk's copy for each of `max_vertices` (in decreasing order), from one run of collapses: the
 /// collapses stop at each size in turn and go on from there, so each copy is the one coarsen_disk gives
-/// for that size, for the cost of one.
+/// for that size, for the cost of one. With `aggregates` given, the collapses also stop at each of
+/// `aggregate_sizes` (decreasing; they may go below the copies' sizes) and record there which vertex
+/// stands for each fine vertex: the nested aggregates of the full mesh's iterative solves
+/// (MultilevelSolver), one level per size.
 std::vector<CoarseDisk> coarsen_disk_in_steps(const Disk& fine, const std::vector<double>& face_target,
-                                              const std::vector<size_t>& max_vertices);
+                                              const std::vector<size_t>& max_vertices, const std::vector<size_t>& aggregate_sizes = {},
+                                              VertexAggregates* aggregates = nullptr);
 
 }  // namespace tightex

@@ -4,7 +4,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include <tbb/parallel_invoke.h>
+
 #include "param/folds.hpp"
+#include "param/multigrid.hpp"
 #include "param/sparse_cholesky.hpp"
 
 namespace tightex {
@@ -142,10 +145,32 @@ DirichletSolver::DirichletSolver(long supernodal_from, std::shared_ptr<const std
 
 DirichletSolver::~DirichletSolver() = default;
 
+void DirichletSolver::solve_iteratively(std::shared_ptr<const VertexAggregates> aggregates, double tolerance) {
+  aggregates_ = std::move(aggregates);
+  tolerance_ = tolerance;
+  laplacian_.reset();
+}
+
 void DirichletSolver::prepare(const Surface& m, const std::vector<char>& on_boundary) {
   const size_t nv = m.num_vertices();
   laplacian_ = std::make_unique<Laplacian>(m, on_boundary);
+  multilevel_.reset();
+  cholesky_analysed_ = false;
   if (laplacian_->n == 0) return;
+  if (aggregates_) {
+    std::vector<uint32_t> vertex(size_t(laplacian_->n));
+    for (size_t v = 0; v < nv; ++v)
+      if (laplacian_->unknown[v] >= 0) vertex[size_t(laplacian_->unknown[v])] = uint32_t(v);
+    multilevel_ = std::make_unique<MultilevelSolver>(laplacian_->a, vertex, std::vector<uint8_t>(vertex.size(), 0), *aggregates_);
+    return;
+  }
+  analyse();
+}
+
+/// CHOLMOD's analysis of the Laplacian's pattern, in the disk's vertex order where there is one.
+void DirichletSolver::analyse() {
+  const size_t nv = laplacian_->unknown.size();
+  cholesky_analysed_ = true;
   const std::vector<int> order =
       vertex_order_ && vertex_order_->size() == nv ? order_of_unknowns(*vertex_order_, laplacian_->unknown, 1) : std::vector<int>{};
   cholesky_->analyzePattern(laplacian_->a, order.empty() ? nullptr : &order);
@@ -158,11 +183,33 @@ bool DirichletSolver::solve(const Surface& m, const std::vector<double>& w, cons
   if (lap.n == 0) return true;
   Eigen::MatrixX2d rhs;
   lap.assemble(m, w, uv, rhs);
-  if (!cholesky_->factorize(lap.a)) return false;
-  Eigen::MatrixX2d x;
-  if (!cholesky_->solve(lap.a, rhs, x)) return false;
+  Eigen::MatrixX2d x(lap.n, 2);
+  for (size_t v = 0; v < nv; ++v)
+    if (lap.unknown[v] >= 0) x.row(lap.unknown[v]) = uv[v].transpose();
+  if (!multilevel_ || !solve_by_iterations(rhs, x)) {
+    if (!cholesky_analysed_) analyse();
+    if (!cholesky_->factorize(lap.a)) return false;
+    if (!cholesky_->solve(lap.a, rhs, x)) return false;
+  }
   for (size_t v = 0; v < nv; ++v)
     if (lap.unknown[v] >= 0) uv[v] = x.row(lap.unknown[v]).transpose();
+  return true;
+}
+
+namespace {
+/// An iterative solve that has not converged by then is given up for the factorisation.
+constexpr int kMaxIterations = 200;
+}  // namespace
+
+bool DirichletSolver::solve_by_iterations(const Eigen::MatrixX2d& rhs, Eigen::MatrixX2d& x) {
+  if (!multilevel_->update(laplacian_->a)) return false;
+  IterativeSolve outcome[2];
+  Eigen::VectorXd b[2] = {rhs.col(0), rhs.col(1)}, column[2] = {x.col(0), x.col(1)};
+  auto solve_column = [&](int k) { outcome[k] = multilevel_->solve(b[k], column[k], tolerance_, kMaxIterations); };
+  tbb::parallel_invoke([&] { solve_column(0); }, [&] { solve_column(1); });
+  if (!outcome[0].converged || !outcome[1].converged) return false;
+  x.col(0) = column[0];
+  x.col(1) = column[1];
   return true;
 }
 

@@ -5,11 +5,15 @@
 #include <string_view>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "param/square_map_options.hpp"
 
 namespace tightex {
 
 class SparseCholesky;
+class MultilevelSolver;
+struct VertexAggregates;
 
 /// The edge weights of the Laplacian: cotangent (the paper's), cotangent with negative weights clamped
 /// to 1e-3 of the mean absolute weight (positive, so the map of a convex boundary cannot fold:
@@ -48,8 +52,21 @@ class DirichletSolver {
   /// vertices held builds its own again.
   void prepare(const Surface& mesh, const std::vector<char>& on_boundary);
 
+  /// From now on solves by conjugate gradients preconditioned over `aggregates` of the mesh's vertices
+  /// (MultilevelSolver), from the values uv holds, to a relative residual of `tolerance`, instead of
+  /// factorising (memory linear in the mesh; a start near the solution, as a reweighting step's, saves
+  /// iterations). Where that does not converge, the solve factorises after all.
+  void solve_iteratively(std::shared_ptr<const VertexAggregates> aggregates, double tolerance);
+
  private:
   struct Laplacian;
+  void analyse();
+  /// The iterative solve from x's values; false (x unspecified) where either coordinate does not converge.
+  bool solve_by_iterations(const Eigen::MatrixX2d& rhs, Eigen::MatrixX2d& x);
+  std::shared_ptr<const VertexAggregates> aggregates_;
+  double tolerance_ = 0;
+  std::unique_ptr<MultilevelSolver> multilevel_;
+  bool cholesky_analysed_ = false;
   std::unique_ptr<SparseCholesky> cholesky_;
   std::shared_ptr<const std::vector<int>> vertex_order_;
   std::unique_ptr<Laplacian> laplacian_;  // the pattern, built at the first solve

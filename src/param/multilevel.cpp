@@ -102,6 +102,23 @@ void release_free_memory() {
 #endif
 }
 
+/// The relative residual the full mesh's Laplacians are solved to where they are solved iteratively
+/// (options.iterative_laplacians): at 1e-10 the Tutte fill of esp32cam subdivided twice folded a
+/// triangle, at 1e-12 none.
+constexpr double kFillTolerance = 1e-12;
+
+/// The aggregates' coarsest level has about this many vertices (the collapses may stop short of it).
+constexpr size_t kCoarsestAggregate = 3000;
+
+/// The sizes the collapses record the full mesh's aggregates at (multigrid.hpp): a quarter of the
+/// vertices each, down to kCoarsestAggregate; at least two levels (a small disk's, in the tests).
+std::vector<size_t> aggregate_sizes(const Disk& disk) {
+  std::vector<size_t> sizes;
+  for (size_t size = disk.mesh.num_vertices() / 4; size > 0 && (size >= kCoarsestAggregate || sizes.size() < 2); size /= 4)
+    sizes.push_back(size);
+  return sizes;
+}
+
 /// Coarse copies tried, each twice the vertices of the one before, while it stays within
 /// multilevel_from and at most a quarter of the disk.
 constexpr int kCoarseTries = 3;
@@ -135,10 +152,14 @@ std::optional<std::pair<CoarseDisk, std::vector<Vec2>>> coarse_map(std::vector<C
 /// the harmonic fill, the boundary for the Tutte fill. Where coarse_map settles on another copy, the
 /// harmonic fill makes its own.
 FineSystems prepare_fills(const Disk& disk, const std::vector<char>& held, const SquareMapOptions& options,
-                          const std::shared_ptr<const std::vector<int>>& order) {
+                          const std::shared_ptr<const std::vector<int>>& order, const std::shared_ptr<const VertexAggregates>& aggregates) {
   const Surface& m = disk.mesh;
   FineSystems systems{std::make_unique<DirichletSolver>(options.supernodal_from, order),
                       std::make_unique<DirichletSolver>(options.supernodal_from, order)};
+  if (aggregates && options.iterative_laplacians) {
+    systems.between->solve_iteratively(aggregates, kFillTolerance);
+    systems.tutte->solve_iteratively(aggregates, kFillTolerance);
+  }
   systems.between->prepare(m, held);
   systems.tutte->prepare(m, boundary_mask(m.num_vertices(), disk.boundary));
   return systems;
@@ -172,10 +193,14 @@ std::optional<std::vector<Vec2>> multilevel_map(const Disk& disk, const SquareMa
   SquareBoundary placed;
   // One fill-reducing order for every system on the full mesh, found beside the coarse copies (each
   // runs on one thread: METIS's 2 s at 425k vertices then cost no wall time).
+  // The iterative solves' aggregates (multigrid.hpp) are recorded by the same collapses.
+  const bool iterative = m.num_vertices() >= options.iterative_from;
   std::vector<CoarseDisk> copies;
   std::shared_ptr<const std::vector<int>> order;
-  tbb::parallel_invoke([&] { copies = coarsen_disk_in_steps(disk, options.face_target, coarse_sizes(disk, options)); },
-                       [&] { order = vertex_order_from(m, options.vertex_order_from); });
+  std::shared_ptr<VertexAggregates> aggregates = iterative ? std::make_shared<VertexAggregates>() : nullptr;
+  tbb::parallel_invoke(
+      [&] { copies = coarsen_disk_in_steps(disk, options.face_target, coarse_sizes(disk, options), aggregate_sizes(disk), aggregates.get()); },
+      [&] { order = vertex_order_from(m, options.vertex_order_from); });
   // What METIS freed stays in its thread's malloc arena, out of reach of the fine stage's
   // factorisations (peak 1706 -> 1779 MiB at 854k faces).
   release_free_memory();
@@ -187,7 +212,7 @@ std::optional<std::vector<Vec2>> multilevel_map(const Disk& disk, const SquareMa
   std::optional<std::pair<CoarseDisk, std::vector<Vec2>>> coarse_and_map;
   FineSystems systems;
   tbb::parallel_invoke([&] { coarse_and_map = coarse_map(copies, options, st, placed); },
-                       [&] { systems = prepare_fills(disk, first_held, options, order); });
+                       [&] { systems = prepare_fills(disk, first_held, options, order, aggregates); });
   copies.clear();
   if (!coarse_and_map) return std::nullopt;
   const CoarseDisk& coarse = coarse_and_map->first;
@@ -201,21 +226,25 @@ std::optional<std::vector<Vec2>> multilevel_map(const Disk& disk, const SquareMa
   fine_options.correction_rounds = 0;
   fine_options.progress = nullptr;
   // The symmetric Dirichlet steps' constraints are the coarse boundary's (its vertices are the fine
-  // boundary's, in the same order); their system is made beside the fill and the reweighting.
+  // boundary's, in the same order). Their system is made beside the fill and the reweighting where
+  // it is factorised (its analysis takes seconds); an iterative one after them, once the Laplacian's
+  // factor is freed: the two at once were the peak of the run (3.4M faces).
   const DensityConstraints constraints = density_constraints(disk, placed, fine_options, order);
+  const auto prepare_steps = [&] {
+    constraints.refinement =
+        prepare_refinement(m, constraints.fixed, options.face_target, options.supernodal_from, order.get(), aggregates.get());
+  };
   SquareMapStats fine;
   tbb::task_group steps_ahead;
-  steps_ahead.run([&] {
-    constraints.refinement = prepare_refinement(m, constraints.fixed, options.face_target, options.supernodal_from, order.get());
-  });
+  if (!aggregates) steps_ahead.run(prepare_steps);
   std::vector<Vec2> uv = fill_and_reweight(disk, coarse, coarse_uv, fine_options, systems, fine);
   steps_ahead.wait();
   if (uv.empty()) return std::nullopt;
   // The Laplacian's factor is freed before the symmetric Dirichlet steps factorise a system of twice
-  // the unknowns (the peak of the run), and handed back to the system: the steps' system, built
-  // already, would not reuse it.
+  // the unknowns, and handed back to the system: the steps' system, built already, would not reuse it.
   systems.tutte.reset();
   release_free_memory();
+  if (aggregates) prepare_steps();
   refine_towards_targets(constraints, uv, fine);
   st.fine_reweighting = fine.iterations;
   st.fine_steps = fine.refine_iterations;

@@ -11,6 +11,7 @@
 #include "param/folds.hpp"
 #include "param/harmonic.hpp"
 #include "param/map_to_square.hpp"
+#include "param/multigrid.hpp"
 #include "param/multilevel.hpp"
 #include "param/slim.hpp"
 #include "param/square_map_options.hpp"

@@ -16,6 +16,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "param/multigrid.hpp"
 #include "param/sparse_cholesky.hpp"
 
 namespace tightex {
@@ -28,6 +29,13 @@ namespace {
 /// applied to every step, as it changes the path of maps that solve without it. Chosen by
 /// measurement: docs/decisions.md.
 constexpr double kMaxWeight = 1e8;
+
+/// The iterative solves of the steps' systems (a RefinementSystem with a MultilevelSolver): the
+/// relative residual a step is solved to (an inexact Newton step: the line search makes any descent
+/// direction safe; 1e-2 lost 0.3 dB of surface PSNR at 213k faces, 1e-3 none: BENCHMARKS.md, "Scale"),
+/// and the iterations it may take.
+constexpr double kStepTolerance = 1e-3;
+constexpr int kStepIterations = 100;
 
 using SpMat = Eigen::SparseMatrix<double>;
 using Mat2 = Eigen::Matrix2d;
@@ -434,11 +442,23 @@ class SlimSystem {
 
 class RefinementSystem {
  public:
-  RefinementSystem(const Surface& m, std::vector<int> index, int n, long supernodal_from, const std::vector<int>* vertex_order)
+  /// aggregates (optional): the steps are solved by conjugate gradients preconditioned over them
+  /// (MultilevelSolver) instead of factorised.
+  RefinementSystem(const Surface& m, std::vector<int> index, int n, long supernodal_from, const std::vector<int>* vertex_order,
+                   const VertexAggregates* aggregates = nullptr)
       : system(m, std::move(index), n), solver(supernodal_from) {
+    if (aggregates) {
+      std::vector<uint32_t> vertex(static_cast<size_t>(n));
+      std::vector<uint8_t> axis(static_cast<size_t>(n));
+      for (size_t k = 0; k < system.index().size(); ++k)
+        if (const int i = system.index()[k]; i >= 0) vertex[size_t(i)] = uint32_t(k / 2), axis[size_t(i)] = uint8_t(k % 2);
+      multilevel = std::make_unique<MultilevelSolver>(system.A, vertex, axis, *aggregates);
+      return;
+    }
     const std::vector<int> order =
         vertex_order && vertex_order->size() == m.num_vertices() ? order_of_unknowns(*vertex_order, system.index(), 2) : std::vector<int>{};
     solver.analyzePattern(system.A, order.empty() ? nullptr : &order);
+    analysed = true;
   }
 
   /// The free coordinates' next positions x from uv: the projected Newton step; where its system does
@@ -446,7 +466,8 @@ class RefinementSystem {
   /// with its weights capped at kMaxWeight. False if none solves.
   bool solve_step(const std::vector<TargetFrame>& fr, const std::vector<Vec2>& uv, Eigen::VectorXd& x, SlimStats& st) {
     system.assemble_newton(fr, uv);
-    if (solver.factorize(system.A) && solver.solve(system.A, system.rhs, x)) {
+    x = Eigen::VectorXd::Zero(system.rhs.size());
+    if (solve_newton(x)) {
       const std::vector<int>& index = system.index();
       for (size_t v = 0; v < uv.size(); ++v)
         for (int a = 0; a < 2; ++a)
@@ -455,24 +476,69 @@ class RefinementSystem {
     }
     ++st.proxy_steps;
     system.assemble(fr, uv, INFINITY);
-    if (solver.factorize(system.A) && solver.solve(system.A, system.rhs, x)) return true;
+    if (solve_proxy(uv, x)) return true;
     system.assemble(fr, uv, kMaxWeight);
-    if (!solver.factorize(system.A) || !solver.solve(system.A, system.rhs, x)) return false;
+    if (!solve_proxy(uv, x)) return false;
     ++st.capped_steps;
     return true;
   }
 
   SlimSystem system;
   SparseCholesky solver;
+  bool analysed = false;
+  std::unique_ptr<MultilevelSolver> multilevel;
+
+ private:
+  /// The Newton system's step into x (zero on entry): iterated where there is a multilevel solver,
+  /// else factorised.
+  bool solve_newton(Eigen::VectorXd& x) {
+    if (!multilevel) return factorize_and_solve(x);
+    return iterate_step(system.rhs, x);
+  }
+
+  /// The proxy's positions into x: where there is a multilevel solver, uv plus the step its system
+  /// gives from uv, iterated as Newton's; factorised where that fails or there is none.
+  bool solve_proxy(const std::vector<Vec2>& uv, Eigen::VectorXd& x) {
+    if (multilevel) {
+      const std::vector<int>& index = system.index();
+      Eigen::VectorXd start(x.size());
+      for (size_t v = 0; v < uv.size(); ++v)
+        for (int a = 0; a < 2; ++a)
+          if (const int k = index[2 * v + size_t(a)]; k >= 0) start(k) = uv[v](a);
+      const Eigen::VectorXd rhs = system.rhs - system.A.selfadjointView<Eigen::Lower>() * start;
+      x.setZero();
+      if (iterate_step(rhs, x)) {
+        x += start;
+        return true;
+      }
+    }
+    return factorize_and_solve(x);
+  }
+
+  /// A step's system A x = rhs solved from x = 0 to kStepTolerance, or as far as kStepIterations take it:
+  /// conjugate gradients from zero give a descent direction at any iteration, and the line search
+  /// takes what of it lowers the energy without folding. False where the solver cannot start or the
+  /// step is not finite.
+  bool iterate_step(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) {
+    if (!multilevel->update(system.A)) return false;
+    const IterativeSolve r = multilevel->solve(rhs, x, kStepTolerance, kStepIterations);
+    return r.iterations > 0 && r.relative_residual < 0.5 && x.allFinite();
+  }
+
+  bool factorize_and_solve(Eigen::VectorXd& x) {
+    if (!analysed) solver.analyzePattern(system.A), analysed = true;
+    return solver.factorize(system.A) && solver.solve(system.A, system.rhs, x);
+  }
 };
 
 std::shared_ptr<RefinementSystem> prepare_refinement(const Surface& m, const std::vector<char>& fixed, const std::vector<double>& target,
-                                                     long supernodal_from, const std::vector<int>* vertex_order) {
+                                                     long supernodal_from, const std::vector<int>* vertex_order,
+                                                     const VertexAggregates* aggregates) {
   int n = 0;
   std::vector<int> index = free_coordinates(
       m, [&](size_t f) { return target[f] > 0 && std::isfinite(target[f]); }, fixed, n);
   if (n == 0) return nullptr;
-  return std::make_shared<RefinementSystem>(m, std::move(index), n, supernodal_from, vertex_order);
+  return std::make_shared<RefinementSystem>(m, std::move(index), n, supernodal_from, vertex_order, aggregates);
 }
 
 SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,

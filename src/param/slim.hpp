@@ -22,6 +22,7 @@ struct SlimStats {
 /// land) and CHOLMOD's analysis, the same for every step and for every refinement of that mesh that
 /// frees the same coordinates.
 class RefinementSystem;
+struct VertexAggregates;
 
 /// A triangle's shape in the plane (its corners in the face's order; position and rotation do not matter).
 using FaceShape = std::array<Vec2, 3>;
@@ -47,9 +48,12 @@ SlimStats refine_map(const Surface& mesh, const std::vector<char>& fixed, const 
 /// The system refine_map(mesh, fixed, target, ..., supernodal_from, ..., vertex_order) solves from a
 /// fold-free start map, built and analysed before that map exists (every face with a positive target
 /// then has a frame): for a caller with a core to spare while it makes the start. Null where no
-/// coordinate is free.
+/// coordinate is free. aggregates (optional): its steps are solved by conjugate gradients
+/// preconditioned over these aggregates of the mesh's vertices (MultilevelSolver), not factorised:
+/// memory linear in the mesh.
 std::shared_ptr<RefinementSystem> prepare_refinement(const Surface& mesh, const std::vector<char>& fixed, const std::vector<double>& target,
                                                      long supernodal_from = kSupernodalFrom,
-                                                     const std::vector<int>* vertex_order = nullptr);
+                                                     const std::vector<int>* vertex_order = nullptr,
+                                                     const VertexAggregates* aggregates = nullptr);
 
 }  // namespace tightex

@@ -75,6 +75,15 @@ struct SquareMapOptions {
   size_t multilevel_from = 100000;
   size_t coarse_vertices = 30000;
   int fine_reweighting = 4, fine_steps = 2;
+  /// A multilevel disk of this many vertices or more solves its full mesh's symmetric Dirichlet steps
+  /// by conjugate gradients preconditioned over the coarsening's aggregates (MultilevelSolver) instead
+  /// of factorising them: memory linear in the mesh. Chosen by measurement: BENCHMARKS.md, "Scale".
+  size_t iterative_from = 200000;
+  /// With iterative_from: the full mesh's Laplacians (the fill and the reweighting) too. Off: they must
+  /// be solved to a relative residual of 1e-12 (a Tutte map must not fold where the map is crowded),
+  /// which the preconditioner reaches 10 to 30 times slower than CHOLMOD's factorisation and solve
+  /// (BENCHMARKS.md, "Scale").
+  bool iterative_laplacians = false;
   /// The density steps start from whichever weighting gave a fold-free harmonic map, even where the
   /// clamped cotangent weights crowded a region (which otherwise stops the map there, for the caller
   /// to slit): multilevel_map's coarse copy, whose crowding is no reason to re-cut the full mesh.
