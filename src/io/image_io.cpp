@@ -283,10 +283,6 @@ Image decode_png(const unsigned char* data, size_t size, const std::string& name
   return image;
 }
 
-bool is_opaque(const Image& image) {
-  return std::all_of(image.pixels.begin(), image.pixels.end(), [](const Rgba8& p) { return p.a == 255; });
-}
-
 // The zlib level, strategy and row filter for ImageEncoding::png_level: the fast settings, or that
 // level with zlib's default strategy and the adaptive filter (each row tries all five).
 PngSettings png_settings(int png_level) {

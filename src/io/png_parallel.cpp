@@ -130,17 +130,15 @@ void append_chunk(std::string& out, const char* type, const char* data, size_t s
   append_u32(out, uint32_t(crc));
 }
 
-bool opaque(const Image& image) {
-  for (const Rgba8& p : image.pixels)
-    if (p.a != 255) return false;
-  return true;
-}
-
 }  // namespace
+
+bool is_opaque(const Image& image) {
+  return std::all_of(image.pixels.begin(), image.pixels.end(), [](const Rgba8& p) { return p.a == 255; });
+}
 
 std::string encode_png(const Image& image, const PngSettings& settings) {
   if (image.width <= 0 || image.height <= 0) fail_internal("encode_png of a {}x{} image", image.width, image.height);
-  const size_t channels = opaque(image) ? 3 : 4;
+  const size_t channels = is_opaque(image) ? 3 : 4;
   const std::string idat = zlib_stream(filtered_rows(image, channels, settings.filter), settings);
   std::string png("\x89PNG\r\n\x1a\n", 8);
   std::string ihdr;

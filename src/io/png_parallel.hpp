@@ -21,6 +21,9 @@ struct PngSettings {
   PngRowFilter filter = PngRowFilter::kAdaptive;
 };
 
+/// Whether every pixel's alpha is 255 (an encoder may then store RGB alone).
+bool is_opaque(const Image& image);
+
 /// The PNG file of `image`: 8-bit RGB where every alpha is 255, else RGBA. The same pixels as any
 /// encoder's; the bytes depend on the settings and the slice size, not on the number of cores.
 std::string encode_png(const Image& image, const PngSettings& settings);
