@@ -30,7 +30,10 @@ inline std::string read_whole(const std::filesystem::path& p) {
 
 /// Runs `tightex ARGS` through the shell; its exit status (-1 when a signal ended it).
 inline int run_tightex(const std::string& args) {
-  const int status = std::system((std::string(TIGHTEX_CLI) + " " + args).c_str());
+  std::string command = TIGHTEX_CLI;
+  command += ' ';
+  command += args;
+  const int status = std::system(command.c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 

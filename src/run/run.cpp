@@ -232,7 +232,7 @@ void check_options(const Options& o) {
 ModelFormat model_format_of(const std::string& path) {
   const std::string extension = fs::path(path).extension().string();
   for (const ModelFormat f : kModelFormats)
-    if (f != ModelFormat::kObj && equals_ignoring_case(extension, "." + std::string(to_string(f)))) return f;
+    if (f != ModelFormat::kObj && equals_ignoring_case(extension, fmt::format(".{}", to_string(f)))) return f;
   return ModelFormat::kObj;
 }
 

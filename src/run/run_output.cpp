@@ -1,5 +1,6 @@
 #include "run/run_output.hpp"
 
+#include <fmt/format.h>
 #include <tbb/parallel_invoke.h>
 
 #include <chrono>
@@ -17,7 +18,7 @@ namespace tightex {
 
 namespace {
 
-fs::path temporary_beside(const fs::path& path) { return path.parent_path() / ("." + path.filename().string() + ".tmp"); }
+fs::path temporary_beside(const fs::path& path) { return path.parent_path() / fmt::format(".{}.tmp", path.filename().string()); }
 
 /// Writes each text to its path under a temporary name, and only once all are written renames them
 /// into place, in order: a reader never sees one file of the set without the others written. Throws
