@@ -230,6 +230,33 @@ TEST(Scenes, UntexturedPartsAreWrittenAsTheyCame) {
   EXPECT_EQ(plain_triangle_colours(in_path, ply, factor), 2u);
 }
 
+/// The Kd of the first material of an MTL file.
+std::array<double, 3> first_kd(const fs::path& obj) { return read_obj(obj.string()).materials.at(0).kd; }
+
+TEST(Scenes, ObjOutputsKeepTheFactorTheTexturesShare) {
+  // An OBJ whose textured material has Kd 0.6 (as Meshroom writes): the output OBJ keeps it (viewers
+  // that multiply map_Kd by Kd show the output as they showed the input); a glTF output stays white.
+  const fs::path dir = testing::scratch_folder("scene_texture_factor");
+  TexturedMesh grey = testing::disk();
+  grey.materials.at(0).kd = {0.6, 0.6, 0.6};
+  write_obj(grey, (dir / "obj_in").string(), "disk", ImageEncoding(ImageFormat::kPng));
+  ASSERT_EQ(run_quietly(dir / "obj_in" / "disk.obj", dir / "obj_out"), 0) << read_whole(dir / "obj_out.stderr");
+  EXPECT_EQ(first_kd(dir / "obj_out" / "disk.obj"), grey.materials[0].kd);
+  ASSERT_EQ(run_quietly(dir / "obj_in" / "disk.obj", dir / "glb_out", "--output-format glb"), 0);
+  EXPECT_EQ(read_gltf((dir / "glb_out" / "disk.glb").string()).materials.at(0).kd, (std::array<double, 3>{1, 1, 1}));
+  // A glTF's tinted texture: OBJ carries the factor as Kd, without a warning; PLY cannot, and says so.
+  testing::GridGltf tinted = testing::grid_gltf();
+  tinted.doc["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = {0.5, 0.25, 1.0, 1.0};
+  const fs::path glb = dir / "tinted.glb";
+  write_whole(glb, testing::make_glb(tinted.doc, tinted.bin));
+  ASSERT_EQ(run_quietly(glb, dir / "tinted_obj", "--output-format obj"), 0);
+  EXPECT_EQ(first_kd(dir / "tinted_obj" / "tinted.obj"), (std::array<double, 3>{0.5, 0.25, 1.0}));
+  auto warnings = [&](const char* out) { return json::parse(read_whole(dir / out / "report.json"))["warnings"].dump(); };
+  EXPECT_EQ(warnings("tinted_obj").find("colour factor"), std::string::npos) << warnings("tinted_obj");
+  ASSERT_EQ(run_quietly(glb, dir / "tinted_ply", "--output-format ply"), 0);
+  EXPECT_NE(warnings("tinted_ply").find("1 textured material(s) have a colour factor"), std::string::npos) << warnings("tinted_ply");
+}
+
 TEST(Scenes, NothingToBakeIsRefusedWithNothingWritten) {
   const fs::path dir = testing::scratch_folder("scene_nothing");
   testing::GridGltf g = testing::scene_gltf(false);

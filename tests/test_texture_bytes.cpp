@@ -55,21 +55,28 @@ double measured_psnr(const fs::path& in, const fs::path& out) {
   return json::parse(read_whole(j))["surface_psnr_db"].get<double>();
 }
 
-TEST(TextureBytes, AJpegScanComesBackAsJpegNoLargerOnDisk) {
-  const fs::path dir = testing::scratch_folder("bytes_jpeg");
-  const fs::path in = scan_obj(dir / "in", ImageFormat::kJpeg);
+/// A lossy scan comes back in its own codec, no larger on disk, its report's bytes and written PSNR
+/// those of the files.
+void expect_lossy_scan_no_larger(ImageFormat format, const std::string& name, const std::string& extension) {
+  SCOPED_TRACE(name);
+  const fs::path dir = testing::scratch_folder("bytes_" + name);
+  const fs::path in = scan_obj(dir / "in", format);
   const json report = run(in, dir / "out");
   const json& bytes = report["bytes"];
-  EXPECT_EQ(bytes["encoding"]["format"], "jpg");
-  EXPECT_EQ(bytes["input"]["total"].get<uint64_t>(), bytes_of(dir / "in", ".jpg"));
-  EXPECT_EQ(bytes["output"]["total"].get<uint64_t>(), bytes_of(dir / "out", ".jpg"));
+  EXPECT_EQ(bytes["encoding"]["format"], name);
+  EXPECT_EQ(bytes["input"]["total"].get<uint64_t>(), bytes_of(dir / "in", extension));
+  EXPECT_EQ(bytes["output"]["total"].get<uint64_t>(), bytes_of(dir / "out", extension));
   EXPECT_EQ(bytes_of(dir / "out", ".png"), 0u);
-  EXPECT_LE(bytes_of(dir / "out", ".jpg"), bytes_of(dir / "in", ".jpg"));
+  EXPECT_LE(bytes_of(dir / "out", extension), bytes_of(dir / "in", extension));
   EXPECT_NEAR(bytes["surface_psnr_written_db"].get<double>(), measured_psnr(in, dir / "out" / "scan.obj"), 0.3);
   // The report's surface PSNR is the written files'; the bake's beside it.
   EXPECT_EQ(report["metrics"]["surface_psnr_db"], bytes["surface_psnr_written_db"]);
   EXPECT_LE(bytes["surface_psnr_written_db"].get<double>(), report["metrics"]["surface_psnr_bake_db"].get<double>() + 0.05);
 }
+
+TEST(TextureBytes, AJpegScanComesBackAsJpegNoLargerOnDisk) { expect_lossy_scan_no_larger(ImageFormat::kJpeg, "jpg", ".jpg"); }
+
+TEST(TextureBytes, AWebpScanComesBackAsWebpNoLargerOnDisk) { expect_lossy_scan_no_larger(ImageFormat::kWebp, "webp", ".webp"); }
 
 TEST(TextureBytes, APngScanComesBackAsPngWithTheBakesPsnr) {
   const fs::path dir = testing::scratch_folder("bytes_png");

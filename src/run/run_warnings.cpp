@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "io/output_files.hpp"
 #include "report/report.hpp"
 
 namespace tightex {
@@ -34,9 +35,11 @@ void add_plan_warnings(const Plan& plan, const nlohmann::json& report, Lines& ou
 }
 
 /// The input's textured materials whose colour factor is not white (read from glTF: the factor a
-/// glTF output keeps in its material, which OBJ and PLY outputs lose).
-size_t tinted_textures(const TexturedMesh& input) {
-  if (!input.gltf) return 0;
+/// glTF output keeps in its material), where `format` loses it: PLY always, OBJ where the factors
+/// differ (one they share is its Kd, keep_texture_factor).
+size_t tinted_textures(const TexturedMesh& input, ModelFormat format) {
+  if (!input.gltf || format == ModelFormat::kGltf || format == ModelFormat::kGlb) return 0;
+  if (format == ModelFormat::kObj && shared_texture_factor(input)) return 0;
   size_t n = 0;
   for (const Material& m : input.materials) n += m.texture >= 0 && (m.kd[0] != 1.0 || m.kd[1] != 1.0 || m.kd[2] != 1.0);
   return n;
@@ -52,10 +55,10 @@ void add_not_carried(const TexturedMesh& input, const ModelReadStats& read_stats
   if (read_stats.instances_flattened > 0)
     out.notes.push_back(fmt::format("the glTF scene's {} mesh instances are written in world space ({} has no scene graph)",
                                     read_stats.instances_flattened, name));
-  if (!gltf && tinted_textures(input) > 0)
+  if (const size_t tinted = tinted_textures(input, format); tinted > 0)
     out.warnings.push_back(fmt::format("{} textured material(s) have a colour factor (glTF baseColorFactor) that {} cannot carry and the "
                                        "new texture does not hold; --output-format glb keeps it",
-                                       tinted_textures(input), name));
+                                       tinted, name));
   if (!gltf && !read_stats.not_read.empty())
     out.warnings.push_back(fmt::format("{} {} of the input {} not written ({} has no place for them; --output-format glb keeps them): {}",
                                        read_stats.not_read.size(), read_stats.not_read.size() == 1 ? "part" : "parts",
