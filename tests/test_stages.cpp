@@ -2031,6 +2031,29 @@ TEST(Pipeline, BakePlanRefusesAnotherMesh) {
   EXPECT_NO_THROW(bake_plan(plan, planned, opt));
 }
 
+// The run's bake, which frees the plan's maps once the output model holds them, bakes what bake_plan
+// bakes; the plan still answers its queries (a component kept as it was included), and refuses a
+// second bake instead of baking freed maps.
+TEST(Pipeline, BakePlanReleasingMapsBakesTheSame) {
+  Options opt;
+  opt.size = 64;
+  const TexturedMesh in = cat::multi_component();
+  Plan plan = plan_charts(in, opt, PlanHooks{{1}});
+  const Result kept = bake_plan(plan, in, opt);
+  const size_t kept_components = plan.kept_components(), kept_triangles = plan.kept_triangles();
+  ASSERT_EQ(kept_components, 1u);
+  const Result released = bake_plan_releasing_maps(plan, in, opt);
+  EXPECT_EQ(released.output.triangles, kept.output.triangles);
+  EXPECT_EQ(released.output.corner_uv, kept.output.corner_uv);
+  ASSERT_EQ(released.output.textures.size(), kept.output.textures.size());
+  for (size_t i = 0; i < kept.output.textures.size(); ++i)
+    EXPECT_TRUE(released.output.textures[i].image.pixels == kept.output.textures[i].image.pixels) << i;
+  EXPECT_EQ(plan.kept_components(), kept_components);
+  EXPECT_EQ(plan.kept_triangles(), kept_triangles);
+  EXPECT_TRUE(plan_state(plan).disks[0].mesh.triangles.empty());
+  EXPECT_THROW(bake_plan(plan, in, opt), InputError);
+}
+
 // A plan whose preparation (repair, components, seams, handles) was made from the geometry alone, as
 // the CLI makes it while the textures decode, is the plan made in one call: the same charts and UVs,
 // the same texture. A preparation of another mesh, or one used already, is an InputError.

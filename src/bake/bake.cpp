@@ -37,62 +37,44 @@ struct BakeCounters {
 /// What every step of one bake reads, and where it counts.
 struct BakeContext {
   const std::vector<BakeTriangle>& triangles;
-  const Samplers& samplers;  // one per triangle
+  const SamplerMaker& samplers;
   const BakeOptions& options;
   int max_samples;  // options.max_footprint_samples, at least 1
   BakeCounters& counters;
   ProgressCounter& progress;
 };
 
-/// The sampler of every triangle: its material's texture where it has one with pixels, else the
-/// material's flat colour (white without a material); `linear_light`: filtered in linear light.
-Samplers make_samplers(const TexturedMesh& input, const std::vector<BakeTriangle>& triangles, bool linear_light) {
-  std::vector<Rgba8> flat_colour(input.materials.size());
+/// The samplers of a base colour bake: each triangle's material's texture where it has one with
+/// pixels, else the material's flat colour (white without a material); `linear_light`: filtered in
+/// linear light.
+SamplerMaker base_colour_samplers(const TexturedMesh& input, const std::vector<BakeTriangle>& triangles, bool linear_light) {
+  SamplerMaker maker{triangles, std::vector<MaterialSampling>(input.materials.size() + 1)};
   for (size_t m = 0; m < input.materials.size(); ++m) {
-    const auto& kd = input.materials[m].kd;
-    auto stored = [&](int k) { return float(linear_to_srgb(kd[size_t(k)]) * 255); };
-    flat_colour[m] = to_rgba({stored(0), stored(1), stored(2), 255.f});
-  }
-  Samplers samplers(triangles.size());  // constructed below
-  tbb::parallel_for(size_t(0), triangles.size(), [&](size_t t) {
-    const BakeTriangle& tri = triangles[t];
-    TriangleSampler& smp = *::new (&samplers[t]) TriangleSampler();
-    const Image* src = nullptr;
-    Rgba8 flat{255, 255, 255, 255};
-    bool from_vertex_colours = false;
-    if (tri.material >= 0) {
-      const Material& mat = input.materials[size_t(tri.material)];
-      if (mat.texture >= 0 && !input.textures[size_t(mat.texture)].image.empty()) {
-        src = &input.textures[size_t(mat.texture)].image;
-        from_vertex_colours = input.textures[size_t(mat.texture)].from_vertex_colours;
-      } else {
-        flat = flat_colour[size_t(tri.material)];
-      }
+    const Material& mat = input.materials[m];
+    MaterialSampling& ms = maker.material[m];
+    if (mat.texture >= 0 && !input.textures[size_t(mat.texture)].image.empty()) {
+      ms.src = &input.textures[size_t(mat.texture)].image;
+      ms.corner_samples = input.textures[size_t(mat.texture)].from_vertex_colours;
+    } else {
+      auto stored = [&](int k) { return float(linear_to_srgb(mat.kd[size_t(k)]) * 255); };
+      ms.flat = to_rgba({stored(0), stored(1), stored(2), 255.f});
     }
-    smp.init(tri, src, flat);
-    smp.corner_samples = from_vertex_colours;
-    if (linear_light) smp.encoding = SlotEncoding::kSrgbColour;
-  });
-  return samplers;
+  }
+  if (linear_light) maker.encoding = SlotEncoding::kSrgbColour;
+  return maker;
 }
 
-/// The sampler of every triangle for `map`: its material's texture for the map where it has one with
-/// pixels, else the map's flat value; with the map's encoding and the triangle's frames.
-Samplers make_map_samplers(const TexturedMesh& input, const MaterialMapSource& map, const std::vector<BakeTriangle>& triangles) {
-  Samplers samplers(triangles.size());  // constructed below
-  tbb::parallel_for(size_t(0), triangles.size(), [&](size_t t) {
-    const BakeTriangle& tri = triangles[t];
-    TriangleSampler& smp = *::new (&samplers[t]) TriangleSampler();
-    const Image* src = nullptr;
-    if (tri.material >= 0 && size_t(tri.material) < map.texture_of_material.size()) {
-      const int tex = map.texture_of_material[size_t(tri.material)];
-      if (tex >= 0 && !input.textures[size_t(tex)].image.empty()) src = &input.textures[size_t(tex)].image;
-    }
-    smp.init(tri, src, map.flat);
-    smp.encoding = map.encoding;
-    if (map.encoding == SlotEncoding::kTangentNormal) smp.frames = &(*map.frames)[t];
-  });
-  return samplers;
+/// The samplers of a bake of `map`: each triangle's material's texture for the map where it has one
+/// with pixels, else the map's flat value; with the map's encoding and the triangle's frames.
+SamplerMaker map_samplers(const TexturedMesh& input, const MaterialMapSource& map, const std::vector<BakeTriangle>& triangles) {
+  SamplerMaker maker{triangles, std::vector<MaterialSampling>(input.materials.size() + 1, MaterialSampling{nullptr, map.flat, false})};
+  for (size_t m = 0; m < input.materials.size() && m < map.texture_of_material.size(); ++m) {
+    const int tex = map.texture_of_material[m];
+    if (tex >= 0 && !input.textures[size_t(tex)].image.empty()) maker.material[m].src = &input.textures[size_t(tex)].image;
+  }
+  maker.encoding = map.encoding;
+  if (map.encoding == SlotEncoding::kTangentNormal) maker.frames = map.frames;
+  return maker;
 }
 
 /// The bake's progress units: each tile of each image is rasterised (1 unit) and, with the fit,
@@ -196,7 +178,9 @@ void rasterize_texels(const BakeContext& ctx, const TileBins& grid, Image& out, 
     ScanCounts counts;
     for (size_t b = range.begin(); b < range.end(); ++b) {
       const TexelTile tile = grid.tile(b, out);
-      for (uint32_t t : grid.bins[b]) scan_convert_triangle(ctx.triangles[t], ctx.samplers[t], tile, ctx.max_samples, out, covered, counts);
+      const std::vector<uint32_t>& bin = grid.bins[b];
+      const std::vector<TriangleSampler> samplers = ctx.samplers.of(bin);
+      for (size_t i = 0; i < bin.size(); ++i) scan_convert_triangle(ctx.triangles[bin[i]], samplers[i], tile, ctx.max_samples, out, covered, counts);
     }
     ctx.counters.filled += counts.filled;
     ctx.counters.filtered += counts.filtered;
@@ -257,10 +241,9 @@ void dilate_uncovered(const std::vector<Rect>& rects, const std::vector<size_t>&
 /// Whether a tile's fit can change anything: some textured triangle does not magnify the input by 2 or
 /// more (where all do, the bilinear bake is already right), or samples its corners (the bilinear
 /// bake flattens the peaks of a vertex-coloured input's colours at its vertices).
-bool worth_fitting(const std::vector<uint32_t>& bin, const Samplers& samplers) {
+bool worth_fitting(const std::vector<TriangleSampler>& samplers) {
   bool worth = false;
-  for (uint32_t t : bin) {
-    const TriangleSampler& smp = samplers[t];
+  for (const TriangleSampler& smp : samplers) {
     worth = worth || (smp.src && smp.valid && (smp.corner_samples || std::max(smp.footprint_x, smp.footprint_y) > 0.5));
   }
   return worth;
@@ -288,17 +271,17 @@ void fit_tiles(const BakeContext& ctx, const TileBins& grid, Image& out) {
   const Image base = out;
   tbb::parallel_for(size_t(0), grid.bins.size(), [&](size_t b) {
     if (!grid.bins[b].empty()) ++ctx.counters.tiles_total;
-    if (worth_fitting(grid.bins[b], ctx.samplers)) {
+    if (!grid.bins[b].empty() && worth_fitting(ctx.samplers.of(grid.bins[b]))) {
       const std::vector<uint32_t> nearby = triangles_near_tile(grid, int(b % size_t(grid.tiles_x)), int(b / size_t(grid.tiles_x)));
-      fit_tile(FitTileInput{base, ctx.triangles, ctx.samplers, nearby}, grid.tile(b, out), ctx.options, out);
+      fit_tile(FitTileInput{base, ctx.triangles, ctx.samplers.of(nearby), nearby}, grid.tile(b, out), ctx.options, out);
       ++ctx.counters.tiles_fitted;
     }
     ctx.progress.advance(kFitUnits);
   });
 }
 
-/// The bake of every image through the given samplers (one per triangle).
-void bake_with_samplers(const Samplers& samplers, const std::vector<BakeTriangle>& triangles, const std::vector<Rect>& rects,
+/// The bake of every image through the samplers `samplers` makes.
+void bake_with_samplers(const SamplerMaker& samplers, const std::vector<BakeTriangle>& triangles, const std::vector<Rect>& rects,
                         std::vector<Image>& images, BakeStats* stats, const BakeOptions& options) {
   BakeCounters counters;
   ProgressCounter progress(options.progress, bake_progress_units(images, options.fit), options.progress_interval_s);
@@ -325,14 +308,14 @@ void bake_with_samplers(const Samplers& samplers, const std::vector<BakeTriangle
 
 void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& triangles, const std::vector<Rect>& rects,
                   std::vector<Image>& images, BakeStats* stats, const BakeOptions& options) {
-  bake_with_samplers(make_samplers(input, triangles, options.linear_light_colour), triangles, rects, images, stats, options);
+  bake_with_samplers(base_colour_samplers(input, triangles, options.linear_light_colour), triangles, rects, images, stats, options);
 }
 
 void bake_material_map(const TexturedMesh& input, const MaterialMapSource& map, const std::vector<BakeTriangle>& triangles, const std::vector<Rect>& rects,
               std::vector<Image>& images, BakeStats* stats, const BakeOptions& options) {
   if (map.encoding == SlotEncoding::kTangentNormal && (!map.frames || map.frames->size() != triangles.size()))
     fail_internal("bake_material_map: a normal map needs one frame per triangle ({} for {})", map.frames ? map.frames->size() : 0, triangles.size());
-  bake_with_samplers(make_map_samplers(input, map, triangles), triangles, rects, images, stats, options);
+  bake_with_samplers(map_samplers(input, map, triangles), triangles, rects, images, stats, options);
 }
 
 }  // namespace tightex

@@ -42,8 +42,7 @@ struct SampleGrid {
 SampleGrid sample_grid(const FitTileInput& input, const BakeOptions& options) {
   bool coarse = false;
   if (options.fit_samples > 2)
-    for (uint32_t t : input.nearby) {
-      const TriangleSampler& smp = input.samplers[t];
+    for (const TriangleSampler& smp : input.samplers) {
       if (smp.valid && std::max(smp.footprint_x, smp.footprint_y) > options.fit_fine_max_footprint) {
         coarse = true;
         break;
@@ -113,15 +112,15 @@ FitSamples collect_samples(const FitTileInput& input, const SampleGrid& grid, co
   s.target.resize(size_t(grid.classes) * region.n);
   s.weight.assign(size_t(grid.classes) * region.n, 0.0f);
   double max_weight = 0;
-  for (uint32_t t : input.nearby)
-    if (input.samplers[t].valid && input.samplers[t].weight > 0) max_weight = std::max(max_weight, input.samplers[t].weight);
+  for (const TriangleSampler& smp : input.samplers)
+    if (smp.valid && smp.weight > 0) max_weight = std::max(max_weight, smp.weight);
   if (!(max_weight > 0)) return s;
   const double weight_scale = std::ldexp(1.0, -std::ilogb(max_weight));
-  for (uint32_t t : input.nearby) {
-    const TriangleSampler& smp = input.samplers[t];
+  for (size_t n = 0; n < input.nearby.size(); ++n) {
+    const TriangleSampler& smp = input.samplers[n];
     if (!smp.valid || !(smp.weight > 0)) continue;
     const double smp_weight = smp.weight * weight_scale;
-    const BakeTriangle& tri = input.triangles[t];
+    const BakeTriangle& tri = input.triangles[input.nearby[n]];
     for (int k = 0; k < grid.classes; ++k) {
       const Vec2 off(grid.offsets[size_t(k)][0], grid.offsets[size_t(k)][1]);
       scan_triangle(tri.target_px[0] - off, tri.target_px[1] - off, tri.target_px[2] - off, region.x0 + 1, region.x1 - 1, region.y0 + 1,

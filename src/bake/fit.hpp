@@ -20,7 +20,7 @@ struct TexelTile {
 struct FitTileInput {
   const Image& base;                             // the plain bake of the whole image (after dilation)
   const std::vector<BakeTriangle>& triangles;    // all triangles of the bake
-  const Samplers& samplers;                      // one per triangle
+  const std::vector<TriangleSampler>& samplers;  // one per triangle of `nearby`, in its order
   const std::vector<uint32_t>& nearby;           // indices of the triangles that may reach the tile or its halo
 };
 

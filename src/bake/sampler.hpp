@@ -4,14 +4,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <new>
-#include <type_traits>
-#include <utility>
 #include <vector>
 
 #include "bake/bake.hpp"
 #include "core/image.hpp"
-#include "core/large_buffer.hpp"
 #include "core/mesh.hpp"
 
 namespace tightex {
@@ -189,27 +185,41 @@ struct TriangleSampler {
   }
 };
 
-/// Storage of one sampler per triangle (about 230 bytes each: 200 MB at 850k triangles). Sizing the
-/// vector leaves its elements unwritten (construct() without arguments does nothing), so that the
-/// first touch of its pages is not one core's serial loop: make_samplers constructs each sampler in
-/// place, in parallel, before anything reads it. Large blocks are advised as huge pages.
-template <typename T>
-struct InPlaceConstructedAllocator : LargeBufferAllocator<T> {
-  template <typename U>
-  struct rebind {
-    using other = InPlaceConstructedAllocator<U>;
-  };
-  InPlaceConstructedAllocator() = default;
-  template <typename U>
-  InPlaceConstructedAllocator(const InPlaceConstructedAllocator<U>&) {}
-  template <typename U>
-  void construct(U*) noexcept {}  // the caller constructs the element in place (placement new)
-  template <typename U, typename... Args>
-  void construct(U* p, Args&&... args) {
-    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+/// What the sampler of a triangle of one material reads: its texture (nullptr: none with pixels), the
+/// colour it takes without one, and whether it samples its corners (TriangleSampler::corner_samples).
+struct MaterialSampling {
+  const Image* src = nullptr;
+  Rgba8 flat{255, 255, 255, 255};
+  bool corner_samples = false;
+};
+
+/// Makes the sampler of any triangle of one bake where a tile needs it: a sampler held for every
+/// triangle at once (about 230 bytes each) would be the largest buffer of a bake of millions of
+/// triangles, and one is made in far less time than its texels take to sample.
+struct SamplerMaker {
+  const std::vector<BakeTriangle>& triangles;
+  std::vector<MaterialSampling> material;  // per input material, then one for no material (-1)
+  SlotEncoding encoding = SlotEncoding::kData;
+  const std::vector<NormalFrames>* frames = nullptr;  // kTangentNormal: one per triangle
+
+  /// The sampler of triangle t.
+  TriangleSampler operator()(uint32_t t) const {
+    const BakeTriangle& tri = triangles[t];
+    const MaterialSampling& m = tri.material >= 0 ? material[size_t(tri.material)] : material.back();
+    TriangleSampler smp = TriangleSampler();  // zeroed, as a sampler left invalid by init has always been
+    smp.init(tri, m.src, m.flat);
+    smp.corner_samples = m.corner_samples;
+    smp.encoding = encoding;
+    if (frames) smp.frames = &(*frames)[t];
+    return smp;
+  }
+  /// The samplers of the triangles `tris`, in their order.
+  std::vector<TriangleSampler> of(const std::vector<uint32_t>& tris) const {
+    std::vector<TriangleSampler> samplers;
+    samplers.reserve(tris.size());
+    for (const uint32_t t : tris) samplers.push_back((*this)(t));
+    return samplers;
   }
 };
-static_assert(std::is_trivially_destructible_v<TriangleSampler>, "elements are never destroyed one by one");
-using Samplers = std::vector<TriangleSampler, InPlaceConstructedAllocator<TriangleSampler>>;
 
 }  // namespace tightex

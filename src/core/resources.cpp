@@ -1,6 +1,9 @@
 #include "core/resources.hpp"
 
 #include <sys/resource.h>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 
 namespace tightex {
 
@@ -15,6 +18,12 @@ CpuTimes process_cpu_times() {
   if (getrusage(RUSAGE_SELF, &u) != 0) return {};
   auto seconds = [](const timeval& t) { return double(t.tv_sec) + 1e-6 * double(t.tv_usec); };
   return {seconds(u.ru_utime), seconds(u.ru_stime)};
+}
+
+void release_free_memory() {
+#ifdef __GLIBC__
+  malloc_trim(0);
+#endif
 }
 
 }  // namespace tightex

@@ -16,4 +16,10 @@ struct CpuTimes {
 /// getrusage's CPU times of the whole process. Never throws; zeros if the system does not report them.
 CpuTimes process_cpu_times();
 
+/// Hands the memory the allocator holds free back to the system (glibc: malloc_trim; elsewhere
+/// nothing): for a stage that has freed its arrays before the next allocates others. What a thread's
+/// arena freed is out of reach of the other threads' allocations, and the command keeps freed memory
+/// instead of trimming it (src/cli/main.cpp), so it would stay resident beneath the next stage's peak.
+void release_free_memory();
+
 }  // namespace tightex

@@ -6,10 +6,8 @@
 
 #include <tbb/parallel_invoke.h>
 #include <tbb/task_group.h>
-#ifdef __GLIBC__
-#include <malloc.h>
-#endif
 
+#include "core/resources.hpp"
 #include "param/boundary.hpp"
 #include "param/coarsen.hpp"
 #include "param/density_map.hpp"
@@ -71,9 +69,10 @@ std::vector<double> target_cotangent_weights(const Surface& m, const std::vector
   return w;
 }
 
-/// The full mesh's Laplacians, built and analysed ahead (prepare_fills): the one with the coarse
-/// vertices held (the harmonic fill), the one with the boundary held (the Tutte fill and the
-/// reweighting).
+/// The full mesh's Laplacians: the one with the coarse vertices held (the harmonic fill), built and
+/// analysed ahead (prepare_fills), and the one with the boundary held (the Tutte fill and the
+/// reweighting), built and analysed at its first solve, once the harmonic fill's is freed: the
+/// factor of the one beside the other's pattern and analysis was the map's peak.
 struct FineSystems {
   std::unique_ptr<DirichletSolver> between, tutte;
 };
@@ -84,22 +83,15 @@ struct FineSystems {
 std::vector<Vec2> fill_between(const Disk& disk, const CoarseDisk& coarse, const std::vector<Vec2>& coarse_uv, FineSystems& systems,
                                std::vector<double>& weights) {
   const Surface& m = disk.mesh;
-  const std::vector<Vec2> target = harmonic_between(disk, coarse, coarse_uv, *systems.between);
+  std::vector<Vec2> target = harmonic_between(disk, coarse, coarse_uv, *systems.between);
   systems.between.reset();
+  release_free_memory();  // for the Tutte fill's system, made next
   if (target.empty()) return {};
-  std::vector<Vec2> uv = target;
   weights = target_cotangent_weights(m, target);
+  std::vector<Vec2> uv = std::move(target);
   if (!systems.tutte->solve(m, weights, boundary_mask(m.num_vertices(), disk.boundary), uv)) return {};
   if (count_folds(m, uv) > 0) return {};
   return uv;
-}
-
-/// Hands the memory the process's allocator holds free back to the system (glibc), where a thread's
-/// arena keeps what it freed out of reach of the next large allocation.
-void release_free_memory() {
-#ifdef __GLIBC__
-  malloc_trim(0);
-#endif
 }
 
 /// The relative residual the full mesh's Laplacians are solved to where they are solved iteratively
@@ -149,8 +141,8 @@ std::optional<std::pair<CoarseDisk, std::vector<Vec2>>> coarse_map(std::vector<C
 }
 
 /// The full mesh's Laplacians: `held` (the vertices of the coarse copy coarse_map tries first) held for
-/// the harmonic fill, the boundary for the Tutte fill. Where coarse_map settles on another copy, the
-/// harmonic fill makes its own.
+/// the harmonic fill, prepared; the Tutte fill's made, to be prepared at its first solve (FineSystems).
+/// Where coarse_map settles on another copy, the harmonic fill makes its own.
 FineSystems prepare_fills(const Disk& disk, const std::vector<char>& held, const SquareMapOptions& options,
                           const std::shared_ptr<const std::vector<int>>& order, const std::shared_ptr<const VertexAggregates>& aggregates) {
   const Surface& m = disk.mesh;
@@ -161,7 +153,6 @@ FineSystems prepare_fills(const Disk& disk, const std::vector<char>& held, const
     systems.tutte->solve_iteratively(aggregates, kFillTolerance);
   }
   systems.between->prepare(m, held);
-  systems.tutte->prepare(m, boundary_mask(m.num_vertices(), disk.boundary));
   return systems;
 }
 
@@ -173,7 +164,7 @@ std::vector<Vec2> fill_and_reweight(const Disk& disk, const CoarseDisk& coarse, 
   std::vector<Vec2> uv = fill_between(disk, coarse, coarse_uv, systems, weights);
   if (uv.empty()) return uv;
   // The density on the full mesh (the coarse map's holds only on average over each coarse triangle).
-  reweight_towards_density(disk.mesh, disk.boundary, fine_options, nullptr, weights, *systems.tutte, uv, fine);
+  reweight_towards_density(disk.mesh, disk.boundary, fine_options, nullptr, std::move(weights), *systems.tutte, uv, fine);
   return uv;
 }
 
@@ -205,7 +196,7 @@ std::optional<std::vector<Vec2>> multilevel_map(const Disk& disk, const SquareMa
   // factorisations (peak 1706 -> 1779 MiB at 854k faces).
   release_free_memory();
   if (copies.empty() || copies.back().fine_vertex.size() > options.multilevel_from) return std::nullopt;
-  // The full mesh's Laplacians are built and analysed beside the coarse map, which does not need them,
+  // The harmonic fill's Laplacian is built and analysed beside the coarse map, which does not need it,
   // for the copy coarse_map tries first (its vertices taken before the map may move it); the symmetric
   // Dirichlet steps' system beside the fill and the reweighting.
   const std::vector<char> first_held = coarse_vertices(m, copies.back());

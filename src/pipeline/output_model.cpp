@@ -199,6 +199,19 @@ void add_untextured_triangles(const SetAside& set_aside, const TexturedMesh& inp
   }
 }
 
+/// Room for every input triangle in each of the output's per-triangle and per-corner arrays (it holds
+/// each at most once): grown one triangle at a time, they would end up to twice their size.
+void reserve_triangles(const TexturedMesh& input, OutputModel& om) {
+  const size_t n = input.num_triangles();
+  om.mesh.triangles.reserve(n);
+  om.mesh.input_triangle.reserve(n);
+  om.mesh.face_material.reserve(n);
+  om.mesh.corner_uv.reserve(3 * n);
+  if (!input.corner_normal.empty()) om.mesh.corner_normal.reserve(3 * n);
+  om.input_corner.reserve(3 * n);
+  om.bake_triangles.reserve(n);
+}
+
 }  // namespace
 
 OutputModel build_output_model(const Plan::State& plan, const TexturedMesh& input) {
@@ -207,7 +220,7 @@ OutputModel build_output_model(const Plan::State& plan, const TexturedMesh& inpu
   om.mesh.positions = input.positions;
   om.mesh.gltf = input.gltf;
   om.budget_is_default = plan.budget.is_default;
-  om.bake_triangles.reserve(input.num_triangles());
+  reserve_triangles(input, om);
   const std::vector<int> image_index = renumber_images(plan, &om.new_images);
   add_mapped_triangles(plan, input, image_index, om);
   add_repeats(plan.set_aside, input, 0, om);

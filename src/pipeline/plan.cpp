@@ -8,6 +8,7 @@
 
 #include "core/error.hpp"
 #include "core/progress.hpp"
+#include "core/resources.hpp"
 #include "pipeline/aspect.hpp"
 #include "pipeline/budget.hpp"
 #include "pipeline/plan_report.hpp"
@@ -398,6 +399,7 @@ Plan plan_prepared(const TexturedMesh& input, const Options& options, const Text
   std::vector<CutStats> cuts;
   std::vector<SquareMapStats> maps;
   map_components(ctx, probed, rep.aspect.probed_component, cut_inputs, *plan, cuts, maps);
+  release_free_memory();  // what the maps freed, before the bake allocates its own
   clock.done("cut+map");
 
   fill_plan_report(input, *plan, areas, cuts, maps, rep);

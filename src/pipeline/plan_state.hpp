@@ -56,10 +56,21 @@ struct Plan::State {
   ReportData report;               // what was done so far
   nlohmann::json report_json;      // the same, as Plan::report() gives it
   uint64_t input_fingerprint = 0;  // input_fingerprint() of the mesh planned
+  /// The mapped components' surfaces, disks and texture coordinates were freed by a bake
+  /// (bake_plan_releasing_maps): the plan cannot be baked again.
+  bool maps_released = false;
 };
 
 /// What `plan` holds. Throws InputError for an empty plan (one not made by plan_charts).
 const Plan::State& plan_state(const Plan& plan);
+Plan::State& mutable_plan_state(Plan& plan);
+
+/// bake_plan for a caller that is done with the plan's maps once they are baked (the library's own
+/// run): the mapped components' surfaces, disks and texture coordinates are freed as soon as the
+/// output model holds their triangles, before the bake, whose peak then holds no second copy of the
+/// surface. The plan keeps its report, texture sizes and kept components (Plan's queries answer as
+/// before); baking it again is an InputError.
+Result bake_plan_releasing_maps(Plan& plan, const TexturedMesh& input, const Options& options);
 
 /// A hash of what the plan depends on in the input (vertex and triangle counts, triangles, texture
 /// coordinates, materials), so bake_plan can refuse another mesh.

@@ -256,7 +256,7 @@ Report run(const std::string& input, const std::string& outdir, const Options& o
   PlannedModel planned = read_textures_and_plan(std::move(geometry), opt, budget, t0);
   timings.textures_s = planned.textures_s;
   if (options.layout != Layout::kAtlas) check_per_component_memory(guard, planned.plan);
-  Result result = bake_plan(planned.plan, planned.mesh, opt);
+  Result result = bake_plan_releasing_maps(planned.plan, planned.mesh, opt);
   round_uvs_as_stored(result.output, format);
   keep_texture_factor(planned.mesh, format, result.report.texture_sizes.size(), result.output);
 
@@ -297,9 +297,9 @@ Result optimize(const TexturedMesh& mesh, const Options& options) {
   check_texture_headers(memory_guard(name, options), mesh);
   const TextureBudget budget = texture_budget(mesh, options);
   const MemoryGuard guard = check_memory(name, options, mesh, budget.side);
-  const Plan plan = plan_charts(mesh, options, budget);
+  Plan plan = plan_charts(mesh, options, budget);
   if (options.layout != Layout::kAtlas) check_per_component_memory(guard, plan);
-  Result result = bake_plan(plan, mesh, options);
+  Result result = bake_plan_releasing_maps(plan, mesh, options);
   nlohmann::json json = report_json(result.report);
   json["wall_seconds"] = seconds_since(t0);
   json["peak_rss_mib"] = peak_rss_mib();
