@@ -270,8 +270,8 @@ TEST(RealDataMaps, AreaMapKeepsTheRefinementStepsWithinTheDensitySlack) {
 
 // A component large enough for its probes to be multilevel (meshroom_esp32cam: 53k faces) is not
 // probed: its coarse copy's texel stretch decides whether another shape's own map is made beside the
-// square's. Meshroom's reads 1.48, within kShapeLookStretch: its square alone is mapped, nothing is
-// estimated, and the square is kept (its 2:1 map, when it was made, gave 43.50 dB against 44.16).
+// square's. Meshroom's is within kShapeLookStretch (1.07; 1.48 while the rim's ears were crushed onto
+// the square's sides): its square alone is mapped, nothing is estimated, and the square is kept.
 TEST(RealDataMaps, ALargeComponentWithMildStretchKeepsItsSquareOnOneMap) {
   const fs::path input = fs::path(TIGHTEX_SHARED_DATA) / "meshroom_esp32cam" / "texturedMesh.obj";
   if (!fs::exists(input)) GTEST_SKIP() << "../shared/data/meshroom_esp32cam not present";
@@ -284,14 +284,14 @@ TEST(RealDataMaps, ALargeComponentWithMildStretchKeepsItsSquareOnOneMap) {
   const nlohmann::json& probes = aspect["probes"];
   ASSERT_EQ(probes.size(), 3u);
   const double stretch = aspect["square_texel_stretch"].get<double>();
-  EXPECT_GT(stretch, kAspectProbeStretch);  // a probe this stretched would have had 2:1 mapped too
   EXPECT_LT(stretch, kShapeLookStretch);
+  EXPECT_GT(stretch, 1 / kShapeLookStretch);
   for (const nlohmann::json& p : probes) {
     EXPECT_EQ(p["estimated_psnr_db"].get<double>(), -1.0) << p;
     EXPECT_TRUE(p["full_map_estimated_psnr_db"].is_null()) << p;
   }
   EXPECT_EQ(aspect["chosen"].get<double>(), 1.0);
-  // Measured 44.16 dB.
+  // Measured 45.25 dB.
   EXPECT_GT(r["metrics"]["surface_psnr_db"].get<double>(), 43.8);
   EXPECT_EQ(r["metrics"]["flipped"].get<size_t>(), 0u);
   EXPECT_EQ(r["metrics"]["lost_triangles"].get<size_t>(), 0u);

@@ -8,6 +8,7 @@
 #include <gtest/gtest-spi.h>  // ScopedFakeTestPartResultReporter: the checkers' own test
 #include <dlfcn.h>
 #include <gtest/gtest.h>
+#include <Eigen/SVD>
 
 #include <algorithm>
 #include <atomic>
@@ -595,6 +596,14 @@ TEST_P(Catalogue, CutToDisk) {
 
 // ---- 4. map_to_square ----
 
+/// Whether some boundary vertex of the map lies strictly inside the unit square.
+bool inward_anywhere(const Disk& disk, const std::vector<Vec2>& uv) {
+  constexpr double kEps = 1e-12;
+  for (uint32_t v : disk.boundary)
+    if (uv[v].x() > kEps && uv[v].x() < 1 - kEps && uv[v].y() > kEps && uv[v].y() < 1 - kEps) return true;
+  return false;
+}
+
 /// Checks a map of `disk` onto the unit square made with `options`.
 void check_square_map(const Disk& disk, const std::vector<Vec2>& uv, const SquareMapOptions& options,
                       const SquareMapStats& st) {
@@ -623,9 +632,9 @@ void check_square_map(const Disk& disk, const std::vector<Vec2>& uv, const Squar
     // Corners in counter-clockwise boundary order, distinct.
     for (int k = 1; k < 4; ++k) EXPECT_GT((at[k] + nb - at[0]) % nb, (at[k - 1] + nb - at[0]) % nb) << "corner " << k;
 
-    // Each side: its vertices on that side of the square (or lifted outward by at most the bump),
-    // moving monotonically along it.
-    size_t off_side = 0;
+    // Each side: its vertices on that side of the square (or lifted outward by at most the bump; a
+    // density map's bumps and their chords' ends may have moved inwards), moving monotonically along it.
+    size_t off_side = 0, inward = 0;
     for (int k = 0; k < 4; ++k) {
       const Side& side = kSides[k];
       const size_t len = (at[(k + 1) % 4] + nb - at[k]) % nb;
@@ -634,7 +643,9 @@ void check_square_map(const Disk& disk, const std::vector<Vec2>& uv, const Squar
         const Vec2& p = uv[b[(at[k] + j) % nb]];
         const double off = (p[side.fixed_axis] - side.value) * side.outward;  // > 0: outside
         const double along = p[side.along_axis] * side.along_sign;
-        EXPECT_GE(off, -kEps) << "side " << k << " vertex " << j << " at (" << p.x() << ", " << p.y() << ") is inside";
+        if (off < -kEps && j > 0 && j < len) ++inward;
+        EXPECT_TRUE(off >= -kEps || (!options.face_target.empty() && j > 0 && j < len))
+            << "side " << k << " vertex " << j << " at (" << p.x() << ", " << p.y() << ") is inside";
         EXPECT_LE(off, bump + kEps) << "side " << k << " vertex " << j << " beyond the bump";
         if (off > kEps && j > 0 && j < len) ++off_side;
         EXPECT_GE(p[side.along_axis], -kEps);
@@ -644,6 +655,8 @@ void check_square_map(const Disk& disk, const std::vector<Vec2>& uv, const Squar
       }
     }
     EXPECT_LE(off_side, st.bumped_vertices) << "boundary vertices off the square that were not bumped";
+    // A bump's vertices and the two ends of its chords.
+    EXPECT_LE(inward, 3 * st.bumped_vertices) << "boundary vertices inside the square that were neither bumped nor a chord's end";
   }
   // Interior strictly inside: inside the unit square, or, next to a bump (whose bulge interior
   // vertices may follow), strictly inside the square grown by the bump height.
@@ -678,7 +691,8 @@ void check_square_map(const Disk& disk, const std::vector<Vec2>& uv, const Squar
   if (nb == 3) {
     EXPECT_NEAR(polygon, 0.5, 1e-12);
   } else {
-    EXPECT_GE(polygon, 1 - 1e-12);
+    // Where bumps moved inwards, the notches beside them leave a little of the square empty.
+    EXPECT_GE(polygon, 1 - 1e-12 - (inward_anywhere(disk, uv) ? 0.05 : 0.0));
     EXPECT_LE(polygon, 1 + 4 * bump);
   }
   EXPECT_FALSE(st.weights.empty());
@@ -996,6 +1010,13 @@ TEST(SparseCholesky, AMeshsNestedDissectionOrderSolvesItsLaplacianAsCholmodsOwn)
   EXPECT_LT((2 * x - own).norm(), 1e-9 * own.norm());
 }
 
+/// The one component of the generated surface `g` cut to a disk, its holes capped.
+Disk one_disk(const testing::Geometry& g, const std::string& name) {
+  const auto comps = split_components(prepare_surface(testing::make_textured(name, g.positions, g.triangles), nullptr));
+  EXPECT_EQ(comps.size(), 1u);
+  return cut_to_disk(comps.at(0), {.holes = HoleMode::kFill}, nullptr);
+}
+
 // Large systems are factorised supernodally (BLAS kernels), small ones simplicially; components are
 // mapped in parallel. Here the supernodal path is forced on a small sheet, mapped by four threads at
 // once: every result must be fold-free and the same map as the simplicial one (a BLAS that is not
@@ -1005,9 +1026,7 @@ TEST(MapToSquare, SupernodalMatchesSimplicialWhenComponentsRunConcurrently) {
     const double x = i / 47.0, y = j / 39.0;
     return Vec3(x, 0.8 * y, 0.15 * std::sin(6 * x) * std::cos(5 * y) + 0.3 * x * x);
   });
-  const auto comps = split_components(prepare_surface(testing::make_textured("sheet", g.positions, g.triangles), nullptr));
-  ASSERT_EQ(comps.size(), 1u);
-  const Disk disk = cut_to_disk(comps[0], {.holes = HoleMode::kFill}, nullptr);
+  const Disk disk = one_disk(g, "sheet");
   SquareMapOptions options;
   options.rect_width = options.rect_height = 256;
   options.face_target.resize(disk.mesh.num_faces());
@@ -1422,6 +1441,53 @@ TEST(DensityFlow, TracersFollowTheVerticesAndSmallCopiesOfFacesNeverFold) {
     const Vec2 &a = tracers[first_copy + 3 * f], &b = tracers[first_copy + 3 * f + 1], &c = tracers[first_copy + 3 * f + 2];
     EXPECT_GT(signed_area(a, b, c), 0) << "face " << f;
   }
+}
+
+/// The largest ratio of the singular values of a real face's map from its 3D triangle to its texels
+/// in the options' rectangle: how far the map crushes a triangle in one direction against the other.
+double max_anisotropy(const Disk& disk, const std::vector<Vec2>& uv, const SquareMapOptions& options) {
+  const Surface& m = disk.mesh;
+  double worst = 1;
+  for (size_t f = 0; f < m.num_faces(); ++f) {
+    if (m.face_parent[f] == kNone) continue;
+    const Tri& t = m.triangles[f];
+    const Vec3 e1 = m.positions[t[1]] - m.positions[t[0]], e2 = m.positions[t[2]] - m.positions[t[0]];
+    const Vec3 x = e1.normalized(), y = e1.cross(e2).normalized().cross(x);
+    Eigen::Matrix2d surface, texels;
+    surface << e1.dot(x), e2.dot(x), e1.dot(y), e2.dot(y);
+    const Vec2 scale(options.rect_width, options.rect_height);
+    texels.col(0) = (uv[t[1]] - uv[t[0]]).cwiseProduct(scale), texels.col(1) = (uv[t[2]] - uv[t[0]]).cwiseProduct(scale);
+    const Eigen::Vector2d sv = Eigen::JacobiSVD<Eigen::Matrix2d>(texels * surface.inverse()).singularValues();
+    worst = std::max(worst, sv(0) / sv(1));
+  }
+  return worst;
+}
+
+// A triangle with two edges on a disk's rim (an ear, common on a scan's jagged rim) lies beyond a
+// chord: with both of the chord's ends on one side of the square, Alg. 1 leaves it only the bump's
+// sliver, a fraction of a texel high however large its target. The detail map's symmetric Dirichlet
+// steps move the bump and the chord's ends inwards, so the ear gets its share of the square and no
+// triangle is crushed more than 20:1; the map stays fold-free with its boundary in order. (The area
+// map's steps stop where they would widen the density error, which the ear, a sliver of the area,
+// does not count in: they leave it crushed.)
+TEST(MapToSquare, AnEarOnTheRimIsNotCrushedOntoItsSide) {
+  constexpr int nu = 13, nv = 9;
+  auto g = testing::param_grid(nu, nv, false, false, [](int i, int j) { return Vec3(0.125 * i, 0.125 * j, 0.0); });
+  const uint32_t ear = uint32_t(g.positions.size());
+  g.add(Vec3(0.125 * 6.5, -0.3, 0.0));
+  g.triangles.push_back({7, 6, ear});  // below the bottom row's edge (6, 7), which becomes the chord
+  const Disk disk = one_disk(g, "eared_sheet");
+  SquareMapOptions options;
+  options.rect_width = options.rect_height = 256;
+  options.face_target.resize(disk.mesh.num_faces());
+  for (size_t f = 0; f < disk.mesh.num_faces(); ++f) options.face_target[f] = triangle_area(disk.mesh.positions, disk.mesh.triangles[f]);
+  options.refine_keeps_density = false;  // the detail map's steps, as set_face_targets sets them
+  options.refine_iterations = 30;
+  SquareMapStats st;
+  const auto uv = map_to_square(disk, options, &st);
+  ASSERT_GT(st.bumped_vertices, 0u) << "the ear's chord must have both ends on one side";
+  check_square_map(disk, uv, options, st);
+  EXPECT_LT(max_anisotropy(disk, uv, options), 20.0) << st.refine_iterations << " steps, " << st.refine_stopped;
 }
 
 TEST(MapToSquare, NonSquareRectangles) {

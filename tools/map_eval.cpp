@@ -9,7 +9,7 @@
 //   tightex_map_eval make-orm-scan SCAN.obj OUTDIR [CREASE_TEXELS [DEPTH]]
 //                                                   writes OUTDIR/scan_orm.glb (creases 6 texels, 0.4 deep)
 //   tightex_map_eval compare INPUT OUTPUT          one table row per map, exit 1 when a check fails
-//   tightex_map_eval crushed INPUT                 where each map's error sits: triangles crushed 20:1 or not
+//   tightex_map_eval crushed INPUT [RATIO]         where each map's error sits: triangles crushed RATIO:1 (20) or not
 //
 // The ideal re-sampler: every new texel the box average of 4 x 4 bilinear samples over its footprint,
 // on a grid rotated 30 degrees at the input's own texel density, read back bilinearly.
@@ -351,11 +351,11 @@ int input_corner_of(const TexturedMesh& in, const TexturedMesh& out, size_t t, s
   return k;
 }
 
-/// `crushed INPUT`: tightex's default run, every map at the base colour's size (--material-map-budget 0), and
+/// `crushed INPUT [RATIO]`: tightex's default run, every map at the base colour's size (--material-map-budget 0), and
 /// where each map's error sits: at kSamples area-weighted points of the output, squared error split
-/// between the triangles whose texture coordinates are crushed more than 20:1 (anisotropy) and the
+/// between the triangles whose texture coordinates are crushed more than `limit`:1 (anisotropy) and the
 /// rest, tightex's and the ideal re-sampler's, per slot over its channels.
-int crushed(const std::string& input_path) {
+int crushed(const std::string& input_path, double limit) {
   const TexturedMesh in = read_model(input_path);
   Options o;
   o.material_map_budget_db = 0, o.measure = false;  // size 0: the default budget
@@ -365,9 +365,9 @@ int crushed(const std::string& input_path) {
   for (size_t t = 0; t < out.num_triangles(); ++t) {
     const double a3 = triangle_area(out.positions, out.triangles[t]);
     cdf[t] = acc += a3, ratio[t] = anisotropy(out, t);
-    if (ratio[t] > 20) crushed_area += a3;
+    if (ratio[t] > limit) crushed_area += a3;
   }
-  std::printf("%s: output triangles crushed more than 20:1: %.2f%% of the area\n", input_path.c_str(), 100 * crushed_area / acc);
+  std::printf("%s: output triangles crushed more than %g:1: %.2f%% of the area\n", input_path.c_str(), limit, 100 * crushed_area / acc);
   std::printf("| slot | PSNR crushed (ideal) | PSNR rest (ideal) | crushed share of the squared error |\n");
   for (int slot = -1; slot < int(kMaterialSlots); ++slot) {
     bool bound = slot < 0;
@@ -389,7 +389,7 @@ int crushed(const std::string& input_path) {
       Vec2 ui = Vec2::Zero(), uo = Vec2::Zero();
       for (int k = 0; k < 3; ++k) uo += b[k] * out.sampled_uv(q, k), ui += b[k] * in.sampled_uv(t, input_corner_of(in, out, t, q, k));
       const auto exact = sample_bilinear(*io, ui.x(), ui.y()), ours = sample_bilinear(*oo, uo.x(), uo.y()), ideal = ideal_resample(*io, ui);
-      const int c = ratio[q] > 20;
+      const int c = ratio[q] > limit;
       for (int k = 0; k < 3; ++k)
         if (channels & (1u << k)) {
           const double d0 = std::lround(ours[size_t(k)]) - std::lround(exact[size_t(k)]),
@@ -411,7 +411,7 @@ int main(int argc, char** argv) {
   try {
     if (argc == 4 && std::string(argv[1]) == "compare") return compare(argv[2], argv[3]);
     if (argc == 4 && std::string(argv[1]) == "make-scan") return make_scan(argv[2], argv[3]);
-    if (argc == 3 && std::string(argv[1]) == "crushed") return crushed(argv[2]);
+    if ((argc == 3 || argc == 4) && std::string(argv[1]) == "crushed") return crushed(argv[2], argc == 4 ? std::stod(argv[3]) : 20.0);
     if (argc >= 4 && argc <= 6 && std::string(argv[1]) == "make-orm-scan") {
       Creases c;
       if (argc >= 5) c.width = std::stod(argv[4]);
@@ -424,6 +424,6 @@ int main(int argc, char** argv) {
   }
   std::fprintf(stderr,
                "usage: tightex_map_eval compare INPUT OUTPUT | make-scan DEMO.obj OUTDIR | make-orm-scan SCAN.obj OUTDIR [CREASE_TEXELS "
-               "[DEPTH]] | crushed INPUT\n");
+               "[DEPTH]] | crushed INPUT [RATIO]\n");
   return 2;
 }

@@ -16,6 +16,10 @@ namespace {
 
 /// No flow on a fragment of fewer faces: the grid's noise moves those by more than it evens them out.
 constexpr size_t kFlowMinFaces = 100;
+/// The real faces must cover at least this share of the square after a refinement whose chords' ends
+/// moved inwards, or it is made again with them on their sides: the layout promises an output 99%
+/// used, which the hole caps already share.
+constexpr double kMinRealShare = 0.99;
 /// Symmetric Dirichlet steps towards the flowed faces' shapes where the flowed map itself folds or
 /// collapses. Chosen by measurement: docs/decisions.md.
 constexpr int kFlowShapeSteps = 30;
@@ -42,7 +46,7 @@ SlimStats refine_in_rectangle(const DensityConstraints& c, const std::vector<dou
                               const std::vector<FaceShape>* shapes = nullptr) {
   if (c.aspect == 1.0)
     return refine_map(c.mesh, c.fixed, target, iterations, uv, c.options.supernodal_from, on_step, shapes, c.vertex_order.get(),
-                      &c.refinement);
+                      &c.refinement, &c.bounds);
   const double sx = std::sqrt(c.aspect);
   const std::vector<Vec2> before = uv;
   for (Vec2& p : uv) p = Vec2(p.x() * sx, p.y() / sx);
@@ -52,14 +56,18 @@ SlimStats refine_in_rectangle(const DensityConstraints& c, const std::vector<dou
     for (FaceShape& s : scaled_shapes)
       for (Vec2& p : s) p = Vec2(p.x() * sx, p.y() / sx);
   }
+  std::vector<CoordinateBound> scaled_bounds = c.bounds;
+  for (CoordinateBound& b : scaled_bounds) b.bound *= b.axis == 0 ? sx : 1 / sx;
   const SlimStats r = refine_map(c.mesh, c.fixed, target, iterations, uv, c.options.supernodal_from, on_step,
-                                 shapes ? &scaled_shapes : nullptr, c.vertex_order.get(), &c.refinement);
+                                 shapes ? &scaled_shapes : nullptr, c.vertex_order.get(), &c.refinement, &scaled_bounds);
   for (Vec2& p : uv) p = Vec2(p.x() / sx, p.y() * sx);
   // Held coordinates come back exactly (x * sx / sx may miss 1 by an ulp: a side's texel centres
-  // would fall outside the chart).
+  // would fall outside the chart), bounded ones within their line.
   for (size_t v = 0; v < uv.size(); ++v)
     for (int a = 0; a < 2; ++a)
       if (c.fixed[v] & (1 << a)) uv[v](a) = before[v](a);
+  for (const CoordinateBound& b : c.bounds)
+    if (b.sign * (uv[b.vertex](b.axis) - b.bound) > 0) uv[b.vertex](b.axis) = b.bound;
   return r;
 }
 
@@ -161,6 +169,19 @@ void correct_targets(const DensityConstraints& c, std::vector<double> log_ratio,
   }
 }
 
+/// Per boundary position, whether it is the end of a bump's chords: a side neighbour of a bumped
+/// (pinned, not corner) position, neither pinned nor a corner itself.
+template <class IsCorner>
+std::vector<char> chord_ends(const SquareBoundary& b, IsCorner&& is_corner) {
+  const size_t nb = b.pinned.size();
+  std::vector<char> end(nb, 0);
+  for (size_t i = 0; i < nb; ++i)
+    if (b.pinned[i] && !is_corner(i))
+      for (size_t j : {(i + 1) % nb, (i + nb - 1) % nb})
+        if (!b.pinned[j]) end[j] = 1;
+  return end;
+}
+
 }  // namespace
 
 DensityConstraints density_constraints(const Disk& disk, const SquareBoundary& boundary, const SquareMapOptions& options,
@@ -169,9 +190,8 @@ DensityConstraints density_constraints(const Disk& disk, const SquareBoundary& b
   const size_t nb = bnd.size();
   const auto& corner = boundary.corner;
   auto is_corner = [&](size_t i) { return std::find(corner.begin(), corner.end(), i) != corner.end(); };
-  std::vector<char> held = boundary.pinned;
-  for (size_t i = 0; i < nb; ++i)
-    if (boundary.pinned[i] && !is_corner(i)) held[(i + 1) % nb] = held[(i + nb - 1) % nb] = 1;
+  const std::vector<char> chord_end = chord_ends(boundary, is_corner);
+  auto inwards = [&](size_t i) { return chord_end[i] || (boundary.pinned[i] && !is_corner(i)); };
   // A boundary vertex that `holds(i)` stays (3), every other slides along its side (2: a horizontal
   // side holds v, 1: a vertical one holds u); all stay when the boundary does not slide.
   auto side_constraints = [&](auto&& holds) {
@@ -179,12 +199,26 @@ DensityConstraints density_constraints(const Disk& disk, const SquareBoundary& b
     for (size_t i = 0; i < nb; ++i) fixed[bnd[i]] = holds(i) || !options.slide_boundary ? 3 : (boundary.side_of[i] % 2 == 0 ? 2 : 1);
     return fixed;
   };
-  return {disk.mesh,
-          options,
-          map_aspect(options),
-          side_constraints([&](size_t i) { return held[i] != 0; }),
-          side_constraints(is_corner),
-          std::move(vertex_order)};
+  const std::vector<char> on_sides = side_constraints([&](size_t i) { return boundary.pinned[i] || chord_end[i]; });
+  DensityConstraints c{disk.mesh, options, map_aspect(options), on_sides, {}, on_sides, side_constraints(is_corner), std::move(vertex_order)};
+  // The flow slides every side vertex with its field, which keeps them in order only while they all
+  // lie on their sides: a map that may flow keeps its chords there.
+  if (!options.chords_move_inwards || options.density_flow || !options.slide_boundary ||
+      std::find(chord_end.begin(), chord_end.end(), 1) == chord_end.end())
+    return c;
+  // The bumps and the chords' ends keep their place along the side (the coordinate the side does not
+  // hold) and move inwards only, across the side: a chord's end from the side, a bumped vertex from its
+  // bump. The vertices next to the chords' ends stay instead.
+  c.fixed = side_constraints([&](size_t i) {
+    return is_corner(i) || (!inwards(i) && (chord_end[(i + 1) % nb] || chord_end[(i + nb - 1) % nb]));
+  });
+  for (size_t i = 0; i < nb; ++i) {
+    if (!inwards(i)) continue;
+    const int side = boundary.side_of[i], across = side % 2 == 0 ? 1 : 0, sign = side == 0 || side == 3 ? -1 : 1;
+    c.fixed[bnd[i]] = char(1 << (1 - across));
+    c.bounds.push_back({bnd[i], across, boundary.uv[i](across), sign});
+  }
+  return c;
 }
 
 void measure_density_spread(const Surface& mesh, const std::vector<Vec2>& uv, SquareMapStats& stats) {
@@ -265,10 +299,9 @@ SlimStats refine_keeping_density(const DensityConstraints& c, const std::functio
   return total;
 }
 
-}  // namespace
-
-void refine_towards_targets(const DensityConstraints& c, std::vector<Vec2>& uv, SquareMapStats& st) {
-  if (c.options.refine_iterations <= 0) return;
+/// The symmetric Dirichlet refinement (refine_towards_targets) with the constraints as given, then the
+/// target correction.
+void refine_and_correct(const DensityConstraints& c, std::vector<Vec2>& uv, SquareMapStats& st) {
   const auto on_step = [&](int step) {
     if (c.options.progress) c.options.progress(0.4 + 0.6 * std::min(1.0, step / 15.0));
   };
@@ -279,6 +312,38 @@ void refine_towards_targets(const DensityConstraints& c, std::vector<Vec2>& uv, 
   st.refine_energy = ss.energy;
   st.refine_stopped = ss.stopped;
   correct_targets(c, measure_density_error(c.mesh, uv, st), uv, st);
+}
+
+/// Whether the notches that chords' ends moved inwards leave beside them take the real faces (not
+/// scaffolding) below kMinRealShare of the square, where the caps alone would not.
+bool notches_too_large(const Surface& m, const std::vector<Vec2>& uv) {
+  double real = 0, all = 0;
+  for (size_t f = 0; f < m.num_faces(); ++f) {
+    const double area = signed_area(uv[m.triangles[f][0]], uv[m.triangles[f][1]], uv[m.triangles[f][2]]);
+    all += area;
+    if (m.face_parent[f] != kNone) real += area;
+  }
+  const double notches = std::max(0.0, 1 - all);
+  return real < kMinRealShare && real + notches >= kMinRealShare;
+}
+
+}  // namespace
+
+void refine_towards_targets(const DensityConstraints& c, std::vector<Vec2>& uv, SquareMapStats& st) {
+  if (c.options.refine_iterations <= 0) return;
+  const std::vector<Vec2> start = c.bounds.empty() ? std::vector<Vec2>{} : uv;
+  const SquareMapStats start_stats = c.bounds.empty() ? SquareMapStats{} : st;
+  refine_and_correct(c, uv, st);
+  if (c.bounds.empty() || !notches_too_large(c.mesh, uv)) return;
+  // The chords' ends moved in so far that the notches beside them took too much of the square: the
+  // refinement again, with the chords on their sides.
+  DensityConstraints on_sides = c;
+  on_sides.fixed = c.fixed_on_sides;
+  on_sides.bounds.clear();
+  on_sides.refinement = nullptr;
+  uv = start;
+  st = start_stats;
+  refine_and_correct(on_sides, uv, st);
 }
 
 }  // namespace tightex

@@ -21,7 +21,9 @@ namespace tightex {
 ///    target length instead of arc length, the interior is re-solved with reweighted positive edge
 ///    weights (reweight_towards_density), moved by the density-equalising flow where that stalled
 ///    (flow_towards_targets, options.density_flow) and refined by symmetric Dirichlet steps
-///    (refine_towards_targets). Each keeps the map fold-free.
+///    (refine_towards_targets), in which a chord's bump and the chord's ends may move inwards, off
+///    their side, so the triangles beyond the chord are not left the bump's sliver. Each keeps the map
+///    fold-free.
 /// 4. A large disk with a density target (options.multilevel_from) is mapped by multilevel_map: steps
 ///    1-3 on a coarse copy, then carried to the full mesh; where that cannot be done fold-free, as above.
 /// Requires a disk (one boundary loop of at least 3 vertices) and, if given, one face target per face.

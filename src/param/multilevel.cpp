@@ -174,6 +174,7 @@ SquareMapOptions coarse_options(const SquareMapOptions& options, const CoarseDis
   SquareMapOptions o = options;
   o.face_target = coarse.face_target;
   o.density_despite_crowding = true;
+  o.chords_move_inwards = false;
   return o;
 }
 

@@ -37,6 +37,10 @@ constexpr double kMaxWeight = 1e8;
 constexpr double kStepTolerance = 1e-3;
 constexpr int kStepIterations = 100;
 
+/// A bounded coordinate held for a step (hold_pressed) is tied by a spring this many times its own
+/// curvature: its step is then that much smaller than the pressure on it would make it.
+constexpr double kHoldStiffness = 1e10;
+
 using SpMat = Eigen::SparseMatrix<double>;
 using Mat2 = Eigen::Matrix2d;
 
@@ -145,6 +149,20 @@ double max_step(const Surface& m, const std::vector<Vec2>& uv, const std::vector
     if (root < t_max) t_max = root;
   }
   return t_max;
+}
+
+/// Step d from uv kept within `bounds`: a coordinate on its line that d would take across it stays
+/// (its component of d zeroed).
+void keep_within_bounds(const std::vector<CoordinateBound>& bounds, const std::vector<Vec2>& uv, std::vector<Vec2>& d) {
+  for (const CoordinateBound& b : bounds)
+    if (b.sign * d[b.vertex](b.axis) > 0 && b.sign * (uv[b.vertex](b.axis) - b.bound) >= 0) d[b.vertex](b.axis) = 0;
+}
+
+/// Puts a bounded coordinate that a step took across its line back onto it (the line search's
+/// projection).
+void clamp_to_bounds(const std::vector<CoordinateBound>& bounds, std::vector<Vec2>& uv) {
+  for (const CoordinateBound& b : bounds)
+    if (b.sign * (uv[b.vertex](b.axis) - b.bound) > 0) uv[b.vertex](b.axis) = b.bound;
 }
 
 /// The free coordinates' unknowns: index[2 v + a] for coordinate a of vertex v, -1 where it is held.
@@ -464,9 +482,11 @@ class RefinementSystem {
   /// The free coordinates' next positions x from uv: the projected Newton step; where its system does
   /// not solve (curvatures of 1e28 and more, from a sliver in the start map), SLIM's proxy, then that
   /// with its weights capped at kMaxWeight. False if none solves.
-  bool solve_step(const std::vector<TargetFrame>& fr, const std::vector<Vec2>& uv, Eigen::VectorXd& x, SlimStats& st) {
+  bool solve_step(const std::vector<TargetFrame>& fr, const std::vector<Vec2>& uv, Eigen::VectorXd& x, SlimStats& st,
+                  const std::vector<CoordinateBound>* bounds) {
     system.assemble_newton(fr, uv);
     x = Eigen::VectorXd::Zero(system.rhs.size());
+    if (bounds) hold_pressed(*bounds, uv);
     if (solve_newton(x)) {
       const std::vector<int>& index = system.index();
       for (size_t v = 0; v < uv.size(); ++v)
@@ -489,6 +509,18 @@ class RefinementSystem {
   std::unique_ptr<MultilevelSolver> multilevel;
 
  private:
+  /// Holds, for this step, the bounded coordinates that sit on their lines with the energy pressing
+  /// them across (projected Newton's active set): each is tied to where it is by a spring far stiffer
+  /// than its own curvature, so the others move as they would with it held.
+  void hold_pressed(const std::vector<CoordinateBound>& bounds, const std::vector<Vec2>& uv) {
+    const std::vector<int>& index = system.index();
+    for (const CoordinateBound& b : bounds) {
+      const int k = index[2 * size_t(b.vertex) + size_t(b.axis)];
+      if (k < 0 || b.sign * (b.bound - uv[b.vertex](b.axis)) > 0 || !(b.sign * system.rhs(k) > 0)) continue;
+      system.A.coeffRef(k, k) *= 1 + kHoldStiffness;
+    }
+  }
+
   /// The Newton system's step into x (zero on entry): iterated where there is a multilevel solver,
   /// else factorised.
   bool solve_newton(Eigen::VectorXd& x) {
@@ -544,7 +576,7 @@ std::shared_ptr<RefinementSystem> prepare_refinement(const Surface& m, const std
 SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,
                      std::vector<Vec2>& uv, long supernodal_from, const std::function<void(int step)>& on_step,
                      const std::vector<FaceShape>* shapes, const std::vector<int>* vertex_order,
-                     std::shared_ptr<RefinementSystem>* system) {
+                     std::shared_ptr<RefinementSystem>* system, const std::vector<CoordinateBound>* bounds) {
   SlimStats st;
   const size_t nv = m.num_vertices();
   const auto fr = target_frames(m, target, uv, shapes);
@@ -560,7 +592,7 @@ SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std
   std::vector<Vec2> d(nv), trial(nv);
   for (int it = 0; it < iterations; ++it) {
     Eigen::VectorXd x;
-    if (!sys->solve_step(fr, uv, x, st)) {
+    if (!sys->solve_step(fr, uv, x, st, bounds)) {
       st.stopped = "solver";
       break;
     }
@@ -570,11 +602,13 @@ SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std
         d[v](a) = k < 0 ? 0.0 : x(k) - uv[v](a);
       }
     // Line search: from the whole step, or 0.9 of the longest that folds nothing where that is
-    // shorter, halved until the energy drops.
+    // shorter, halved until the energy drops; a bounded coordinate stops at its line (projected).
+    if (bounds) keep_within_bounds(*bounds, uv, d);
     double t = 0.9 * max_step(m, uv, d, 1 / 0.9);
     double e_new = INFINITY;
     for (int tries = 0; tries < 40; ++tries, t *= 0.5) {
       for (size_t v = 0; v < nv; ++v) trial[v] = uv[v] + t * d[v];
+      if (bounds) clamp_to_bounds(*bounds, trial);
       e_new = energy(m, fr, trial);
       if (e_new < st.energy) break;
     }

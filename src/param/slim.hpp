@@ -27,6 +27,15 @@ struct VertexAggregates;
 /// A triangle's shape in the plane (its corners in the face's order; position and rotation do not matter).
 using FaceShape = std::array<Vec2, 3>;
 
+/// A free coordinate that may move to one side of a line only: coordinate `axis` (0: u, 1: v) of
+/// `vertex` stays at most `bound` (sign +1) or at least `bound` (sign -1).
+struct CoordinateBound {
+  uint32_t vertex = 0;
+  int axis = 0;
+  double bound = 0;
+  int sign = 1;
+};
+
 /// Lowers the symmetric Dirichlet energy |J|^2 + |J^-1|^2 of every face, measured against its target
 /// shape (the 3D triangle scaled to area target[f]; a face of zero 3D area keeps its start shape and
 /// area; `shapes`, optional: face f's shapes[f] instead, where that has a positive area), weighted by
@@ -40,10 +49,13 @@ using FaceShape = std::array<Vec2, 3>;
 /// `system` (optional): the system of an earlier refinement of this mesh, or prepare_refinement's,
 /// used where its free coordinates are this refinement's (their pattern and analysis are then not made
 /// again), replaced otherwise; it must have been made with the same supernodal_from and vertex_order.
+/// `bounds` (optional): free coordinates that must stay on one side of a line, which uv meets: the line
+/// search stops a coordinate at its line (projected), and one on its line that the energy presses
+/// across is held for the step (projected Newton's active set).
 SlimStats refine_map(const Surface& mesh, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,
                      std::vector<Vec2>& uv, long supernodal_from = kSupernodalFrom, const std::function<void(int step)>& on_step = {},
                      const std::vector<FaceShape>* shapes = nullptr, const std::vector<int>* vertex_order = nullptr,
-                     std::shared_ptr<RefinementSystem>* system = nullptr);
+                     std::shared_ptr<RefinementSystem>* system = nullptr, const std::vector<CoordinateBound>* bounds = nullptr);
 
 /// The system refine_map(mesh, fixed, target, ..., supernodal_from, ..., vertex_order) solves from a
 /// fold-free start map, built and analysed before that map exists (every face with a positive target

@@ -57,6 +57,12 @@ struct SquareMapOptions {
   /// square: between reweighting steps each boundary edge grows or shrinks with the square root of its
   /// face's target/area, and the refinement moves them along the side.
   bool slide_boundary = true;
+  /// In the symmetric Dirichlet steps, a chord's bump and the chord's ends move inwards off their side
+  /// where that lowers the energy (density_constraints), so the triangles beyond the chord are not left
+  /// the bump's sliver. Not with density_flow (the flow slides the side vertices, which stay in order
+  /// only on their sides), nor on multilevel_map's coarse copy (the full mesh's Tutte fill holds the
+  /// coarse map's boundary, which must stay convex for it not to fold).
+  bool chords_move_inwards = true;
   /// Rounds of target correction after the refinement (each: the targets scaled by target/area, 2 more
   /// steps). Off by default: chosen by measurement, docs/decisions.md.
   int correction_rounds = 0;
