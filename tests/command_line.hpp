@@ -9,15 +9,36 @@
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <system_error>
+#include <vector>
+
+#include <gtest/gtest.h>
 
 namespace tightex::testing {
 
+/// The scratch folders this process made, removed when it exits unless one of its tests failed (then
+/// they are kept to look at). Each test runs in a process of its own (gtest_discover_tests).
+class ScratchFolders {
+ public:
+  void add(const std::filesystem::path& folder) { folders_.push_back(folder); }
+  ~ScratchFolders() {
+    if (::testing::UnitTest::GetInstance()->failed_test_count() > 0) return;
+    std::error_code ignored;
+    for (const std::filesystem::path& folder : folders_) std::filesystem::remove_all(folder, ignored);
+  }
+
+ private:
+  std::vector<std::filesystem::path> folders_;
+};
+
 /// An empty folder under the system's temporary folder, named for the test and this process (test
-/// shards run side by side).
+/// shards run side by side), removed when the process exits.
 inline std::filesystem::path scratch_folder(const std::string& name) {
+  static ScratchFolders made;
   const std::filesystem::path d = std::filesystem::temp_directory_path() / ("tightex_" + name + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(d);
   std::filesystem::create_directories(d);
+  made.add(d);
   return d;
 }
 

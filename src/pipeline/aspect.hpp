@@ -21,22 +21,14 @@ constexpr double kAspectProbes[] = {1.0, 0.5, 2.0};
 /// Another shape is probed only where the square's map has texels longer on the surface along one
 /// axis than along the other by more than this, in squared length (texel_stretch_ratio outside
 /// [1/k, k]): the best shape is about sqrt(ratio) wide per high, and where that is near 1 neither 1:2
-/// nor 2:1 wins; beyond it only the shape on the stretch's side (2:1 above k, 1:2 below 1/k). On
-/// ../shared/data every shape that won had a ratio of at most 0.68 or at least 2.34 (detail and area
-/// maps, every shape probed), skipping below 1.35 leaves every choice as it was, and in every run
-/// beyond it (detail, area and texel maps) the shape on the stretch's side was estimated closer than
-/// the other (BENCHMARKS.md, "Options").
+/// nor 2:1 wins; beyond it only the shape on the stretch's side (2:1 above k, 1:2 below 1/k).
+/// Measured on ../shared/data: BENCHMARKS.md, "Options".
 constexpr double kAspectProbeStretch = 1.35;
 
 /// For a component chosen on own maps (too large to probe), the stretch of its coarse copy's map (2k
-/// vertices) from which the other shape's own map is made too. A coarse copy's stretch is milder than
-/// a probe's (meshroom_esp32cam, detail / area / texel maps: 1.48 / 1.51 / 1.45 against the probes'
-/// 1.68 / 3.39 / 6.60), and 2:1 is nearer than the square to the best shape (about sqrt(ratio) wide
-/// per high) only from a ratio of 2 on. Measured with the default map: 18 generated vases of 44k-99k
-/// triangles (tightex_make_demo, 160-240 segments, seeds 1-8) read 1.97-2.13 where 2:1 won (by
-/// 0.40-0.58 dB) and 0.54-0.58 (1.72-1.85 turned over) where 1:2 came within 0.31 dB of the square;
-/// meshroom_esp32cam and its paged copy read 1.48 and 1.50, where the square wins by 0.66 dB (44.16
-/// against 43.50 in 2:1) and the second map only cost time (cut+map 1.37 s against 0.81).
+/// vertices) from which the other shape's own map is made too: a coarse copy reads a milder stretch
+/// than a probe, and 2:1 is nearer than the square to the best shape only from a ratio of about 2
+/// (docs/maps.md, where the measurements are).
 constexpr double kShapeLookStretch = 1.6;
 
 /// The shape chosen, what each probe was estimated to give (estimated_mse < 0: not probed, since the
