@@ -10,6 +10,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <string>
 #include <nlohmann/json.hpp>
 
 #include "io/obj_reader.hpp"
@@ -230,6 +232,28 @@ TEST(RealDataGuards, OversizeAndOverBudgetRunsAreRefusedWithoutOutput) {
     EXPECT_EQ(WEXITSTATUS(status), 1);
     EXPECT_FALSE(fs::exists(out));
   }
+}
+
+// The guard's estimate bounds what the run holds: the peak meshroom_esp32cam's run reports is below the
+// memory the guard names when it refuses the same run (under a limit that its texture alone fits).
+TEST(RealDataGuards, TheEstimateIsAboveTheRunsPeak) {
+  const fs::path input = fs::path(TIGHTEX_SHARED_DATA) / "meshroom_esp32cam" / "texturedMesh.obj";
+  if (!fs::exists(input)) GTEST_SKIP() << "../shared/data/meshroom_esp32cam not present";
+#ifdef __SANITIZE_ADDRESS__
+  GTEST_SKIP() << "the sanitizers' shadow memory is not the run's";
+#endif
+  const nlohmann::json report = run_cli(input.string(), "", "peak");
+  ASSERT_TRUE(report.contains("peak_rss_mib"));
+  const fs::path err = fs::temp_directory_path() / ("tightex_guard_err_" + std::to_string(::getpid()));
+  const std::string cmd = std::string(TIGHTEX_CLI) + " '" + input.string() + "' -o '" + err.string() + ".out' --quiet --max-memory 100 2> '" + err.string() + "'";
+  EXPECT_NE(std::system(cmd.c_str()), 0);
+  std::ifstream message_file(err);
+  const std::string message((std::istreambuf_iterator<char>(message_file)), {});
+  fs::remove(err);
+  const size_t at = message.find("this model at this --size needs about ");
+  ASSERT_NE(at, std::string::npos) << message;
+  const double estimate_mib = std::stod(message.substr(at + 38));
+  EXPECT_LT(report["peak_rss_mib"].get<double>(), estimate_mib) << message;
 }
 
 }  // namespace

@@ -1,6 +1,9 @@
 #include "core/resources.hpp"
 
+#include "core/memory_model.hpp"
+
 #include <sys/resource.h>
+#include <unistd.h>
 #ifdef __GLIBC__
 #include <malloc.h>
 #endif
@@ -24,6 +27,11 @@ void release_free_memory() {
 #ifdef __GLIBC__
   malloc_trim(0);
 #endif
+}
+
+double memory_limit_mib(double max_memory_mib) {
+  if (max_memory_mib > 0) return max_memory_mib;
+  return 0.9 * double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE)) / double(1 << 20);
 }
 
 }  // namespace tightex

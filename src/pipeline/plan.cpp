@@ -1,5 +1,6 @@
 // plan_charts: the geometric half of the method, stage after stage (paper §4.1, §4.2, then the layout).
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <algorithm>
 #include <cmath>
@@ -7,6 +8,7 @@
 #include <numeric>
 
 #include "core/error.hpp"
+#include "core/memory_model.hpp"
 #include "core/progress.hpp"
 #include "core/resources.hpp"
 #include "pipeline/aspect.hpp"
@@ -200,7 +202,8 @@ void lay_out(const Options& options, const std::vector<double>& shares, int size
 
 /// Every component cut and mapped into its rectangle (the probed one reuses its chosen probe's map),
 /// each from its prepared cut inputs, released once it is mapped; each one's cut and map statistics
-/// for the report.
+/// for the report. The large maps one after another where the memory limit does not leave room for
+/// all of them at once (large_maps_at_once), the smaller ones beside them.
 void map_components(const MapContext& ctx, std::optional<Mapped>& probed, size_t probed_component,
                     std::vector<std::optional<CutInputs>>& cut_inputs, Plan::State& plan, std::vector<CutStats>& cuts,
                     std::vector<SquareMapStats>& maps) {
@@ -210,7 +213,7 @@ void map_components(const MapContext& ctx, std::optional<Mapped>& probed, size_t
   plan.kept.assign(nc, std::string());
   cuts.resize(nc);
   maps.resize(nc);
-  tbb::parallel_for(size_t(0), nc, [&](size_t c) {
+  auto map_one = [&](size_t c) {
     const Rect& rect = plan.rects[c];
     Mapped m = c == probed_component && probed && rect.w == probed->rect.w && rect.h == probed->rect.h
                    ? std::move(*probed)
@@ -221,7 +224,20 @@ void map_components(const MapContext& ctx, std::optional<Mapped>& probed, size_t
     cuts[c] = std::move(m.cut);
     maps[c] = m.map;
     plan.kept[c] = std::move(m.kept);
-  });
+  };
+  std::vector<size_t> large, small;
+  double large_faces = 0;
+  for (size_t c = 0; c < nc; ++c) {
+    const bool is_large = plan.components[c].num_faces() >= kLargeMapFaces;
+    (is_large ? large : small).push_back(c);
+    if (is_large) large_faces += double(plan.components[c].num_faces());
+  }
+  if (large.size() < 2 || large_maps_at_once(large_faces, peak_rss_mib(), memory_limit_mib(ctx.options.max_memory_mib))) {
+    tbb::parallel_for(size_t(0), nc, map_one);
+    return;
+  }
+  tbb::parallel_invoke([&] { for (size_t c : large) map_one(c); },
+                       [&] { tbb::parallel_for(size_t(0), small.size(), [&](size_t i) { map_one(small[i]); }); });
 }
 
 OptionsUsed options_used(const Options& o, int size) {

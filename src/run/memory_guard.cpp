@@ -1,23 +1,16 @@
 #include "run/memory_guard.hpp"
 
-#include <unistd.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <array>
 
 #include "core/error.hpp"
+#include "core/memory_model.hpp"
 
 namespace tightex {
 
 namespace {
-
-/// Memory a run needs whatever the model (the process, its pools, the other maps' images and the
-/// report's pictures), per input triangle (the mesh and its stages, with components of at most
-/// Options::max_piece_faces) and per output texel and image (RGBA and the bake's coverage masks), in
-/// bytes: at or above the peaks measured from 1k to 10M triangles (BENCHMARKS.md, "Memory").
-constexpr double kBaseBytes = 256.0 * (1 << 20);
-constexpr double kBytesPerTriangle = 1500.0;
-constexpr double kBytesPerOutputTexel = 7.0;
 
 /// The output images baked per base colour texel: the base colour's and one per map slot some
 /// material binds (a slot may share another's image, or be baked larger: one each is the estimate).
@@ -39,9 +32,7 @@ void MemoryGuard::check(double bytes, const std::string& what) const {
 MemoryGuard memory_guard(const std::string& input, const Options& options) {
   MemoryGuard guard;
   guard.input = input;
-  guard.limit_mib = options.max_memory_mib > 0
-                        ? options.max_memory_mib
-                        : 0.9 * double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE)) / double(1 << 20);
+  guard.limit_mib = memory_limit_mib(options.max_memory_mib);
   return guard;
 }
 
@@ -52,7 +43,12 @@ void check_texture_headers(const MemoryGuard& guard, const TexturedMesh& geometr
 
 MemoryGuard check_memory(const std::string& input, const Options& options, const TexturedMesh& geometry, int side) {
   MemoryGuard guard = memory_guard(input, options);
-  guard.estimate = kBaseBytes + double(geometry.num_triangles()) * kBytesPerTriangle;
+  // The maps made at once: where the limit does not leave room for every large one together, one large
+  // map (at most a piece of max_piece_faces) beside a smaller one per other thread (pipeline/plan).
+  const double faces = double(geometry.num_triangles());
+  const double pieces = options.max_piece_faces > 0 ? double(options.max_piece_faces) : faces;
+  const double beside = double(std::max(1, tbb::this_task_arena::max_concurrency()) - 1) * double(kLargeMapFaces);
+  guard.estimate = kRunBaseBytes + faces * kBytesPerTriangle + std::min(faces, pieces + beside) * kBytesPerMappedTriangle;
   for (const Texture& t : geometry.textures) guard.estimate += double(t.width) * double(t.height) * 4.0;
   guard.output_images = output_images(geometry);
   if (options.layout == Layout::kAtlas) guard.estimate += double(side) * double(side) * kBytesPerOutputTexel * guard.output_images;
