@@ -194,7 +194,7 @@ std::optional<std::vector<Vec2>> multilevel_map(const Disk& disk, const SquareMa
       [&] { copies = coarsen_disk_in_steps(disk, options.face_target, coarse_sizes(disk, options), aggregate_sizes(disk), aggregates.get()); },
       [&] { order = vertex_order_from(m, options.vertex_order_from); });
   // What METIS freed stays in its thread's malloc arena, out of reach of the fine stage's
-  // factorisations (peak 1706 -> 1779 MiB at 854k faces).
+  // factorisations, which would take fresh memory beside it and raise the peak.
   release_free_memory();
   if (copies.empty() || copies.back().fine_vertex.size() > options.multilevel_from) return std::nullopt;
   // The harmonic fill's Laplacian is built and analysed beside the coarse map, which does not need it,
