@@ -235,7 +235,8 @@ std::array<double, 3> first_kd(const fs::path& obj) { return read_obj(obj.string
 
 TEST(Scenes, ObjOutputsKeepTheFactorTheTexturesShare) {
   // An OBJ whose textured material has Kd 0.6 (as Meshroom writes): the output OBJ keeps it (viewers
-  // that multiply map_Kd by Kd show the output as they showed the input); a glTF output stays white.
+  // that multiply map_Kd by Kd show the output as they showed the input), from the command and from the
+  // library; a glTF output stays white.
   const fs::path dir = testing::scratch_folder("scene_texture_factor");
   TexturedMesh grey = testing::disk();
   grey.materials.at(0).kd = {0.6, 0.6, 0.6};
@@ -244,6 +245,12 @@ TEST(Scenes, ObjOutputsKeepTheFactorTheTexturesShare) {
   EXPECT_EQ(first_kd(dir / "obj_out" / "disk.obj"), grey.materials[0].kd);
   ASSERT_EQ(run_quietly(dir / "obj_in" / "disk.obj", dir / "glb_out", "--output-format glb"), 0);
   EXPECT_EQ(read_gltf((dir / "glb_out" / "disk.glb").string()).materials.at(0).kd, (std::array<double, 3>{1, 1, 1}));
+  // The library's own path (optimize, then write_obj) keeps it too.
+  Options small;
+  small.size = 64;
+  const Result lib = optimize(grey, small);
+  write_obj(lib.output, (dir / "lib_out").string(), "disk", ImageEncoding(ImageFormat::kPng));
+  EXPECT_EQ(first_kd(dir / "lib_out" / "disk.obj"), grey.materials[0].kd);
   // A glTF's tinted texture: OBJ carries the factor as Kd, without a warning; PLY cannot, and says so.
   testing::GridGltf tinted = testing::grid_gltf();
   tinted.doc["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = {0.5, 0.25, 1.0, 1.0};

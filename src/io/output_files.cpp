@@ -77,23 +77,6 @@ void round_uvs_as_stored(TexturedMesh& mesh, ModelFormat format) {
   }
 }
 
-std::optional<std::array<double, 3>> shared_texture_factor(const TexturedMesh& mesh) {
-  std::optional<std::array<double, 3>> shared;
-  for (const Material& m : mesh.materials) {
-    if (m.texture < 0) continue;
-    if (shared && *shared != m.kd) return std::nullopt;
-    shared = m.kd;
-  }
-  return shared;
-}
-
-void keep_texture_factor(const TexturedMesh& input, ModelFormat format, size_t new_textures, TexturedMesh& output) {
-  if (format != ModelFormat::kObj) return;
-  const std::optional<std::array<double, 3>> factor = shared_texture_factor(input);
-  if (!factor) return;
-  for (size_t m = 0; m < new_textures && m < output.materials.size(); ++m) output.materials[m].kd = *factor;
-}
-
 std::vector<OutputFile> texture_output_files(const TexturedMesh& mesh, const ImageEncoding& encoding, const EncodedImages& encoded) {
   std::vector<OutputFile> files;
   for (size_t i = 0; i < mesh.textures.size(); ++i) {

@@ -50,17 +50,6 @@ std::string texture_file_name(const Texture& texture, ImageFormat format);
 /// Measured after it, a map's figures (flipped, degenerate, coverage) are those of the written file.
 void round_uvs_as_stored(TexturedMesh& mesh, ModelFormat format);
 
-/// The colour factor (Material::kd) every textured material of `mesh` shares, or nullopt where they
-/// differ or none has a texture.
-std::optional<std::array<double, 3>> shared_texture_factor(const TexturedMesh& mesh);
-
-/// An OBJ output's new textures' materials (the first `new_textures` of `output`, as
-/// build_output_model orders them) take the factor every textured material of `input` shares (OBJ's Kd,
-/// glTF's baseColorFactor: the same number), so that each viewer shows the output as it shows the
-/// input: the MTL specification and three.js multiply map_Kd by Kd, Blender and MeshLab show the
-/// texture alone (Meshroom writes Kd 0.6 beside its textures). Other formats keep white: every glTF
-/// viewer multiplies the factor, which would darken what those OBJ viewers show as it is.
-void keep_texture_factor(const TexturedMesh& input, ModelFormat format, size_t new_textures, TexturedMesh& output);
 
 /// Per texture of a model, its file's bytes where the caller has encoded it already as the writer's
 /// encoding says (rate control measured them); written as they are. An empty entry, or a missing one,

@@ -86,9 +86,12 @@ void add_mapped_triangles(const Plan::State& plan, const TexturedMesh& input, co
   }
 }
 
-/// The new textures (black until baked) and their materials, named after the input file.
-void add_new_textures(const Plan::State& plan, const std::vector<int>& image_index, std::set<std::string>& names, OutputModel& om) {
+/// The new textures (black until baked) and their materials, named after the input file, with the
+/// colour factor the input's textured materials share (shared_texture_factor).
+void add_new_textures(const Plan::State& plan, const TexturedMesh& input, const std::vector<int>& image_index, std::set<std::string>& names,
+                      OutputModel& om) {
   const std::string stem = file_stem(om.mesh.source);
+  const std::array<double, 3> factor = shared_texture_factor(input).value_or(std::array<double, 3>{1.0, 1.0, 1.0});
   for (int i = 0; i < om.new_images; ++i) {
     Texture tex;
     tex.path = om.new_images == 1 ? stem + "_tightex" : fmt::format("{}_tightex_{}", stem, i);
@@ -100,6 +103,7 @@ void add_new_textures(const Plan::State& plan, const std::vector<int>& image_ind
     Material m;
     m.name = om.new_images == 1 ? "tightex" : fmt::format("tightex_{}", i);
     m.texture = i;
+    m.kd = factor;
     names.insert(lower(m.name));
     om.mesh.materials.push_back(m);
   }
@@ -214,6 +218,16 @@ void reserve_triangles(const TexturedMesh& input, OutputModel& om) {
 
 }  // namespace
 
+std::optional<std::array<double, 3>> shared_texture_factor(const TexturedMesh& mesh) {
+  std::optional<std::array<double, 3>> shared;
+  for (const Material& m : mesh.materials) {
+    if (m.texture < 0) continue;
+    if (shared && *shared != m.kd) return std::nullopt;
+    shared = m.kd;
+  }
+  return shared;
+}
+
 OutputModel build_output_model(const Plan::State& plan, const TexturedMesh& input) {
   OutputModel om;
   om.mesh.source = input.source;
@@ -225,7 +239,7 @@ OutputModel build_output_model(const Plan::State& plan, const TexturedMesh& inpu
   add_mapped_triangles(plan, input, image_index, om);
   add_repeats(plan.set_aside, input, 0, om);
   std::set<std::string> names;  // file stems and material names taken, compared without case
-  add_new_textures(plan, image_index, names, om);
+  add_new_textures(plan, input, image_index, names, om);
   const size_t kept_from = om.mesh.num_triangles();
   add_kept_triangles(plan, input, names, om.mesh, om.input_corner);
   add_repeats(plan.set_aside, input, kept_from, om);

@@ -258,7 +258,6 @@ Report run(const std::string& input, const std::string& outdir, const Options& o
   if (options.layout != Layout::kAtlas) check_per_component_memory(guard, planned.plan);
   Result result = bake_plan_releasing_maps(planned.plan, planned.mesh, opt);
   round_uvs_as_stored(result.output, format);
-  keep_texture_factor(planned.mesh, format, result.report.texture_sizes.size(), result.output);
 
   const std::vector<TextureSource> sources = texture_sources(planned.mesh);
   auto [choice, budgets] = choose_images(options, opt, planned.mesh, sources, budget, format, result);

@@ -4,6 +4,7 @@
 #include <fmt/ranges.h>
 
 #include "io/output_files.hpp"
+#include "pipeline/output_model.hpp"
 #include "report/report.hpp"
 
 namespace tightex {
@@ -36,7 +37,7 @@ void add_plan_warnings(const Plan& plan, const nlohmann::json& report, Lines& ou
 
 /// The input's textured materials whose colour factor is not white (read from glTF: the factor a
 /// glTF output keeps in its material), where `format` loses it: PLY always, OBJ where the factors
-/// differ (one they share is its Kd, keep_texture_factor).
+/// differ (one they share is its Kd: build_output_model gives it to the new materials).
 size_t tinted_textures(const TexturedMesh& input, ModelFormat format) {
   if (!input.gltf || format == ModelFormat::kGltf || format == ModelFormat::kGlb) return 0;
   if (format == ModelFormat::kObj && shared_texture_factor(input)) return 0;
