@@ -128,7 +128,8 @@ TEST(Report, HasEveryKeyOfTheSchema) {
   EXPECT_EQ(keys_of(j["options"]), (std::set<std::string>{"size", "size_grown_from", "layout", "holes", "map", "balance", "fit",
                                                            "fine_fit", "corners", "aspect", "material_map_budget_db"}));
   EXPECT_EQ(keys_of(j["aspect"]), (std::set<std::string>{"requested", "chosen", "probed_component", "probes", "square_texel_stretch"}));
-  EXPECT_EQ(keys_of(j["pages"]), (std::set<std::string>{"max_side", "max_piece_faces", "count", "components_split", "pieces", "reason"}));
+  EXPECT_EQ(keys_of(j["pages"]),
+            (std::set<std::string>{"max_side", "max_piece_faces", "count", "components_split", "pieces", "reason", "large_maps_one_after_another"}));
   EXPECT_EQ(keys_of(j["aspect"]["probes"][0]),
             (std::set<std::string>{"aspect", "width", "height", "estimated_psnr_db", "full_map_estimated_psnr_db"}));
   EXPECT_EQ(keys_of(j["preparation"]),

@@ -203,8 +203,9 @@ void lay_out(const Options& options, const std::vector<double>& shares, int size
 /// Every component cut and mapped into its rectangle (the probed one reuses its chosen probe's map),
 /// each from its prepared cut inputs, released once it is mapped; each one's cut and map statistics
 /// for the report. The large maps one after another where the memory limit does not leave room for
-/// all of them at once (large_maps_at_once), the smaller ones beside them.
-void map_components(const MapContext& ctx, std::optional<Mapped>& probed, size_t probed_component,
+/// all of them at once (large_maps_at_once), the smaller ones beside them: returns how many went one
+/// after another (0: all at once).
+size_t map_components(const MapContext& ctx, std::optional<Mapped>& probed, size_t probed_component,
                     std::vector<std::optional<CutInputs>>& cut_inputs, Plan::State& plan, std::vector<CutStats>& cuts,
                     std::vector<SquareMapStats>& maps) {
   const size_t nc = plan.components.size();
@@ -234,10 +235,11 @@ void map_components(const MapContext& ctx, std::optional<Mapped>& probed, size_t
   }
   if (large.size() < 2 || large_maps_at_once(large_faces, peak_rss_mib(), memory_limit_mib(ctx.options.max_memory_mib))) {
     tbb::parallel_for(size_t(0), nc, map_one);
-    return;
+    return 0;
   }
   tbb::parallel_invoke([&] { for (size_t c : large) map_one(c); },
                        [&] { tbb::parallel_for(size_t(0), small.size(), [&](size_t i) { map_one(small[i]); }); });
+  return large.size();
 }
 
 OptionsUsed options_used(const Options& o, int size) {
@@ -414,7 +416,7 @@ Plan plan_prepared(const TexturedMesh& input, const Options& options, const Text
   lay_out(options, shares, size, rep.aspect.chosen, *plan);
   std::vector<CutStats> cuts;
   std::vector<SquareMapStats> maps;
-  map_components(ctx, probed, rep.aspect.probed_component, cut_inputs, *plan, cuts, maps);
+  rep.pages.large_maps_one_after_another = map_components(ctx, probed, rep.aspect.probed_component, cut_inputs, *plan, cuts, maps);
   release_free_memory();  // what the maps freed, before the bake allocates its own
   clock.done("cut+map");
 

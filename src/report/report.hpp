@@ -75,6 +75,9 @@ struct Pages {
   size_t components_split = 0;  // components split into pieces: one alone was more than a page holds or max_piece_faces
   size_t pieces = 0;            // the pieces they became
   std::string reason;           // why more than one page; empty for one
+  /// Components of a million triangles or more (kLargeMapFaces) mapped one after another, the memory
+  /// limit leaving no room for all of them at once (0: at once, or fewer than two).
+  size_t large_maps_one_after_another = 0;
 };
 
 /// "preparation": the repair's counts and totals over all components (the listed ones are a subset).

@@ -186,7 +186,8 @@ json to_json(const ReportData& report) {
                 {"count", pages.count},
                 {"components_split", pages.components_split},
                 {"pieces", pages.pieces},
-                {"reason", pages.reason.empty() ? json(nullptr) : json(pages.reason)}};
+                {"reason", pages.reason.empty() ? json(nullptr) : json(pages.reason)},
+                {"large_maps_one_after_another", pages.large_maps_one_after_another}};
   j["preparation"] = preparation_json(report.preparation, report.components.size());
   json components = json::array();
   for (const ComponentEntry& e : report.components) {

@@ -22,6 +22,10 @@ void add_plan_warnings(const Plan& plan, const nlohmann::json& report, Lines& ou
     out.warnings.push_back(fmt::format("{} component(s), {} triangles, could not be re-parameterized and keep their original texture "
                                        "coordinates and texture(s) ({}); see \"kept_original_uvs\" in the report",
                                        kept_components, plan.kept_triangles(), plan.first_kept_reason()));
+  if (const size_t one_after_another = report["pages"]["large_maps_one_after_another"].get<size_t>(); one_after_another > 0)
+    out.notes.push_back(fmt::format("{} components of a million triangles or more were mapped one after another: the memory limit "
+                                    "(--max-memory, default 90% of this machine's) leaves no room for all of them at once",
+                                    one_after_another));
   const nlohmann::json& prep = report["preparation"];
   if (const size_t untextured = prep["untextured_kept"].get<size_t>(); untextured > 0)
     out.warnings.push_back(
