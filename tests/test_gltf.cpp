@@ -602,7 +602,7 @@ TEST(GltfCli, AnObjScanConvertedToGlbGoesThrough) {
   if (!fs::exists(obj)) GTEST_SKIP() << obj << " is absent";
   const fs::path dir = scratch("fuze");
   TexturedMesh scan = read_obj(obj.string());
-  for (Vec3& p : scan.positions) p = p.cast<float>().cast<double>();
+  for (Vec3& p : scan.positions) p = Vec3(float(p.x()), float(p.y()), float(p.z()));
   write_gltf(scan, (dir / "in").string(), "fuze", ImageFormat::kJpeg, GltfContainer::kGlb);
   const json report = run_and_check(dir / "in" / "fuze.glb", dir / "out", "--size 256");
   EXPECT_EQ(report["input"]["triangles"], scan.num_triangles());

@@ -54,7 +54,7 @@ TexturedMesh plate_with_maps(const std::function<uint8_t(const Vec3&)>& occlusio
   const Image& colour = m.textures[0].image;
   const int W = colour.width, H = colour.height;
   Image normal(W, H, Rgba8{128, 128, 255, 255}), orm(W, H, Rgba8{255, 128, 0, 255});
-  const std::vector<Eigen::Vector4d> tg = compute_corner_tangents(m);
+  const std::vector<Vec4> tg = compute_corner_tangents(m);
   for (size_t t = 0; t < m.num_triangles(); ++t) {
     Vec2 px[3];
     for (int k = 0; k < 3; ++k) px[k] = Vec2(m.corner_uv[3 * t + size_t(k)].x() * W, (1 - m.corner_uv[3 * t + size_t(k)].y()) * H);
@@ -326,7 +326,7 @@ TEST(MaterialMaps, ComputedTangentsAgreeWithAnExportersTangentAttribute) {
   ro.load_textures = false;
   const TexturedMesh m = read_gltf(file.string(), ro);
   ASSERT_EQ(m.corner_tangent.size(), 3 * m.num_triangles());
-  const std::vector<Eigen::Vector4d> ours = compute_corner_tangents(m);
+  const std::vector<Vec4> ours = compute_corner_tangents(m);
   std::vector<double> angle;
   size_t same_sign = 0;
   for (size_t c = 0; c < ours.size(); ++c) {

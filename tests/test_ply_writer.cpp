@@ -134,7 +134,7 @@ TEST_F(PlyWriterTest, ReadsBackWhatItWrote) {
 
 TEST_F(PlyWriterTest, PositionsAreFloatWhereThatIsExact) {
   TexturedMesh m = two_texture_mesh(false);
-  for (Vec3& p : m.positions) p = p.cast<float>().cast<double>();
+  for (Vec3& p : m.positions) p = Vec3(float(p.x()), float(p.y()), float(p.z()));
   write_ply(m, dir_.string(), "m", ImageFormat::kJpeg);
   EXPECT_NE(header_of(dir_ / "m.ply").find("property float x\nproperty float y\nproperty float z\n"), std::string::npos);
   EXPECT_EQ(files_in(dir_), (std::set<std::string>{"m.ply", "tex_gradient.jpg", "tex_checker.jpg"}));

@@ -22,6 +22,7 @@
 #include <thread>
 
 #include "report/report.hpp"
+#include "core/eigen_vector.hpp"
 #include "core/error.hpp"
 #include "core/statistics.hpp"
 #include "cut/cut.hpp"
@@ -1180,8 +1181,8 @@ TEST(Pipeline, AHoleCapWithFacesOfZeroAreaDoesNotCrushTheAreaMap) {
     const Tri& f = out.triangles[t];
     const bool corner = at_corner(f);
     corner_faces += corner;
-    EXPECT_GT(density[t], (corner ? 0.25 : 0.4) * mean) << "triangle " << t << " squeezed at " << out.positions[f[0]].transpose() << " / "
-                                                        << out.positions[f[1]].transpose() << " / " << out.positions[f[2]].transpose();
+    EXPECT_GT(density[t], (corner ? 0.25 : 0.4) * mean) << "triangle " << t << " squeezed at " << out.positions[f[0]] << " / "
+                                                        << out.positions[f[1]] << " / " << out.positions[f[2]];
   }
   EXPECT_EQ(corner_faces, 6u);  // one face at two corners, two at the others (the cells' diagonals)
   EXPECT_EQ(report_json(r.report)["metrics"]["flipped"], 0);
@@ -1456,7 +1457,8 @@ double max_anisotropy(const Disk& disk, const std::vector<Vec2>& uv, const Squar
     Eigen::Matrix2d surface, texels;
     surface << e1.dot(x), e2.dot(x), e1.dot(y), e2.dot(y);
     const Vec2 scale(options.rect_width, options.rect_height);
-    texels.col(0) = (uv[t[1]] - uv[t[0]]).cwiseProduct(scale), texels.col(1) = (uv[t[2]] - uv[t[0]]).cwiseProduct(scale);
+    const Vec2 u1 = (uv[t[1]] - uv[t[0]]).cwiseProduct(scale), u2 = (uv[t[2]] - uv[t[0]]).cwiseProduct(scale);
+    texels.col(0) = as_eigen(u1), texels.col(1) = as_eigen(u2);
     const Eigen::Vector2d sv = Eigen::JacobiSVD<Eigen::Matrix2d>(texels * surface.inverse()).singularValues();
     worst = std::max(worst, sv(0) / sv(1));
   }

@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "core/eigen_vector.hpp"
 #include "core/image.hpp"
 #include "core/mesh.hpp"
 #include "core/raster.hpp"
@@ -44,7 +45,7 @@ constexpr uint64_t kSeed = 20240606;  // METRICS.md's surface PSNR seed
 std::array<float, 4> ideal_resample(const Image& img, const Vec2& uv) {
   const Eigen::Rotation2Dd rot(kRotation);
   const Vec2 X(uv.x() * img.width, (1 - uv.y()) * img.height);  // input pixel units, texel centres at +0.5
-  const Vec2 q = rot.inverse() * X;                             // rotated grid units
+  const Vec2 q = rot.inverse() * as_eigen(X);                             // rotated grid units
   const double gx = q.x() - 0.5, gy = q.y() - 0.5;
   const double fx = std::floor(gx), fy = std::floor(gy);
   const double tx = gx - fx, ty = gy - fy;
@@ -55,7 +56,7 @@ std::array<float, 4> ideal_resample(const Image& img, const Vec2& uv) {
       std::array<float, 4> texel{0, 0, 0, 0};
       for (int b = 0; b < 4; ++b)
         for (int a = 0; a < 4; ++a) {
-          const Vec2 p = rot * Vec2(fx + di + (a + 0.5) / 4, fy + dj + (b + 0.5) / 4);
+          const Vec2 p = rot * Eigen::Vector2d(fx + di + (a + 0.5) / 4, fy + dj + (b + 0.5) / 4);
           const auto c = sample_bilinear(img, p.x() / img.width, 1 - p.y() / img.height);
           for (int k = 0; k < 4; ++k) texel[size_t(k)] += c[size_t(k)] / 16;
         }
@@ -73,7 +74,7 @@ const Image* slot_image(const TexturedMesh& m, size_t t, int slot) {
 }
 
 /// Object-space normal of a tangent-space map value c at barycentrics b of triangle t.
-Vec3 decode(const TexturedMesh& m, const std::vector<Eigen::Vector4d>& tg, size_t t, const double* b, const std::array<float, 4>& c) {
+Vec3 decode(const TexturedMesh& m, const std::vector<Vec4>& tg, size_t t, const double* b, const std::array<float, 4>& c) {
   Vec3 T = Vec3::Zero(), N = Vec3::Zero();
   for (int k = 0; k < 3; ++k) T += b[k] * tg[3 * t + size_t(k)].head<3>(), N += b[k] * frame_normal(m, t, k);
   const Vec3 B = (tg[3 * t].w() < 0 ? -1.0 : 1.0) * N.cross(T);
@@ -89,7 +90,7 @@ struct IdealFigures {
 IdealFigures ideal_figures(const TexturedMesh& in, int slot) {
   const bool normal = slot >= 0 && slot_encoding(MaterialSlot(slot)) == SlotEncoding::kTangentNormal;
   const unsigned channels = slot < 0 ? 7u : material_slot_channels(MaterialSlot(slot));
-  const std::vector<Eigen::Vector4d> tg = normal ? completed_corner_tangents(in) : std::vector<Eigen::Vector4d>{};
+  const std::vector<Vec4> tg = normal ? completed_corner_tangents(in) : std::vector<Vec4>{};
   std::vector<double> cdf(in.num_triangles());
   double acc = 0;
   for (size_t t = 0; t < in.num_triangles(); ++t) cdf[t] = acc += triangle_area(in.positions, in.triangles[t]);
@@ -165,7 +166,7 @@ using Painter = std::function<void(size_t t, const Vec3& p, const Vec3& T, const
 /// 4 texels from the charts, as a scan's texturing tool pads them. Returns the images per texture index
 /// (empty for a texture no material binds as its base colour).
 std::vector<std::vector<Image>> paint_pages(const TexturedMesh& m, const std::vector<Rgba8>& fill, const Painter& paint) {
-  const std::vector<Eigen::Vector4d> tg = compute_corner_tangents(m);
+  const std::vector<Vec4> tg = compute_corner_tangents(m);
   std::vector<std::vector<Image>> maps(m.textures.size());
   std::vector<std::vector<uint8_t>> covered(m.textures.size());
   std::vector<Rgba8> values(fill.size());
@@ -200,7 +201,7 @@ std::vector<std::vector<Image>> paint_pages(const TexturedMesh& m, const std::ve
 /// size: each covered texel from the surface point under it.
 int make_scan(const std::string& demo_obj, const std::string& outdir) {
   TexturedMesh m = read_obj(demo_obj);
-  const std::vector<Eigen::Vector4d> tg = compute_corner_tangents(m);
+  const std::vector<Vec4> tg = compute_corner_tangents(m);
   std::vector<std::vector<Image>> maps =
       paint_pages(m, {Rgba8{255, 128, 0, 255}, Rgba8{128, 128, 255, 255}},
                   [&](size_t t, const Vec3& p, const Vec3& T, const Vec3& N, std::vector<Rgba8>& v) {
@@ -209,8 +210,8 @@ int make_scan(const std::string& demo_obj, const std::string& outdir) {
                     v[0] = {255, uint8_t(std::lround(255 * rough)), uint8_t(metal ? 255 : 0), 255};
                     const Vec3 n = tilted_normal(p, N.normalized(), T);
                     Eigen::Matrix3d frame;
-                    frame.col(0) = T, frame.col(1) = (tg[3 * t].w() < 0 ? -1.0 : 1.0) * N.cross(T), frame.col(2) = N;
-                    const Vec3 e = frame.fullPivLu().solve(n).normalized();
+                    frame.col(0) = as_eigen(T), frame.col(1) = as_eigen(Vec3((tg[3 * t].w() < 0 ? -1.0 : 1.0) * N.cross(T))), frame.col(2) = as_eigen(N);
+                    const Vec3 e = Vec3(frame.fullPivLu().solve(as_eigen(n))).normalized();
                     auto q = [](double c) { return uint8_t(std::clamp(std::lround((c + 1) * 127.5), 0l, 255l)); };
                     v[1] = {q(e.x()), q(e.y()), q(e.z()), 255};
                   });
@@ -338,7 +339,8 @@ double anisotropy(const TexturedMesh& out, size_t o) {
   const Vec3 e1 = (b - a).normalized(), e2 = (b - a).cross(c - a).normalized().cross(e1);
   Eigen::Matrix2d surface, texture;
   surface << (b - a).dot(e1), (c - a).dot(e1), (b - a).dot(e2), (c - a).dot(e2);
-  texture.col(0) = out.sampled_uv(o, 1) - out.sampled_uv(o, 0), texture.col(1) = out.sampled_uv(o, 2) - out.sampled_uv(o, 0);
+  const Vec2 t1 = out.sampled_uv(o, 1) - out.sampled_uv(o, 0), t2 = out.sampled_uv(o, 2) - out.sampled_uv(o, 0);
+  texture.col(0) = as_eigen(t1), texture.col(1) = as_eigen(t2);
   const Eigen::Vector2d sv = Eigen::JacobiSVD<Eigen::Matrix2d>(texture * surface.inverse()).singularValues();
   const double r = sv(0) / sv(1);
   return std::isfinite(r) ? r : 1e9;

@@ -2,7 +2,6 @@
 // written back. Texture coordinates and normals are per corner (3 per triangle), so a stage never has
 // to reconcile split vertices: corner c of triangle t is index 3*t + c.
 #pragma once
-#include <Eigen/Core>
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -11,11 +10,10 @@
 #include <vector>
 
 #include "tightex/image.hpp"
+#include "tightex/vector.hpp"
 
 namespace tightex {
 
-using Vec2 = Eigen::Vector2d;
-using Vec3 = Eigen::Vector3d;
 using Tri = std::array<uint32_t, 3>;
 constexpr uint32_t kNone = UINT32_MAX;
 
@@ -81,7 +79,7 @@ struct TexturedMesh {
   /// TANGENT: xyz the tangent (direction of increasing u), w = +1 or -1 the handedness, the bitangent
   /// (direction of increasing v) being w * cross(normal, tangent). Read from glTF's TANGENT, computed
   /// by compute_corner_tangents (core/tangents.hpp) otherwise.
-  std::vector<Eigen::Vector4d> corner_tangent;
+  std::vector<Vec4> corner_tangent;
   /// 3 per triangle, or empty when the model has none: a vertex-coloured model's colours (red, green,
   /// blue, alpha), sRGB-encoded in [0, 1] as an 8-bit texture stores them.
   std::vector<std::array<float, 4>> corner_color;

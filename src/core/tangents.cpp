@@ -57,7 +57,7 @@ Vec3 frame_normal(const TexturedMesh& mesh, size_t t, int k) {
   return n.allFinite() && n.norm() > 0 ? Vec3(n.normalized()) : Vec3(0, 0, 1);
 }
 
-std::vector<Eigen::Vector4d> compute_corner_tangents(const TexturedMesh& mesh) {
+std::vector<Vec4> compute_corner_tangents(const TexturedMesh& mesh) {
   const size_t corners = 3 * mesh.num_triangles();
   std::vector<CornerKey> key(corners);
   std::vector<Vec3> contribution(corners, Vec3::Zero());
@@ -76,7 +76,7 @@ std::vector<Eigen::Vector4d> compute_corner_tangents(const TexturedMesh& mesh) {
   std::iota(order.begin(), order.end(), size_t(0));
   std::sort(order.begin(), order.end(),
             [&](size_t a, size_t b) { return std::make_pair(key[a].tie(), a) < std::make_pair(key[b].tie(), b); });
-  std::vector<Eigen::Vector4d> tangents(corners);
+  std::vector<Vec4> tangents(corners);
   for (size_t begin = 0; begin < corners;) {
     size_t end = begin + 1;
     while (end < corners && key[order[end]].tie() == key[order[begin]].tie()) ++end;
@@ -85,19 +85,19 @@ std::vector<Eigen::Vector4d> compute_corner_tangents(const TexturedMesh& mesh) {
     const size_t first = order[begin];
     const Vec3 n(key[first].nx, key[first].ny, key[first].nz);
     const Vec3 tangent = sum.norm() > 1e-12 ? Vec3(sum.normalized()) : any_orthogonal(n);
-    for (size_t i = begin; i < end; ++i) tangents[order[i]] << tangent, key[first].positive ? 1.0 : -1.0;
+    for (size_t i = begin; i < end; ++i) tangents[order[i]] = Vec4(tangent.x(), tangent.y(), tangent.z(), key[first].positive ? 1.0 : -1.0);
     begin = end;
   }
   return tangents;
 }
 
-std::vector<Eigen::Vector4d> completed_corner_tangents(const TexturedMesh& mesh) {
+std::vector<Vec4> completed_corner_tangents(const TexturedMesh& mesh) {
   const size_t corners = 3 * mesh.num_triangles();
-  std::vector<Eigen::Vector4d> computed = compute_corner_tangents(mesh);
+  std::vector<Vec4> computed = compute_corner_tangents(mesh);
   if (mesh.corner_tangent.size() != corners) return computed;
-  std::vector<Eigen::Vector4d> result = mesh.corner_tangent;
+  std::vector<Vec4> result = mesh.corner_tangent;
   for (size_t c = 0; c < corners; ++c) {
-    Eigen::Vector4d& tg = result[c];
+    Vec4& tg = result[c];
     const Vec3 n = frame_normal(mesh, c / 3, int(c % 3));
     Vec3 xyz = tg.head<3>();
     xyz -= n * n.dot(xyz);
@@ -105,7 +105,8 @@ std::vector<Eigen::Vector4d> completed_corner_tangents(const TexturedMesh& mesh)
       tg = computed[c];
       continue;
     }
-    tg << xyz.normalized(), tg.w() > 0 ? 1.0 : -1.0;
+    const Vec3 unit = xyz.normalized();
+    tg = Vec4(unit.x(), unit.y(), unit.z(), tg.w() > 0 ? 1.0 : -1.0);
   }
   return result;
 }

@@ -20,11 +20,11 @@ Vec3 frame_normal(const TexturedMesh& mesh, size_t t, int k);
 /// Guarantees: 3 per triangle; xyz of unit length and orthogonal to frame_normal; w = +1 or -1. A
 /// corner whose triangle has no area in texture space gets the average of its vertex group, or any
 /// unit vector orthogonal to its normal when the whole group is degenerate. Deterministic.
-std::vector<Eigen::Vector4d> compute_corner_tangents(const TexturedMesh& mesh);
+std::vector<Vec4> compute_corner_tangents(const TexturedMesh& mesh);
 
 /// mesh.corner_tangent made complete: computed when it is empty, and where a corner's tangent is not
 /// usable (zero, non-finite, or w not +-1: a primitive without TANGENT beside one with) the computed
 /// one; usable tangents orthonormalised against frame_normal, w made exactly +-1.
-std::vector<Eigen::Vector4d> completed_corner_tangents(const TexturedMesh& mesh);
+std::vector<Vec4> completed_corner_tangents(const TexturedMesh& mesh);
 
 }  // namespace tightex

@@ -15,6 +15,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/eigen_vector.hpp"
 #include "core/error.hpp"
 #include "core/image.hpp"
 #include "io/gltf_document.hpp"
@@ -592,11 +593,11 @@ void append_instance(const TexturedMesh& local, size_t t0, size_t t1, size_t v0,
   const bool mirrored = linear.determinant() < 0;
   const uint32_t base = uint32_t(out.positions.size());
   for (size_t v = v0; v < v1; ++v) {
-    out.positions.push_back((instance.world * local.positions[v].homogeneous()).head<3>());
+    out.positions.push_back((instance.world * as_eigen(local.positions[v]).homogeneous()).head<3>());
     vertex_source.push_back(doc.vertex_source[v]);
   }
   auto direction = [](const Eigen::Matrix3d& m, const Vec3& d) {
-    const Vec3 x = m * d;
+    const Vec3 x = m * as_eigen(d);
     return x.norm() > 0 ? Vec3(x.normalized()) : x;
   };
   for (size_t t = t0; t < t1; ++t) {
@@ -613,9 +614,9 @@ void append_instance(const TexturedMesh& local, size_t t0, size_t t1, size_t v0,
       if (!local.corner_normal.empty()) out.corner_normal.push_back(direction(normal_matrix, local.corner_normal[c]));
       if (!local.corner_color.empty()) out.corner_color.push_back(local.corner_color[c]);
       if (!local.corner_tangent.empty()) {
-        const Eigen::Vector4d& tg = local.corner_tangent[c];
+        const Vec4& tg = local.corner_tangent[c];
         const Vec3 d = direction(linear, tg.head<3>());
-        out.corner_tangent.push_back(Eigen::Vector4d(d.x(), d.y(), d.z(), mirrored ? -tg.w() : tg.w()));
+        out.corner_tangent.push_back(Vec4(d.x(), d.y(), d.z(), mirrored ? -tg.w() : tg.w()));
       }
     }
   }
@@ -993,8 +994,8 @@ void GltfReader::read_primitive(size_t m, size_t p, ReadState& state) {
       if (normal.data != nullptr) n = Vec3(normal.get(v, 0), normal.get(v, 1), normal.get(v, 2));
       if (!n.allFinite()) fail(element, "NORMAL entry {} is not finite", v);
       state.mesh.corner_normal.push_back(n);
-      Eigen::Vector4d tg = Eigen::Vector4d::Zero();  // zero: computed later (completed_corner_tangents)
-      if (tangent.data != nullptr) tg = Eigen::Vector4d(tangent.get(v, 0), tangent.get(v, 1), tangent.get(v, 2), tangent.get(v, 3));
+      Vec4 tg = Vec4::Zero();  // zero: computed later (completed_corner_tangents)
+      if (tangent.data != nullptr) tg = Vec4(tangent.get(v, 0), tangent.get(v, 1), tangent.get(v, 2), tangent.get(v, 3));
       if (!tg.allFinite()) fail(element, "TANGENT entry {} is not finite", v);
       state.mesh.corner_tangent.push_back(tg);
       state.corner_has_normal.push_back(normal.data != nullptr);

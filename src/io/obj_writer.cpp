@@ -27,8 +27,8 @@ namespace {
 
 std::pair<uint64_t, uint64_t> key(const Vec2& v) {
   uint64_t a, b;
-  std::memcpy(&a, &v.x(), 8);
-  std::memcpy(&b, &v.y(), 8);
+  std::memcpy(&a, v.data(), 8);
+  std::memcpy(&b, v.data() + 1, 8);
   return {a, b};
 }
 

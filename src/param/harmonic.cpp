@@ -7,6 +7,7 @@
 #include <tbb/parallel_invoke.h>
 
 #include "param/folds.hpp"
+#include "core/eigen_vector.hpp"
 #include "param/multigrid.hpp"
 #include "param/sparse_cholesky.hpp"
 
@@ -132,9 +133,9 @@ struct DirichletSolver::Laplacian {
       if (ia >= 0 && ib >= 0) {
         values[edge_slot[h]] += -wt;
       } else if (ia >= 0) {
-        rhs.row(ia) += wt * uv[vb].transpose();
+        rhs.row(ia) += wt * as_eigen(uv[vb]).transpose();
       } else if (ib >= 0) {
-        rhs.row(ib) += wt * uv[va].transpose();
+        rhs.row(ib) += wt * as_eigen(uv[va]).transpose();
       }
     }
   }
@@ -185,7 +186,7 @@ bool DirichletSolver::solve(const Surface& m, const std::vector<double>& w, cons
   lap.assemble(m, w, uv, rhs);
   Eigen::MatrixX2d x(lap.n, 2);
   for (size_t v = 0; v < nv; ++v)
-    if (lap.unknown[v] >= 0) x.row(lap.unknown[v]) = uv[v].transpose();
+    if (lap.unknown[v] >= 0) x.row(lap.unknown[v]) = as_eigen(uv[v]).transpose();
   if (!multilevel_ || !solve_by_iterations(rhs, x)) {
     if (!cholesky_analysed_) analyse();
     if (!cholesky_->factorize(lap.a)) return false;

@@ -16,6 +16,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "core/eigen_vector.hpp"
 #include "param/multigrid.hpp"
 #include "param/sparse_cholesky.hpp"
 
@@ -93,7 +94,8 @@ std::vector<TargetFrame> target_frames(const Surface& m, const std::vector<doubl
 }
 
 Mat2 jacobian(const TargetFrame& fr, const Vec2& x0, const Vec2& x1, const Vec2& x2) {
-  return x0 * fr.g[0].transpose() + x1 * fr.g[1].transpose() + x2 * fr.g[2].transpose();
+  return as_eigen(x0) * as_eigen(fr.g[0]).transpose() + as_eigen(x1) * as_eigen(fr.g[1]).transpose() +
+         as_eigen(x2) * as_eigen(fr.g[2]).transpose();
 }
 
 /// Signed-free SVD of a 2x2 matrix with positive determinant: J = U diag(sigma) V^T, U and V rotations,
@@ -356,10 +358,10 @@ class SlimSystem {
       // w^2 of SLIM's symmetric Dirichlet weights, at most max_weight.
       w2(k) = std::min(max_weight, std::abs(s - 1) < 1e-8 ? 4.0 : (s - 1 / (s * s * s)) / (s - 1));
     }
-    const Mat2 M = U * w2.asDiagonal() * U.transpose();
+    const Mat2 M = U * as_eigen(w2).asDiagonal() * U.transpose();
     const Mat2 MR = M * R;
     for (int i = 0; i < 3; ++i) {
-      const Vec2 b = F.area * MR * F.g[i];
+      const Vec2 b = F.area * MR * as_eigen(F.g[i]);
       for (int a = 0; a < 2; ++a) {
         const int row = index_[2 * t[i] + size_t(a)];
         if (row < 0) continue;
@@ -418,7 +420,7 @@ class SlimSystem {
     face_svd(F, f, uv, U, s, V);
     const double s1 = s(0), s2 = s(1);
     const double f1 = 2 * s1 - 2 / (s1 * s1 * s1), f2 = 2 * s2 - 2 / (s2 * s2 * s2);
-    const Mat2 gradient = F.area * U * Vec2(f1, f2).asDiagonal() * V.transpose();
+    const Mat2 gradient = F.area * U * Eigen::Vector2d(f1, f2).asDiagonal() * V.transpose();
     Mat2 scale1, scale2, twist, flip;
     scale1 << 1, 0, 0, 0;
     scale2 << 0, 0, 0, 1;
@@ -431,10 +433,10 @@ class SlimSystem {
                                       U * flip * V.transpose()};
     std::array<std::array<Vec2, 3>, 4> q;  // q[k][i]: mode k's derivative in corner i's coordinates
     for (int k = 0; k < 4; ++k)
-      for (int i = 0; i < 3; ++i) q[size_t(k)][size_t(i)] = mode[size_t(k)] * F.g[size_t(i)];
+      for (int i = 0; i < 3; ++i) q[size_t(k)][size_t(i)] = mode[size_t(k)] * as_eigen(F.g[size_t(i)]);
     size_t n = 0;
     for_each_newton_entry(
-        f, [&](int i, int a, int) { out.gradient[size_t(2 * i + a)] = (gradient * F.g[size_t(i)])(a); },
+        f, [&](int i, int a, int) { out.gradient[size_t(2 * i + a)] = (gradient * as_eigen(F.g[size_t(i)]))(a); },
         [&](int i, int a, int j, int b) {
           double h = 0;
           for (size_t k = 0; k < 4; ++k) h += lambda[k] * q[k][size_t(i)](a) * q[k][size_t(j)](b);

@@ -93,23 +93,23 @@ std::vector<MapGroup> map_groups(const TexturedMesh& input) {
 /// The output's tangents: from the new texture coordinates for the mapped triangles (the first
 /// om.bake_triangles.size()), the input's own for the kept ones (their texture coordinates are the
 /// input's).
-void set_output_tangents(const std::vector<Eigen::Vector4d>& input_tangents, OutputModel& om) {
-  std::vector<Eigen::Vector4d> tangents = compute_corner_tangents(om.mesh);
+void set_output_tangents(const std::vector<Vec4>& input_tangents, OutputModel& om) {
+  std::vector<Vec4> tangents = compute_corner_tangents(om.mesh);
   for (size_t o = om.bake_triangles.size(); o < om.mesh.num_triangles(); ++o)
     for (size_t k = 0; k < 3; ++k) tangents[3 * o + k] = input_tangents[3 * size_t(om.mesh.input_triangle[o]) + om.input_corner[3 * o + k]];
   om.mesh.corner_tangent = std::move(tangents);
 }
 
 /// Each bake triangle's input and output tangent frames.
-std::vector<NormalFrames> normal_frames(const TexturedMesh& input, const std::vector<Eigen::Vector4d>& input_tangents,
+std::vector<NormalFrames> normal_frames(const TexturedMesh& input, const std::vector<Vec4>& input_tangents,
                                         const OutputModel& om) {
   std::vector<NormalFrames> frames(om.bake_triangles.size());
   tbb::parallel_for(size_t(0), frames.size(), [&](size_t o) {
     const size_t t = om.mesh.input_triangle[o];
     for (size_t k = 0; k < 3; ++k) {
       const int ic = om.input_corner[3 * o + k];
-      const Eigen::Vector4d& ti = input_tangents[3 * t + size_t(ic)];
-      const Eigen::Vector4d& to = om.mesh.corner_tangent[3 * o + k];
+      const Vec4& ti = input_tangents[3 * t + size_t(ic)];
+      const Vec4& to = om.mesh.corner_tangent[3 * o + k];
       frames[o].input[k] = {ti.head<3>(), frame_normal(input, t, ic), ti.w()};
       frames[o].output[k] = {to.head<3>(), frame_normal(om.mesh, o, int(k)), to.w()};
     }
@@ -237,7 +237,7 @@ ChannelErrors judged_errors(const TexturedMesh& input, const MaterialMapSource& 
 /// tools/map_eval.cpp, keeps its own copy so that it stays independent of what it checks.
 std::array<float, 4> ideal_resample(const Image& img, const Vec2& uv) {
   const Eigen::Rotation2Dd rot(kIdealRotation);
-  const Vec2 q = rot.inverse() * Vec2(uv.x() * img.width, (1 - uv.y()) * img.height);  // rotated grid units
+  const Vec2 q = rot.inverse() * Eigen::Vector2d(uv.x() * img.width, (1 - uv.y()) * img.height);  // rotated grid units
   const double gx = q.x() - 0.5, gy = q.y() - 0.5;
   const double fx = std::floor(gx), fy = std::floor(gy), tx = gx - fx, ty = gy - fy;
   std::array<float, 4> out{0, 0, 0, 0};
@@ -247,7 +247,7 @@ std::array<float, 4> ideal_resample(const Image& img, const Vec2& uv) {
       std::array<float, 4> texel{0, 0, 0, 0};
       for (int b = 0; b < 4; ++b)
         for (int a = 0; a < 4; ++a) {
-          const Vec2 x = rot * Vec2(fx + di + (a + 0.5) / 4, fy + dj + (b + 0.5) / 4);
+          const Vec2 x = rot * Eigen::Vector2d(fx + di + (a + 0.5) / 4, fy + dj + (b + 0.5) / 4);
           const auto c = sample_bilinear(img, x.x() / img.width, 1 - x.y() / img.height);
           for (size_t k = 0; k < 4; ++k) texel[k] += c[k] / 16;
         }
@@ -540,7 +540,7 @@ std::vector<MaterialMapEntry> bake_material_maps(const TexturedMesh& input, cons
       std::any_of(groups.begin(), groups.end(), [](const MapGroup& g) { return g.source.encoding == SlotEncoding::kTangentNormal; });
   std::vector<NormalFrames> frames;
   if (normal_map || !input.corner_tangent.empty()) {
-    const std::vector<Eigen::Vector4d> input_tangents = completed_corner_tangents(input);
+    const std::vector<Vec4> input_tangents = completed_corner_tangents(input);
     set_output_tangents(input_tangents, om);
     if (normal_map) frames = normal_frames(input, input_tangents, om);
   }

@@ -575,7 +575,7 @@ const Image* map_image_of(const TexturedMesh& m, size_t t, MaterialSlot slot) {
 
 /// The object-space normal of a tangent-space normal map `img` at point uv of triangle t of `m` with
 /// barycentrics b (of t's own corners), decoded as glTF does through the corner tangents.
-Vec3 decoded_normal(const TexturedMesh& m, size_t t, const double* b, const std::vector<Eigen::Vector4d>& tangents, const Image& img,
+Vec3 decoded_normal(const TexturedMesh& m, size_t t, const double* b, const std::vector<Vec4>& tangents, const Image& img,
                     const Vec2& uv) {
   Vec3 tangent = Vec3::Zero(), normal = Vec3::Zero();
   for (int k = 0; k < 3; ++k) tangent += b[k] * tangents[3 * t + size_t(k)].head<3>(), normal += b[k] * frame_normal(m, t, k);
@@ -587,8 +587,8 @@ Vec3 decoded_normal(const TexturedMesh& m, size_t t, const double* b, const std:
 
 /// One slot's MaterialMapFigures at the surface PSNR's points (those whose input triangle binds the map).
 MaterialMapFigures measure_map_slot(const TexturedMesh& in, const TexturedMesh& out, const Correspondence& c, MaterialSlot slot,
-                            const std::vector<SurfacePoint>& points, const std::vector<Eigen::Vector4d>& in_tangents,
-                            const std::vector<Eigen::Vector4d>& out_tangents) {
+                            const std::vector<SurfacePoint>& points, const std::vector<Vec4>& in_tangents,
+                            const std::vector<Vec4>& out_tangents) {
   MaterialMapFigures f;
   f.slot = slot;
   const bool normal_map = slot_encoding(slot) == SlotEncoding::kTangentNormal;
@@ -642,7 +642,7 @@ bool binds(const TexturedMesh& m, MaterialSlot slot) {
 std::vector<MaterialMapFigures> measure_material_maps(const TexturedMesh& in, const TexturedMesh& out, const Correspondence& c,
                                      const std::vector<SurfacePoint>& points) {
   std::vector<MaterialMapFigures> figures;
-  std::vector<Eigen::Vector4d> in_tangents, out_tangents;
+  std::vector<Vec4> in_tangents, out_tangents;
   for (size_t s = 0; s < kMaterialSlots; ++s) {
     const MaterialSlot slot = MaterialSlot(s);
     if (!binds(in, slot) || !binds(out, slot)) continue;
