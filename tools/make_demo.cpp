@@ -289,14 +289,19 @@ struct Model {
   int holes = 0;
 };
 
-Model build_model(int segments, Rng& rng) {
-  Model model;
-  auto& verts = model.vertices;
-  auto& faces = model.faces;
-  const int n = segments;
-  const double dtheta = 2.0 * kPi / n;
+// Vertex id of side row j, column i (i wraps around the n columns).
+int side_id(int n, int j, int i) { return j * n + ((i % n) + n) % n; }
 
-  // --- Side: staggered rings, evenly spaced in sigma.
+// The side's rows (rings): rows + 1 of them, from the bottom crease (row 0) to the rim.
+struct SideRows {
+  int rows = 0;
+  std::vector<double> row_radius;  // unjittered radius of every row
+};
+
+// Makes the side's vertices: staggered rings of n, evenly spaced in sigma, with tangential and
+// normal jitter.
+SideRows add_side_vertices(int n, Rng& rng, std::vector<Vertex>& verts) {
+  const double dtheta = 2.0 * kPi / n;
   const Profile profile;
   const int rows = std::max(2, int(std::lround(profile.total_sigma() / (dtheta * std::sqrt(3.0) / 2.0))));
   std::vector<double> row_radius(rows + 1);
@@ -330,165 +335,225 @@ Model build_model(int segments, Rng& rng) {
       verts.push_back(v);
     }
   }
-  auto side_id = [n](int j, int i) { return j * n + ((i % n) + n) % n; };
+  return {rows, std::move(row_radius)};
+}
+
+// Makes the side's faces: two triangles between every pair of neighbouring columns of
+// consecutive rows, following the stagger.
+void add_side_faces(int n, int rows, std::vector<Face>& faces) {
   for (int j = 0; j < rows; ++j) {
     for (int i = 0; i < n; ++i) {
       if ((j & 1) == 0) {
-        faces.push_back({{side_id(j, i), side_id(j, i + 1), side_id(j + 1, i)}, kSide});
-        faces.push_back({{side_id(j, i + 1), side_id(j + 1, i + 1), side_id(j + 1, i)}, kSide});
+        faces.push_back({{side_id(n, j, i), side_id(n, j, i + 1), side_id(n, j + 1, i)}, kSide});
+        faces.push_back({{side_id(n, j, i + 1), side_id(n, j + 1, i + 1), side_id(n, j + 1, i)}, kSide});
       } else {
-        faces.push_back({{side_id(j, i), side_id(j + 1, i + 1), side_id(j + 1, i)}, kSide});
-        faces.push_back({{side_id(j, i), side_id(j, i + 1), side_id(j + 1, i + 1)}, kSide});
+        faces.push_back({{side_id(n, j, i), side_id(n, j + 1, i + 1), side_id(n, j + 1, i)}, kSide});
+        faces.push_back({{side_id(n, j, i), side_id(n, j, i + 1), side_id(n, j + 1, i + 1)}, kSide});
       }
     }
   }
-  const size_t num_side_faces = faces.size();
+}
 
-  // --- Base disk: concentric rings down to a centre vertex; the outer ring is the side's row 0.
-  {
-    const double r0 = row_radius[0];
-    const double spacing = r0 * dtheta;
-    const int rings = std::max(1, int(std::lround(n / (kPi * std::sqrt(3.0)))));
-    std::vector<int> ring_ids(n);
-    std::vector<double> ring_angles(n);
-    for (int i = 0; i < n; ++i) {
-      ring_ids[i] = side_id(0, i);
-      ring_angles[i] = dtheta * i;
-    }
-    std::vector<std::array<int, 3>> tris;
-    for (int k = rings - 1; k >= 0; --k) {
-      std::vector<int> ids;
-      std::vector<double> angles;
-      const int count = k == 0 ? 1 : std::max(6, int(std::lround(double(n) * k / rings)));
-      const double phase = k == 0 ? 0.0 : rng.uniform();
-      for (int i = 0; i < count; ++i) {
-        const double a = 2.0 * kPi * (i + phase) / count;
-        const double rho = r0 * k / rings;
-        Vertex v;
-        v.p = Vec3(rho * std::cos(a), rho * std::sin(a), 0.0) +
-              Vec3(rng.uniform(-0.12, 0.12) * spacing, rng.uniform(-0.12, 0.12) * spacing,
-                   rng.uniform(-0.06, 0.06) * spacing);
-        ids.push_back(int(verts.size()));
-        angles.push_back(a);
-        verts.push_back(v);
-      }
-      if (k == 0) {
-        // Fan from the centre to the innermost ring.
-        const size_t m = ring_ids.size();
-        for (size_t i = 0; i < m; ++i) tris.push_back({ids[0], ring_ids[i], ring_ids[(i + 1) % m]});
-      } else {
-        stitch_rings(ids, angles, ring_ids, ring_angles, tris);
-      }
-      ring_ids = std::move(ids);
-      ring_angles = std::move(angles);
-    }
-    // The base faces down: flip the counter-clockwise (+z) triangles.
-    for (const auto& t : tris) faces.push_back({{t[0], t[2], t[1]}, kBase});
+// Makes the base disk: concentric rings down to a centre vertex; the outer ring is the side's
+// row 0 (radius r0).
+void add_base(int n, double r0, Rng& rng, Model& model) {
+  auto& verts = model.vertices;
+  const double dtheta = 2.0 * kPi / n;
+  const double spacing = r0 * dtheta;
+  const int rings = std::max(1, int(std::lround(n / (kPi * std::sqrt(3.0)))));
+  std::vector<int> ring_ids(n);
+  std::vector<double> ring_angles(n);
+  for (int i = 0; i < n; ++i) {
+    ring_ids[i] = side_id(n, 0, i);
+    ring_angles[i] = dtheta * i;
   }
+  std::vector<std::array<int, 3>> tris;
+  for (int k = rings - 1; k >= 0; --k) {
+    std::vector<int> ids;
+    std::vector<double> angles;
+    const int count = k == 0 ? 1 : std::max(6, int(std::lround(double(n) * k / rings)));
+    const double phase = k == 0 ? 0.0 : rng.uniform();
+    for (int i = 0; i < count; ++i) {
+      const double a = 2.0 * kPi * (i + phase) / count;
+      const double rho = r0 * k / rings;
+      Vertex v;
+      v.p = Vec3(rho * std::cos(a), rho * std::sin(a), 0.0) +
+            Vec3(rng.uniform(-0.12, 0.12) * spacing, rng.uniform(-0.12, 0.12) * spacing,
+                 rng.uniform(-0.06, 0.06) * spacing);
+      ids.push_back(int(verts.size()));
+      angles.push_back(a);
+      verts.push_back(v);
+    }
+    if (k == 0) {
+      // Fan from the centre to the innermost ring.
+      const size_t m = ring_ids.size();
+      for (size_t i = 0; i < m; ++i) tris.push_back({ids[0], ring_ids[i], ring_ids[(i + 1) % m]});
+    } else {
+      stitch_rings(ids, angles, ring_ids, ring_angles, tris);
+    }
+    ring_ids = std::move(ids);
+    ring_angles = std::move(angles);
+  }
+  // The base faces down: flip the counter-clockwise (+z) triangles.
+  for (const auto& t : tris) model.faces.push_back({{t[0], t[2], t[1]}, kBase});
+}
 
-  // --- Holes: remove a few small elliptical patches of side faces (each a few dozen triangles).
-  std::vector<char> alive(faces.size(), 1);
-  {
-    const int wanted = rng.integer(3, 4);
-    std::vector<Vec3> centres;
-    int expected_loops = 1;  // the rim
-    for (int attempt = 0; attempt < 200 && model.holes < wanted; ++attempt) {
-      const int j = rng.integer(int(0.15 * rows), std::max(int(0.15 * rows), int(0.85 * rows)));
-      const int i = rng.index(n);
-      const Vec3 c = verts[side_id(j, i)].p;
-      bool far = true;
-      for (const auto& o : centres) far = far && (o - c).norm() > 0.45;
-      if (!far) continue;
-      const double spacing = row_radius[j] * dtheta;
-      const double radius = rng.uniform(1.6, 2.4) * spacing;
-      const double aspect = rng.uniform(1.0, 1.6);
-      const double orient = rng.uniform(0.0, kPi);
-      const Vec3 t_dir(-std::sin(verts[side_id(j, i)].theta), std::cos(verts[side_id(j, i)].theta), 0.0);
-      const Vec3 axis_a = std::cos(orient) * t_dir + std::sin(orient) * Vec3(0, 0, 1);
-      const Vec3 axis_b = -std::sin(orient) * t_dir + std::cos(orient) * Vec3(0, 0, 1);
-      auto inside = [&](const Vec3& p) {
-        const Vec3 d = p - c;
-        const double a = d.dot(axis_a) / (radius * aspect), b = d.dot(axis_b) / radius;
-        return a * a + b * b < 1.0 && d.norm() < 2.0 * radius * aspect;
-      };
-      std::vector<size_t> removed;
-      for (size_t f = 0; f < num_side_faces; ++f) {
-        if (!alive[f]) continue;
-        const auto& v = faces[f].v;
-        if (inside(verts[v[0]].p) || inside(verts[v[1]].p) || inside(verts[v[2]].p)) removed.push_back(f);
-      }
-      // A few dozen triangles each, and never a large part of a coarse mesh.
-      if (removed.size() < 20 || removed.size() > std::min<size_t>(90, num_side_faces / 50)) continue;
-      for (size_t f : removed) alive[f] = 0;
-      const Topology topo = check_topology(faces, alive, verts.size());
-      if (!topo.manifold || topo.boundary_loops != expected_loops + 1) {
-        for (size_t f : removed) alive[f] = 1;
-        continue;
-      }
-      ++expected_loops;
-      ++model.holes;
-      centres.push_back(c);
+// An elliptical patch on the side wall: semi-axes radius * aspect along axis_a and radius along
+// axis_b (both tangent to the wall).
+struct Ellipse {
+  Vec3 c, axis_a, axis_b;
+  double radius = 0.0, aspect = 1.0;
+  bool contains(const Vec3& p) const {
+    const Vec3 d = p - c;
+    const double a = d.dot(axis_a) / (radius * aspect), b = d.dot(axis_b) / radius;
+    return a * a + b * b < 1.0 && d.norm() < 2.0 * radius * aspect;
+  }
+};
+
+// The live side faces (among the first num_side_faces) with a corner inside the patch.
+std::vector<size_t> faces_in_patch(const Model& model, const std::vector<char>& alive, size_t num_side_faces,
+                                   const Ellipse& patch) {
+  std::vector<size_t> found;
+  for (size_t f = 0; f < num_side_faces; ++f) {
+    if (!alive[f]) continue;
+    const auto& v = model.faces[f].v;
+    const auto& verts = model.vertices;
+    if (patch.contains(verts[v[0]].p) || patch.contains(verts[v[1]].p) || patch.contains(verts[v[2]].p)) {
+      found.push_back(f);
     }
   }
+  return found;
+}
 
-  // --- Floating fragment: a small jittered spherical cap beside the vase (one boundary loop).
-  {
-    Fragment& frag = model.fragment;
-    const double psi = rng.uniform(0.0, 2.0 * kPi);
-    const Vec3 apex(1.2 * std::cos(psi), 1.2 * std::sin(psi), 0.18);
-    frag.n = (Vec3(0, 0, 1) + Vec3(rng.uniform(-0.4, 0.4), rng.uniform(-0.4, 0.4), 0.0)).normalized();
-    frag.e1 = frag.n.cross(Vec3(1, 0, 0)).normalized();
-    frag.e2 = frag.n.cross(frag.e1);
-    frag.e1 = frag.e2.cross(frag.n);  // right-handed: e1 x e2 = n
-    frag.radius = 0.2;
-    frag.centre = apex - frag.radius * frag.n;
-    const int rings = 6;
-    const double alpha_max = 1.0;
-    const double spacing = frag.radius * alpha_max / rings;
-    auto cap_point = [&](double alpha, double phi) {
-      return frag.centre + frag.radius * (std::sin(alpha) * (std::cos(phi) * frag.e1 + std::sin(phi) * frag.e2) +
-                                          std::cos(alpha) * frag.n);
-    };
-    auto jittered = [&](const Vec3& p) {
-      const Vec3 radial = (p - frag.centre).normalized();
-      Vec3 j(rng.uniform(-0.12, 0.12), rng.uniform(-0.12, 0.12), rng.uniform(-0.12, 0.12));
-      j -= radial * (j.dot(radial) * 0.5);  // less jitter along the normal
-      return Vec3(p + j * spacing);
-    };
-    Vertex centre_vertex;
-    centre_vertex.p = jittered(cap_point(0.0, 0.0));
-    std::vector<int> prev_ids{int(verts.size())};
-    std::vector<double> prev_angles{0.0};
-    verts.push_back(centre_vertex);
-    std::vector<std::array<int, 3>> tris;
-    for (int k = 1; k <= rings; ++k) {
-      const int count = 6 * k;
-      const double phase = rng.uniform();
-      std::vector<int> ids;
-      std::vector<double> angles;
-      for (int i = 0; i < count; ++i) {
-        const double phi = 2.0 * kPi * (i + phase) / count;
-        Vertex v;
-        v.p = jittered(cap_point(alpha_max * k / rings, phi));
-        ids.push_back(int(verts.size()));
-        angles.push_back(phi);
-        verts.push_back(v);
-      }
-      if (k == 1) {
-        for (int i = 0; i < count; ++i) tris.push_back({prev_ids[0], ids[i], ids[(i + 1) % count]});
-      } else {
-        stitch_rings(prev_ids, prev_angles, ids, angles, tris);
-      }
-      prev_ids = std::move(ids);
-      prev_angles = std::move(angles);
+// Makes the holes: removes (clears in `alive`) a few small elliptical patches of side faces, each a
+// few dozen triangles, far apart, each adding exactly one boundary loop to a manifold mesh.
+void cut_holes(int n, const SideRows& side, size_t num_side_faces, Rng& rng, Model& model, std::vector<char>& alive) {
+  const auto& verts = model.vertices;
+  const int rows = side.rows;
+  const double dtheta = 2.0 * kPi / n;
+  const int wanted = rng.integer(3, 4);
+  std::vector<Vec3> centres;
+  int expected_loops = 1;  // the rim
+  for (int attempt = 0; attempt < 200 && model.holes < wanted; ++attempt) {
+    const int j = rng.integer(int(0.15 * rows), std::max(int(0.15 * rows), int(0.85 * rows)));
+    const int i = rng.index(n);
+    const Vec3 c = verts[side_id(n, j, i)].p;
+    bool far = true;
+    for (const auto& o : centres) far = far && (o - c).norm() > 0.45;
+    if (!far) continue;
+    const double spacing = side.row_radius[j] * dtheta;
+    const double radius = rng.uniform(1.6, 2.4) * spacing;
+    const double aspect = rng.uniform(1.0, 1.6);
+    const double orient = rng.uniform(0.0, kPi);
+    const Vec3 t_dir(-std::sin(verts[side_id(n, j, i)].theta), std::cos(verts[side_id(n, j, i)].theta), 0.0);
+    const Vec3 axis_a = std::cos(orient) * t_dir + std::sin(orient) * Vec3(0, 0, 1);
+    const Vec3 axis_b = -std::sin(orient) * t_dir + std::cos(orient) * Vec3(0, 0, 1);
+    const Ellipse patch{c, axis_a, axis_b, radius, aspect};
+    const std::vector<size_t> removed = faces_in_patch(model, alive, num_side_faces, patch);
+    // A few dozen triangles each, and never a large part of a coarse mesh.
+    if (removed.size() < 20 || removed.size() > std::min<size_t>(90, num_side_faces / 50)) continue;
+    for (size_t f : removed) alive[f] = 0;
+    const Topology topo = check_topology(model.faces, alive, verts.size());
+    if (!topo.manifold || topo.boundary_loops != expected_loops + 1) {
+      for (size_t f : removed) alive[f] = 1;
+      continue;
     }
-    for (const auto& t : tris) {
-      faces.push_back({t, kFragment});
-      alive.push_back(1);
-    }
+    ++expected_loops;
+    ++model.holes;
+    centres.push_back(c);
   }
+}
 
-  // --- Compact: drop removed faces and the vertices only they used.
+// Makes the fragment's sphere and tangent frame: radius 0.2, the cap's apex at a random angle
+// beside the vase, its pole tilted randomly from +z.
+Fragment make_fragment_frame(Rng& rng) {
+  Fragment frag;
+  const double psi = rng.uniform(0.0, 2.0 * kPi);
+  const Vec3 apex(1.2 * std::cos(psi), 1.2 * std::sin(psi), 0.18);
+  frag.n = (Vec3(0, 0, 1) + Vec3(rng.uniform(-0.4, 0.4), rng.uniform(-0.4, 0.4), 0.0)).normalized();
+  frag.e1 = frag.n.cross(Vec3(1, 0, 0)).normalized();
+  frag.e2 = frag.n.cross(frag.e1);
+  frag.e1 = frag.e2.cross(frag.n);  // right-handed: e1 x e2 = n
+  frag.radius = 0.2;
+  frag.centre = apex - frag.radius * frag.n;
+  return frag;
+}
+
+// Makes the floating fragment: a small jittered spherical cap beside the vase (one boundary loop),
+// its faces alive.
+void add_fragment(Rng& rng, Model& model, std::vector<char>& alive) {
+  model.fragment = make_fragment_frame(rng);
+  const Fragment& frag = model.fragment;
+  auto& verts = model.vertices;
+  const int rings = 6;
+  const double alpha_max = 1.0;
+  const double spacing = frag.radius * alpha_max / rings;
+  auto cap_point = [&](double alpha, double phi) {
+    return frag.centre + frag.radius * (std::sin(alpha) * (std::cos(phi) * frag.e1 + std::sin(phi) * frag.e2) +
+                                        std::cos(alpha) * frag.n);
+  };
+  auto jittered = [&](const Vec3& p) {
+    const Vec3 radial = (p - frag.centre).normalized();
+    Vec3 j(rng.uniform(-0.12, 0.12), rng.uniform(-0.12, 0.12), rng.uniform(-0.12, 0.12));
+    j -= radial * (j.dot(radial) * 0.5);  // less jitter along the normal
+    return Vec3(p + j * spacing);
+  };
+  Vertex centre_vertex;
+  centre_vertex.p = jittered(cap_point(0.0, 0.0));
+  std::vector<int> prev_ids{int(verts.size())};
+  std::vector<double> prev_angles{0.0};
+  verts.push_back(centre_vertex);
+  std::vector<std::array<int, 3>> tris;
+  for (int k = 1; k <= rings; ++k) {
+    const int count = 6 * k;
+    const double phase = rng.uniform();
+    std::vector<int> ids;
+    std::vector<double> angles;
+    for (int i = 0; i < count; ++i) {
+      const double phi = 2.0 * kPi * (i + phase) / count;
+      Vertex v;
+      v.p = jittered(cap_point(alpha_max * k / rings, phi));
+      ids.push_back(int(verts.size()));
+      angles.push_back(phi);
+      verts.push_back(v);
+    }
+    if (k == 1) {
+      for (int i = 0; i < count; ++i) tris.push_back({prev_ids[0], ids[i], ids[(i + 1) % count]});
+    } else {
+      stitch_rings(prev_ids, prev_angles, ids, angles, tris);
+    }
+    prev_ids = std::move(ids);
+    prev_angles = std::move(angles);
+  }
+  for (const auto& t : tris) {
+    model.faces.push_back({t, kFragment});
+    alive.push_back(1);
+  }
+}
+
+// Renumbers the kept vertices (and the kept faces' references) from first-use order to the
+// original vertex order (rows bottom to top); remap maps original ids to first-use ids or -1.
+void restore_vertex_order(const std::vector<int>& remap, std::vector<Face>& kept, std::vector<Vertex>& kept_vertices) {
+  std::vector<int> order;
+  for (size_t v = 0; v < remap.size(); ++v) {
+    if (remap[v] != -1) order.push_back(remap[v]);
+  }
+  std::vector<int> final_id(kept_vertices.size());
+  std::vector<Vertex> sorted(kept_vertices.size());
+  for (size_t k = 0; k < order.size(); ++k) {
+    final_id[order[k]] = int(k);
+    sorted[k] = kept_vertices[order[k]];
+  }
+  for (auto& f : kept) {
+    for (int& v : f.v) v = final_id[v];
+  }
+  kept_vertices = std::move(sorted);
+}
+
+// Compacts the model: drops the removed faces and the vertices only they used.
+void compact(Model& model, const std::vector<char>& alive) {
+  const auto& verts = model.vertices;
+  const auto& faces = model.faces;
   std::vector<int> remap(verts.size(), -1);
   std::vector<Face> kept;
   for (size_t f = 0; f < faces.size(); ++f) {
@@ -504,25 +569,23 @@ Model build_model(int segments, Rng& rng) {
       v = remap[v];
     }
   }
-  // Keep the original vertex order (rows bottom to top) rather than first-use order.
-  {
-    std::vector<int> order;
-    for (size_t v = 0; v < remap.size(); ++v) {
-      if (remap[v] != -1) order.push_back(remap[v]);
-    }
-    std::vector<int> final_id(kept_vertices.size());
-    std::vector<Vertex> sorted(kept_vertices.size());
-    for (size_t k = 0; k < order.size(); ++k) {
-      final_id[order[k]] = int(k);
-      sorted[k] = kept_vertices[order[k]];
-    }
-    for (auto& f : kept) {
-      for (int& v : f.v) v = final_id[v];
-    }
-    kept_vertices = std::move(sorted);
-  }
+  restore_vertex_order(remap, kept, kept_vertices);
   model.vertices = std::move(kept_vertices);
   model.faces = std::move(kept);
+}
+
+// The whole model: side, base disk, holes and floating fragment, compacted.
+Model build_model(int segments, Rng& rng) {
+  Model model;
+  const int n = segments;
+  const SideRows side = add_side_vertices(n, rng, model.vertices);
+  add_side_faces(n, side.rows, model.faces);
+  const size_t num_side_faces = model.faces.size();
+  add_base(n, side.row_radius[0], rng, model);
+  std::vector<char> alive(model.faces.size(), 1);
+  cut_holes(n, side, num_side_faces, rng, model, alive);
+  add_fragment(rng, model, alive);
+  compact(model, alive);
   return model;
 }
 
@@ -641,24 +704,29 @@ struct Atlas {
   int flipped = 0;           // UV triangles with non-positive area (should be 0)
 };
 
-Atlas build_atlas(const Model& model, Rng& rng) {
-  Atlas atlas;
+// Chart-local coordinates (model units) of a vertex in a chart of the given region; theta0 is the
+// chart's reference angle (side charts).
+Vec2 local_uv(const Vertex& vx, int region, double theta0, const Fragment& frag) {
+  if (region == kSide) {
+    // Cylindrical coordinates (theta * r, arc length), exact to first order locally.
+    return Vec2(wrap_angle(vx.theta - theta0) * vx.r + vx.dt, vx.s + vx.ds);
+  }
+  if (region == kBase) return Vec2(-vx.p.x(), vx.p.y());  // seen from below
+  // Azimuthal equidistant projection of the cap around its pole.
+  const Vec3 q = vx.p - frag.centre;
+  const double alpha = std::acos(std::clamp(q.normalized().dot(frag.n), -1.0, 1.0));
+  const double phi = std::atan2(q.dot(frag.e2), q.dot(frag.e1));
+  return frag.radius * alpha * Vec2(std::cos(phi), std::sin(phi));
+}
+
+// Makes the texture coordinates, one per (chart, vertex) pair, flattened locally (model units),
+// and the faces' references to them; returns the chart of every texture coordinate.
+std::vector<int> flatten_charts(const Model& model, const std::vector<std::vector<int>>& chart_faces, Atlas& atlas) {
   const auto& faces = model.faces;
   const auto& verts = model.vertices;
-  const int nf = int(faces.size());
-  const int wanted = std::clamp(nf / 70, std::min(300, std::max(1, nf / 8)), 600);
-  const std::vector<int> label = grow_charts(model, wanted, rng, atlas.charts);
-  const int nc = atlas.charts;
-
-  // Chart membership and the chart's reference angle (side charts).
-  std::vector<std::vector<int>> chart_faces(nc);
-  for (int f = 0; f < nf; ++f) chart_faces[label[f]].push_back(f);
-  const Fragment& frag = model.fragment;
-
-  // Local flattening of every (chart, vertex) pair.
-  atlas.face_uv.resize(nf);
+  atlas.face_uv.resize(faces.size());
   std::vector<int> chart_of_uv;
-  for (int c = 0; c < nc; ++c) {
+  for (int c = 0; c < int(chart_faces.size()); ++c) {
     const int region = faces[chart_faces[c][0]].region;
     const double theta0 = verts[faces[chart_faces[c][0]].v[0]].theta;
     std::unordered_map<int, int> local;
@@ -667,45 +735,42 @@ Atlas build_atlas(const Model& model, Rng& rng) {
         const int v = faces[f].v[k];
         auto [it, inserted] = local.try_emplace(v, int(atlas.uv.size()));
         if (inserted) {
-          const Vertex& vx = verts[v];
-          Vec2 uv;
-          if (region == kSide) {
-            // Cylindrical coordinates (theta * r, arc length), exact to first order locally.
-            uv = Vec2(wrap_angle(vx.theta - theta0) * vx.r + vx.dt, vx.s + vx.ds);
-          } else if (region == kBase) {
-            uv = Vec2(-vx.p.x(), vx.p.y());  // seen from below
-          } else {
-            // Azimuthal equidistant projection of the cap around its pole.
-            const Vec3 q = vx.p - frag.centre;
-            const double alpha = std::acos(std::clamp(q.normalized().dot(frag.n), -1.0, 1.0));
-            const double phi = std::atan2(q.dot(frag.e2), q.dot(frag.e1));
-            uv = frag.radius * alpha * Vec2(std::cos(phi), std::sin(phi));
-          }
-          atlas.uv.push_back(uv);
+          atlas.uv.push_back(local_uv(verts[v], region, theta0, model.fragment));
           chart_of_uv.push_back(c);
         }
         atlas.face_uv[f][k] = it->second;
       }
     }
   }
+  return chart_of_uv;
+}
 
-  // Random rotation per chart, then the bounding boxes.
+// Per chart, the bounding box of its chart-local coordinates.
+struct ChartBoxes {
+  std::vector<Vec2> lo, hi;
+};
+
+// Rotates every chart by a random angle (in place in `uv`) and makes the charts' bounding boxes.
+ChartBoxes rotate_charts(int nc, const std::vector<int>& chart_of_uv, Rng& rng, std::vector<Vec2>& uv) {
   std::vector<Vec2> lo(nc, Vec2::Constant(1e300)), hi(nc, Vec2::Constant(-1e300));
   std::vector<Eigen::Matrix2d> rotation(nc);
   for (int c = 0; c < nc; ++c) rotation[c] = Eigen::Rotation2Dd(rng.uniform(0.0, 2.0 * kPi)).toRotationMatrix();
-  for (size_t k = 0; k < atlas.uv.size(); ++k) {
+  for (size_t k = 0; k < uv.size(); ++k) {
     const int c = chart_of_uv[k];
-    atlas.uv[k] = rotation[c] * atlas.uv[k];
-    lo[c] = lo[c].cwiseMin(atlas.uv[k]);
-    hi[c] = hi[c].cwiseMax(atlas.uv[k]);
+    uv[k] = rotation[c] * uv[k];
+    lo[c] = lo[c].cwiseMin(uv[k]);
+    hi[c] = hi[c].cwiseMax(uv[k]);
   }
-  std::vector<Vec2> extent(nc);
-  for (int c = 0; c < nc; ++c) extent[c] = hi[c] - lo[c];
+  return {std::move(lo), std::move(hi)};
+}
+
+// Makes the charts' placements in the texture: shelves, tallest first, at the largest uniform
+// texel density at which they fit (stored in `density`).
+std::vector<Placement> pack_charts(const std::vector<Vec2>& extent, Rng& rng, double& density) {
+  const int nc = int(extent.size());
   std::vector<int> order(nc);
   for (int c = 0; c < nc; ++c) order[c] = c;
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return extent[a].y() > extent[b].y(); });
-
-  // The largest uniform texel density at which the shelves fit.
   const uint32_t gap_seed = rng.raw();
   double area = 0.0;
   for (const auto& e : extent) area += e.x() * e.y();
@@ -715,59 +780,88 @@ Atlas build_atlas(const Model& model, Rng& rng) {
     const double mid = 0.5 * (d_lo + d_hi);
     (pack_shelves(extent, order, mid, gap_seed, place) ? d_lo : d_hi) = mid;
   }
-  atlas.density = d_lo;
+  density = d_lo;
   if (!pack_shelves(extent, order, d_lo, gap_seed, place)) {
     throw std::runtime_error("internal error: the charts do not fit in the texture");
   }
+  return place;
+}
 
-  // Texel positions -> OBJ texture coordinates (v up; image row 0 is v = 1).
-  for (size_t k = 0; k < atlas.uv.size(); ++k) {
+// Converts the chart-local coordinates to OBJ texture coordinates at the charts' placements (texel
+// positions, v up; image row 0 is v = 1).
+void to_texture_coords(const std::vector<int>& chart_of_uv, const ChartBoxes& box, const std::vector<Placement>& place,
+                       double density, std::vector<Vec2>& uv) {
+  for (size_t k = 0; k < uv.size(); ++k) {
     const int c = chart_of_uv[k];
-    const double x = place[c].x + kMargin + (atlas.uv[k].x() - lo[c].x()) * atlas.density;
-    const double y = place[c].y + kMargin + (hi[c].y() - atlas.uv[k].y()) * atlas.density;
-    atlas.uv[k] = Vec2(x / kTextureSize, 1.0 - y / kTextureSize);
+    const double x = place[c].x + kMargin + (uv[k].x() - box.lo[c].x()) * density;
+    const double y = place[c].y + kMargin + (box.hi[c].y() - uv[k].y()) * density;
+    uv[k] = Vec2(x / kTextureSize, 1.0 - y / kTextureSize);
   }
+}
 
-  // Rasterize: colour every texel whose centre lies in a chart triangle.
+// The texture under construction, per texel: mask 0 = empty, 1 = inside a chart, 2.. = gutter
+// pass; colour in [0, 1] where the mask is set.
+struct Canvas {
+  std::vector<uint8_t> mask;
+  std::vector<Vec3> colour;
+};
+
+// Colours the texels whose centre lies in face f's UV triangle with the surface colour; counts the
+// face in atlas.flipped if its UV triangle is not clockwise in image space. Returns how many texels
+// were newly covered.
+size_t rasterize_face(const Model& model, int f, Atlas& atlas, Canvas& canvas) {
   const int size = kTextureSize;
-  atlas.image = tightex::Image(size, size, kBackground);
-  std::vector<uint8_t> mask(size_t(size) * size, 0);  // 1 = inside a chart, 2.. = gutter pass
-  std::vector<Vec3> colour(size_t(size) * size, Vec3::Zero());
+  std::array<Vec2, 3> q;
+  for (int k = 0; k < 3; ++k) {
+    const Vec2& uv = atlas.uv[atlas.face_uv[f][k]];
+    q[k] = Vec2(uv.x() * size, (1.0 - uv.y()) * size);
+  }
+  const double area2 = (q[1] - q[0]).x() * (q[2] - q[0]).y() - (q[1] - q[0]).y() * (q[2] - q[0]).x();
+  if (area2 >= 0.0) ++atlas.flipped;  // image y points down: counter-clockwise UV is negative here
+  if (area2 == 0.0) return 0;
+  const int x0 = std::max(0, int(std::floor(std::min({q[0].x(), q[1].x(), q[2].x()}))));
+  const int x1 = std::min(size - 1, int(std::ceil(std::max({q[0].x(), q[1].x(), q[2].x()}))));
+  const int y0 = std::max(0, int(std::floor(std::min({q[0].y(), q[1].y(), q[2].y()}))));
+  const int y1 = std::min(size - 1, int(std::ceil(std::max({q[0].y(), q[1].y(), q[2].y()}))));
+  const auto& verts = model.vertices;
+  const Vec3& p0 = verts[model.faces[f].v[0]].p;
+  const Vec3& p1 = verts[model.faces[f].v[1]].p;
+  const Vec3& p2 = verts[model.faces[f].v[2]].p;
   size_t covered = 0;
-  for (int f = 0; f < nf; ++f) {
-    std::array<Vec2, 3> q;
-    for (int k = 0; k < 3; ++k) {
-      const Vec2& uv = atlas.uv[atlas.face_uv[f][k]];
-      q[k] = Vec2(uv.x() * size, (1.0 - uv.y()) * size);
-    }
-    const double area2 = (q[1] - q[0]).x() * (q[2] - q[0]).y() - (q[1] - q[0]).y() * (q[2] - q[0]).x();
-    if (area2 >= 0.0) ++atlas.flipped;  // image y points down: counter-clockwise UV is negative here
-    if (area2 == 0.0) continue;
-    const int x0 = std::max(0, int(std::floor(std::min({q[0].x(), q[1].x(), q[2].x()}))));
-    const int x1 = std::min(size - 1, int(std::ceil(std::max({q[0].x(), q[1].x(), q[2].x()}))));
-    const int y0 = std::max(0, int(std::floor(std::min({q[0].y(), q[1].y(), q[2].y()}))));
-    const int y1 = std::min(size - 1, int(std::ceil(std::max({q[0].y(), q[1].y(), q[2].y()}))));
-    const Vec3& p0 = verts[faces[f].v[0]].p;
-    const Vec3& p1 = verts[faces[f].v[1]].p;
-    const Vec3& p2 = verts[faces[f].v[2]].p;
-    for (int y = y0; y <= y1; ++y) {
-      for (int x = x0; x <= x1; ++x) {
-        const Vec2 c(x + 0.5, y + 0.5);
-        auto edge = [&](const Vec2& a, const Vec2& b) {
-          return ((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x()) / area2;
-        };
-        const double b0 = edge(q[1], q[2]), b1 = edge(q[2], q[0]), b2 = edge(q[0], q[1]);
-        if (b0 < -1e-9 || b1 < -1e-9 || b2 < -1e-9) continue;
-        const size_t idx = size_t(y) * size + x;
-        if (mask[idx] == 0) ++covered;
-        mask[idx] = 1;
-        colour[idx] = surface_colour(b0 * p0 + b1 * p1 + b2 * p2);
-      }
+  for (int y = y0; y <= y1; ++y) {
+    for (int x = x0; x <= x1; ++x) {
+      const Vec2 c(x + 0.5, y + 0.5);
+      auto edge = [&](const Vec2& a, const Vec2& b) {
+        return ((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x()) / area2;
+      };
+      const double b0 = edge(q[1], q[2]), b1 = edge(q[2], q[0]), b2 = edge(q[0], q[1]);
+      if (b0 < -1e-9 || b1 < -1e-9 || b2 < -1e-9) continue;
+      const size_t idx = size_t(y) * size + x;
+      if (canvas.mask[idx] == 0) ++covered;
+      canvas.mask[idx] = 1;
+      canvas.colour[idx] = surface_colour(b0 * p0 + b1 * p1 + b2 * p2);
     }
   }
-  atlas.utilization = double(covered) / (double(size) * size);
+  return covered;
+}
 
-  // Gutter: dilate each chart by kGutter texels (average of the already coloured 8-neighbours).
+// Makes the charts' texels: every texel whose centre lies in a chart triangle, coloured; sets
+// atlas.utilization and atlas.flipped.
+Canvas rasterize(const Model& model, Atlas& atlas) {
+  const int size = kTextureSize;
+  Canvas canvas{std::vector<uint8_t>(size_t(size) * size, 0), std::vector<Vec3>(size_t(size) * size, Vec3::Zero())};
+  size_t covered = 0;
+  for (int f = 0; f < int(model.faces.size()); ++f) covered += rasterize_face(model, f, atlas, canvas);
+  atlas.utilization = double(covered) / (double(size) * size);
+  return canvas;
+}
+
+// Makes the gutter: dilates each chart by kGutter texels (average of the already coloured
+// 8-neighbours).
+void add_gutter(Canvas& canvas) {
+  const int size = kTextureSize;
+  auto& mask = canvas.mask;
+  auto& colour = canvas.colour;
   for (int pass = 1; pass <= kGutter; ++pass) {
     std::vector<std::pair<size_t, Vec3>> grown;
     for (int y = 0; y < size; ++y) {
@@ -795,11 +889,42 @@ Atlas build_atlas(const Model& model, Rng& rng) {
       colour[idx] = c;
     }
   }
-  for (size_t idx = 0; idx < mask.size(); ++idx) {
-    if (mask[idx] == 0) continue;
+}
+
+// Makes the texture image: the canvas's coloured texels (charts and gutters), flat background
+// elsewhere.
+tightex::Image paint_texture(const Canvas& canvas) {
+  tightex::Image image(kTextureSize, kTextureSize, kBackground);
+  for (size_t idx = 0; idx < canvas.mask.size(); ++idx) {
+    if (canvas.mask[idx] == 0) continue;
     auto to8 = [](double v) { return uint8_t(std::lround(std::clamp(v, 0.0, 1.0) * 255.0)); };
-    atlas.image.pixels[idx] = {to8(colour[idx].x()), to8(colour[idx].y()), to8(colour[idx].z()), 255};
+    const Vec3& c = canvas.colour[idx];
+    image.pixels[idx] = {to8(c.x()), to8(c.y()), to8(c.z()), 255};
   }
+  return image;
+}
+
+// The fragmented atlas of the model: charts, flattened, rotated, packed and rasterized with a
+// gutter.
+Atlas build_atlas(const Model& model, Rng& rng) {
+  Atlas atlas;
+  const int nf = int(model.faces.size());
+  const int wanted = std::clamp(nf / 70, std::min(300, std::max(1, nf / 8)), 600);
+  const std::vector<int> label = grow_charts(model, wanted, rng, atlas.charts);
+  const int nc = atlas.charts;
+  std::vector<std::vector<int>> chart_faces(nc);
+  for (int f = 0; f < nf; ++f) chart_faces[label[f]].push_back(f);
+
+  const std::vector<int> chart_of_uv = flatten_charts(model, chart_faces, atlas);
+  const ChartBoxes box = rotate_charts(nc, chart_of_uv, rng, atlas.uv);
+  std::vector<Vec2> extent(nc);
+  for (int c = 0; c < nc; ++c) extent[c] = box.hi[c] - box.lo[c];
+  const std::vector<Placement> place = pack_charts(extent, rng, atlas.density);
+  to_texture_coords(chart_of_uv, box, place, atlas.density, atlas.uv);
+
+  Canvas canvas = rasterize(model, atlas);
+  add_gutter(canvas);
+  atlas.image = paint_texture(canvas);
   return atlas;
 }
 
