@@ -4,7 +4,6 @@
 #include <cmath>
 #include <utility>
 
-#include <tbb/parallel_invoke.h>
 #include <tbb/task_group.h>
 
 #include "core/resources.hpp"
@@ -183,28 +182,35 @@ std::optional<std::vector<Vec2>> multilevel_map(const Disk& disk, const SquareMa
   if (options.face_target.empty() || options.balance != 1.0 || m.num_vertices() <= options.multilevel_from) return std::nullopt;
   SquareMapStats st;
   SquareBoundary placed;
-  // One fill-reducing order for every system on the full mesh, found beside the coarse copies (each
-  // runs on one thread: METIS's 2 s at 425k vertices then cost no wall time).
-  // The iterative solves' aggregates (multigrid.hpp) are recorded by the same collapses.
+  // Two chains side by side, each on one thread: the coarse copies, then the coarse map; the
+  // fill-reducing order of every system on the full mesh (METIS), then the harmonic fill's Laplacian
+  // built and analysed for the copy coarse_map tries first (its vertices taken before the map may move
+  // it). The chains take about as long as each other, where waiting for both the copies and the order
+  // before either went on left a core idle while the coarse map ran.
+  // The iterative solves' aggregates (multigrid.hpp) are recorded by the coarsening's collapses.
   const bool iterative = m.num_vertices() >= options.iterative_from;
-  std::vector<CoarseDisk> copies;
   std::shared_ptr<const std::vector<int>> order;
+  tbb::task_group ordering;
+  ordering.run([&] { order = vertex_order_from(m, options.vertex_order_from); });
   std::shared_ptr<VertexAggregates> aggregates = iterative ? std::make_shared<VertexAggregates>() : nullptr;
-  tbb::parallel_invoke(
-      [&] { copies = coarsen_disk_in_steps(disk, options.face_target, coarse_sizes(disk, options), aggregate_sizes(disk), aggregates.get()); },
-      [&] { order = vertex_order_from(m, options.vertex_order_from); });
-  // What METIS freed stays in its thread's malloc arena, out of reach of the fine stage's
-  // factorisations, which would take fresh memory beside it and raise the peak.
-  release_free_memory();
-  if (copies.empty() || copies.back().fine_vertex.size() > options.multilevel_from) return std::nullopt;
-  // The harmonic fill's Laplacian is built and analysed beside the coarse map, which does not need it,
-  // for the copy coarse_map tries first (its vertices taken before the map may move it); the symmetric
-  // Dirichlet steps' system beside the fill and the reweighting.
+  std::vector<CoarseDisk> copies =
+      coarsen_disk_in_steps(disk, options.face_target, coarse_sizes(disk, options), aggregate_sizes(disk), aggregates.get());
+  if (copies.empty() || copies.back().fine_vertex.size() > options.multilevel_from) {
+    ordering.wait();
+    return std::nullopt;
+  }
   const std::vector<char> first_held = coarse_vertices(m, copies.back());
-  std::optional<std::pair<CoarseDisk, std::vector<Vec2>>> coarse_and_map;
   FineSystems systems;
-  tbb::parallel_invoke([&] { coarse_and_map = coarse_map(copies, options, st, placed); },
-                       [&] { systems = prepare_fills(disk, first_held, options, order, aggregates); });
+  tbb::task_group fills;
+  fills.run([&] {
+    ordering.wait();
+    // What METIS freed stays in its thread's malloc arena, out of reach of the fine stage's
+    // factorisations, which would take fresh memory beside it and raise the peak.
+    release_free_memory();
+    systems = prepare_fills(disk, first_held, options, order, aggregates);
+  });
+  std::optional<std::pair<CoarseDisk, std::vector<Vec2>>> coarse_and_map = coarse_map(copies, options, st, placed);
+  fills.wait();
   copies.clear();
   if (!coarse_and_map) return std::nullopt;
   const CoarseDisk& coarse = coarse_and_map->first;
