@@ -122,7 +122,7 @@ class SparseCholesky {
     const auto analyse = [&] {
       if (order && order->size() == size_t(a.rows())) {
         solver_.analyzePatternInOrder(a, *order);
-      } else {
+      } else if (!analyse_by_minimum_degree(a)) {
         const std::lock_guard<std::mutex> lock(metis_mutex());
         solver_.analyzePattern(a);
       }
@@ -205,6 +205,23 @@ class SparseCholesky {
   bool factorises_permuted_copy() const { return !permutation_.empty(); }
 
  private:
+  /// CHOLMOD's own order where it is AMD's, found without METIS and so without metis_mutex (a
+  /// multilevel map's fine order holds it for seconds, and the maps beside it waited on it for
+  /// nothing): its default tries AMD and goes on to METIS only where AMD's factor is costly (flops per
+  /// factor entry at least 500 and factor entries per entry of a at least 5), keeping AMD's order
+  /// otherwise. False where it would go on, or the analysis failed: the caller then analyses as CHOLMOD
+  /// does by default, under the lock.
+  bool analyse_by_minimum_degree(const Matrix& a) {
+    cholmod_common& c = solver_.cholmod();
+    c.nmethods = 1;
+    c.method[0].ordering = CHOLMOD_AMD;
+    solver_.analyzePattern(a);
+    c.nmethods = 0;
+    c.method[0].ordering = CHOLMOD_GIVEN;
+    if (solver_.info() != Eigen::Success || !(c.lnz > 0)) return false;
+    return c.fl / c.lnz < 500 || c.lnz / double(a.nonZeros()) < 5;
+  }
+
   /// `a` permuted into the analysed factor's order (permuted_, where each of a's values lands in
   /// slot_) and analysed again as ordered: each factorisation then scatters the values, and CHOLMOD
   /// copies nothing (with its own permutation it makes two permuted transposes of a lower-triangle
