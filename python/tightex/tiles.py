@@ -5,7 +5,8 @@
 INPUT is a folder of models (.obj, .ply, and .glb where the library reads it; searched recursively),
 or a 3D Tiles ``tileset.json`` whose content is 1.0 ``.b3dm`` (the embedded GLB is optimized; the
 feature and batch tables are kept byte for byte), 1.1 ``.glb`` or a model file (external tilesets,
-``.json`` content, are followed). OUTPUT mirrors INPUT: the tile ``a/b/t.obj`` is written to the folder
+``.json`` content, are followed); a folder with a ``tileset.json`` at its top is that tileset. A folder
+with neither is refused (exit status 2). OUTPUT mirrors INPUT: the tile ``a/b/t.obj`` is written to the folder
 ``OUTPUT/a/b/t/`` (its model, material, texture and ``report.json``), and each tileset.json is rewritten
 with its content URIs pointing at the new files (bounding volumes and everything else unchanged).
 
@@ -627,13 +628,23 @@ def parse_command_line(argv):
     return opts, _tightex_options(ap, opts)
 
 
+def tileset_of_folder(path):
+    """``path``/tileset.json where ``path`` is a folder that has one (a 3D Tiles set handed over as its
+    folder), else ``path``."""
+    tileset = os.path.join(path, "tileset.json")
+    return tileset if os.path.isdir(path) and os.path.isfile(tileset) else path
+
+
 def collect_tiles(opts, output_root):
     """The tiles of INPUT and, for a tileset, the tilesets to rewrite (else None)."""
+    from . import InputError
     if os.path.isfile(opts.input) and opts.input.lower().endswith(".json"):
         return read_tileset(opts.input, output_root)
     if os.path.isdir(opts.input):
-        return None, folder_tiles(os.path.abspath(opts.input), output_root)
-    from . import InputError
+        tiles = folder_tiles(os.path.abspath(opts.input), output_root)
+        if not tiles:
+            raise InputError(f"{opts.input}: no model file ({', '.join(MODEL_EXTENSIONS)}) under this folder and no tileset.json at its top")
+        return None, tiles
     raise InputError(f"{opts.input}: neither a folder of models nor a tileset .json file")
 
 
@@ -641,6 +652,7 @@ def main(argv=None):
     """The command; returns its exit status."""
     from . import Error, _tightex
     opts, options = parse_command_line(argv)
+    opts.input = tileset_of_folder(opts.input)
     start = time.monotonic()
     try:
         output_root = os.path.abspath(opts.output)

@@ -242,3 +242,25 @@ def test_bad_command_line_is_refused_before_any_work(tightex, tmp_path):
         rc, err = run_tiles(tmp_path / "in", out, *args)
         assert rc == 2 and message in err, err
         assert not out.exists()
+
+
+def test_folder_with_a_tileset_is_the_tileset_and_an_empty_folder_is_refused(tightex, tmp_path):
+    root = tmp_path / "in"
+    for i, count in enumerate((12, 16)):
+        make_boxes(root / "tiles" / f"t{i}", count, i + 1)
+    box = {"box": [0, 0, 0, 100, 0, 0, 0, 100, 0, 0, 0, 10]}
+    children = [{"boundingVolume": box, "geometricError": 0, "content": {"uri": f"tiles/t{i}/boxes.obj"}} for i in range(2)]
+    write_tileset(root, {"asset": {"version": "1.0"}, "geometricError": 100,
+                         "root": {"boundingVolume": box, "geometricError": 50, "refine": "ADD", "children": children}})
+    out = tmp_path / "out"
+    rc, err = run_tiles(root, out, "--workers", "1")
+    assert rc == 0, err
+    with open(out / "tileset.json") as f:
+        written = json.load(f)
+    assert [c["content"]["uri"] for c in written["root"]["children"]] == ["tiles/t0/boxes/boxes.obj", "tiles/t1/boxes/boxes.obj"]
+    empty = tmp_path / "empty"
+    (empty / "sub").mkdir(parents=True)
+    (empty / "sub" / "notes.txt").write_text("no models here")
+    rc, err = run_tiles(empty, tmp_path / "out2")
+    assert rc == 2 and "no model file" in err, err
+    assert not (tmp_path / "out2").exists()
