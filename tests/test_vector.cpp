@@ -8,6 +8,7 @@
 #include <cstring>
 #include <random>
 #include <sstream>
+#include <type_traits>
 
 #include "core/eigen_vector.hpp"
 #include "tightex/vector.hpp"
@@ -51,6 +52,11 @@ void expect_eigen_bits(uint64_t seed) {
 TEST(Vector, ArithmeticHasEigensBits2) { expect_eigen_bits<2>(1); }
 TEST(Vector, ArithmeticHasEigensBits3) { expect_eigen_bits<3>(2); }
 TEST(Vector, ArithmeticHasEigensBits4) { expect_eigen_bits<4>(3); }
+
+// A vector of another size does not convert: Eigen's 3-vector to a Vec2 would drop a coefficient.
+static_assert(std::is_convertible_v<Eigen::Vector3d, Vec3> && std::is_convertible_v<Eigen::VectorXd, Vec3>);
+static_assert(!std::is_convertible_v<Eigen::Vector3d, Vec2> && !std::is_convertible_v<Vec3, Vec2> &&
+              !std::is_constructible_v<Vec4, Eigen::Vector2d>);
 
 TEST(Vector, ZeroStaysZeroWhenNormalized) {
   EXPECT_EQ(Vec3::Zero().normalized(), Vec3::Zero());

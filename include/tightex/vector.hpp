@@ -3,6 +3,7 @@
 // vector expression that has size() and operator()(i) (an Eigen vector, for one) and its sums are
 // computed in the order Eigen computes them, so code that moves between the two gets the same bits.
 #pragma once
+#include <cassert>
 #include <cmath>
 #include <cstddef>
 #include <ostream>
@@ -10,6 +11,18 @@
 #include <utility>
 
 namespace tightex {
+
+/// The number of coefficients a vector type holds, known at compile time: tightex's kSize, Eigen's
+/// SizeAtCompileTime; -1 where it is not known (a dynamic vector).
+template <class V>
+constexpr int compile_time_size() {
+  if constexpr (requires { V::kSize; })
+    return int(V::kSize);
+  else if constexpr (requires { V::SizeAtCompileTime; })
+    return int(V::SizeAtCompileTime);
+  else
+    return -1;
+}
 
 template <int N>
 class Vector {
@@ -22,11 +35,15 @@ class Vector {
   Vector(double x, double y) requires(N == 2) : c_{x, y} {}
   Vector(double x, double y, double z) requires(N == 3) : c_{x, y, z} {}
   Vector(double x, double y, double z, double w) requires(N == 4) : c_{x, y, z, w} {}
-  /// From any other vector expression of N coefficients (read through size() and operator()(i)).
+  /// From any other vector expression of N coefficients (read through size() and operator()(i)); one
+  /// whose size is known at compile time must be N, a dynamic one must hold N at run time.
   template <class Other>
-    requires(!std::is_same_v<std::remove_cvref_t<Other>, Vector> &&
-             requires(const Other& o) { o.size(); double(o(0)); })
+    requires(!std::is_same_v<std::remove_cvref_t<Other>, Vector> && requires(const Other& o) {
+      o.size();
+      double(o(0));
+    } && (compile_time_size<std::remove_cvref_t<Other>>() == N || compile_time_size<std::remove_cvref_t<Other>>() < 0))
   Vector(const Other& other) {  // NOLINT(google-explicit-constructor): interchangeable with Eigen's
+    assert(other.size() == N);
     for (int i = 0; i < N; ++i) c_[i] = other(i);
   }
 
