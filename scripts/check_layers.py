@@ -69,8 +69,7 @@ def standalone_breaks(root, compiler):
                              capture_output=True, text=True)
         if run.returncode != 0:
             errors = [line for line in run.stderr.splitlines() if "error" in line] or ["(no message)"]
-            first = errors[0]
-            yield f"{path.relative_to(root)}: does not compile alone: {first}"
+            yield f"{path.relative_to(root)}: does not compile alone: {errors[0]}"
 
 
 def main():

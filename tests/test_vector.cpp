@@ -68,6 +68,7 @@ TEST(Vector, EigenViewSharesTheCoefficients) {
   as_eigen(v) = Eigen::Matrix2d{{0, 1}, {1, 0}} * as_eigen(v);
   EXPECT_EQ(v, Vec2(2, 1));
   EXPECT_EQ(Vec4(1, 2, 3, 4).head<3>(), Vec3(1, 2, 3));
+  EXPECT_EQ(Vec4(Vec3(1, 2, 3), -1), Vec4(1, 2, 3, -1));
   std::ostringstream text;
   text << Vec3(1, 2.5, -3);
   EXPECT_EQ(text.str(), "1 2.5 -3");

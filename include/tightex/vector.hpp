@@ -12,6 +12,7 @@
 
 namespace tightex {
 
+namespace detail {
 /// The number of coefficients a vector type holds, known at compile time: tightex's kSize, Eigen's
 /// SizeAtCompileTime; -1 where it is not known (a dynamic vector).
 template <class V>
@@ -23,6 +24,7 @@ constexpr int compile_time_size() {
   else
     return -1;
 }
+}  // namespace detail
 
 template <int N>
 class Vector {
@@ -35,13 +37,15 @@ class Vector {
   Vector(double x, double y) requires(N == 2) : c_{x, y} {}
   Vector(double x, double y, double z) requires(N == 3) : c_{x, y, z} {}
   Vector(double x, double y, double z, double w) requires(N == 4) : c_{x, y, z, w} {}
+  /// A direction and a fourth coefficient (a tangent and its handedness).
+  Vector(const Vector<3>& xyz, double w) requires(N == 4) : c_{xyz[0], xyz[1], xyz[2], w} {}
   /// From any other vector expression of N coefficients (read through size() and operator()(i)); one
   /// whose size is known at compile time must be N, a dynamic one must hold N at run time.
   template <class Other>
     requires(!std::is_same_v<std::remove_cvref_t<Other>, Vector> && requires(const Other& o) {
       o.size();
       double(o(0));
-    } && (compile_time_size<std::remove_cvref_t<Other>>() == N || compile_time_size<std::remove_cvref_t<Other>>() < 0))
+    } && (detail::compile_time_size<std::remove_cvref_t<Other>>() == N || detail::compile_time_size<std::remove_cvref_t<Other>>() < 0))
   Vector(const Other& other) {  // NOLINT(google-explicit-constructor): interchangeable with Eigen's
     assert(other.size() == N);
     for (int i = 0; i < N; ++i) c_[i] = other(i);

@@ -85,7 +85,7 @@ std::vector<Vec4> compute_corner_tangents(const TexturedMesh& mesh) {
     const size_t first = order[begin];
     const Vec3 n(key[first].nx, key[first].ny, key[first].nz);
     const Vec3 tangent = sum.norm() > 1e-12 ? Vec3(sum.normalized()) : any_orthogonal(n);
-    for (size_t i = begin; i < end; ++i) tangents[order[i]] = Vec4(tangent.x(), tangent.y(), tangent.z(), key[first].positive ? 1.0 : -1.0);
+    for (size_t i = begin; i < end; ++i) tangents[order[i]] = Vec4(tangent, key[first].positive ? 1.0 : -1.0);
     begin = end;
   }
   return tangents;
@@ -105,8 +105,7 @@ std::vector<Vec4> completed_corner_tangents(const TexturedMesh& mesh) {
       tg = computed[c];
       continue;
     }
-    const Vec3 unit = xyz.normalized();
-    tg = Vec4(unit.x(), unit.y(), unit.z(), tg.w() > 0 ? 1.0 : -1.0);
+    tg = Vec4(xyz.normalized(), tg.w() > 0 ? 1.0 : -1.0);
   }
   return result;
 }

@@ -616,7 +616,7 @@ void append_instance(const TexturedMesh& local, size_t t0, size_t t1, size_t v0,
       if (!local.corner_tangent.empty()) {
         const Vec4& tg = local.corner_tangent[c];
         const Vec3 d = direction(linear, tg.head<3>());
-        out.corner_tangent.push_back(Vec4(d.x(), d.y(), d.z(), mirrored ? -tg.w() : tg.w()));
+        out.corner_tangent.push_back(Vec4(d, mirrored ? -tg.w() : tg.w()));
       }
     }
   }

@@ -213,11 +213,12 @@ class SparseCholesky {
   /// does by default, under the lock.
   bool analyse_by_minimum_degree(const Matrix& a) {
     cholmod_common& c = solver_.cholmod();
+    const int methods = c.nmethods, first_ordering = c.method[0].ordering;
     c.nmethods = 1;
     c.method[0].ordering = CHOLMOD_AMD;
     solver_.analyzePattern(a);
-    c.nmethods = 0;
-    c.method[0].ordering = CHOLMOD_GIVEN;
+    c.nmethods = methods;
+    c.method[0].ordering = first_ordering;
     if (solver_.info() != Eigen::Success || !(c.lnz > 0)) return false;
     return c.fl / c.lnz < 500 || c.lnz / double(a.nonZeros()) < 5;
   }
