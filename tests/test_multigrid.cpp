@@ -12,6 +12,7 @@
 #include "io/obj_reader.hpp"
 #include "mesh_catalogue.hpp"
 #include "param/param.hpp"
+#include "param/sparse_cholesky.hpp"
 #include "prepare/components.hpp"
 #include "prepare/repair.hpp"
 
@@ -118,20 +119,26 @@ TEST(Multigrid, TutteMapMatchesTheFactorisationOnARealScan) {
     if (!(signed_area(b[f[0]], b[f[1]], b[f[2]]) > 0)) EXPECT_LT(std::abs(signed_area(a[f[0]], a[f[1]], a[f[2]])), 1e-12);
 }
 
-// The solver on a system of two coordinates per vertex (a symmetric Dirichlet step's shape): the
-// Laplacian of each axis, coupled by a small cross term, matches Eigen's factorisation.
-TEST(Multigrid, SolvesATwoCoordinateSystemAsTheFactorisationDoes) {
-  const Disk disk = torus_disk();
+/// A system of two coordinates per vertex (a symmetric Dirichlet step's shape): the Laplacian of each
+/// axis, coupled by a small cross term, the boundary held; its unknowns numbered vertex by vertex in
+/// `numbering`'s order (the vertices' own where empty).
+struct TwoCoordinateSystem {
+  MultilevelSolver::Matrix a;
+  std::vector<uint32_t> vertex;
+  std::vector<uint8_t> axis;
+};
+
+TwoCoordinateSystem two_coordinate_system(const Disk& disk, const std::vector<int>& numbering = {}) {
   const Surface& m = disk.mesh;
-  const VertexAggregates aggregates = aggregates_of(disk);
   const std::vector<double> w = edge_weights(m, EdgeWeights::kClamped);
   const std::vector<char> held = boundary_mask(m.num_vertices(), disk.boundary);
   std::vector<int> unknown(2 * m.num_vertices(), -1);
-  std::vector<uint32_t> vertex;
-  std::vector<uint8_t> axis;
-  for (uint32_t v = 0; v < m.num_vertices(); ++v)
+  TwoCoordinateSystem sys;
+  for (uint32_t k = 0; k < m.num_vertices(); ++k) {
+    const uint32_t v = numbering.empty() ? k : uint32_t(numbering[k]);
     for (uint8_t a = 0; a < 2; ++a)
-      if (!held[v]) unknown[2 * v + a] = int(vertex.size()), vertex.push_back(v), axis.push_back(a);
+      if (!held[v]) unknown[2 * v + a] = int(sys.vertex.size()), sys.vertex.push_back(v), sys.axis.push_back(a);
+  }
   std::vector<Eigen::Triplet<double>> entries;
   for (uint32_t h = 0; h < m.opposite.size(); ++h) {
     const uint32_t o = m.opposite[h];
@@ -146,18 +153,63 @@ TEST(Multigrid, SolvesATwoCoordinateSystemAsTheFactorisationDoes) {
         if (ip >= 0 && iq >= 0) entries.emplace_back(std::max(ip, iq), std::min(ip, iq), -value);
       }
   }
-  MultilevelSolver::Matrix a(Eigen::Index(vertex.size()), Eigen::Index(vertex.size()));
-  a.setFromTriplets(entries.begin(), entries.end());
-  a.makeCompressed();
-  Eigen::VectorXd rhs = Eigen::VectorXd::LinSpaced(a.rows(), -1.0, 1.0), x;
-  MultilevelSolver solver(a, vertex, axis, aggregates);
-  ASSERT_TRUE(solver.update(a));
+  sys.a.resize(Eigen::Index(sys.vertex.size()), Eigen::Index(sys.vertex.size()));
+  sys.a.setFromTriplets(entries.begin(), entries.end());
+  sys.a.makeCompressed();
+  return sys;
+}
+
+/// The largest difference between x and the factorisation's solution of a x = rhs, relative to the
+/// latter's largest coefficient.
+double relative_error_against_factorisation(const MultilevelSolver::Matrix& a, const Eigen::VectorXd& rhs, const Eigen::VectorXd& x) {
+  Eigen::SimplicialLDLT<MultilevelSolver::Matrix, Eigen::Lower> direct(a);
+  const Eigen::VectorXd expected = direct.solve(rhs);
+  return (x - expected).lpNorm<Eigen::Infinity>() / expected.lpNorm<Eigen::Infinity>();
+}
+
+TEST(Multigrid, SolvesATwoCoordinateSystemAsTheFactorisationDoes) {
+  const Disk disk = torus_disk();
+  const TwoCoordinateSystem sys = two_coordinate_system(disk);
+  const Eigen::VectorXd rhs = Eigen::VectorXd::LinSpaced(sys.a.rows(), -1.0, 1.0);
+  Eigen::VectorXd x;
+  MultilevelSolver solver(sys.a, sys.vertex, sys.axis, aggregates_of(disk));
+  ASSERT_TRUE(solver.update(sys.a));
   ASSERT_GE(solver.level_sizes().size(), 3u);
   const IterativeSolve outcome = solver.solve(rhs, x, 1e-12, 200);
   ASSERT_TRUE(outcome.converged);
-  Eigen::SimplicialLDLT<MultilevelSolver::Matrix, Eigen::Lower> direct(a);
-  const Eigen::VectorXd expected = direct.solve(rhs);
-  EXPECT_LT((x - expected).lpNorm<Eigen::Infinity>(), 1e-8 * expected.lpNorm<Eigen::Infinity>());
+  EXPECT_LT(relative_error_against_factorisation(sys.a, rhs, x), 1e-8);
+}
+
+// Unknowns in nested dissection's order, the large levels swept in halves on two threads: after as
+// many iterations, a residual about as small as one thread's sweeps leave (the halves' coupling as
+// Jacobi's costs little convergence), and the same bits from solve to solve (nothing depends on the
+// threads' timing).
+TEST(Multigrid, SweepsInHalvesConvergeAsOneThreadsAndRepeatExactly) {
+  auto g = cat::torus_geometry(480, 240);
+  const TexturedMesh mesh = cat::make_textured("torus", g.positions, g.triangles);
+  const Disk disk = cut_to_disk(split_components(prepare_surface(mesh, nullptr)).at(0), CutOptions{}, nullptr);
+  const std::vector<int> order = nested_dissection_order(disk.mesh);
+  ASSERT_EQ(order.size(), disk.mesh.num_vertices());
+  const TwoCoordinateSystem sys = two_coordinate_system(disk, order);
+  const VertexAggregates aggregates = aggregates_of(disk);
+  const Eigen::VectorXd rhs = Eigen::VectorXd::LinSpaced(sys.a.rows(), -1.0, 1.0);
+  constexpr int kIterations = 60;
+  double residual[2] = {0, 0};
+  for (bool halves : {false, true}) {
+    MultilevelSolver solver(sys.a, sys.vertex, sys.axis, aggregates, halves);
+    ASSERT_TRUE(solver.update(sys.a));
+    ASSERT_GE(solver.level_sizes()[1], 50000u) << "two levels large enough to be swept in halves";
+    Eigen::VectorXd x, again;
+    const IterativeSolve outcome = solver.solve(rhs, x, 1e-14, kIterations);
+    ASSERT_EQ(outcome.iterations, kIterations);
+    residual[halves] = (rhs - sys.a.selfadjointView<Eigen::Lower>() * x).norm() / rhs.norm();
+    EXPECT_NEAR(residual[halves], outcome.relative_residual, 1e-3 * outcome.relative_residual) << "halves " << halves;
+    if (!halves) continue;
+    solver.solve(rhs, again, 1e-14, kIterations);
+    EXPECT_TRUE(x == again);
+  }
+  EXPECT_LT(residual[0], 1e-2) << residual[1];
+  EXPECT_LT(residual[1], 1.5 * residual[0]) << "one thread " << residual[0];
 }
 
 }  // namespace

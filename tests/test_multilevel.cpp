@@ -161,8 +161,9 @@ TEST(Multilevel, OneVertexOrderForEverySystemGivesTheSameMap) {
 }
 
 // The full mesh's symmetric Dirichlet steps solved by conjugate gradients over the collapses'
-// aggregates (as from iterative_from vertices), the Laplacians too (iterative_laplacians): fold-free on
-// the square, with the density of the map whose systems are factorised.
+// aggregates (as from iterative_from vertices; their unknowns numbered in the nested dissection's
+// order, as a large disk's are), the Laplacians too (iterative_laplacians): fold-free on the square,
+// with the density of the map whose systems are factorised.
 TEST(Multilevel, IterativeFineStageGivesTheFactorisedMapsDensity) {
   const Disk disk = torus_disk();
   SquareMapOptions options = multilevel_options(disk);
@@ -172,6 +173,7 @@ TEST(Multilevel, IterativeFineStageGivesTheFactorisedMapsDensity) {
   ASSERT_GT(factorised.fine_steps, 0);
   for (bool laplacians : {false, true}) {
     options.iterative_from = 0;
+    options.vertex_order_from = 0;
     options.iterative_laplacians = laplacians;
     SquareMapStats st;
     const std::vector<Vec2> uv = map_to_square(disk, options, &st);

@@ -1,7 +1,10 @@
 #include "param/multigrid.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+
+#include <tbb/parallel_invoke.h>
 
 namespace tightex {
 
@@ -46,6 +49,85 @@ void solve_block(int first, int last, const double (&s)[2], const double (&d)[2]
   }
 }
 
+/// A level of at least this many unknowns is swept, and multiplied by, on two threads (where the
+/// solver has a vertex order): below it a thread's start costs more than half the sweep saves.
+constexpr int kTwoThreadsFrom = 50000;
+
+}  // namespace
+
+/// How a level's sweeps and products run: its unknowns' blocks (one vertex's, vertex_blocks) and,
+/// where it runs on two threads, the first unknown of its second half (at a block's start) and the
+/// entries between the halves.
+struct MultilevelSolver::Sweeps {
+  struct Crossing {
+    int entry, row, column;
+  };
+  std::vector<int> start;           // vertex_blocks
+  int middle = -1;                  // the second half's first unknown; -1: one thread
+  int middle_block = 0;             // the second half's first block
+  std::vector<Crossing> crossings;  // the lower triangle's entries from the first half's columns to the second half's rows
+
+  /// `vertex` per unknown; `halves`: whether the level may run on two threads (its unknowns numbered
+  /// so that each half of them is one region of the mesh).
+  Sweeps(const Matrix& pattern, const std::vector<uint32_t>& vertex, bool halves) : start(vertex_blocks(vertex)) {
+    if (!halves || pattern.cols() < kTwoThreadsFrom) return;
+    middle_block = int(std::lower_bound(start.begin(), start.end(), int(pattern.cols() / 2)) - start.begin());
+    middle = start[size_t(middle_block)];
+    const int* outer = pattern.outerIndexPtr();
+    const int* inner = pattern.innerIndexPtr();
+    for (int c = 0; c < middle; ++c)
+      for (int p = outer[c]; p < outer[c + 1]; ++p)
+        if (inner[p] >= middle) crossings.push_back({p, inner[p], c});
+  }
+
+  bool two_threads() const { return middle >= 0; }
+  /// The blocks of half h (0: all blocks on one thread): [first, end).
+  int first_block(int h) const { return h == 0 ? 0 : middle_block; }
+  int end_block(int h) const { return h == 0 && two_threads() ? middle_block : int(start.size()) - 1; }
+  /// The rows of half h end before this.
+  int end_row(int h) const { return h == 0 && two_threads() ? middle : start.back(); }
+};
+
+namespace {
+
+using Sweeps = MultilevelSolver::Sweeps;
+
+/// One half's part of a block Gauss-Seidel sweep (block_sweep): acc already holds, per row of the
+/// half, what the other half contributes to it.
+void sweep_half(const Matrix& a, const Sweeps& sw, int half, const Eigen::VectorXd& b, Eigen::VectorXd& x, Eigen::VectorXd& acc,
+                bool forward) {
+  const int* outer = a.outerIndexPtr();
+  const int* inner = a.innerIndexPtr();
+  const double* value = a.valuePtr();
+  const int end_row = sw.end_row(half), first_block = sw.first_block(half), end_block = sw.end_block(half);
+  // Column k's rows are sorted: those of the half after the block end at end_row.
+  auto below_block = [&](int first, int last, auto&& f) {
+    for (int k = first; k <= last; ++k)
+      for (int p = outer[k]; p < outer[k + 1] && inner[p] < end_row; ++p)
+        if (inner[p] > last) f(k, inner[p], value[p]);
+  };
+  const auto block = [&](int blk, auto&& f) { f(sw.start[size_t(blk)], sw.start[size_t(blk) + 1] - 1); };
+  if (!forward)
+    for (int blk = first_block; blk < end_block; ++blk)
+      block(blk, [&](int first, int last) { below_block(first, last, [&](int k, int r, double v) { acc[r] += v * x[k]; }); });
+  for (int t = first_block; t < end_block; ++t) {
+    block(forward ? t : first_block + end_block - 1 - t, [&](int first, int last) {
+      double s[2] = {0, 0}, d[2] = {1, 1}, off = 0;
+      for (int k = first; k <= last; ++k) {
+        s[k - first] = b[k] - acc[k];
+        for (int p = outer[k]; p < outer[k + 1]; ++p)
+          if (inner[p] == k)
+            d[k - first] = value[p];
+          else if (inner[p] <= last)
+            off = value[p];
+      }
+      below_block(first, last, [&](int k, int r, double v) { s[k - first] -= v * x[r]; });
+      solve_block(first, last, s, d, off, forward, x);
+      if (forward) below_block(first, last, [&](int k, int r, double v) { acc[r] += v * x[k]; });
+    });
+  }
+}
+
 /// One block Gauss-Seidel sweep of a x = b (a: lower triangle) from x, the blocks (vertex_blocks) in
 /// increasing order (forward) or decreasing: each block's unknowns solved for together (a vertex's u
 /// and v are coupled strongly where its triangles shear), the others as they stand. acc[i] holds
@@ -53,36 +135,60 @@ void solve_block(int first, int last, const double (&s)[2], const double (&d)[2]
 /// gathered as the sweep goes where it goes forward (from the new values), from the values before the
 /// sweep where it goes backward (those unknowns are solved for after i). The backward sweep is the
 /// forward one's transpose, so the two around a coarse correction make a symmetric preconditioner.
-void block_sweep(const Matrix& a, const std::vector<int>& start, const Eigen::VectorXd& b, Eigen::VectorXd& x, Eigen::VectorXd& acc,
-                 bool forward) {
+/// On two threads (Sweeps), each half is swept so by its own, the other half's unknowns taken at
+/// their values before the sweep (gathered into acc first): still each other's transpose.
+void block_sweep(const Matrix& a, const Sweeps& sw, const Eigen::VectorXd& b, Eigen::VectorXd& x, Eigen::VectorXd& acc, bool forward) {
+  acc.setZero();
+  if (!sw.two_threads()) {
+    sweep_half(a, sw, 0, b, x, acc, forward);
+    return;
+  }
+  const double* value = a.valuePtr();
+  for (const Sweeps::Crossing& e : sw.crossings) {
+    acc[e.row] += value[e.entry] * x[e.column];
+    acc[e.column] += value[e.entry] * x[e.row];
+  }
+  tbb::parallel_invoke([&] { sweep_half(a, sw, 0, b, x, acc, forward); }, [&] { sweep_half(a, sw, 1, b, x, acc, forward); });
+}
+
+/// y = a x (a: the lower triangle of a symmetric matrix). On two threads (Sweeps), the first takes the
+/// first half's columns, its products into the second half's rows gathered in `spill`, the second the
+/// rest; each sums in a fixed order.
+void symmetric_product(const Matrix& a, const Sweeps& sw, const Eigen::VectorXd& x, Eigen::VectorXd& y, Eigen::VectorXd& spill) {
+  if (!sw.two_threads()) {
+    y.noalias() = a.selfadjointView<Eigen::Lower>() * x;
+    return;
+  }
   const int* outer = a.outerIndexPtr();
   const int* inner = a.innerIndexPtr();
   const double* value = a.valuePtr();
-  const int blocks = int(start.size()) - 1;
-  acc.setZero();
-  auto below_block = [&](int first, int last, auto&& f) {
-    for (int k = first; k <= last; ++k)
-      for (int p = outer[k]; p < outer[k + 1]; ++p)
-        if (inner[p] > last) f(k, inner[p], value[p]);
-  };
-  if (!forward)
-    for (int blk = 0; blk < blocks; ++blk) below_block(start[blk], start[blk + 1] - 1, [&](int k, int r, double v) { acc[r] += v * x[k]; });
-  for (int t = 0; t < blocks; ++t) {
-    const int blk = forward ? t : blocks - 1 - t;
-    const int first = start[blk], last = start[blk + 1] - 1;
-    double s[2] = {0, 0}, d[2] = {1, 1}, off = 0;
-    for (int k = first; k <= last; ++k) {
-      s[k - first] = b[k] - acc[k];
-      for (int p = outer[k]; p < outer[k + 1]; ++p)
-        if (inner[p] == k)
-          d[k - first] = value[p];
-        else if (inner[p] <= last)
-          off = value[p];
+  const int n = int(a.cols()), split = sw.middle;
+  const auto columns = [&](int from, int to, double* spilled) {
+    for (int c = from; c < to; ++c) {
+      double sum = y[c];
+      for (int p = outer[c]; p < outer[c + 1]; ++p) {
+        const int r = inner[p];
+        if (r == c) {
+          sum += value[p] * x[c];
+          continue;
+        }
+        sum += value[p] * x[r];
+        (r < to || !spilled ? y[r] : spilled[r]) += value[p] * x[c];
+      }
+      y[c] = sum;
     }
-    below_block(first, last, [&](int k, int r, double v) { s[k - first] -= v * x[r]; });
-    solve_block(first, last, s, d, off, forward, x);
-    if (forward) below_block(first, last, [&](int k, int r, double v) { acc[r] += v * x[k]; });
-  }
+  };
+  tbb::parallel_invoke(
+      [&] {
+        y.head(split).setZero();
+        spill.tail(n - split).setZero();
+        columns(0, split, spill.data());
+      },
+      [&] {
+        y.tail(n - split).setZero();
+        columns(split, n, nullptr);
+      });
+  y.tail(n - split) += spill.tail(n - split);
 }
 
 /// Per unknown, its aggregate (the pair of the vertex standing for its vertex and its axis); the
@@ -180,27 +286,28 @@ struct MultilevelSolver::Level {
   }
 };
 
-/// One solve's vectors per level: right-hand side, solution, residual and a sweep's accumulator.
+/// One solve's vectors per level: right-hand side, solution, residual, a sweep's accumulator, a
+/// product and its first thread's spill (symmetric_product).
 struct MultilevelSolver::Workspace {
-  std::vector<Eigen::VectorXd> b, x, r, acc;
+  std::vector<Eigen::VectorXd> b, x, r, acc, product, spill;
 };
 
 MultilevelSolver::MultilevelSolver(const Matrix& pattern, const std::vector<uint32_t>& unknown_vertex,
-                                   const std::vector<uint8_t>& unknown_axis, const VertexAggregates& aggregates) {
+                                   const std::vector<uint8_t>& unknown_axis, const VertexAggregates& aggregates,
+                                   bool halves) {
   std::vector<uint32_t> vertex = unknown_vertex;
   std::vector<uint8_t> axis = unknown_axis;
   const Matrix* a = &pattern;
-  blocks_.push_back(vertex_blocks(vertex));
   for (const std::vector<uint32_t>& stands_for : aggregates.levels) {
     std::vector<uint32_t> next_vertex = vertex;
     std::vector<uint8_t> next_axis = axis;
     int count = 0;
     std::vector<int> coarse_of = aggregate_unknowns(stands_for, next_vertex, next_axis, count);
     if (count > kMinCoarsening * double(a->cols())) continue;
+    sweeps_.emplace_back(*a, vertex, halves);
     levels_.push_back(std::make_unique<Level>(*a, std::move(coarse_of), count));
     vertex.swap(next_vertex);
     axis.swap(next_axis);
-    blocks_.push_back(vertex_blocks(vertex));
     a = &levels_.back()->coarse;
   }
   coarsest_.analyzePattern(*a);
@@ -240,16 +347,17 @@ void MultilevelSolver::v_cycle(size_t k, const Eigen::VectorXd& b, Eigen::Vector
   const Matrix& a = k == 0 ? *fine_ : levels_[k - 1]->coarse;
   const Level& level = *levels_[k];
   x.setZero();
-  block_sweep(a, blocks_[k], b, x, work.acc[k], true);
+  block_sweep(a, sweeps_[k], b, x, work.acc[k], true);
   Eigen::VectorXd& r = work.r[k];
-  r.noalias() = b - a.selfadjointView<Eigen::Lower>() * x;
+  symmetric_product(a, sweeps_[k], x, work.product[k], work.spill[k]);
+  r.noalias() = b - work.product[k];
   Eigen::VectorXd& coarse_b = work.b[k + 1];
   coarse_b.setZero();
   for (Eigen::Index i = 0; i < r.size(); ++i) coarse_b[level.coarse_of[size_t(i)]] += r[i];
   Eigen::VectorXd& coarse_x = work.x[k + 1];
   v_cycle(k + 1, coarse_b, coarse_x, work);
   for (Eigen::Index i = 0; i < x.size(); ++i) x[i] += coarse_x[level.coarse_of[size_t(i)]];
-  block_sweep(a, blocks_[k], b, x, work.acc[k], false);
+  block_sweep(a, sweeps_[k], b, x, work.acc[k], false);
 }
 
 IterativeSolve MultilevelSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance, int max_iterations) const {
@@ -264,12 +372,16 @@ IterativeSolve MultilevelSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd
   }
   Workspace work;
   const size_t nl = levels_.size() + 1;
-  work.b.resize(nl), work.x.resize(nl), work.r.resize(nl), work.acc.resize(nl);
-  for (size_t k = 0; k < nl; ++k) {
-    const Eigen::Index n = k == 0 ? a.cols() : levels_[k - 1]->coarse.cols();
-    work.b[k].resize(n), work.x[k].resize(n), work.r[k].resize(n), work.acc[k].resize(n);
+  for (auto* vectors : {&work.b, &work.x, &work.r, &work.acc, &work.product, &work.spill}) {
+    vectors->resize(nl);
+    for (size_t k = 0; k < nl; ++k) (*vectors)[k].resize(k == 0 ? a.cols() : levels_[k - 1]->coarse.cols());
   }
-  Eigen::VectorXd r = b - a.selfadjointView<Eigen::Lower>() * x, z(b.size()), p, ap;
+  // The fine level's product, on two threads where its sweeps are.
+  const Sweeps one_thread(Matrix(0, 0), {}, false);
+  const Sweeps& fine_sweeps = sweeps_.empty() ? one_thread : sweeps_[0];
+  Eigen::VectorXd ap(b.size());
+  symmetric_product(a, fine_sweeps, x, ap, work.spill[0]);
+  Eigen::VectorXd r = b - ap, z(b.size()), p;
   v_cycle(0, r, z, work);
   p = z;
   double rz = r.dot(z);
@@ -280,7 +392,7 @@ IterativeSolve MultilevelSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd
       out.converged = true;
       return out;
     }
-    ap.noalias() = a.selfadjointView<Eigen::Lower>() * p;
+    symmetric_product(a, fine_sweeps, p, ap, work.spill[0]);
     const double curvature = p.dot(ap);
     if (!(curvature > 0)) return out;  // a is not positive definite along p
     const double alpha = rz / curvature;

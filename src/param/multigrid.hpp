@@ -33,6 +33,12 @@ struct IterativeSolve {
 /// (a vertex's coordinates one block) before the coarser level's correction and a backward one after
 /// it (so the preconditioner is symmetric), the coarsest level solved by a sparse Cholesky
 /// factorisation. The pattern is fixed at construction; the values may change (update) between solves.
+/// Where the unknowns are numbered in nested dissection's order (`halves`), a level of at least
+/// kTwoThreadsFrom (multigrid.cpp) unknowns is swept on two threads, one per half of its unknowns (two regions of the
+/// mesh with a short border between them, contiguous in memory): each thread's sweep takes the other
+/// half's unknowns as they stood before the sweep, so the smoother couples the halves as Jacobi does
+/// and each half within itself as Gauss-Seidel does; its matrix products run on two threads too. The
+/// result depends only on the inputs, not on timing.
 /// Memory: the coarser levels' matrices (about a third of the system's entries), one int per entry
 /// of every level but the coarsest (where it lands in the next), and a few vectors per solve.
 class MultilevelSolver {
@@ -40,9 +46,11 @@ class MultilevelSolver {
   using Matrix = Eigen::SparseMatrix<double>;  // the lower triangle, compressed, rows sorted in each column
 
   /// `pattern`: the system's lower triangle (its values unused). Levels of `aggregates` that merge
-  /// fewer than a tenth of the unknowns left are skipped.
+  /// fewer than a tenth of the unknowns left are skipped. `halves`: the unknowns are numbered in the
+  /// order of nested_dissection_order's vertices, so that the large levels' sweeps may run in halves
+  /// on two threads (the aggregates, numbered as their unknowns first appear, keep that order).
   MultilevelSolver(const Matrix& pattern, const std::vector<uint32_t>& unknown_vertex, const std::vector<uint8_t>& unknown_axis,
-                   const VertexAggregates& aggregates);
+                   const VertexAggregates& aggregates, bool halves = false);
   ~MultilevelSolver();
   MultilevelSolver(const MultilevelSolver&) = delete;
   MultilevelSolver& operator=(const MultilevelSolver&) = delete;
@@ -59,6 +67,8 @@ class MultilevelSolver {
   /// Unknowns per level, finest first (the last solved directly).
   std::vector<size_t> level_sizes() const;
 
+  struct Sweeps;  // how a level's sweeps and products run (multigrid.cpp)
+
  private:
   struct Level;
   struct Workspace;
@@ -66,7 +76,7 @@ class MultilevelSolver {
 
   const Matrix* fine_ = nullptr;
   std::vector<std::unique_ptr<Level>> levels_;  // levels_[k]: from level k to k + 1 (level 0: the system)
-  std::vector<std::vector<int>> blocks_;        // per level, its unknowns' blocks (one vertex's, vertex_blocks)
+  std::vector<Sweeps> sweeps_;                  // per level but the coarsest, how its sweeps and products run
   Eigen::SimplicialLLT<Matrix, Eigen::Lower> coarsest_;
 };
 

@@ -173,9 +173,11 @@ void clamp_to_bounds(const std::vector<CoordinateBound>& bounds, std::vector<Vec
 /// in the start map) has no energy term: its row of the system would be zero and the factorisation
 /// fail, leaving the whole map unrefined, so it stays where it is (the line search still keeps its
 /// faces from collapsing).
-/// has_frame(f): whether face f has one.
+/// has_frame(f): whether face f has one. The unknowns are numbered vertex by vertex in `numbering`'s
+/// order (a permutation of the vertices), in the vertices' own where it is null.
 template <class HasFrame>
-std::vector<int> free_coordinates(const Surface& m, HasFrame&& has_frame, const std::vector<char>& fixed, int& n) {
+std::vector<int> free_coordinates(const Surface& m, HasFrame&& has_frame, const std::vector<char>& fixed, int& n,
+                                  const std::vector<int>* numbering = nullptr) {
   const size_t nv = m.num_vertices();
   std::vector<char> framed(nv, 0);
   for (size_t f = 0; f < m.num_faces(); ++f)
@@ -183,27 +185,33 @@ std::vector<int> free_coordinates(const Surface& m, HasFrame&& has_frame, const 
       for (uint32_t v : m.triangles[f]) framed[v] = 1;
   std::vector<int> index(2 * nv, -1);
   n = 0;
-  for (size_t v = 0; v < nv; ++v)
+  for (size_t k = 0; k < nv; ++k) {
+    const size_t v = numbering ? size_t((*numbering)[k]) : k;
     for (int a = 0; a < 2; ++a)
       if (framed[v] && !(fixed[v] & (1 << a))) index[2 * v + size_t(a)] = n++;
+  }
   return index;
 }
 
-/// Each vertex's neighbours (across an edge) of a higher number, sorted, once each: vertex v's are
+/// Each vertex's neighbours (across an edge) later in `rank` (each vertex's place in the unknowns'
+/// numbering; empty: the vertices' own order), in that order, once each: vertex v's are
 /// neighbour[start[v]] up to neighbour[start[v + 1]].
 struct HigherNeighbours {
   std::vector<uint32_t> start, neighbour;
 };
 
-HigherNeighbours higher_neighbours(const Surface& m) {
+HigherNeighbours higher_neighbours(const Surface& m, const std::vector<uint32_t>& rank) {
   const size_t nv = m.num_vertices();
   HigherNeighbours r;
   std::vector<uint32_t> start(nv + 1, 0);
+  const auto earlier = [&](uint32_t a, uint32_t b) { return rank.empty() ? a < b : rank[a] < rank[b]; };
   // Every face's three edges (an inner edge twice; the duplicates go below).
   auto for_each_edge = [&](auto&& f) {
     for (const Tri& t : m.triangles)
-      for (int k = 0; k < 3; ++k)
-        if (t[k] != t[(k + 1) % 3]) f(std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3]));
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t a = t[k], b = t[(k + 1) % 3];
+        if (a != b) earlier(a, b) ? f(a, b) : f(b, a);
+      }
   };
   for_each_edge([&](uint32_t lo, uint32_t) { ++start[lo + 1]; });
   for (size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
@@ -214,7 +222,7 @@ HigherNeighbours higher_neighbours(const Surface& m) {
   r.start.assign(nv + 1, 0);
   size_t out = 0;
   for (size_t v = 0; v < nv; ++v) {
-    std::sort(r.neighbour.begin() + start[v], r.neighbour.begin() + start[v + 1]);
+    std::sort(r.neighbour.begin() + start[v], r.neighbour.begin() + start[v + 1], earlier);
     for (uint32_t k = start[v]; k < start[v + 1]; ++k)
       if (out == r.start[v] || r.neighbour[out - 1] != r.neighbour[k]) r.neighbour[out++] = r.neighbour[k];
     r.start[v + 1] = uint32_t(out);
@@ -231,10 +239,10 @@ class SlimSystem {
   SpMat A;
   Eigen::VectorXd rhs;
 
-  /// index: free_coordinates' numbering of the n unknowns.
-  SlimSystem(const Surface& m, std::vector<int> index, int n)
+  /// index: free_coordinates' numbering of the n unknowns, in `numbering`'s order of the vertices.
+  SlimSystem(const Surface& m, std::vector<int> index, int n, const std::vector<int>* numbering)
       : A(n, n), rhs(n), m_(m), index_(std::move(index)), slot_(m.num_faces() * kPairs, -1) {
-    build_pattern();
+    build_pattern(numbering);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, m.num_faces(), 4096), [&](const tbb::blocked_range<size_t>& faces) {
       for (size_t face = faces.begin(); face != faces.end(); ++face)
         for_each_entry_of(face, [&](size_t s, int row, int col) {
@@ -299,13 +307,19 @@ class SlimSystem {
 
   /// A's lower triangle (zeros) in compressed columns, straight from the mesh's edges: two unknowns
   /// are coupled where they are one vertex's or the two ends of an edge (every pair of a face's corners
-  /// is an edge). The unknowns are numbered in vertex order (free_coordinates), so a column's rows are
-  /// its own vertex's from its coordinate on, then those of its vertex's higher neighbours in turn.
+  /// is an edge). The unknowns are numbered vertex by vertex (free_coordinates), so a column's rows are
+  /// its own vertex's from its coordinate on, then those of its vertex's later neighbours in turn.
   /// The same pattern as the faces' entries summed through triplets, built without sorting 21 of them
   /// per face (2.5 s of the symmetric Dirichlet steps at 854k faces).
-  void build_pattern() {
+  void build_pattern(const std::vector<int>* numbering) {
     const size_t nv = m_.num_vertices();
-    const HigherNeighbours higher = higher_neighbours(m_);
+    std::vector<uint32_t> rank;
+    if (numbering) {
+      rank.resize(nv);
+      for (size_t i = 0; i < nv; ++i) rank[size_t((*numbering)[i])] = uint32_t(i);
+    }
+    const HigherNeighbours higher = higher_neighbours(m_, rank);
+    const auto vertex = [&](size_t i) { return numbering ? size_t((*numbering)[i]) : i; };
     const std::vector<uint32_t>& start = higher.start;
     auto free_of = [&](size_t v, int from) {
       int count = 0;
@@ -314,8 +328,9 @@ class SlimSystem {
     };
     int* outer = A.outerIndexPtr();
     outer[0] = 0;
-    for (size_t v = 0; v < nv; ++v)
+    for (size_t i = 0; i < nv; ++i)
       for (int a = 0; a < 2; ++a) {
+        const size_t v = vertex(i);
         const int col = index_[2 * v + size_t(a)];
         if (col < 0) continue;
         int rows = free_of(v, a);
@@ -324,8 +339,9 @@ class SlimSystem {
       }
     A.resizeNonZeros(outer[A.cols()]);
     int* inner = A.innerIndexPtr();
-    for (size_t v = 0; v < nv; ++v)
+    for (size_t i = 0; i < nv; ++i)
       for (int a = 0; a < 2; ++a) {
+        const size_t v = vertex(i);
         const int col = index_[2 * v + size_t(a)];
         if (col < 0) continue;
         int p = outer[col];
@@ -462,17 +478,18 @@ class SlimSystem {
 
 class RefinementSystem {
  public:
-  /// aggregates (optional): the steps are solved by conjugate gradients preconditioned over them
+  /// index: free_coordinates', in `numbering`'s order of the vertices (numbering_for). aggregates
+  /// (optional): the steps are solved by conjugate gradients preconditioned over them
   /// (MultilevelSolver) instead of factorised.
   RefinementSystem(const Surface& m, std::vector<int> index, int n, long supernodal_from, const std::vector<int>* vertex_order,
-                   const VertexAggregates* aggregates = nullptr)
-      : system(m, std::move(index), n), solver(supernodal_from) {
+                   const VertexAggregates* aggregates = nullptr, const std::vector<int>* numbering = nullptr)
+      : system(m, std::move(index), n, numbering), solver(supernodal_from), numbered_in_vertex_order(numbering != nullptr) {
     if (aggregates) {
       std::vector<uint32_t> vertex(static_cast<size_t>(n));
       std::vector<uint8_t> axis(static_cast<size_t>(n));
       for (size_t k = 0; k < system.index().size(); ++k)
         if (const int i = system.index()[k]; i >= 0) vertex[size_t(i)] = uint32_t(k / 2), axis[size_t(i)] = uint8_t(k % 2);
-      multilevel = std::make_unique<MultilevelSolver>(system.A, vertex, axis, *aggregates);
+      multilevel = std::make_unique<MultilevelSolver>(system.A, vertex, axis, *aggregates, numbered_in_vertex_order);
       return;
     }
     const std::vector<int> order =
@@ -505,8 +522,15 @@ class RefinementSystem {
     return true;
   }
 
+  /// The iterative solver's unknowns in vertex_order's order of the vertices (which halves its
+  /// sweeps), a factorised system's in the vertices' own (in which its results were measured).
+  static const std::vector<int>* numbering_for(const Surface& m, const std::vector<int>* vertex_order, const VertexAggregates* aggregates) {
+    return aggregates && vertex_order && vertex_order->size() == m.num_vertices() ? vertex_order : nullptr;
+  }
+
   SlimSystem system;
   SparseCholesky solver;
+  bool numbered_in_vertex_order;
   bool analysed = false;
   std::unique_ptr<MultilevelSolver> multilevel;
 
@@ -569,10 +593,11 @@ std::shared_ptr<RefinementSystem> prepare_refinement(const Surface& m, const std
                                                      long supernodal_from, const std::vector<int>* vertex_order,
                                                      const VertexAggregates* aggregates) {
   int n = 0;
+  const std::vector<int>* numbering = RefinementSystem::numbering_for(m, vertex_order, aggregates);
   std::vector<int> index = free_coordinates(
-      m, [&](size_t f) { return target[f] > 0 && std::isfinite(target[f]); }, fixed, n);
+      m, [&](size_t f) { return target[f] > 0 && std::isfinite(target[f]); }, fixed, n, numbering);
   if (n == 0) return nullptr;
-  return std::make_shared<RefinementSystem>(m, std::move(index), n, supernodal_from, vertex_order, aggregates);
+  return std::make_shared<RefinementSystem>(m, std::move(index), n, supernodal_from, vertex_order, aggregates, numbering);
 }
 
 SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,
@@ -583,13 +608,17 @@ SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std
   const size_t nv = m.num_vertices();
   const auto fr = target_frames(m, target, uv, shapes);
   int n = 0;
-  std::vector<int> index = free_coordinates(
-      m, [&](size_t f) { return fr[f].area > 0; }, fixed, n);
-  st.energy_before = st.energy = energy(m, fr, uv);
-  if (n == 0 || !std::isfinite(st.energy)) return st;
   std::shared_ptr<RefinementSystem> own;
   std::shared_ptr<RefinementSystem>& sys = system ? *system : own;
-  if (!sys || sys->system.index() != index) sys = std::make_shared<RefinementSystem>(m, std::move(index), n, supernodal_from, vertex_order);
+  // Numbered as the given system is, to be compared with its unknowns.
+  const auto framed = [&](size_t f) { return fr[f].area > 0; };
+  std::vector<int> index = free_coordinates(m, framed, fixed, n, sys && sys->numbered_in_vertex_order ? vertex_order : nullptr);
+  st.energy_before = st.energy = energy(m, fr, uv);
+  if (n == 0 || !std::isfinite(st.energy)) return st;
+  if (!sys || sys->system.index() != index) {
+    if (sys && sys->numbered_in_vertex_order) index = free_coordinates(m, framed, fixed, n);
+    sys = std::make_shared<RefinementSystem>(m, std::move(index), n, supernodal_from, vertex_order);
+  }
   const std::vector<int>& free = sys->system.index();
   std::vector<Vec2> d(nv), trial(nv);
   for (int it = 0; it < iterations; ++it) {
