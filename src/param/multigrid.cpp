@@ -152,8 +152,8 @@ void block_sweep(const Matrix& a, const Sweeps& sw, const Eigen::VectorXd& b, Ei
 }
 
 /// y = a x (a: the lower triangle of a symmetric matrix). On two threads (Sweeps), the first takes the
-/// first half's columns, its products into the second half's rows gathered in `spill`, the second the
-/// rest; each sums in a fixed order.
+/// first half's columns, its products into the second half's rows gathered in `spill` (at least a's
+/// size), the second the rest; each sums in a fixed order.
 void symmetric_product(const Matrix& a, const Sweeps& sw, const Eigen::VectorXd& x, Eigen::VectorXd& y, Eigen::VectorXd& spill) {
   if (!sw.two_threads()) {
     y.noalias() = a.selfadjointView<Eigen::Lower>() * x;
@@ -181,14 +181,14 @@ void symmetric_product(const Matrix& a, const Sweeps& sw, const Eigen::VectorXd&
   tbb::parallel_invoke(
       [&] {
         y.head(split).setZero();
-        spill.tail(n - split).setZero();
+        spill.segment(split, n - split).setZero();
         columns(0, split, spill.data());
       },
       [&] {
         y.tail(n - split).setZero();
         columns(split, n, nullptr);
       });
-  y.tail(n - split) += spill.tail(n - split);
+  y.tail(n - split) += spill.segment(split, n - split);
 }
 
 /// Per unknown, its aggregate (the pair of the vertex standing for its vertex and its axis); the
@@ -286,10 +286,11 @@ struct MultilevelSolver::Level {
   }
 };
 
-/// One solve's vectors per level: right-hand side, solution, residual, a sweep's accumulator, a
-/// product and its first thread's spill (symmetric_product).
+/// One solve's vectors per level: right-hand side, solution, residual and a sweep's accumulator;
+/// and the products' first thread's spill (symmetric_product), one for every level.
 struct MultilevelSolver::Workspace {
-  std::vector<Eigen::VectorXd> b, x, r, acc, product, spill;
+  std::vector<Eigen::VectorXd> b, x, r, acc;
+  Eigen::VectorXd spill;
 };
 
 MultilevelSolver::MultilevelSolver(const Matrix& pattern, const std::vector<uint32_t>& unknown_vertex,
@@ -349,8 +350,8 @@ void MultilevelSolver::v_cycle(size_t k, const Eigen::VectorXd& b, Eigen::Vector
   x.setZero();
   block_sweep(a, sweeps_[k], b, x, work.acc[k], true);
   Eigen::VectorXd& r = work.r[k];
-  symmetric_product(a, sweeps_[k], x, work.product[k], work.spill[k]);
-  r.noalias() = b - work.product[k];
+  symmetric_product(a, sweeps_[k], x, r, work.spill);
+  r = b - r;
   Eigen::VectorXd& coarse_b = work.b[k + 1];
   coarse_b.setZero();
   for (Eigen::Index i = 0; i < r.size(); ++i) coarse_b[level.coarse_of[size_t(i)]] += r[i];
@@ -372,15 +373,16 @@ IterativeSolve MultilevelSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd
   }
   Workspace work;
   const size_t nl = levels_.size() + 1;
-  for (auto* vectors : {&work.b, &work.x, &work.r, &work.acc, &work.product, &work.spill}) {
+  for (auto* vectors : {&work.b, &work.x, &work.r, &work.acc}) {
     vectors->resize(nl);
     for (size_t k = 0; k < nl; ++k) (*vectors)[k].resize(k == 0 ? a.cols() : levels_[k - 1]->coarse.cols());
   }
+  if (!sweeps_.empty() && sweeps_[0].two_threads()) work.spill.resize(a.cols());
   // The fine level's product, on two threads where its sweeps are.
   const Sweeps one_thread(Matrix(0, 0), {}, false);
   const Sweeps& fine_sweeps = sweeps_.empty() ? one_thread : sweeps_[0];
   Eigen::VectorXd ap(b.size());
-  symmetric_product(a, fine_sweeps, x, ap, work.spill[0]);
+  symmetric_product(a, fine_sweeps, x, ap, work.spill);
   Eigen::VectorXd r = b - ap, z(b.size()), p;
   v_cycle(0, r, z, work);
   p = z;
@@ -392,7 +394,7 @@ IterativeSolve MultilevelSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd
       out.converged = true;
       return out;
     }
-    symmetric_product(a, fine_sweeps, p, ap, work.spill[0]);
+    symmetric_product(a, fine_sweeps, p, ap, work.spill);
     const double curvature = p.dot(ap);
     if (!(curvature > 0)) return out;  // a is not positive definite along p
     const double alpha = rz / curvature;
