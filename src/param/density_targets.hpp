@@ -17,7 +17,8 @@ struct ComponentDensity {
   double median = 1.0;       // area-weighted median of face
   double texels = 0.0;       // sum of density x 3D area: the component's share of the texture
   bool textured = true;      // false: no face had a texture of known size (area density used)
-  // Detail map only: per face its 3D area, texture detail (input_detail) and input texel density.
+  // Detail map only: per face its 3D area, texture detail (input_detail) and input texel density,
+  // allocate_detail's inputs, which it releases.
   std::vector<double> area3, detail, input_density;
 };
 
@@ -29,7 +30,8 @@ ComponentDensity component_density(const TexturedMesh& input, const Surface& com
 /// The detail map's densities over all components for a budget of `budget` texels: c x detail, capped
 /// at kDetailCap times the input's own density and at least kDetailFloor of the mean, c chosen by
 /// bisection so the surface takes the budget; then smoothed over face neighbours in log space where faces
-/// get few texels. Leaves the uniform density where no face has texture detail.
+/// get few texels. Leaves the uniform density where no face has texture detail. Releases each
+/// density's area3, detail and input_density.
 void allocate_detail(const std::vector<Surface>& components, std::vector<ComponentDensity>& density, double budget);
 
 /// Gives components without any texture the mean density of the textured ones (per unit area), so
