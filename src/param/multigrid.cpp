@@ -49,8 +49,9 @@ void solve_block(int first, int last, const double (&s)[2], const double (&d)[2]
   }
 }
 
-/// A level of at least this many unknowns is swept, and multiplied by, on two threads (where the
-/// solver has a vertex order): below it a thread's start costs more than half the sweep saves.
+/// A level of at least this many unknowns is swept, and multiplied by, on two threads (where its
+/// unknowns come in halves: MultilevelSolver's `halves`): below it a thread's start costs more than
+/// half the sweep saves.
 constexpr int kTwoThreadsFrom = 50000;
 
 }  // namespace
