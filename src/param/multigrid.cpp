@@ -152,18 +152,18 @@ void block_sweep(const Matrix& a, const Sweeps& sw, const Eigen::VectorXd& b, Ei
   tbb::parallel_invoke([&] { sweep_half(a, sw, 0, b, x, acc, forward); }, [&] { sweep_half(a, sw, 1, b, x, acc, forward); });
 }
 
-/// y = a x (a: the lower triangle of a symmetric matrix). On two threads (Sweeps), the first takes the
-/// first half's columns, its products into the second half's rows gathered in `spill` (at least a's
-/// size), the second the rest; each sums in a fixed order.
-void symmetric_product(const Matrix& a, const Sweeps& sw, const Eigen::VectorXd& x, Eigen::VectorXd& y, Eigen::VectorXd& spill) {
-  if (!sw.two_threads()) {
+/// y = a x (a: the lower triangle of a symmetric matrix). On two threads (sw given, in halves), the
+/// first takes the first half's columns, its products into the second half's rows gathered in `spill`
+/// (at least a's size), the second the rest; each sums in a fixed order.
+void symmetric_product(const Matrix& a, const Sweeps* sw, const Eigen::VectorXd& x, Eigen::VectorXd& y, Eigen::VectorXd& spill) {
+  if (!sw || !sw->two_threads()) {
     y.noalias() = a.selfadjointView<Eigen::Lower>() * x;
     return;
   }
   const int* outer = a.outerIndexPtr();
   const int* inner = a.innerIndexPtr();
   const double* value = a.valuePtr();
-  const int n = int(a.cols()), split = sw.middle;
+  const int n = int(a.cols()), split = sw->middle;
   const auto columns = [&](int from, int to, double* spilled) {
     for (int c = from; c < to; ++c) {
       double sum = y[c];
@@ -351,7 +351,7 @@ void MultilevelSolver::v_cycle(size_t k, const Eigen::VectorXd& b, Eigen::Vector
   x.setZero();
   block_sweep(a, sweeps_[k], b, x, work.acc[k], true);
   Eigen::VectorXd& r = work.r[k];
-  symmetric_product(a, sweeps_[k], x, r, work.spill);
+  symmetric_product(a, &sweeps_[k], x, r, work.spill);
   r = b - r;
   Eigen::VectorXd& coarse_b = work.b[k + 1];
   coarse_b.setZero();
@@ -380,8 +380,7 @@ IterativeSolve MultilevelSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd
   }
   if (!sweeps_.empty() && sweeps_[0].two_threads()) work.spill.resize(a.cols());
   // The fine level's product, on two threads where its sweeps are.
-  const Sweeps one_thread(Matrix(0, 0), {}, false);
-  const Sweeps& fine_sweeps = sweeps_.empty() ? one_thread : sweeps_[0];
+  const Sweeps* fine_sweeps = sweeps_.empty() ? nullptr : &sweeps_[0];
   Eigen::VectorXd ap(b.size());
   symmetric_product(a, fine_sweeps, x, ap, work.spill);
   Eigen::VectorXd r = b - ap, z(b.size()), p;

@@ -417,8 +417,8 @@ class SlimSystem {
   };
 
   /// Calls on_row(i, a, row) for each free coordinate of face f's corners (corner i's a-th, the
-  /// system's row), then on_entry(i, a, j, b) for each entry of the lower triangle that row takes from
-  /// corner j's b-th coordinate.
+  /// system's row), then on_entry(i, a, j, b, row, col) for each entry of the lower triangle that row
+  /// takes from corner j's b-th coordinate (the system's column col).
   template <class OnRow, class OnEntry>
   void for_each_newton_entry(size_t f, OnRow&& on_row, OnEntry&& on_entry) const {
     const Tri& t = m_.triangles[f];
@@ -430,7 +430,7 @@ class SlimSystem {
         for (int j = 0; j < 3; ++j)
           for (int b = 0; b < 2; ++b) {
             const int col = index_[2 * t[j] + size_t(b)];
-            if (col >= 0 && row >= col) on_entry(i, a, j, b);
+            if (col >= 0 && row >= col) on_entry(i, a, j, b, row, col);
           }
       }
   }
@@ -465,7 +465,7 @@ class SlimSystem {
     size_t n = 0;
     for_each_newton_entry(
         f, [&](int i, int a, int) { out.gradient[size_t(2 * i + a)] = (gradient * as_eigen(F.g[size_t(i)]))(a); },
-        [&](int i, int a, int j, int b) {
+        [&](int i, int a, int j, int b, int, int) {
           double h = 0;
           for (size_t k = 0; k < 4; ++k) h += lambda[k] * q[k][size_t(i)](a) * q[k][size_t(j)](b);
           out.hessian[n++] = F.area * h;
@@ -478,10 +478,7 @@ class SlimSystem {
     size_t n = 0;
     for_each_newton_entry(
         f, [&](int i, int a, int row) { rhs(row) -= terms.gradient[size_t(2 * i + a)]; },
-        [&](int i, int a, int j, int b) {
-          const int row = index_[2 * m_.triangles[f][size_t(i)] + size_t(a)], col = index_[2 * m_.triangles[f][size_t(j)] + size_t(b)];
-          values[slot(f, i, j, row, col)] += terms.hessian[n++];
-        });
+        [&](int i, int, int j, int, int row, int col) { values[slot(f, i, j, row, col)] += terms.hessian[n++]; });
   }
 
   const Surface& m_;
