@@ -41,10 +41,10 @@ std::vector<Vec2> harmonic_between(const Disk& disk, const CoarseDisk& coarse, c
 }
 
 /// Per edge (at its lower halfedge, as edge_weights gives them) the cotangent weight of the target map's
-/// own triangles, clamped positive: a planar triangulation is harmonic for its own cotangent weights, so
-/// the Tutte map with these reproduces the target wherever its triangles are unfolded and not obtuse.
-/// A folded target triangle adds nothing.
-std::vector<double> target_cotangent_weights(const Surface& m, const std::vector<Vec2>& target) {
+/// own triangles, at least `floor` times their mean magnitude: a planar triangulation is harmonic for its
+/// own cotangent weights, so the Tutte map with these reproduces the target wherever its triangles are
+/// unfolded and not obtuse. A folded target triangle adds nothing.
+std::vector<double> target_cotangent_weights(const Surface& m, const std::vector<Vec2>& target, double floor) {
   const size_t nh = m.opposite.size();
   std::vector<double> half_cot(nh, 0.0);
   for (uint32_t h = 0; h < nh; ++h) {
@@ -64,7 +64,7 @@ std::vector<double> target_cotangent_weights(const Surface& m, const std::vector
     mean_abs += std::abs(w[h]), ++count;
   }
   mean_abs = count && mean_abs > 0 ? mean_abs / double(count) : 1.0;
-  for (uint32_t h = 0; h < nh; ++h) w[h] = std::max(w[h], 1e-3 * mean_abs);
+  for (uint32_t h = 0; h < nh; ++h) w[h] = std::max(w[h], floor * mean_abs);
   return w;
 }
 
@@ -76,21 +76,32 @@ struct FineSystems {
   std::unique_ptr<DirichletSolver> between, tutte;
 };
 
+/// The floors (times the mean magnitude) the Tutte fill's weights are tried with, in turn, while its
+/// map folds: the target's cotangent weights of slivers and obtuse triangles spread over six orders of
+/// magnitude, and at 1.7M vertices such a fill can crush a triangle to zero area in rounding (the
+/// 3.4M-face scan read from float32 GLB: 3 triangles at 1e-22 of the square at 1e-3). A higher floor
+/// crowds less; the reweighting that follows moves the map towards the density either way.
+constexpr double kFillWeightFloors[] = {1e-3, 1e-2, 1e-1};
+
 /// Step 2 of multilevel_map: the Tutte map (only the boundary held) with the weights of the harmonic
-/// target between the coarse vertices (target_cotangent_weights), which `weights` gets. The harmonic
-/// target's solver is freed once it is solved. Empty if a solve fails or the result folds numerically.
+/// target between the coarse vertices (target_cotangent_weights, the first of kFillWeightFloors whose
+/// map folds nothing), which `weights` gets. The harmonic target's solver is freed once it is solved.
+/// Empty if a solve fails or the map folds numerically at every floor.
 std::vector<Vec2> fill_between(const Disk& disk, const CoarseDisk& coarse, const std::vector<Vec2>& coarse_uv, FineSystems& systems,
                                std::vector<double>& weights) {
   const Surface& m = disk.mesh;
-  std::vector<Vec2> target = harmonic_between(disk, coarse, coarse_uv, *systems.between);
+  const std::vector<Vec2> target = harmonic_between(disk, coarse, coarse_uv, *systems.between);
   systems.between.reset();
   release_free_memory();  // for the Tutte fill's system, made next
   if (target.empty()) return {};
-  weights = target_cotangent_weights(m, target);
-  std::vector<Vec2> uv = std::move(target);
-  if (!systems.tutte->solve(m, weights, boundary_mask(m.num_vertices(), disk.boundary), uv)) return {};
-  if (count_folds(m, uv) > 0) return {};
-  return uv;
+  const std::vector<char> held = boundary_mask(m.num_vertices(), disk.boundary);
+  for (double floor : kFillWeightFloors) {
+    weights = target_cotangent_weights(m, target, floor);
+    std::vector<Vec2> uv = target;
+    if (!systems.tutte->solve(m, weights, held, uv)) return {};
+    if (count_folds(m, uv) == 0) return uv;
+  }
+  return {};
 }
 
 /// The relative residual the full mesh's Laplacians are solved to where they are solved iteratively
