@@ -144,7 +144,7 @@ TEST(Report, HasEveryKeyOfTheSchema) {
       "negative_cotangent_weights", "bumped_boundary_vertices", "flipped_in_map", "folds_per_weighting", "density_iterations",
       "density_stopped", "density_correction_rounds", "density_error_log2_before", "density_error_log2", "refine_iterations",
       "flow_steps", "flow_lead_steps", "flow_shape_steps", "flow_stopped", "refine_energy", "refine_stopped", "multilevel",
-      "rect"};
+      "float_coordinates", "rect"};
   ASSERT_EQ(j["components"].size(), 2u);
   for (const auto& c : j["components"]) EXPECT_EQ(keys_of(c), component_keys);
   EXPECT_EQ(keys_of(j["components"][0]["rect"]), (std::set<std::string>{"image", "x", "y", "w", "h"}));

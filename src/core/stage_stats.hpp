@@ -74,6 +74,9 @@ struct SquareMapStats {
   /// symmetric Dirichlet steps on the full mesh (iterations and refine_iterations count the coarse copy's).
   size_t coarse_vertices = 0;
   int fine_reweighting = 0, fine_steps = 0;
+  /// The output's float texture coordinates (keep_orientation_in_float): vertices moved a few float
+  /// steps so that a sliver keeps its orientation, and triangles no such move fixed.
+  size_t float_moved = 0, float_unfixed = 0;
 };
 
 struct BakeStats {

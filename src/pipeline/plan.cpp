@@ -11,6 +11,7 @@
 #include "core/memory_model.hpp"
 #include "core/progress.hpp"
 #include "core/resources.hpp"
+#include "layout/float_coordinates.hpp"
 #include "pipeline/aspect.hpp"
 #include "pipeline/budget.hpp"
 #include "pipeline/plan_report.hpp"
@@ -220,6 +221,11 @@ size_t map_components(const MapContext& ctx, std::optional<Mapped>& probed, size
                    ? std::move(*probed)
                    : map_component(ctx, c, rect, cut_inputs[c] ? &*cut_inputs[c] : nullptr, CapChoice::kAuto);
     cut_inputs[c].reset();
+    if (m.kept.empty()) {
+      const auto [width, height] = plan.image_size[size_t(rect.image)];
+      const FloatGuard guard = keep_orientation_in_float(m.disk.mesh, rect, width, height, m.uv);
+      m.map.float_moved = guard.moved, m.map.float_unfixed = guard.unfixed;
+    }
     plan.disks[c] = std::move(m.disk);
     plan.uv[c] = std::move(m.uv);
     cuts[c] = std::move(m.cut);

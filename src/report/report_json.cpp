@@ -135,6 +135,7 @@ json map_json(const ComponentEntry& e) {
           {"refine_energy", json::array({ms.refine_energy_before, ms.refine_energy})},
           {"refine_stopped", ms.refine_stopped},
           {"multilevel", multilevel_json(ms)},
+          {"float_coordinates", {{"vertices_moved", ms.float_moved}, {"triangles_unfixed", ms.float_unfixed}}},
           {"rect", {{"image", r.image}, {"x", r.x}, {"y", r.y}, {"w", r.w}, {"h", r.h}}}};
 }
 
