@@ -3,6 +3,8 @@
 // buffers' real sizes before a byte is read, so a lying file ends in one InputError line naming the
 // file and the element ("FILE: accessors[3]: ...").
 #include <Eigen/Geometry>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -152,6 +154,16 @@ struct MeshInstance {
 constexpr uint64_t kMaxFlattenedTriangles = uint64_t(1) << 27;
 
 /// What the reader collects while it walks the scene.
+/// A per-corner array of the mesh (normals, tangents, colours), `corners` long once a primitive that
+/// has the attribute (`present`) is read: the corners before it get `fill`, as do the corners of a
+/// later primitive without it. Stays empty while no primitive has it. Returns `present` (the primitive
+/// writes its own values).
+template <typename T>
+bool grow_corner_attribute(std::vector<T>& values, bool present, size_t corners, const T& fill) {
+  if (present || !values.empty()) values.resize(corners, fill);
+  return present;
+}
+
 struct ReadState {
   TexturedMesh mesh;
   std::map<int, int32_t> material_of;  // glTF material (-1: default) -> TexturedMesh material
@@ -191,6 +203,7 @@ class GltfReader {
   std::vector<double> numbers_of(const json& node, const char* key, size_t count, const std::string& element) const;
   TexturedMesh flattened(const TexturedMesh& local, const std::vector<MeshInstance>& instances) const;
   void read_primitive(size_t m, size_t p, ReadState& state);
+  void check_finite_entries(const std::vector<uint32_t>& used, const AccessorView& a, const char* name, const std::string& element) const;
   std::vector<Tri> primitive_triangles(const json& primitive, size_t vertices, int64_t mode, const std::string& element) const;
   void check_supported(const json& primitive, const std::string& element) const;
   int32_t material_for(int material, ReadState& state);
@@ -925,6 +938,16 @@ std::vector<GltfVertexAttribute> GltfReader::carried_attributes(const json& prim
   return carried;
 }
 
+/// Fails on the first of the `used` entries of accessor `a` (if present) with a component that is not
+/// finite.
+void GltfReader::check_finite_entries(const std::vector<uint32_t>& used, const AccessorView& a, const char* name,
+                                      const std::string& element) const {
+  if (a.data == nullptr) return;
+  for (const uint32_t v : used)
+    for (size_t k = 0; k < a.components; ++k)
+      if (!std::isfinite(a.get(v, k))) fail(element, "{} entry {} is not finite", name, v);
+}
+
 void GltfReader::read_primitive(size_t m, size_t p, ReadState& state) {
   const std::string element = fmt::format("meshes[{}].primitives[{}]", m, p);
   const json& primitive = array("meshes")[m]["primitives"][p];
@@ -961,7 +984,6 @@ void GltfReader::read_primitive(size_t m, size_t p, ReadState& state) {
     state.mesh.positions.push_back(x);
     doc_->vertex_source.push_back(i);
   }
-  auto vertex_of = [&](uint32_t v) { return uint32_t(base + size_t(std::lower_bound(used.begin(), used.end(), v) - used.begin())); };
   const int material = int(index_in(primitive, "material", "materials", element));
   const int32_t tm = material_for(material, state);
   const std::string uv_set = read_corner_uvs(primitive, material, tris, pos.count, element, state);
@@ -984,31 +1006,39 @@ void GltfReader::read_primitive(size_t m, size_t p, ReadState& state) {
   const bool colours_baked = base_color_info(array("materials"), material) == nullptr;  // texture_vertex_colours bakes them
   doc_->primitives.push_back(
       {m, p, material, normal.data != nullptr, carried_attributes(primitive, uv_set, colours_baked, pos.count, element)});
-  for (const Tri& t : tris) {
-    state.mesh.triangles.push_back({vertex_of(t[0]), vertex_of(t[1]), vertex_of(t[2])});
-    state.mesh.face_material.push_back(tm);
-    state.mesh.source_mesh.push_back(uint32_t(m));
-    doc_->triangle_primitive.push_back(prim_index);
-    for (const uint32_t v : t) {
-      Vec3 n(0, 0, 0);
-      if (normal.data != nullptr) n = Vec3(normal.get(v, 0), normal.get(v, 1), normal.get(v, 2));
-      if (!n.allFinite()) fail(element, "NORMAL entry {} is not finite", v);
-      state.mesh.corner_normal.push_back(n);
-      Vec4 tg = Vec4::Zero();  // zero: computed later (completed_corner_tangents)
-      if (tangent.data != nullptr) tg = Vec4(tangent.get(v, 0), tangent.get(v, 1), tangent.get(v, 2), tangent.get(v, 3));
-      if (!tg.allFinite()) fail(element, "TANGENT entry {} is not finite", v);
-      state.mesh.corner_tangent.push_back(tg);
-      state.corner_has_normal.push_back(normal.data != nullptr);
-      std::array<float, 4> c{1, 1, 1, 1};
-      if (color.data != nullptr)
-        for (size_t k = 0; k < color.components; ++k) {
-          const double x = color.get(v, k);
-          if (!std::isfinite(x)) fail(element, "COLOR_0 entry {} is not finite", v);
-          c[k] = float(k < 3 ? linear_to_srgb(x) : std::clamp(x, 0.0, 1.0));
+  check_finite_entries(used, normal, "NORMAL", element);
+  check_finite_entries(used, tangent, "TANGENT", element);
+  check_finite_entries(used, color, "COLOR_0", element);
+  std::vector<uint32_t> new_vertex(pos.count, kNone);
+  for (size_t k = 0; k < used.size(); ++k) new_vertex[used[k]] = uint32_t(base + k);
+  // The corners' normals, tangents and colours are kept only once some primitive has them (the corners
+  // before it get the defaults then): a scan without tangents or colours does not hold 48 bytes a corner
+  // of zeros and ones.
+  TexturedMesh& mesh = state.mesh;
+  const size_t first = mesh.triangles.size(), corners = 3 * (first + tris.size());
+  mesh.triangles.resize(first + tris.size());
+  mesh.face_material.resize(first + tris.size(), tm);
+  mesh.source_mesh.resize(first + tris.size(), uint32_t(m));
+  doc_->triangle_primitive.resize(first + tris.size(), prim_index);
+  const bool normals = grow_corner_attribute(mesh.corner_normal, normal.data != nullptr, corners, Vec3(0, 0, 0));
+  grow_corner_attribute(state.corner_has_normal, normal.data != nullptr, corners, uint8_t(0));
+  const bool tangents = grow_corner_attribute(mesh.corner_tangent, tangent.data != nullptr, corners, Vec4(0, 0, 0, 0));
+  const bool colours = grow_corner_attribute(mesh.corner_color, color.data != nullptr, corners, std::array<float, 4>{1, 1, 1, 1});
+  tbb::parallel_for(size_t(0), tris.size(), [&](size_t i) {
+    const Tri& t = tris[i];
+    mesh.triangles[first + i] = {new_vertex[t[0]], new_vertex[t[1]], new_vertex[t[2]]};
+    for (size_t k = 0; k < 3; ++k) {
+      const uint32_t v = t[k];
+      const size_t c = 3 * (first + i) + k;
+      if (normals) mesh.corner_normal[c] = Vec3(normal.get(v, 0), normal.get(v, 1), normal.get(v, 2)), state.corner_has_normal[c] = 1;
+      if (tangents) mesh.corner_tangent[c] = Vec4(tangent.get(v, 0), tangent.get(v, 1), tangent.get(v, 2), tangent.get(v, 3));
+      if (colours)
+        for (size_t j = 0; j < color.components; ++j) {
+          const double x = color.get(v, j);
+          mesh.corner_color[c][j] = float(j < 3 ? linear_to_srgb(x) : std::clamp(x, 0.0, 1.0));
         }
-      state.mesh.corner_color.push_back(c);
     }
-  }
+  });
 }
 
 /// Corners without a normal (a primitive without NORMAL beside one with) get their face's normal, as a

@@ -20,11 +20,13 @@ Vec2 output_uv(const Rect& r, int width, int height, const Vec2& s) {
   return Vec2(px.x() / width, 1.0 - px.y() / height);
 }
 
-/// The coordinate as the writers store it: u, and v up (PLY: float(v)) or down (glTF: float(1 - v)).
+/// The coordinate as the writers store it: in doubles (OBJ), and as floats with v up (PLY: float(v)) or
+/// down (glTF: float(1 - v)).
 struct Stored {
+  Vec2 uv;
   float u, v_up, v_down;
 };
-Stored stored(const Vec2& uv) { return {to_float(uv.x()), to_float(uv.y()), to_float(1.0 - uv.y())}; }
+Stored stored(const Vec2& uv) { return {uv, to_float(uv.x()), to_float(uv.y()), to_float(1.0 - uv.y())}; }
 
 /// The unit-square point whose output coordinate is (u, v) (output_uv inverted, up to rounding).
 Vec2 unit_point(const Rect& r, int width, int height, double u, double v) {
@@ -53,11 +55,12 @@ class Guard {
     for (size_t v = 0; v < uv.size(); ++v) out_[v] = stored(output_uv(r, width, height, uv[v]));
   }
 
-  /// Whether a face keeps its orientation in both ways the writers store v as a float: up (PLY:
-  /// float(v)) and down (glTF: float(1 - v), which mirrors the triangle).
+  /// Whether a face keeps its orientation in every way the writers store it: doubles (OBJ), floats with
+  /// v up (PLY: float(v)) and down (glTF: float(1 - v), which mirrors the triangle).
   bool positive(uint32_t face) const {
     const Stored &a = out_[disk_.triangles[face][0]], &b = out_[disk_.triangles[face][1]], &c = out_[disk_.triangles[face][2]];
-    return float_area(a.u, a.v_up, b.u, b.v_up, c.u, c.v_up) > 0 && float_area(a.u, a.v_down, b.u, b.v_down, c.u, c.v_down) < 0;
+    return signed_area(a.uv, b.uv, c.uv) > 0 && float_area(a.u, a.v_up, b.u, b.v_up, c.u, c.v_up) > 0 &&
+           float_area(a.u, a.v_down, b.u, b.v_down, c.u, c.v_down) < 0;
   }
   bool real(uint32_t face) const { return disk_.input_face.empty() || disk_.input_face[face] != kNone; }
 
