@@ -41,10 +41,10 @@ std::vector<Vec2> harmonic_between(const Disk& disk, const CoarseDisk& coarse, c
 }
 
 /// Per edge (at its lower halfedge, as edge_weights gives them) the cotangent weight of the target map's
-/// own triangles, at least `floor` times their mean magnitude: a planar triangulation is harmonic for its
-/// own cotangent weights, so the Tutte map with these reproduces the target wherever its triangles are
-/// unfolded and not obtuse. A folded target triangle adds nothing.
-std::vector<double> target_cotangent_weights(const Surface& m, const std::vector<Vec2>& target, double floor) {
+/// own triangles, at least `floor` times their mean magnitude (which `mean` gets): a planar triangulation
+/// is harmonic for its own cotangent weights, so the Tutte map with these reproduces the target wherever
+/// its triangles are unfolded and not obtuse. A folded target triangle adds nothing.
+std::vector<double> target_cotangent_weights(const Surface& m, const std::vector<Vec2>& target, double floor, double& mean) {
   const size_t nh = m.opposite.size();
   std::vector<double> half_cot(nh, 0.0);
   for (uint32_t h = 0; h < nh; ++h) {
@@ -65,6 +65,7 @@ std::vector<double> target_cotangent_weights(const Surface& m, const std::vector
   }
   mean_abs = count && mean_abs > 0 ? mean_abs / double(count) : 1.0;
   for (uint32_t h = 0; h < nh; ++h) w[h] = std::max(w[h], floor * mean_abs);
+  mean = mean_abs;
   return w;
 }
 
@@ -76,17 +77,38 @@ struct FineSystems {
   std::unique_ptr<DirichletSolver> between, tutte;
 };
 
-/// The floors (times the mean magnitude) the Tutte fill's weights are tried with, in turn, while its
-/// map folds: the target's cotangent weights of slivers and obtuse triangles spread over six orders of
-/// magnitude, and at 1.7M vertices such a fill can crush a triangle to zero area in rounding (the
-/// 3.4M-face scan read from float32 GLB: 3 triangles at 1e-22 of the square at 1e-3). A higher floor
-/// crowds less; the reweighting that follows moves the map towards the density either way.
-constexpr double kFillWeightFloors[] = {1e-3, 1e-2, 1e-1};
+/// How the Tutte fill's weights are floored (times their mean magnitude), tried in turn while its map
+/// folds: everywhere, and where the try before folded, within kFloorRings vertex rings of its folded
+/// triangles. The target's cotangent weights around slivers and obtuse triangles spread over six orders
+/// of magnitude, and at 1.7M vertices such a fill can crush a triangle to zero area in rounding (the
+/// 3.4M-face scan read from float32 GLB: 3 triangles at 1e-22 of the square with the floor at 1e-3,
+/// still folded at 1e-2). A higher floor crowds less, but everywhere it moves the map off the target:
+/// 1e-1 everywhere took the 3.4M scan's steps 20 s instead of 7 s and 0.39 dB (the OBJ scan), hence the
+/// local floor first.
+struct FillFloor {
+  double everywhere, near_folds;
+};
+constexpr FillFloor kFillFloors[] = {{1e-3, 1e-3}, {1e-3, 1e-1}, {1e-2, 1e-1}, {1e-1, 1e-1}};
+constexpr int kFloorRings = 8;
+
+/// Per vertex, 1 within `rings` vertex rings of a triangle that folds in `uv`, added to `near`.
+void mark_near_folds(const Surface& m, const std::vector<Vec2>& uv, int rings, std::vector<char>& near) {
+  std::vector<char> now(m.num_vertices(), 0);
+  for (const Tri& t : m.triangles)
+    if (!(signed_area(uv[t[0]], uv[t[1]], uv[t[2]]) > 0)) now[t[0]] = now[t[1]] = now[t[2]] = 1;
+  for (int ring = 0; ring < rings; ++ring) {
+    std::vector<char> next = now;
+    for (const Tri& t : m.triangles)
+      if (now[t[0]] || now[t[1]] || now[t[2]]) next[t[0]] = next[t[1]] = next[t[2]] = 1;
+    now.swap(next);
+  }
+  for (size_t v = 0; v < near.size(); ++v) near[v] = near[v] || now[v];
+}
 
 /// Step 2 of multilevel_map: the Tutte map (only the boundary held) with the weights of the harmonic
-/// target between the coarse vertices (target_cotangent_weights, the first of kFillWeightFloors whose
-/// map folds nothing), which `weights` gets. The harmonic target's solver is freed once it is solved.
-/// Empty if a solve fails or the map folds numerically at every floor.
+/// target between the coarse vertices (target_cotangent_weights, floored by the first of kFillFloors
+/// whose map folds nothing), which `weights` gets. The harmonic target's solver is freed once it is
+/// solved. Empty if a solve fails or the map folds numerically with every floor.
 std::vector<Vec2> fill_between(const Disk& disk, const CoarseDisk& coarse, const std::vector<Vec2>& coarse_uv, FineSystems& systems,
                                std::vector<double>& weights) {
   const Surface& m = disk.mesh;
@@ -95,11 +117,16 @@ std::vector<Vec2> fill_between(const Disk& disk, const CoarseDisk& coarse, const
   release_free_memory();  // for the Tutte fill's system, made next
   if (target.empty()) return {};
   const std::vector<char> held = boundary_mask(m.num_vertices(), disk.boundary);
-  for (double floor : kFillWeightFloors) {
-    weights = target_cotangent_weights(m, target, floor);
+  std::vector<char> near(m.num_vertices(), 0);  // near a fold of an earlier try
+  for (const FillFloor& floor : kFillFloors) {
+    double mean = 0;
+    weights = target_cotangent_weights(m, target, floor.everywhere, mean);
+    for (uint32_t h = 0; h < weights.size(); ++h)
+      if (near[m.from(h)] || near[m.to(h)]) weights[h] = std::max(weights[h], floor.near_folds * mean);
     std::vector<Vec2> uv = target;
     if (!systems.tutte->solve(m, weights, held, uv)) return {};
     if (count_folds(m, uv) == 0) return uv;
+    mark_near_folds(m, uv, kFloorRings, near);
   }
   return {};
 }
