@@ -203,6 +203,46 @@ TEST(GltfReader, ReadsVertexColoursAsSrgb) {
   EXPECT_NEAR(m.corner_color[0][3], 128 / 255.0, 1e-6);  // alpha is not a colour
 }
 
+// Per-corner colours (and normals) of a primitive beside one without them: the corners of the one
+// without get the defaults (white; the face's normal) in either order, and an attribute no primitive
+// has (TANGENT here) stays empty.
+TEST(GltfReader, CornersOfAPrimitiveWithoutAnAttributeGetItsDefault) {
+  for (const bool colour_first : {true, false}) {
+    const fs::path dir = scratch(colour_first ? "partial_colour_first" : "partial_colour_second");
+    GridGltf g = testing::grid_gltf();
+    std::string colours;
+    for (int i = 0; i < 25; ++i)
+      for (const uint8_t c : {uint8_t(10), uint8_t(20), uint8_t(i), uint8_t(255)}) colours.push_back(char(c));
+    while (g.bin.size() % 4 != 0) g.bin.push_back('\0');
+    g.doc["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", g.bin.size()}, {"byteLength", colours.size()}});
+    g.bin += colours;
+    g.doc["buffers"][0]["byteLength"] = g.bin.size();
+    g.doc["accessors"].push_back(
+        {{"bufferView", g.doc["bufferViews"].size() - 1}, {"componentType", 5121}, {"normalized", true}, {"count", 25}, {"type", "VEC4"}});
+    auto& primitives = g.doc["meshes"][0]["primitives"];
+    nlohmann::json plain = primitives[0];
+    plain["attributes"].erase("NORMAL");
+    nlohmann::json coloured = primitives[0];
+    coloured["attributes"]["COLOR_0"] = g.doc["accessors"].size() - 1;
+    primitives[0] = colour_first ? coloured : plain;
+    primitives.push_back(colour_first ? plain : coloured);
+    const TexturedMesh m = read_gltf(grid_glb(dir, g).string());
+    ASSERT_EQ(m.num_triangles(), 2 * g.triangles);
+    ASSERT_EQ(m.corner_color.size(), 3 * m.num_triangles());
+    ASSERT_EQ(m.corner_normal.size(), 3 * m.num_triangles());
+    EXPECT_TRUE(m.corner_tangent.empty());
+    const size_t first_coloured = colour_first ? 0 : g.triangles;
+    const size_t first_white = colour_first ? g.triangles : 0;
+    for (size_t t = first_white; t < first_white + g.triangles; ++t)
+      for (size_t k = 0; k < 3; ++k) EXPECT_EQ(m.corner_color[3 * t + k], (std::array<float, 4>{1, 1, 1, 1})) << "triangle " << t;
+    for (size_t t = first_coloured; t < first_coloured + g.triangles; ++t) {
+      EXPECT_NEAR(m.corner_color[3 * t][0], linear_to_srgb(10 / 255.0), 1e-6);
+      EXPECT_NEAR(m.corner_color[3 * t][3], 1.0, 1e-6);
+    }
+    for (const Vec3& n : m.corner_normal) EXPECT_NEAR(std::abs(n.z()), 1.0, 1e-6);  // NORMAL or the flat grid's face normal
+  }
+}
+
 /// One lying document: a change to the grid, and a word the message must hold.
 struct Lie {
   const char* name;
