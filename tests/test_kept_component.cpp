@@ -204,3 +204,28 @@ TEST(KeptComponent, AllKeptAndNoMaterial) {
   EXPECT_EQ(back.num_triangles(), in.num_triangles());
   EXPECT_EQ(measure(in, back, 20000).lost_triangles, 0u);
 }
+
+// tightex's own output given back: one chart per component filling its texture already. Mapped again it
+// could only be resampled, so every component keeps its coordinates and image (the pixels as they
+// were, nothing lost); a budget asked for maps it as any input.
+TEST(KeptComponent, AnOutputGivenBackIsKeptAsItCame) {
+  const TexturedMesh in = tightex::testing::multi_component();
+  const Result first = optimize(in, Options{});
+  const TexturedMesh& once = first.output;
+  ASSERT_FALSE(report_json(first.report)["preparation"]["already_tight"].get<bool>());  // the catalogue's atlas is fragmented
+  const Plan plan = plan_charts(once, Options{});
+  const size_t nc = plan_state(plan).components.size();
+  EXPECT_EQ(plan.kept_components(), nc);
+  const Result again = bake_plan(plan, once, Options{});
+  EXPECT_TRUE(report_json(again.report)["preparation"]["already_tight"].get<bool>());
+  ASSERT_EQ(again.output.textures.size(), once.textures.size());
+  for (size_t i = 0; i < once.textures.size(); ++i) EXPECT_TRUE(same_pixels(again.output.textures[i].image, once.textures[i].image));
+  const Metrics m = measure(once, again.output, 20000);
+  EXPECT_EQ(m.lost_triangles, 0u);
+  EXPECT_EQ(m.flipped, 0u);
+  EXPECT_GE(m.surface_psnr, 99.0);
+  Options sized;
+  sized.size = 64;
+  const Plan remapped = plan_charts(once, sized);
+  EXPECT_EQ(remapped.kept_components(), 0u);
+}

@@ -136,7 +136,7 @@ TEST(Report, HasEveryKeyOfTheSchema) {
             (std::set<std::string>{"input_vertices", "welded_vertices", "zero_area_dropped", "exact_repeats_copied", "layered_triangles", "untextured_kept",
                                    "non_manifold_edges_sliced", "inconsistent_edges_sliced", "reoriented_triangles", "vertices_sliced",
                                    "slits_closed", "components", "holes_filled", "holes_cut", "components_with_fallback",
-                                   "components_longest_hole_capped", "components_listed", "components_kept_original_uvs"}));
+                                   "components_longest_hole_capped", "components_listed", "components_kept_original_uvs", "already_tight"}));
   const std::set<std::string> component_keys{
       "index", "triangles", "area", "euler", "boundary_loops", "genus", "holes_filled", "holes_cut", "cut", "longest_hole_edges",
       "longest_hole_capped", "longest_hole_kept_capped_estimated_psnr_db", "slits", "fallback", "cap_budget", "kept_original_uvs",

@@ -224,6 +224,15 @@ bool small_longest_hole(const MapContext& ctx, size_t c, const CutInputs& ci) {
   return cut_to_disk_capped(ctx.components[c], full_cut_options(ctx, ci, kCapBudget), &st) && st.longest_loop_edges < kSmallKeptLoop;
 }
 
+Mapped kept_with_input_uvs(const MapContext& ctx, size_t c, const Rect& rect, std::string why) {
+  Mapped out;
+  out.rect = rect;
+  out.cut.before = topology_of(ctx.components[c]);
+  out.kept = std::move(why);
+  ctx.progress.advance(double(ctx.components[c].num_faces()));
+  return out;
+}
+
 Mapped map_component(const MapContext& ctx, size_t c, const Rect& rect, const CutInputs* pre, CapChoice choice, bool probe) {
   Mapped out;
   out.rect = rect;

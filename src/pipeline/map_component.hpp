@@ -77,6 +77,10 @@ inline bool probes_would_be_multilevel(size_t faces) { return faces > 2 * kProbe
 /// component whose full method and fallback both fail is returned with Mapped::kept saying why.
 Mapped map_component(const MapContext& ctx, size_t c, const Rect& rect, const CutInputs* pre, CapChoice choice, bool probe = false);
 
+/// Component c with its input texture coordinates, material(s) and image(s), not mapped (as the last
+/// resort keeps a component): `why` in Mapped::kept.
+Mapped kept_with_input_uvs(const MapContext& ctx, size_t c, const Rect& rect, std::string why);
+
 /// Component c cut as map_component cuts it (the longest hole kept), its disk coarsened to at most
 /// `vertices` vertices (coarsen_disk) and that copy mapped for `rect`, as multilevel_map maps its coarse
 /// copy: a cheap look at the shape the component's map takes (its texel stretch), not a map to bake.

@@ -17,6 +17,7 @@
 #include "pipeline/plan_report.hpp"
 #include "pipeline/plan_state.hpp"
 #include "pipeline/stage_clock.hpp"
+#include "pipeline/tight_input.hpp"
 #include "pipeline/validate.hpp"
 #include "prepare/components.hpp"
 #include "prepare/repair.hpp"
@@ -207,8 +208,8 @@ void lay_out(const Options& options, const std::vector<double>& shares, int size
 /// all of them at once (large_maps_at_once), the smaller ones beside them: returns how many went one
 /// after another (0: all at once).
 size_t map_components(const MapContext& ctx, std::optional<Mapped>& probed, size_t probed_component,
-                    std::vector<std::optional<CutInputs>>& cut_inputs, Plan::State& plan, std::vector<CutStats>& cuts,
-                    std::vector<SquareMapStats>& maps) {
+                    std::vector<std::optional<CutInputs>>& cut_inputs, const std::string& keep_all, Plan::State& plan,
+                    std::vector<CutStats>& cuts, std::vector<SquareMapStats>& maps) {
   const size_t nc = plan.components.size();
   plan.disks.resize(nc);
   plan.uv.resize(nc);
@@ -217,7 +218,8 @@ size_t map_components(const MapContext& ctx, std::optional<Mapped>& probed, size
   maps.resize(nc);
   auto map_one = [&](size_t c) {
     const Rect& rect = plan.rects[c];
-    Mapped m = c == probed_component && probed && rect.w == probed->rect.w && rect.h == probed->rect.h
+    Mapped m = !keep_all.empty() ? kept_with_input_uvs(ctx, c, rect, keep_all)
+               : c == probed_component && probed && rect.w == probed->rect.w && rect.h == probed->rect.h
                    ? std::move(*probed)
                    : map_component(ctx, c, rect, cut_inputs[c] ? &*cut_inputs[c] : nullptr, CapChoice::kAuto);
     cut_inputs[c].reset();
@@ -387,6 +389,9 @@ Plan plan_prepared(const TexturedMesh& input, const Options& options, const Text
     const int side = atlas_side_holding(areas, size);
     if (side != size) rep.options.size_grown_from = size, size = side;
   }
+  // An input that is one chart per component filling its texture already is kept as it came.
+  const std::string keep_all = have_pixels(input) ? already_tight(input, options, budget, plan->components) : "";
+  rep.preparation.already_tight = !keep_all.empty();
   std::vector<ComponentDensity> density;
   std::vector<double> shares = plan_density(input, options, plan->components, areas, size, density);
   rep.pages.max_side = options.layout == Layout::kAtlas ? options.max_page_side : 0;
@@ -394,7 +399,8 @@ Plan plan_prepared(const TexturedMesh& input, const Options& options, const Text
   // Pieces split by area can still hold more than a page, or more triangles than a piece may, where the
   // density or the triangles' size is uneven: split again.
   std::vector<char> split_piece;
-  for (int round = 0; round < 3 && split_oversized_components(options, size, shares, plan->components, split_piece, rep.pages); ++round) {
+  for (int round = 0; keep_all.empty() && round < 3 && split_oversized_components(options, size, shares, plan->components, split_piece, rep.pages);
+       ++round) {
     areas = component_areas(plan->components);
     shares = plan_density(input, options, plan->components, areas, size, density);
   }
@@ -406,7 +412,7 @@ Plan plan_prepared(const TexturedMesh& input, const Options& options, const Text
   ProgressCounter map_progress(progress.of_stage("cut+map"), 0);
   const MapContext ctx{input, options, plan->components, density, map_progress, have_pixels(input), hooks, split_piece};
   rep.aspect.requested = options.aspect;
-  rep.aspect.probed_component = aspect_probe_component(ctx, shares);
+  rep.aspect.probed_component = keep_all.empty() ? aspect_probe_component(ctx, shares) : kNone;
   map_progress.set_total(faces_to_map(plan->components, rep.aspect.probed_component));
   rep.aspect.chosen = options.aspect > 0 ? options.aspect : 1.0;
   std::optional<Mapped> probed;
@@ -422,7 +428,7 @@ Plan plan_prepared(const TexturedMesh& input, const Options& options, const Text
   lay_out(options, shares, size, rep.aspect.chosen, *plan);
   std::vector<CutStats> cuts;
   std::vector<SquareMapStats> maps;
-  rep.pages.large_maps_one_after_another = map_components(ctx, probed, rep.aspect.probed_component, cut_inputs, *plan, cuts, maps);
+  rep.pages.large_maps_one_after_another = map_components(ctx, probed, rep.aspect.probed_component, cut_inputs, keep_all, *plan, cuts, maps);
   release_free_memory();  // what the maps freed, before the bake allocates its own
   clock.done("cut+map");
 

@@ -89,6 +89,7 @@ struct Preparation {
   size_t components_longest_hole_capped = 0;  // CutStats::longest_loop_capped
   size_t components_kept_original_uvs = 0;    // Plan::kept non-empty
   size_t untextured_kept = 0;                 // triangles with nothing to bake (no texture), written as they came
+  bool already_tight = false;                 // every component kept: one chart each filling the texture (already_tight)
   // "components_listed" is ReportData::components.size().
 };
 

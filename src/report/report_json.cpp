@@ -69,7 +69,8 @@ json preparation_json(const Preparation& p, size_t listed) {
           {"components_with_fallback", p.components_with_fallback},
           {"components_longest_hole_capped", p.components_longest_hole_capped},
           {"components_listed", listed},
-          {"components_kept_original_uvs", p.components_kept_original_uvs}};
+          {"components_kept_original_uvs", p.components_kept_original_uvs},
+          {"already_tight", p.already_tight}};
 }
 
 /// The estimated PSNR of the cuts a small longest hole was tried with (kept as the boundary, capped);

@@ -18,7 +18,10 @@ struct Lines {
 /// The plan's lines: components kept as they were (Plan::kept_components), triangles with nothing to
 /// bake, exact repeats, and the default budget grown to hold every component.
 void add_plan_warnings(const Plan& plan, const nlohmann::json& report, Lines& out) {
-  if (const size_t kept_components = plan.kept_components(); kept_components > 0)
+  const nlohmann::json& prep = report["preparation"];
+  if (prep["already_tight"].get<bool>())
+    out.notes.push_back(fmt::format("{}: written with its own texture coordinates and texture(s)", plan.first_kept_reason()));
+  else if (const size_t kept_components = plan.kept_components(); kept_components > 0)
     out.warnings.push_back(fmt::format("{} component(s), {} triangles, could not be re-parameterized and keep their original texture "
                                        "coordinates and texture(s) ({}); see \"kept_original_uvs\" in the report",
                                        kept_components, plan.kept_triangles(), plan.first_kept_reason()));
@@ -26,7 +29,6 @@ void add_plan_warnings(const Plan& plan, const nlohmann::json& report, Lines& ou
     out.notes.push_back(fmt::format("{} components of a million triangles or more were mapped one after another: the memory limit "
                                     "(--max-memory, default 90% of this machine's) leaves no room for all of them at once",
                                     one_after_another));
-  const nlohmann::json& prep = report["preparation"];
   if (const size_t untextured = prep["untextured_kept"].get<size_t>(); untextured > 0)
     out.warnings.push_back(
         fmt::format("{} triangles have no texture to bake from (no texture, no vertex colours) and are written as they came", untextured));
