@@ -181,19 +181,25 @@ TEST(GltfReader, ReadsStripsAndFansWithTheirWinding) {
   EXPECT_EQ(fan.triangles[0], (Tri{1, 2, 0}));
 }
 
-TEST(GltfReader, ReadsVertexColoursAsSrgb) {
-  const fs::path dir = scratch("colour");
-  GridGltf g = testing::grid_gltf();
+/// Appends to the grid (of 25 vertices) a normalized unsigned byte VEC4 accessor, each vertex i's colour
+/// (r, g, i, a); returns its index.
+size_t add_colour_accessor(GridGltf& g, uint8_t r, uint8_t gr, uint8_t a) {
   std::string colours;
   for (int i = 0; i < 25; ++i)
-    for (const uint8_t c : {uint8_t(0), uint8_t(255), uint8_t(i), uint8_t(128)}) colours.push_back(char(c));
+    for (const uint8_t c : {r, gr, uint8_t(i), a}) colours.push_back(char(c));
   while (g.bin.size() % 4 != 0) g.bin.push_back('\0');
   g.doc["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", g.bin.size()}, {"byteLength", colours.size()}});
   g.bin += colours;
   g.doc["buffers"][0]["byteLength"] = g.bin.size();
   g.doc["accessors"].push_back(
       {{"bufferView", g.doc["bufferViews"].size() - 1}, {"componentType", 5121}, {"normalized", true}, {"count", 25}, {"type", "VEC4"}});
-  g.doc["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = g.doc["accessors"].size() - 1;
+  return g.doc["accessors"].size() - 1;
+}
+
+TEST(GltfReader, ReadsVertexColoursAsSrgb) {
+  const fs::path dir = scratch("colour");
+  GridGltf g = testing::grid_gltf();
+  g.doc["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = add_colour_accessor(g, 0, 255, 128);
   const TexturedMesh m = read_gltf(grid_glb(dir, g).string());
   ASSERT_EQ(m.corner_color.size(), 3 * m.num_triangles());
   const uint32_t v = m.triangles[0][0];
@@ -210,20 +216,12 @@ TEST(GltfReader, CornersOfAPrimitiveWithoutAnAttributeGetItsDefault) {
   for (const bool colour_first : {true, false}) {
     const fs::path dir = scratch(colour_first ? "partial_colour_first" : "partial_colour_second");
     GridGltf g = testing::grid_gltf();
-    std::string colours;
-    for (int i = 0; i < 25; ++i)
-      for (const uint8_t c : {uint8_t(10), uint8_t(20), uint8_t(i), uint8_t(255)}) colours.push_back(char(c));
-    while (g.bin.size() % 4 != 0) g.bin.push_back('\0');
-    g.doc["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", g.bin.size()}, {"byteLength", colours.size()}});
-    g.bin += colours;
-    g.doc["buffers"][0]["byteLength"] = g.bin.size();
-    g.doc["accessors"].push_back(
-        {{"bufferView", g.doc["bufferViews"].size() - 1}, {"componentType", 5121}, {"normalized", true}, {"count", 25}, {"type", "VEC4"}});
+    const size_t colour = add_colour_accessor(g, 10, 20, 255);
     auto& primitives = g.doc["meshes"][0]["primitives"];
     nlohmann::json plain = primitives[0];
     plain["attributes"].erase("NORMAL");
     nlohmann::json coloured = primitives[0];
-    coloured["attributes"]["COLOR_0"] = g.doc["accessors"].size() - 1;
+    coloured["attributes"]["COLOR_0"] = colour;
     primitives[0] = colour_first ? coloured : plain;
     primitives.push_back(colour_first ? plain : coloured);
     const TexturedMesh m = read_gltf(grid_glb(dir, g).string());
