@@ -31,7 +31,8 @@ Stored stored(const Vec2& uv) { return {uv, to_float(uv.x()), to_float(uv.y()), 
 /// The unit-square point whose output coordinate is (u, v) (output_uv inverted, up to rounding).
 Vec2 unit_point(const Rect& r, int width, int height, double u, double v) {
   const double px = u * width, py = (1.0 - v) * height;
-  return Vec2((px - r.x - 0.5 + kChartInset) / (r.w - 1 + 2 * kChartInset), 1.0 - (py - r.y - 0.5 + kChartInset) / (r.h - 1 + 2 * kChartInset));
+  return Vec2((px - r.x - 0.5 + kChartInset) / (r.w - 1 + 2 * kChartInset),
+              1.0 - (py - r.y - 0.5 + kChartInset) / (r.h - 1 + 2 * kChartInset));
 }
 
 /// Twice the signed area of a triangle of float coordinates, computed exactly enough in doubles.

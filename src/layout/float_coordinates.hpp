@@ -12,8 +12,8 @@ namespace tightex {
 
 /// What keep_orientation_in_float did.
 struct FloatGuard {
-  size_t moved = 0;      // vertices moved (each by a few float steps)
-  size_t unfixed = 0;    // real triangles still folded or collapsed in floats
+  size_t moved = 0;    // vertices moved (each by a few float steps)
+  size_t unfixed = 0;  // real triangles still folded or collapsed in floats
 };
 
 /// The real triangles of `disk` (input_face set) whose texture coordinates, as written (rect_pixel of

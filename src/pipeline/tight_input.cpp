@@ -55,9 +55,10 @@ std::string already_tight(const TexturedMesh& input, const Options& options, con
     if (!one_chart(input, s)) return "";
   const double used = measure_texture_space(input).utilization;
   if (!(used >= kTightUtilization)) return "";
-  return fmt::format("the input is already one chart per surface filling its texture ({:.1f}% of its texels used), which a new map "
-                     "could only resample (a budget given with --size or --texels maps it anyway)",
-                     100 * used);
+  return fmt::format(
+      "the input is already one chart per surface filling its texture ({:.1f}% of its texels used), which a new map "
+      "could only resample (a budget given with --size or --texels maps it anyway)",
+      100 * used);
 }
 
 }  // namespace tightex
