@@ -228,4 +228,8 @@ TEST(KeptComponent, AnOutputGivenBackIsKeptAsItCame) {
   sized.size = 64;
   const Plan remapped = plan_charts(once, sized);
   EXPECT_EQ(remapped.kept_components(), 0u);
+  // Prepared for the default budget (so not cut), then planned with one: each component cut as it is mapped.
+  const Plan prepared_then_sized = plan_charts(once, sized, prepare_mesh(once, Options{}));
+  EXPECT_EQ(prepared_then_sized.kept_components(), 0u);
+  EXPECT_EQ(measure(once, bake_plan(prepared_then_sized, once, sized).output, 20000).lost_triangles, 0u);
 }

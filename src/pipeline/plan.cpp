@@ -324,7 +324,7 @@ std::vector<std::optional<CutInputs>> prepare_cut_inputs(const TexturedMesh& inp
 
 std::unique_ptr<PreparedMesh::State> prepare_state(const TexturedMesh& geometry, const Options& options) {
   validate_mesh(geometry);
-  texture_budget(geometry, options);  // the options checked before the work
+  const TextureBudget budget = texture_budget(geometry, options);  // the options checked before the work
   const StageProgress progress(options.progress);
   auto prepared = std::make_unique<PreparedMesh::State>();
   prepared->input_fingerprint = input_fingerprint(geometry);
@@ -347,7 +347,13 @@ std::unique_ptr<PreparedMesh::State> prepare_state(const TexturedMesh& geometry,
   progress("components", 0);
   prepared->components = split_components(surface);
   scale_to_world_area(geometry, prepared->components);
-  prepared->cut_inputs = prepare_cut_inputs(geometry, prepared->components);
+  // An input that is already tight is kept, not cut (a plan with another budget cuts each component
+  // when it maps it).
+  prepared->tight_utilization = tight_utilization(geometry, prepared->components);
+  if (keep_tight_reason(prepared->tight_utilization, options, budget).empty())
+    prepared->cut_inputs = prepare_cut_inputs(geometry, prepared->components);
+  else
+    prepared->cut_inputs.assign(prepared->components.size(), std::nullopt);
   clock.done("seams+handles");
   return prepared;
 }
@@ -383,17 +389,17 @@ Plan plan_prepared(const TexturedMesh& input, const Options& options, const Text
   // 2. The components (prepared), the budget they need, and where the texels go on them.
   plan->components = std::move(prepared->components);
   std::vector<std::optional<CutInputs>> cut_inputs = std::move(prepared->cut_inputs);
+  // An input that is one chart per component filling its texture already is kept as it came.
+  const std::string keep_all = have_pixels(input) ? keep_tight_reason(prepared->tight_utilization, options, budget) : "";
+  rep.preparation.already_tight = !keep_all.empty();
   prepared.reset();
   std::vector<double> areas = component_areas(plan->components);
   if (options.layout == Layout::kAtlas && budget.is_default) {
     const int side = atlas_side_holding(areas, size);
     if (side != size) rep.options.size_grown_from = size, size = side;
   }
-  // An input that is one chart per component filling its texture already is kept as it came.
-  const std::string keep_all = have_pixels(input) ? already_tight(input, options, budget, plan->components) : "";
-  rep.preparation.already_tight = !keep_all.empty();
-  std::vector<ComponentDensity> density;
-  std::vector<double> shares = plan_density(input, options, plan->components, areas, size, density);
+  std::vector<ComponentDensity> density(plan->components.size());
+  std::vector<double> shares = keep_all.empty() ? plan_density(input, options, plan->components, areas, size, density) : areas;
   rep.pages.max_side = options.layout == Layout::kAtlas ? options.max_page_side : 0;
   rep.pages.max_piece_faces = options.max_piece_faces;
   // Pieces split by area can still hold more than a page, or more triangles than a piece may, where the

@@ -21,13 +21,23 @@ const Vec2& input_uv(const TexturedMesh& input, const Surface& s, uint32_t f, ui
   return input.corner_uv[3 * size_t(s.input_face[f]) + s.input_corner[3 * size_t(f) + k]];
 }
 
-/// Whether component s is one chart of `input`: every face samples a loaded image, and the faces are
-/// joined through interior edges with the same material and the same coordinates on both sides.
+/// Whether input triangle t samples an image of known size read from a file (loaded or not yet).
+bool samples_an_image(const TexturedMesh& input, uint32_t t) {
+  const int32_t mat = input.face_material[t];
+  if (mat < 0) return false;
+  const int tex = input.materials[size_t(mat)].texture;
+  if (tex < 0 || input.textures[size_t(tex)].from_vertex_colours) return false;
+  const auto [w, h] = texture_size(input, tex);
+  return w > 0 && h > 0;
+}
+
+/// Whether component s is one chart of `input`: every face samples an image, and the faces are joined
+/// through interior edges with the same material and the same coordinates on both sides.
 bool one_chart(const TexturedMesh& input, const Surface& s) {
   const uint32_t nf = uint32_t(s.num_faces());
   if (nf == 0 || s.input_face.size() != nf) return false;
   for (uint32_t f = 0; f < nf; ++f)
-    if (s.input_face[f] == kNone || image_of(input, s.input_face[f]) == nullptr) return false;
+    if (s.input_face[f] == kNone || !samples_an_image(input, s.input_face[f])) return false;
   std::vector<uint32_t> parent(nf);
   std::iota(parent.begin(), parent.end(), 0u);
   size_t charts = nf;
@@ -48,17 +58,20 @@ bool one_chart(const TexturedMesh& input, const Surface& s) {
 
 }  // namespace
 
-std::string already_tight(const TexturedMesh& input, const Options& options, const TextureBudget& budget,
-                          const std::vector<Surface>& components) {
-  if (!budget.is_default || options.layout != Layout::kAtlas || components.empty()) return "";
+double tight_utilization(const TexturedMesh& input, const std::vector<Surface>& components) {
+  if (components.empty()) return 0;
   for (const Surface& s : components)
-    if (!one_chart(input, s)) return "";
+    if (!one_chart(input, s)) return 0;
   const double used = measure_texture_space(input).utilization;
-  if (!(used >= kTightUtilization)) return "";
+  return used >= kTightUtilization ? used : 0;
+}
+
+std::string keep_tight_reason(double utilization, const Options& options, const TextureBudget& budget) {
+  if (!(utilization > 0) || !budget.is_default || options.layout != Layout::kAtlas) return "";
   return fmt::format(
       "the input is already one chart per surface filling its texture ({:.1f}% of its texels used), which a new map "
       "could only resample (a budget given with --size or --texels maps it anyway)",
-      100 * used);
+      100 * utilization);
 }
 
 }  // namespace tightex

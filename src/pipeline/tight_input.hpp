@@ -15,12 +15,14 @@ namespace tightex {
 /// tightex's own output uses 99.7-100% (the texel centres along its charts' outer edges).
 constexpr double kTightUtilization = 0.99;
 
-/// Why `input`'s components are all to be kept with their own texture coordinates and images; "" where
-/// it is to be mapped. Kept only with the default budget and the atlas layout (a budget or layout asked
-/// for is a request to map), where every component's triangles sample an image through coordinates
-/// continuous across every interior edge (one chart, one material), and the images are at least
-/// kTightUtilization used (METRICS.md's utilization).
-std::string already_tight(const TexturedMesh& input, const Options& options, const TextureBudget& budget,
-                          const std::vector<Surface>& components);
+/// The texel utilization (METRICS.md's) of `input` where every component's triangles sample an image
+/// (its pixels loaded or not yet) through coordinates continuous across every interior edge (one chart, one material) and the
+/// images are at least kTightUtilization used; 0 otherwise.
+double tight_utilization(const TexturedMesh& input, const std::vector<Surface>& components);
+
+/// Why every component is to be kept with its own texture coordinates and images, for an input of
+/// tight_utilization `utilization`; "" where it is to be mapped: kept only with the default budget and
+/// the atlas layout (a budget or layout asked for is a request to map).
+std::string keep_tight_reason(double utilization, const Options& options, const TextureBudget& budget);
 
 }  // namespace tightex
