@@ -223,6 +223,26 @@ std::string expect_input_error(F&& f, const std::string& needle) {
   return {};
 }
 
+// GPU texture containers, HDR and camera formats: refused by name, with what is read instead.
+TEST(ImageDecode, FormatsItDoesNotDecodeAreNamed) {
+  const std::vector<std::pair<Bytes, std::string>> cases = {
+      {{0xAB, 'K', 'T', 'X', ' ', '2', '0', 0xBB, '\r', '\n', 0x1A, '\n', 0, 0, 0, 0}, "the image is KTX2,"},
+      {{0xAB, 'K', 'T', 'X', ' ', '1', '1', 0xBB, '\r', '\n', 0x1A, '\n', 0, 0, 0, 0}, "the image is KTX,"},
+      {{'D', 'D', 'S', ' ', 124, 0, 0, 0}, "the image is DDS,"},
+      {{0x76, 0x2F, 0x31, 0x01, 2, 0, 0, 0}, "the image is OpenEXR,"},
+      {{'I', 'I', '*', 0, 8, 0, 0, 0}, "the image is TIFF,"},
+      {{0, 0, 0, 0x1C, 'f', 't', 'y', 'p', 'a', 'v', 'i', 'f', 0, 0, 0, 0}, "the image is AVIF,"},
+      {{0, 0, 0, 0x18, 'f', 't', 'y', 'p', 'h', 'e', 'i', 'c', 0, 0, 0, 0}, "the image is HEIF,"},
+  };
+  for (const auto& [bytes, needle] : cases) {
+    const std::string message = expect_input_error([&] { decode_image(bytes.data(), bytes.size(), "images[1]"); }, needle);
+    EXPECT_NE(message.find("images[1]: "), std::string::npos) << message;
+    EXPECT_NE(message.find("PNG, JPEG and WebP"), std::string::npos) << message;
+  }
+  const Bytes noise = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12};
+  expect_input_error([&] { decode_image(noise.data(), noise.size(), "noise.bin"); }, "unrecognised image format (not PNG, JPEG or WebP");
+}
+
 // ---------------------------------------------------------------------------------------------------
 // Round trips
 

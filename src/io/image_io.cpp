@@ -631,13 +631,35 @@ Image decode_psd(const unsigned char* data, size_t size, const std::string& name
   return image;
 }
 
+/// The name of an image format that scans and game engines write and tightex does not decode (GPU
+/// texture containers, HDR and camera formats), by its magic bytes; nullptr for any other data.
+const char* undecoded_format(const unsigned char* data, size_t size) {
+  static constexpr unsigned char kKtx[] = {0xAB, 'K', 'T', 'X', ' '};
+  if (size >= 8 && std::memcmp(data, kKtx, 5) == 0) return data[5] == '2' ? "KTX2" : "KTX";
+  if (size >= 4 && std::memcmp(data, "DDS ", 4) == 0) return "DDS";
+  static constexpr unsigned char kExr[] = {0x76, 0x2F, 0x31, 0x01};
+  if (size >= 4 && std::memcmp(data, kExr, 4) == 0) return "OpenEXR";
+  if (size >= 4 && (std::memcmp(data, "II*\0", 4) == 0 || std::memcmp(data, "MM\0*", 4) == 0)) return "TIFF";
+  if (size >= 12 && std::memcmp(data + 4, "ftyp", 4) == 0) {
+    if (std::memcmp(data + 8, "avif", 4) == 0 || std::memcmp(data + 8, "avis", 4) == 0) return "AVIF";
+    if (std::memcmp(data + 8, "heic", 4) == 0 || std::memcmp(data + 8, "heix", 4) == 0 || std::memcmp(data + 8, "mif1", 4) == 0)
+      return "HEIF";
+  }
+  return nullptr;
+}
+
 Image decode_with_stb(const unsigned char* data, size_t size, const std::string& name, size_t max_pixels) {
+  if (const char* format = undecoded_format(data, size))
+    fail_input(
+        "{}: the image is {}, which tightex does not decode (it reads PNG, JPEG and WebP; a glTF can name one as the fallback "
+        "of KHR_texture_basisu or MSFT_texture_dds)",
+        name, format);
   if (size > size_t(INT_MAX)) fail_input("{}: unrecognised image format", name);
   if (pnm_header_number_too_long(data, size)) fail_input("{}: corrupt PNM header (a number of more than 9 digits)", name);
   int width = 0, height = 0, channels = 0;
   // stbi_info parses only the header, so the size check happens before any pixel memory is allocated.
   if (!stbi_info_from_memory(data, int(size), &width, &height, &channels)) {
-    fail_input("{}: unrecognised image format (not PNG or JPEG, and stb_image cannot read it: {})", name, stb_reason());
+    fail_input("{}: unrecognised image format (not PNG, JPEG or WebP, and stb_image cannot read it: {})", name, stb_reason());
   }
   check_dimensions(name, "image", uint64_t(std::max(width, 0)), uint64_t(std::max(height, 0)), max_pixels);
   // stb 2.27 (Debian 12) reads 16-bit PNM samples in the wrong byte order; refusing beats wrong colours.
