@@ -1009,8 +1009,17 @@ void GltfReader::read_primitive(size_t m, size_t p, ReadState& state) {
   check_finite_entries(used, normal, "NORMAL", element);
   check_finite_entries(used, tangent, "TANGENT", element);
   check_finite_entries(used, color, "COLOR_0", element);
-  std::vector<uint32_t> new_vertex(pos.count, kNone);
-  for (size_t k = 0; k < used.size(); ++k) new_vertex[used[k]] = uint32_t(base + k);
+  // Each used vertex's new index: from a table over the accessor where the primitive uses a fair share
+  // of it, else by binary search in `used` (many primitives sharing one large vertex buffer would
+  // each fill a table of its size).
+  std::vector<uint32_t> table;
+  if (pos.count <= 4 * used.size() + 1024) {
+    table.assign(pos.count, kNone);
+    for (size_t k = 0; k < used.size(); ++k) table[used[k]] = uint32_t(base + k);
+  }
+  auto new_vertex = [&](uint32_t v) {
+    return table.empty() ? uint32_t(base + size_t(std::lower_bound(used.begin(), used.end(), v) - used.begin())) : table[v];
+  };
   // The corners' normals, tangents and colours are kept only once some primitive has them (the corners
   // before it get the defaults then): a scan without tangents or colours does not hold 48 bytes a corner
   // of zeros and ones.
@@ -1026,7 +1035,7 @@ void GltfReader::read_primitive(size_t m, size_t p, ReadState& state) {
   const bool colours = grow_corner_attribute(mesh.corner_color, color.data != nullptr, corners, std::array<float, 4>{1, 1, 1, 1});
   tbb::parallel_for(size_t(0), tris.size(), [&](size_t i) {
     const Tri& t = tris[i];
-    mesh.triangles[first + i] = {new_vertex[t[0]], new_vertex[t[1]], new_vertex[t[2]]};
+    mesh.triangles[first + i] = {new_vertex(t[0]), new_vertex(t[1]), new_vertex(t[2])};
     for (size_t k = 0; k < 3; ++k) {
       const uint32_t v = t[k];
       const size_t c = 3 * (first + i) + k;
