@@ -61,8 +61,10 @@ TexturedMesh read_obj(const std::string& path, const ModelReadOptions& options =
 /// "FILE: ELEMENT N: problem" for a binary body, for any malformed, lying or unsupported content.
 TexturedMesh read_ply(const std::string& path, const ModelReadOptions& options = {}, ModelReadStats* stats = nullptr);
 
-/// Gives every triangle that has corner colours (TexturedMesh::corner_color) but no texture a texture
-/// holding those colours: one new material "vertex_colours" and one new texture (its path the model's
+/// Gives every triangle that has corner colours (TexturedMesh::corner_color) but no texture (and whose
+/// material binds no other map, which reads the triangle's own coordinates) a texture holding those
+/// colours: per material a copy reading it (its name and scalars kept; "vertex_colours" for triangles
+/// without a material) and one new texture (its path the model's
 /// own with "_colours.png", never read), in which each such triangle has a cell of 2 x 2 texels, its
 /// corners at three texel centres and the fourth texel the colours' linear extrapolation, so that
 /// bilinear sampling anywhere inside the triangle gives the colours' linear interpolation (to 8 bits;

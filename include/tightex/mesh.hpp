@@ -19,10 +19,36 @@ constexpr uint32_t kNone = UINT32_MAX;
 
 /// The texture maps a material may bind besides its base colour (Material::texture), each read through
 /// the same texture coordinates. glTF: metallic-roughness (G roughness, B metallic), occlusion (R),
-/// emissive, normal (tangent space); OBJ: map_Ks, map_Ke, map_Pr, map_Pm, norm (tangent space) and
-/// map_Bump / bump (a height map, baked as data).
-enum class MaterialSlot : uint8_t { kMetallicRoughness, kOcclusion, kEmissive, kNormal, kSpecular, kRoughness, kMetallic, kBump };
-constexpr size_t kMaterialSlots = 8;
+/// emissive, normal (tangent space), and the KHR_materials_* slots (specular colour and strength,
+/// clearcoat, its roughness and normal, sheen colour and roughness, transmission, volume thickness,
+/// iridescence and its thickness, anisotropy); OBJ: map_Ks (specular colour), map_Ke, map_Pr, map_Pm,
+/// norm (tangent space), map_Bump / bump (a height map, baked as data), map_d, map_Ns and disp /
+/// map_Disp.
+enum class MaterialSlot : uint8_t {
+  kMetallicRoughness,
+  kOcclusion,
+  kEmissive,
+  kNormal,
+  kSpecular,  // specular colour: OBJ map_Ks, KHR_materials_specular's specularColorTexture
+  kRoughness,
+  kMetallic,
+  kBump,
+  kSpecularStrength,  // KHR_materials_specular's specularTexture (A)
+  kClearcoat,
+  kClearcoatRoughness,
+  kClearcoatNormal,
+  kSheenColour,
+  kSheenRoughness,
+  kTransmission,
+  kThickness,
+  kIridescence,
+  kIridescenceThickness,
+  kAnisotropy,
+  kOpacity,       // OBJ map_d
+  kShininess,     // OBJ map_Ns
+  kDisplacement,  // OBJ disp / map_Disp
+};
+constexpr size_t kMaterialSlots = 22;
 
 /// How a map's texels are filtered: colour maps in linear light (sRGB decoded, filtered, re-encoded),
 /// data maps as stored, tangent-space normal maps through the tangent frames (decoded to object space,
@@ -32,9 +58,19 @@ enum class SlotEncoding : uint8_t { kSrgbColour, kData, kTangentNormal };
 /// Each slot's encoding, and its name in reports ("metallic_roughness", "occlusion", ...).
 SlotEncoding slot_encoding(MaterialSlot slot);
 const char* material_slot_name(MaterialSlot slot);
-/// The channels a renderer reads from a slot's image: bit 0 red, 1 green, 2 blue (metallic-roughness
-/// green and blue, occlusion and the OBJ scalar maps red, the others all three).
+/// The channels a renderer reads from a slot's image: bit 0 red, 1 green, 2 blue, 3 alpha
+/// (metallic-roughness green and blue, occlusion and the OBJ scalar maps red, specular strength and
+/// sheen roughness alpha, colour and normal maps all three).
 unsigned material_slot_channels(MaterialSlot slot);
+
+/// Per channel (red, green, blue, alpha): what a viewer multiplies a slot's texels by, and shows alone
+/// where the material binds no texture in the slot (docs/metrics.md, "effective values").
+using SlotFactor = std::array<double, 4>;
+/// Every slot's factor where the model says none: glTF's defaults (metallic and roughness 1, occlusion
+/// strength 1, emissive 0, the KHR_materials_* layers off); OBJ's readers set their own.
+std::array<SlotFactor, kMaterialSlots> default_slot_factors();
+/// Every slot unbound (-1).
+std::array<int, kMaterialSlots> unbound_slots();
 
 /// One material: a name, a constant diffuse colour and optionally a diffuse texture image.
 struct Material {
@@ -48,7 +84,18 @@ struct Material {
   std::array<double, 2> uv_offset{0.0, 0.0};  // map_Kd -o
   /// Per MaterialSlot: index into TexturedMesh::textures, -1 = not bound. A map is sampled at the same
   /// (transformed) texture coordinates as `texture`. One image bound to two slots is one texture.
-  std::array<int, kMaterialSlots> maps{-1, -1, -1, -1, -1, -1, -1, -1};
+  std::array<int, kMaterialSlots> maps = unbound_slots();
+  /// Per MaterialSlot: its factor (glTF's metallic-roughness (1, roughnessFactor, metallicFactor, 1),
+  /// occlusion strength, emissiveFactor times KHR_materials_emissive_strength, normal scale, the
+  /// extensions' factors; OBJ's Ks, Ke, Pr, Pm, d, Ns where the slot has no map, 1 where it has one, as
+  /// OBJ viewers show a map alone). Colour factors are linear, as glTF's.
+  std::array<SlotFactor, kMaterialSlots> factor = default_slot_factors();
+  /// Whether a viewer multiplies the base colour texture by kd (glTF's baseColorFactor does; OBJ
+  /// viewers mostly show map_Kd alone).
+  bool kd_multiplies_texture = false;
+  /// OBJ: the material's MTL statements other than newmtl, Kd and the texture maps (Ka, Ks, Ke, Ns, Ni,
+  /// d, Tr, illum, Pr, Pm, ...), as they came, which write_obj writes back.
+  std::vector<std::string> mtl_statements;
 };
 
 /// A texture image and the path it came from (or will be written to).

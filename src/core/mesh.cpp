@@ -7,36 +7,60 @@
 
 namespace tightex {
 
-SlotEncoding slot_encoding(MaterialSlot slot) {
-  switch (slot) {
-    case MaterialSlot::kEmissive:
-    case MaterialSlot::kSpecular:
-      return SlotEncoding::kSrgbColour;
-    case MaterialSlot::kNormal:
-      return SlotEncoding::kTangentNormal;
-    default:
-      return SlotEncoding::kData;
-  }
+namespace {
+
+/// What each MaterialSlot is, in slot order.
+struct SlotTraits {
+  const char* name;
+  SlotEncoding encoding;
+  unsigned channels;  // bit 0 red, 1 green, 2 blue, 3 alpha
+  SlotFactor factor;  // glTF's default factor
+};
+
+constexpr SlotEncoding kColour = SlotEncoding::kSrgbColour, kData = SlotEncoding::kData, kNormal = SlotEncoding::kTangentNormal;
+constexpr SlotTraits kSlots[kMaterialSlots] = {
+    {"metallic_roughness", kData, 6, {1, 1, 1, 1}},
+    {"occlusion", kData, 1, {1, 1, 1, 1}},
+    {"emissive", kColour, 7, {0, 0, 0, 1}},
+    {"normal", kNormal, 7, {1, 1, 1, 1}},
+    {"specular", kColour, 7, {1, 1, 1, 1}},
+    {"roughness", kData, 1, {1, 1, 1, 1}},
+    {"metallic", kData, 1, {0, 0, 0, 1}},
+    {"bump", kData, 1, {0, 0, 0, 1}},
+    {"specular_strength", kData, 8, {1, 1, 1, 1}},
+    {"clearcoat", kData, 1, {0, 0, 0, 1}},
+    {"clearcoat_roughness", kData, 2, {0, 0, 0, 1}},
+    {"clearcoat_normal", kNormal, 7, {1, 1, 1, 1}},
+    {"sheen_colour", kColour, 7, {0, 0, 0, 1}},
+    {"sheen_roughness", kData, 8, {0, 0, 0, 0}},
+    {"transmission", kData, 1, {0, 0, 0, 1}},
+    {"thickness", kData, 2, {0, 0, 0, 1}},
+    {"iridescence", kData, 1, {0, 0, 0, 1}},
+    {"iridescence_thickness", kData, 2, {1, 1, 1, 1}},
+    {"anisotropy", kData, 7, {1, 1, 0, 1}},
+    {"opacity", kData, 1, {1, 1, 1, 1}},
+    {"shininess", kData, 1, {1, 1, 1, 1}},
+    {"displacement", kData, 1, {0, 0, 0, 1}},
+};
+
+}  // namespace
+
+SlotEncoding slot_encoding(MaterialSlot slot) { return kSlots[size_t(slot)].encoding; }
+
+unsigned material_slot_channels(MaterialSlot slot) { return kSlots[size_t(slot)].channels; }
+
+const char* material_slot_name(MaterialSlot slot) { return kSlots[size_t(slot)].name; }
+
+std::array<SlotFactor, kMaterialSlots> default_slot_factors() {
+  std::array<SlotFactor, kMaterialSlots> f;
+  for (size_t s = 0; s < kMaterialSlots; ++s) f[s] = kSlots[s].factor;
+  return f;
 }
 
-unsigned material_slot_channels(MaterialSlot slot) {
-  switch (slot) {
-    case MaterialSlot::kMetallicRoughness:
-      return 6;
-    case MaterialSlot::kOcclusion:
-    case MaterialSlot::kRoughness:
-    case MaterialSlot::kMetallic:
-    case MaterialSlot::kBump:
-      return 1;
-    default:
-      return 7;
-  }
-}
-
-const char* material_slot_name(MaterialSlot slot) {
-  static constexpr const char* kNames[kMaterialSlots] = {"metallic_roughness", "occlusion", "emissive", "normal",
-                                                    "specular",           "roughness", "metallic", "bump"};
-  return kNames[size_t(slot)];
+std::array<int, kMaterialSlots> unbound_slots() {
+  std::array<int, kMaterialSlots> maps;
+  maps.fill(-1);
+  return maps;
 }
 
 Vec2 TexturedMesh::sampled_uv(size_t triangle, int corner) const {
@@ -83,7 +107,7 @@ double squared_detail_texels(const Image& img, const Vec2& a, const Vec2& b, con
       const Vec2 p = l0 * a + l1 * b + l2 * c;
       const auto xp = sample_bilinear(img, p.x() + du, p.y()), xm = sample_bilinear(img, p.x() - du, p.y());
       const auto yp = sample_bilinear(img, p.x(), p.y() + dv), ym = sample_bilinear(img, p.x(), p.y() - dv);
-      for (int ch = 0; ch < 3; ++ch) {
+      for (int ch = 0; ch < 4; ++ch) {
         if (!(channels & (1u << ch))) continue;
         const double gx = 0.5 * (xp[size_t(ch)] - xm[size_t(ch)]), gy = 0.5 * (yp[size_t(ch)] - ym[size_t(ch)]);
         sum += gx * gx + gy * gy;

@@ -50,6 +50,42 @@ struct GltfDocument {
   bool flattened = false;
 };
 
+/// Where a MaterialSlot's texture info sits in a glTF material: `holder` is "" (the material itself),
+/// "pbrMetallicRoughness", or a KHR_materials_* extension (under "extensions"); `key` the texture
+/// info's name there. read_gltf reads these slots and write_gltf binds them again.
+struct GltfSlot {
+  MaterialSlot slot;
+  const char* holder;
+  const char* key;
+};
+inline constexpr GltfSlot kGltfSlots[] = {
+    {MaterialSlot::kMetallicRoughness, "pbrMetallicRoughness", "metallicRoughnessTexture"},
+    {MaterialSlot::kOcclusion, "", "occlusionTexture"},
+    {MaterialSlot::kEmissive, "", "emissiveTexture"},
+    {MaterialSlot::kNormal, "", "normalTexture"},
+    {MaterialSlot::kSpecularStrength, "KHR_materials_specular", "specularTexture"},
+    {MaterialSlot::kSpecular, "KHR_materials_specular", "specularColorTexture"},
+    {MaterialSlot::kClearcoat, "KHR_materials_clearcoat", "clearcoatTexture"},
+    {MaterialSlot::kClearcoatRoughness, "KHR_materials_clearcoat", "clearcoatRoughnessTexture"},
+    {MaterialSlot::kClearcoatNormal, "KHR_materials_clearcoat", "clearcoatNormalTexture"},
+    {MaterialSlot::kSheenColour, "KHR_materials_sheen", "sheenColorTexture"},
+    {MaterialSlot::kSheenRoughness, "KHR_materials_sheen", "sheenRoughnessTexture"},
+    {MaterialSlot::kTransmission, "KHR_materials_transmission", "transmissionTexture"},
+    {MaterialSlot::kThickness, "KHR_materials_volume", "thicknessTexture"},
+    {MaterialSlot::kIridescence, "KHR_materials_iridescence", "iridescenceTexture"},
+    {MaterialSlot::kIridescenceThickness, "KHR_materials_iridescence", "iridescenceThicknessTexture"},
+    {MaterialSlot::kAnisotropy, "KHR_materials_anisotropy", "anisotropyTexture"},
+};
+
+/// The object of material `m` that holds `slot`'s texture info (GltfSlot::holder), or null when the
+/// material has none.
+const nlohmann::json* gltf_slot_holder(const nlohmann::json& m, const GltfSlot& slot);
+nlohmann::json* gltf_slot_holder(nlohmann::json& m, const GltfSlot& slot);
+
+/// Whether `extension` is one whose texture slots kGltfSlots lists (its textures follow the new
+/// texture coordinates).
+bool gltf_extension_has_slots(const std::string& extension);
+
 /// The JSON text and the BIN chunk of a .glb, or the whole text of a .gltf.
 struct GltfContainerParts {
   std::string_view json;

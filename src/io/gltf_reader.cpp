@@ -15,6 +15,7 @@
 #include <set>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "core/eigen_vector.hpp"
@@ -771,24 +772,86 @@ std::pair<int64_t, json> uv_source(const json* info) {
   return {set, transform};
 }
 
-/// The material's other maps (MaterialSlot) that read the same texture coordinates as its base colour:
-/// metallicRoughnessTexture, occlusionTexture, emissiveTexture, normalTexture. A map on another UV set
-/// or under another transform is left out (write_gltf removes it, saying so).
+/// The material's other maps (MaterialSlot, kGltfSlots: the core slots and the KHR_materials_* ones)
+/// that read the same texture coordinates as its base colour. A map on another UV set or under another
+/// transform is left out (write_gltf removes it, saying so).
 void GltfReader::read_map_slots(const json& g, const json* base, const std::string& element, ReadState& state, Material& m) {
   const auto base_source = uv_source(base);
-  auto read_slot = [&](const json& holder, const char* key, const std::string& slot_element, MaterialSlot slot) {
-    if (!holder.is_object() || !holder.contains(key)) return;
-    const json& info = holder[key];
-    if (uv_source(&info) != base_source) return;
-    m.maps[size_t(slot)] = texture_for(info, slot_element, state);
-  };
-  if (g.contains("pbrMetallicRoughness"))
-    read_slot(g["pbrMetallicRoughness"], "metallicRoughnessTexture", element + ".pbrMetallicRoughness.metallicRoughnessTexture",
-              MaterialSlot::kMetallicRoughness);
-  read_slot(g, "occlusionTexture", element + ".occlusionTexture", MaterialSlot::kOcclusion);
-  read_slot(g, "emissiveTexture", element + ".emissiveTexture", MaterialSlot::kEmissive);
-  read_slot(g, "normalTexture", element + ".normalTexture", MaterialSlot::kNormal);
+  for (const GltfSlot& slot : kGltfSlots) {
+    const json* holder = gltf_slot_holder(g, slot);
+    if (holder == nullptr || !holder->contains(slot.key)) continue;
+    const json& info = (*holder)[slot.key];
+    if (uv_source(&info) != base_source) continue;
+    const std::string where = std::string(slot.holder).rfind("KHR_", 0) == 0 ? ".extensions." + std::string(slot.holder) + "."
+                              : *slot.holder != '\0'                        ? "." + std::string(slot.holder) + "."
+                                                                             : std::string(".");
+    m.maps[size_t(slot.slot)] = texture_for(info, element + where + slot.key, state);
+  }
 }
+
+namespace {
+
+/// The number `key` of `holder` (null: absent), or `fallback`; a member that is not a number is refused.
+double factor_of(const json* holder, const char* key, double fallback, const std::string& element) {
+  if (holder == nullptr || !holder->is_object() || !holder->contains(key)) return fallback;
+  const json& v = (*holder)[key];
+  if (!v.is_number() || !std::isfinite(v.get<double>())) fail_input("{}: {} is not a finite number", element, key);
+  return v.get<double>();
+}
+
+/// The colour `key` (`n` numbers) of `holder`, or `fallback`.
+SlotFactor colour_of(const json* holder, const char* key, const SlotFactor& fallback, const std::string& element) {
+  if (holder == nullptr || !holder->is_object() || !holder->contains(key)) return fallback;
+  const json& v = (*holder)[key];
+  if (!v.is_array() || v.size() != 3) fail_input("{}: {} is not 3 numbers", element, key);
+  SlotFactor f = fallback;
+  for (size_t k = 0; k < 3; ++k) {
+    if (!v[k].is_number() || !std::isfinite(v[k].get<double>())) fail_input("{}: {} is not 3 numbers", element, key);
+    f[k] = v[k].get<double>();
+  }
+  return f;
+}
+
+/// The extension `name` of material `g`, or null.
+const json* extension_of(const json& g, const char* name) {
+  const auto e = g.find("extensions");
+  if (e == g.end() || !e->is_object()) return nullptr;
+  const auto x = e->find(name);
+  return x != e->end() && x->is_object() ? &*x : nullptr;
+}
+
+/// Every slot's factor of glTF material `g` (Material::factor): what a viewer multiplies the slot's
+/// texels by, and shows alone without a texture; glTF's defaults where the material says none.
+std::array<SlotFactor, kMaterialSlots> slot_factors(const json& g, const std::string& element) {
+  std::array<SlotFactor, kMaterialSlots> f = default_slot_factors();
+  auto at = [&](MaterialSlot s) -> SlotFactor& { return f[size_t(s)]; };
+  auto one = [](double x) { return SlotFactor{x, x, x, x}; };
+  const json* pbr = g.contains("pbrMetallicRoughness") && g["pbrMetallicRoughness"].is_object() ? &g["pbrMetallicRoughness"] : nullptr;
+  at(MaterialSlot::kMetallicRoughness) = {1, factor_of(pbr, "roughnessFactor", 1, element), factor_of(pbr, "metallicFactor", 1, element), 1};
+  const json* occlusion = g.contains("occlusionTexture") ? &g["occlusionTexture"] : nullptr;
+  at(MaterialSlot::kOcclusion) = one(factor_of(occlusion, "strength", 1, element + ".occlusionTexture"));
+  const double strength = factor_of(extension_of(g, "KHR_materials_emissive_strength"), "emissiveStrength", 1, element);
+  at(MaterialSlot::kEmissive) = colour_of(&g, "emissiveFactor", {0, 0, 0, 1}, element);
+  for (size_t k = 0; k < 3; ++k) at(MaterialSlot::kEmissive)[k] *= strength;
+  const json* normal = g.contains("normalTexture") ? &g["normalTexture"] : nullptr;
+  at(MaterialSlot::kNormal) = one(factor_of(normal, "scale", 1, element + ".normalTexture"));
+  const json* specular = extension_of(g, "KHR_materials_specular");
+  at(MaterialSlot::kSpecularStrength) = one(factor_of(specular, "specularFactor", 1, element));
+  at(MaterialSlot::kSpecular) = colour_of(specular, "specularColorFactor", {1, 1, 1, 1}, element);
+  const json* clearcoat = extension_of(g, "KHR_materials_clearcoat");
+  at(MaterialSlot::kClearcoat) = one(factor_of(clearcoat, "clearcoatFactor", 0, element));
+  at(MaterialSlot::kClearcoatRoughness) = one(factor_of(clearcoat, "clearcoatRoughnessFactor", 0, element));
+  const json* sheen = extension_of(g, "KHR_materials_sheen");
+  at(MaterialSlot::kSheenColour) = colour_of(sheen, "sheenColorFactor", {0, 0, 0, 1}, element);
+  at(MaterialSlot::kSheenRoughness) = one(factor_of(sheen, "sheenRoughnessFactor", 0, element));
+  at(MaterialSlot::kTransmission) = one(factor_of(extension_of(g, "KHR_materials_transmission"), "transmissionFactor", 0, element));
+  at(MaterialSlot::kThickness) = one(factor_of(extension_of(g, "KHR_materials_volume"), "thicknessFactor", 0, element));
+  at(MaterialSlot::kIridescence) = one(factor_of(extension_of(g, "KHR_materials_iridescence"), "iridescenceFactor", 0, element));
+  at(MaterialSlot::kAnisotropy) = {1, 1, factor_of(extension_of(g, "KHR_materials_anisotropy"), "anisotropyStrength", 0, element), 1};
+  return f;
+}
+
+}  // namespace
 
 /// The TexturedMesh material of glTF material `material` (-1: the default one), made on first use with
 /// its base colour texture and factor.
@@ -813,7 +876,9 @@ int32_t GltfReader::material_for(int material, ReadState& state) {
     const json* base = base_color_info(array("materials"), material);
     if (base != nullptr) m.texture = texture_for(*base, element + ".pbrMetallicRoughness.baseColorTexture", state);
     read_map_slots(g, base, element, state, m);
+    m.factor = slot_factors(g, element);
   }
+  m.kd_multiplies_texture = true;
   const int32_t index = int32_t(state.mesh.materials.size());
   state.mesh.materials.push_back(std::move(m));
   state.material_of[material] = index;
@@ -1003,7 +1068,11 @@ void GltfReader::read_primitive(size_t m, size_t p, ReadState& state) {
   state.any_normals |= normal.data != nullptr;
   state.any_colors |= color.data != nullptr;
   const uint32_t prim_index = uint32_t(doc_->primitives.size());
-  const bool colours_baked = base_color_info(array("materials"), material) == nullptr;  // texture_vertex_colours bakes them
+  // texture_vertex_colours bakes them, unless the material binds other maps (then its triangles keep
+  // their own coordinates and are written as they came, COLOR_0 with them).
+  const Material& read_material = state.mesh.materials[size_t(tm)];
+  const bool colours_baked = base_color_info(array("materials"), material) == nullptr &&
+                             std::all_of(read_material.maps.begin(), read_material.maps.end(), [](int map) { return map < 0; });
   doc_->primitives.push_back(
       {m, p, material, normal.data != nullptr, carried_attributes(primitive, uv_set, colours_baked, pos.count, element)});
   check_finite_entries(used, normal, "NORMAL", element);
@@ -1153,6 +1222,26 @@ size_t gltf_type_components(const std::string& type) {
                                                          {"MAT2", 4},   {"MAT3", 9}, {"MAT4", 16}};
   const auto it = kComponents.find(type);
   return it == kComponents.end() ? 0 : it->second;
+}
+
+const json* gltf_slot_holder(const json& m, const GltfSlot& slot) {
+  if (!m.is_object()) return nullptr;
+  const std::string_view holder = slot.holder;
+  if (holder.empty()) return &m;
+  const json* parent = &m;
+  if (holder.rfind("KHR_", 0) == 0) {
+    const auto e = m.find("extensions");
+    if (e == m.end() || !e->is_object()) return nullptr;
+    parent = &*e;
+  }
+  const auto h = parent->find(slot.holder);
+  return h != parent->end() && h->is_object() ? &*h : nullptr;
+}
+
+json* gltf_slot_holder(json& m, const GltfSlot& slot) { return const_cast<json*>(gltf_slot_holder(std::as_const(m), slot)); }
+
+bool gltf_extension_has_slots(const std::string& extension) {
+  return std::any_of(std::begin(kGltfSlots), std::end(kGltfSlots), [&](const GltfSlot& s) { return extension == s.holder; });
 }
 
 GltfContainerParts split_gltf_container(const std::string& file, std::string_view data) {

@@ -62,6 +62,7 @@ class DocumentBuilder {
  private:
   using GroupKey = std::pair<uint32_t, int>;  // (source primitive or output material + 1, output material)
   void start_fresh_document();
+  json fresh_pbr(const Material& m);
   std::map<GroupKey, std::vector<uint32_t>> groups() const;
   int new_view(std::string_view bytes, int64_t target);
   int new_accessor(const std::string& bytes, int64_t component_type, size_t count, const char* type, int64_t target,
@@ -92,6 +93,21 @@ json& array_of(json& doc, const char* name) {
   return doc[name];
 }
 
+/// The pbrMetallicRoughness of a fresh document's material: its base colour (the texture, times kd
+/// where the material came from glTF, whose viewers multiply it; kd alone without a texture) and its
+/// metallic and roughness (glTF's factors, or OBJ's Pm and Pr).
+json DocumentBuilder::fresh_pbr(const Material& m) {
+  const auto& f = m.factor;
+  const bool gltf_factors = m.kd_multiplies_texture;
+  const double metallic = gltf_factors ? f[size_t(MaterialSlot::kMetallicRoughness)][2] : f[size_t(MaterialSlot::kMetallic)][0];
+  const double roughness = gltf_factors ? f[size_t(MaterialSlot::kMetallicRoughness)][1] : f[size_t(MaterialSlot::kRoughness)][0];
+  json pbr = {{"metallicFactor", metallic}, {"roughnessFactor", roughness}};
+  if (m.texture < 0 || gltf_factors) pbr["baseColorFactor"] = {m.kd[0], m.kd[1], m.kd[2], 1.0};
+  if (m.texture >= 0) pbr["baseColorTexture"] = {{"index", texture_index(m.texture)}};
+  if (const int t = m.maps[size_t(MaterialSlot::kMetallicRoughness)]; t >= 0) pbr["metallicRoughnessTexture"] = {{"index", texture_index(t)}};
+  return pbr;
+}
+
 void DocumentBuilder::start_fresh_document() {
   const std::string name = fs::path(mesh_.source).stem().string();
   doc_ = {{"asset", {{"version", "2.0"}, {"generator", "tightex"}}},
@@ -101,22 +117,22 @@ void DocumentBuilder::start_fresh_document() {
           {"meshes", json::array({{{"name", name}, {"primitives", json::array()}}})}};
   json& materials = array_of(doc_, "materials");
   for (const Material& m : mesh_.materials) {
-    json pbr = {{"metallicFactor", 0.0}, {"roughnessFactor", 1.0}};
-    if (m.texture < 0)
-      pbr["baseColorFactor"] = {m.kd[0], m.kd[1], m.kd[2], 1.0};
-    else
-      pbr["baseColorTexture"] = {{"index", texture_index(m.texture)}};
-    json material = {{"name", m.name}, {"pbrMetallicRoughness", pbr}};
-    if (const int t = m.maps[size_t(MaterialSlot::kMetallicRoughness)]; t >= 0)
-      material["pbrMetallicRoughness"]["metallicRoughnessTexture"] = {{"index", texture_index(t)}},
-      material["pbrMetallicRoughness"]["metallicFactor"] = 1.0;
-    if (const int t = m.maps[size_t(MaterialSlot::kOcclusion)]; t >= 0) material["occlusionTexture"] = {{"index", texture_index(t)}};
-    if (const int t = m.maps[size_t(MaterialSlot::kEmissive)]; t >= 0)
-      material["emissiveTexture"] = {{"index", texture_index(t)}}, material["emissiveFactor"] = {1.0, 1.0, 1.0};
+    json material = {{"name", m.name}, {"pbrMetallicRoughness", fresh_pbr(m)}};
+    const auto& f = m.factor;
+    if (const int t = m.maps[size_t(MaterialSlot::kOcclusion)]; t >= 0)
+      material["occlusionTexture"] = {{"index", texture_index(t)}, {"strength", f[size_t(MaterialSlot::kOcclusion)][0]}};
+    const SlotFactor& emissive = f[size_t(MaterialSlot::kEmissive)];
+    if (const int t = m.maps[size_t(MaterialSlot::kEmissive)]; t >= 0) material["emissiveTexture"] = {{"index", texture_index(t)}};
+    if (emissive[0] != 0 || emissive[1] != 0 || emissive[2] != 0) material["emissiveFactor"] = {emissive[0], emissive[1], emissive[2]};
     if (const int t = m.maps[size_t(MaterialSlot::kNormal)]; t >= 0) material["normalTexture"] = {{"index", texture_index(t)}};
-    // glTF's core has no slot for OBJ's specular colour, roughness or metallic images alone, or a height map.
-    for (const MaterialSlot slot : {MaterialSlot::kSpecular, MaterialSlot::kRoughness, MaterialSlot::kMetallic, MaterialSlot::kBump})
-      if (m.maps[size_t(slot)] >= 0) removed_.insert(fmt::format("material {}: its {} map (no glTF slot)", m.name, material_slot_name(slot)));
+    // A fresh document holds glTF's core slots: OBJ's specular colour, roughness or metallic images
+    // alone, height, opacity, shininess and displacement maps have none there.
+    for (size_t s = 0; s < kMaterialSlots; ++s) {
+      const MaterialSlot slot = MaterialSlot(s);
+      const bool core = slot == MaterialSlot::kMetallicRoughness || slot == MaterialSlot::kOcclusion || slot == MaterialSlot::kEmissive ||
+                        slot == MaterialSlot::kNormal;
+      if (!core && m.maps[s] >= 0) removed_.insert(fmt::format("material {}: its {} map (no glTF slot)", m.name, material_slot_name(slot)));
+    }
     materials.push_back(std::move(material));
   }
 }
@@ -184,34 +200,24 @@ bool refers_to_texture(const json& j) {
   return false;
 }
 
-/// The glTF slots of MaterialSlot, where they sit in a material.
-struct GltfSlot {
-  MaterialSlot slot;
-  const char* key;
-  bool in_pbr;  // under pbrMetallicRoughness
-};
-constexpr GltfSlot kGltfSlots[] = {{MaterialSlot::kMetallicRoughness, "metallicRoughnessTexture", true},
-                                   {MaterialSlot::kOcclusion, "occlusionTexture", false},
-                                   {MaterialSlot::kEmissive, "emissiveTexture", false},
-                                   {MaterialSlot::kNormal, "normalTexture", false}};
-
-/// Each texture slot of material copy `m`: pointed at output material `out_material`'s map for it (on
-/// TEXCOORD_0, without a transform: the new coordinates are what it samples; scale and strength kept),
-/// or removed (noted in removed_) when the output has no such map.
+/// Each texture slot of material copy `m` (kGltfSlots, the KHR_materials_* ones included): pointed at
+/// output material `out_material`'s map for it (on TEXCOORD_0, without a transform: the new coordinates
+/// are what it samples; scale, strength and extras kept), or removed (noted in removed_) when the output
+/// has no such map.
 void DocumentBuilder::bind_map_slots(json& m, const std::string& element, int out_material) {
   for (const GltfSlot& s : kGltfSlots) {
-    json& holder = s.in_pbr ? m["pbrMetallicRoughness"] : m;
-    if (!holder.contains(s.key)) continue;
+    json* holder = gltf_slot_holder(m, s);
+    if (holder == nullptr || !holder->contains(s.key)) continue;
     const int texture = out_material >= 0 ? mesh_.materials[size_t(out_material)].maps[size_t(s.slot)] : -1;
-    const std::string where = element + (s.in_pbr ? ".pbrMetallicRoughness." : ".") + s.key;
+    const std::string where = element + (*s.holder != '\0' ? fmt::format(".{}.", s.holder) : std::string(".")) + s.key;
     if (texture < 0) {
-      holder.erase(s.key), removed_.insert(where);
+      holder->erase(s.key), removed_.insert(where);
       continue;
     }
     json info = {{"index", texture_index(texture)}};
     for (const char* keep : {"scale", "strength", "extras"})
-      if (holder[s.key].is_object() && holder[s.key].contains(keep)) info[keep] = holder[s.key][keep];
-    holder[s.key] = std::move(info);
+      if ((*holder)[s.key].is_object() && (*holder)[s.key].contains(keep)) info[keep] = (*holder)[s.key][keep];
+    (*holder)[s.key] = std::move(info);
   }
 }
 
@@ -231,7 +237,7 @@ int DocumentBuilder::material_for(int source_material, int out_material) {
   if (m.contains("extensions") && m["extensions"].is_object()) {
     std::vector<std::string> drop;
     for (const auto& [key, value] : m["extensions"].items())
-      if (refers_to_texture(value)) drop.push_back(key);
+      if (!gltf_extension_has_slots(key) && refers_to_texture(value)) drop.push_back(key);
     for (const std::string& key : drop) m["extensions"].erase(key), removed_.insert(element + ".extensions." + key);
     if (m["extensions"].empty()) m.erase("extensions");
   }

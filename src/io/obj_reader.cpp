@@ -22,6 +22,7 @@
 #include <filesystem>
 #include <optional>
 #include <string_view>
+#include <tuple>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -218,14 +219,49 @@ struct MaterialDef {
 
 /// The MaterialSlot an MTL keyword binds (matched without case), or -1: map_Ks specular colour, map_Ke
 /// emissive, map_Pr roughness, map_Pm metallic, norm a tangent-space normal map, map_Bump / bump a
-/// height map.
+/// height map, map_d opacity, map_Ns shininess, disp / map_Disp displacement.
 int mtl_map_slot(std::string_view keyword) {
   static constexpr std::pair<const char*, MaterialSlot> kKeywords[] = {
       {"map_Ks", MaterialSlot::kSpecular}, {"map_Ke", MaterialSlot::kEmissive}, {"map_Pr", MaterialSlot::kRoughness}, {"map_Pm", MaterialSlot::kMetallic},
-      {"norm", MaterialSlot::kNormal},     {"map_Bump", MaterialSlot::kBump},   {"bump", MaterialSlot::kBump}};
+      {"norm", MaterialSlot::kNormal},     {"map_Bump", MaterialSlot::kBump},   {"bump", MaterialSlot::kBump},
+      {"map_d", MaterialSlot::kOpacity},   {"map_Ns", MaterialSlot::kShininess}, {"disp", MaterialSlot::kDisplacement},
+      {"map_Disp", MaterialSlot::kDisplacement}};
   for (const auto& [word, slot] : kKeywords)
     if (equals_ignoring_case(keyword, word)) return int(slot);
   return -1;
+}
+
+/// Whether an MTL statement names an image that no slot reads: map_Ka, map_aat, refl, decal and any
+/// other map_ keyword.
+bool is_unread_map_statement(std::string_view keyword) {
+  return (keyword.size() > 4 && equals_ignoring_case(keyword.substr(0, 4), "map_")) || equals_ignoring_case(keyword, "refl") ||
+         equals_ignoring_case(keyword, "decal");
+}
+
+/// The slot whose factor an MTL scalar statement sets (Ks, Ke, Pr, Pm, d, Tr, Ns), and the number that
+/// brings its value to a factor of 0..1 (Ns: 0..1000), or -1.
+std::pair<int, double> mtl_scalar_slot(std::string_view keyword) {
+  static constexpr std::tuple<const char*, MaterialSlot, double> kScalars[] = {
+      {"Ks", MaterialSlot::kSpecular, 1},   {"Ke", MaterialSlot::kEmissive, 1}, {"Pr", MaterialSlot::kRoughness, 1},
+      {"Pm", MaterialSlot::kMetallic, 1},   {"d", MaterialSlot::kOpacity, 1},   {"Tr", MaterialSlot::kOpacity, -1},
+      {"Ns", MaterialSlot::kShininess, 1e-3}};
+  for (const auto& [word, slot, scale] : kScalars)
+    if (equals_ignoring_case(keyword, word)) return {int(slot), scale};
+  return {-1, 0};
+}
+
+/// Sets material `m`'s factor of `slot` from an MTL scalar statement's values (one grey value or
+/// three), times `scale` (Tr's -1: opacity is 1 - Tr); values that are not numbers leave it as it was,
+/// as the statement is written back as it came.
+void set_mtl_factor(Material& m, int slot, double scale, Tokens tokens) {
+  double v[3];
+  size_t n = 0;
+  for (std::string_view t = tokens.next(); !t.empty() && n < 3; t = tokens.next())
+    if (!parse_double(t, v[n++]) || !std::isfinite(v[n - 1])) return;
+  if (n == 0) return;
+  if (n < 3) v[1] = v[2] = v[0];
+  SlotFactor& f = m.factor[size_t(slot)];
+  for (size_t k = 0; k < 3; ++k) f[k] = scale < 0 ? 1 - v[k] : v[k] * scale;
 }
 
 /// Skips a map statement's options (each "-name" and the values after it: numbers, on/off, or
@@ -673,6 +709,8 @@ class ObjParser {
     return found;
   }
   bool saw_mtllib_ = false;
+  std::string missing_library_;        // the first mtllib not found, "FILE:LINE: problem"; empty: none
+  std::vector<std::string> warnings_;  // ModelReadStats::warnings
 };
 
 TexturedMesh ObjParser::read(ModelReadStats* stats) {
@@ -708,6 +746,10 @@ TexturedMesh ObjParser::read(ModelReadStats* stats) {
     });
   }
   mesh.face_material = std::move(triangle_use_);
+  if (!missing_library_.empty()) {
+    if (!coloured()) throw InputError(missing_library_);
+    warnings_.push_back(missing_library_ + ": the vertex colours are read without its materials");
+  }
   assemble_materials(mesh);
 
   if (stats != nullptr) {
@@ -715,6 +757,7 @@ TexturedMesh ObjParser::read(ModelReadStats* stats) {
     stats->lines = lines_;
     stats->paths_found = paths_found_;
     stats->not_read = not_read_;
+    stats->warnings.insert(stats->warnings.end(), warnings_.begin(), warnings_.end());
   }
   return mesh;
 }
@@ -860,8 +903,12 @@ void ObjParser::parse_mtllib(std::string_view rest) {
       missing += f ? 0 : 1;
       names.push_back({std::string(w), f ? *f : folder / w});
     }
-    // No word exists either: most likely one file name with spaces, so name it whole.
-    if (missing == names.size()) fail_here("material library '{}' not found", excerpt(whole));
+    // No word exists either: most likely one file name with spaces, so name it whole. A vertex-coloured
+    // model is read without it (read() decides, once the colours are known).
+    if (missing == names.size()) {
+      if (missing_library_.empty()) missing_library_ = fmt::format("{}:{}: material library '{}' not found", path_, line_, excerpt(whole));
+      return;
+    }
   }
   for (const auto& [name, mtl_path] : names) {
     const std::string key = mtl_path.lexically_normal().string();
@@ -950,9 +997,15 @@ void ObjParser::load_mtl(const fs::path& mtl_path, const std::string& data) {
       current->map_written[size_t(slot)] = file;
       current->map_resolved[size_t(slot)] = found->lexically_normal().string();
       current->map_line[size_t(slot)] = mtl_line;
+    } else if (is_unread_map_statement(keyword)) {
+      // A map with no slot (map_Ka, refl, decal, ...) would name a file the output does not have.
+      if (current != nullptr) not_read_.push_back(fmt::format("{}:{}: {} (no slot for it: not kept)", mtl_name, mtl_line, keyword));
+    } else if (current != nullptr) {
+      // Every other statement (Ka, Ks, Ns, d, illum, PBR factors) is kept as it came for write_obj;
+      // the scalars of the slots (Ks, Ke, Pr, Pm, d, Tr, Ns) are the slots' factors.
+      current->material.mtl_statements.emplace_back(line);
+      if (const auto [slot, scale] = mtl_scalar_slot(keyword); slot >= 0) set_mtl_factor(current->material, slot, scale, tokens);
     }
-    // Every other statement (Ka, Ks, Ns, d, illum, PBR factors) does not affect the textures and is
-    // ignored.
   }
 }
 
@@ -974,6 +1027,10 @@ void ObjParser::assemble_materials(TexturedMesh& mesh) {
   std::vector<const MaterialDef*> used_defs;
   for (size_t u = 0; u < uses_.size(); ++u) {
     const auto it = def_by_name_.find(uses_[u].name);
+    if (it == def_by_name_.end() && !missing_library_.empty()) {
+      material_of_use[u] = -1;  // its library is missing: the vertex colours show (read())
+      continue;
+    }
     if (it == def_by_name_.end()) {
       if (!saw_mtllib_)
         fail_input("{}:{}: material '{}' used but the file names no material library (mtllib)", path_, uses_[u].first_line,
@@ -1003,9 +1060,11 @@ void ObjParser::assemble_materials(TexturedMesh& mesh) {
   }
   for (size_t u = 0; u < used_defs.size(); ++u)  // after every map_Kd: their textures keep their numbers
     for (size_t s = 0; s < kMaterialSlots; ++s)
-      if (!used_defs[u]->map_resolved[s].empty())
+      if (!used_defs[u]->map_resolved[s].empty()) {
         mesh.materials[u].maps[s] =
             texture_of(used_defs[u], used_defs[u]->map_resolved[s], used_defs[u]->map_line[s], used_defs[u]->map_written[s]);
+        mesh.materials[u].factor[s] = {1, 1, 1, 1};  // OBJ viewers show a map alone, as they show map_Kd
+      }
   if (options_.load_textures) mesh.textures = load_texture_pixels(mesh, options_.max_texture_pixels);
 }
 

@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
+#include <algorithm>
 #include <array>
 #include <charconv>
 #include <cmath>
@@ -38,20 +39,24 @@ void append(std::string& s, double v) {
   s.append(buf, end);
 }
 
-/// The MTL statements of a material's other maps (Material::maps) with map_Kd's options: map_Ks (and
-/// Ks 1 1 1, which multiplies it), map_Ke (and Ke 1 1 1), map_Pr, map_Pm, norm, map_Bump; glTF's
-/// metallic-roughness image as map_Pr and map_Pm reading its green and blue (-imfchan). glTF's
-/// occlusion has no MTL statement and is not written.
+/// The MTL statement of each slot that has one (docs: read_obj reads the same).
+constexpr std::pair<MaterialSlot, const char*> kMapStatements[] = {
+    {MaterialSlot::kSpecular, "map_Ks"}, {MaterialSlot::kEmissive, "map_Ke"},   {MaterialSlot::kRoughness, "map_Pr"},
+    {MaterialSlot::kMetallic, "map_Pm"}, {MaterialSlot::kNormal, "norm"},       {MaterialSlot::kBump, "map_Bump"},
+    {MaterialSlot::kOpacity, "map_d"},   {MaterialSlot::kShininess, "map_Ns"}, {MaterialSlot::kDisplacement, "disp"}};
+
+/// The MTL statements of a material's other maps (Material::maps) with map_Kd's options; glTF's
+/// metallic-roughness image as map_Pr and map_Pm reading its green and blue (-imfchan). A material
+/// that did not come from an MTL (no mtl_statements) gets Ks 1 1 1 and Ke 1 1 1 beside map_Ks and
+/// map_Ke, which multiply them; one that did keeps its own. glTF's occlusion and the KHR_materials_*
+/// slots have no MTL statement and are not written.
 std::string map_lines(const Material& m, const std::string& options, const std::vector<std::string>& texture_file) {
-  static constexpr std::pair<MaterialSlot, const char*> kStatements[] = {{MaterialSlot::kSpecular, "map_Ks"},  {MaterialSlot::kEmissive, "map_Ke"},
-                                                                    {MaterialSlot::kRoughness, "map_Pr"}, {MaterialSlot::kMetallic, "map_Pm"},
-                                                                    {MaterialSlot::kNormal, "norm"},      {MaterialSlot::kBump, "map_Bump"}};
   std::string lines;
-  for (const auto& [slot, keyword] : kStatements) {
+  for (const auto& [slot, keyword] : kMapStatements) {
     const int tex = m.maps[size_t(slot)];
     if (tex < 0) continue;
-    if (slot == MaterialSlot::kSpecular) lines += "Ks 1 1 1\n";
-    if (slot == MaterialSlot::kEmissive) lines += "Ke 1 1 1\n";
+    if (slot == MaterialSlot::kSpecular && m.mtl_statements.empty()) lines += "Ks 1 1 1\n";
+    if (slot == MaterialSlot::kEmissive && m.mtl_statements.empty()) lines += "Ke 1 1 1\n";
     lines += fmt::format("{} {}{}\n", keyword, options, texture_file[size_t(tex)]);
   }
   const int mr = m.maps[size_t(MaterialSlot::kMetallicRoughness)];
@@ -63,31 +68,29 @@ std::string map_lines(const Material& m, const std::string& options, const std::
 
 /// Whether map_lines writes a statement for `slot` of `m`.
 bool map_written(const Material& m, MaterialSlot slot) {
-  switch (slot) {
-    case MaterialSlot::kOcclusion:
-      return false;
-    case MaterialSlot::kMetallicRoughness:
-      return m.maps[size_t(MaterialSlot::kRoughness)] < 0 && m.maps[size_t(MaterialSlot::kMetallic)] < 0;
-    default:
-      return true;
-  }
+  if (slot == MaterialSlot::kMetallicRoughness)
+    return m.maps[size_t(MaterialSlot::kRoughness)] < 0 && m.maps[size_t(MaterialSlot::kMetallic)] < 0;
+  return std::any_of(std::begin(kMapStatements), std::end(kMapStatements), [&](const auto& st) { return st.first == slot; });
 }
 
-/// The MTL file: one material each, map_Kd naming the texture files as written (`texture_file`).
+/// The MTL file: one material each with its own statements as read (Material::mtl_statements; the
+/// defaults Ka 1 1 1, Ks 0 0 0, d 1, illum 1 for one that came from no MTL), map_Kd naming the texture
+/// files as written (`texture_file`).
 std::string mtl_text(const TexturedMesh& mesh, const std::vector<std::string>& texture_file) {
   std::string mtl = "# written by tightex\n";
   for (const Material& m : mesh.materials) {
-    mtl += fmt::format("\nnewmtl {}\nKa 1 1 1\nKd {} {} {}\nKs 0 0 0\nd 1\nillum 1\n", m.name, format_double(m.kd[0]),
-                       format_double(m.kd[1]), format_double(m.kd[2]));
-    if (m.texture < 0) continue;
+    mtl += fmt::format("\nnewmtl {}\nKd {} {} {}\n", m.name, format_double(m.kd[0]), format_double(m.kd[1]), format_double(m.kd[2]));
+    if (m.mtl_statements.empty())
+      mtl += m.maps[size_t(MaterialSlot::kSpecular)] >= 0 ? "Ka 1 1 1\nd 1\nillum 1\n" : "Ka 1 1 1\nKs 0 0 0\nd 1\nillum 1\n";
+    for (const std::string& statement : m.mtl_statements) mtl += statement + "\n";
     // -s/-o only where the material has them (a copied input material of a kept component).
     std::string options;
     if (m.uv_scale != std::array<double, 2>{1.0, 1.0})
       options += fmt::format("-s {} {} 1 ", format_double(m.uv_scale[0]), format_double(m.uv_scale[1]));
     if (m.uv_offset != std::array<double, 2>{0.0, 0.0})
       options += fmt::format("-o {} {} 0 ", format_double(m.uv_offset[0]), format_double(m.uv_offset[1]));
-    mtl += fmt::format("map_Kd {}{}\n", options, texture_file[size_t(m.texture)]);
-    mtl += map_lines(m, options, texture_file);
+    if (m.texture >= 0) mtl += fmt::format("map_Kd {}{}\n", options, texture_file[size_t(m.texture)]);
+    mtl += map_lines(m, options, texture_file);  // an untextured material's other maps too
   }
   return mtl;
 }

@@ -12,10 +12,15 @@ namespace tightex {
 
 namespace {
 
-/// Whether triangle t takes its colour from its corners: it has corner colours and no texture.
+/// Whether triangle t takes its colour from its corners: it has corner colours and no texture. A
+/// material that binds other maps (a glass with its roughness and thickness images, no base colour
+/// texture) keeps its triangles' own texture coordinates, which those maps read: its triangles are not
+/// given a colour texture, and are written as they came.
 bool takes_corner_colours(const TexturedMesh& mesh, size_t t) {
   const int32_t m = mesh.face_material[t];
-  return m < 0 || mesh.materials[size_t(m)].texture < 0;
+  if (m < 0) return true;
+  const Material& material = mesh.materials[size_t(m)];
+  return material.texture < 0 && std::all_of(material.maps.begin(), material.maps.end(), [](int map) { return map < 0; });
 }
 
 /// The material's constant colour (linear), which multiplies the corner colours in linear light (as
@@ -67,9 +72,21 @@ size_t texture_vertex_colours(TexturedMesh& mesh, size_t max_pixels) {
   texture.image = Image(int(2 * columns), int(2 * rows), Rgba8{0, 0, 0, 255});
   texture.from_vertex_colours = true;
   const double W = double(texture.image.width), H = double(texture.image.height);
-  Material material;
-  material.name = "vertex_colours";
-  material.texture = int(mesh.textures.size());
+  // Per material of the coloured triangles (and one, "vertex_colours", for those without), a copy that
+  // reads the colours: its name and scalars kept, its colour factor baked into them (white).
+  std::vector<int32_t> colour_material(mesh.materials.size() + 1, -1);
+  auto material_of = [&](int32_t m) {
+    int32_t& made = colour_material[size_t(m + 1)];
+    if (made >= 0) return made;
+    Material material;
+    if (m >= 0) material = mesh.materials[size_t(m)];
+    if (m < 0) material.name = "vertex_colours";
+    material.kd = {1.0, 1.0, 1.0};
+    material.texture = int(mesh.textures.size());
+    made = int32_t(mesh.materials.size());
+    mesh.materials.push_back(std::move(material));
+    return made;
+  };
   for (size_t i = 0; i < coloured.size(); ++i) {
     const size_t t = coloured[i];
     const int x = int(2 * (i % columns)), y = int(2 * (i / columns));
@@ -77,9 +94,8 @@ size_t texture_vertex_colours(TexturedMesh& mesh, size_t max_pixels) {
     // Corners 0, 1, 2 at the centres of texels (x, y+1), (x+1, y+1), (x, y): counter-clockwise in UV.
     const int corner_x[3] = {x, x + 1, x}, corner_y[3] = {y + 1, y + 1, y};
     for (int k = 0; k < 3; ++k) mesh.corner_uv[3 * t + size_t(k)] = Vec2((corner_x[k] + 0.5) / W, 1.0 - (corner_y[k] + 0.5) / H);
-    mesh.face_material[t] = int32_t(mesh.materials.size());
+    mesh.face_material[t] = material_of(mesh.face_material[t]);
   }
-  mesh.materials.push_back(material);
   mesh.textures.push_back(std::move(texture));
   return coloured.size();
 }

@@ -46,8 +46,10 @@ Rgba8 flat_value(MaterialSlot slot) {
     case MaterialSlot::kSpecular:
       return {0, 0, 0, 255};
     case MaterialSlot::kNormal:
+    case MaterialSlot::kClearcoatNormal:
       return {128, 128, 255, 255};
     case MaterialSlot::kBump:
+    case MaterialSlot::kDisplacement:
       return {128, 128, 128, 255};
     default:
       return {255, 255, 255, 255};
@@ -58,8 +60,17 @@ const char* encoding_name(SlotEncoding e) {
   return e == SlotEncoding::kSrgbColour ? "srgb_colour" : e == SlotEncoding::kData ? "data" : "tangent_normal";
 }
 
-/// The slots some material binds to a loaded texture, grouped by the textures they read (per material)
-/// and their encoding, in slot order.
+/// Whether two slots' textures per material can be one output image: where both bind a texture it is
+/// the same one (a material that binds only one of them leaves the other's texels unread).
+bool compatible(const std::vector<int>& a, const std::vector<int>& b) {
+  for (size_t m = 0; m < a.size(); ++m)
+    if (a[m] >= 0 && b[m] >= 0 && a[m] != b[m]) return false;
+  return true;
+}
+
+/// The slots some material binds to a loaded texture, grouped into one output image per input image
+/// role: slots of one encoding whose textures agree in every material that binds both (glTF's
+/// occlusion packed into another material's metallic-roughness image stays one image), in slot order.
 std::vector<MapGroup> map_groups(const TexturedMesh& input) {
   std::vector<MapGroup> groups;
   for (size_t s = 0; s < kMaterialSlots; ++s) {
@@ -74,10 +85,12 @@ std::vector<MapGroup> map_groups(const TexturedMesh& input) {
     }
     if (!any) continue;
     auto same = std::find_if(groups.begin(), groups.end(), [&](const MapGroup& g) {
-      return g.source.texture_of_material == textures && g.source.encoding == slot_encoding(slot);
+      return g.source.encoding == slot_encoding(slot) && compatible(g.source.texture_of_material, textures);
     });
     if (same != groups.end()) {
       same->slots.push_back(slot);
+      for (size_t m = 0; m < textures.size(); ++m)
+        if (textures[m] >= 0) same->source.texture_of_material[m] = textures[m];
       continue;
     }
     MapGroup g;
@@ -88,6 +101,27 @@ std::vector<MapGroup> map_groups(const TexturedMesh& input) {
     groups.push_back(std::move(g));
   }
   return groups;
+}
+
+/// Whether group `g` reads the base colour's own images (a colour image bound as base colour and as
+/// emissive): every material that binds it binds the same image as its base colour, so the new base
+/// colour pages are its images too.
+bool reads_base_colour(const TexturedMesh& input, const MapGroup& g) {
+  if (g.source.encoding != SlotEncoding::kSrgbColour) return false;
+  for (size_t m = 0; m < input.materials.size(); ++m)
+    if (g.source.texture_of_material[m] >= 0 && g.source.texture_of_material[m] != input.materials[m].texture) return false;
+  return true;
+}
+
+/// Binds `slots` of every mapped material on new image `page` to output texture `texture`, where its
+/// input material binds the slot (nothing a material did not have is bound to it).
+void bind_slots(const TexturedMesh& input, const std::vector<MaterialSlot>& slots, int page, int texture, OutputModel& om) {
+  for (size_t o = 0; o < om.mapped_materials.size(); ++o) {
+    const auto [in_mat, image] = om.mapped_materials[o];
+    if (image != page || in_mat < 0) continue;
+    for (MaterialSlot s : slots)
+      if (input.materials[size_t(in_mat)].maps[size_t(s)] >= 0) om.mesh.materials[o].maps[size_t(s)] = texture;
+  }
 }
 
 /// The output's tangents: from the new texture coordinates for the mapped triangles (the first
@@ -163,12 +197,12 @@ std::vector<JudgePoint> judge_points(const std::vector<BakeTriangle>& triangles,
 /// Squared 8-bit differences per channel (red, green, blue) summed over the judge points that count,
 /// and how many counted.
 struct ChannelErrors {
-  std::array<double, 3> se{0, 0, 0};
+  std::array<double, 4> se{0, 0, 0, 0};
   double points = 0;
   /// Mean squared difference over `channels` (0 where nothing counted).
   double mse(unsigned channels) const {
     double sum = 0, n = 0;
-    for (int ch = 0; ch < 3; ++ch)
+    for (int ch = 0; ch < 4; ++ch)
       if (channels & (1u << ch)) sum += se[size_t(ch)], n += points;
     return n > 0 ? sum / n : 0.0;
   }
@@ -178,8 +212,8 @@ struct ChannelErrors {
     return m > 0 ? 10 * std::log10(255.0 * 255.0 / m) : 99.0;
   }
   void add(const std::array<float, 4>& out, const std::array<float, 4>& ref) {
-    for (size_t ch = 0; ch < 3; ++ch) {
-      const double d = double(std::lround(out[ch]) - std::lround(ref[ch]));
+    for (size_t ch = 0; ch < 4; ++ch) {
+      const double d = double(out[ch]) - double(ref[ch]);
       se[ch] += d * d;
     }
     points += 1;
@@ -274,10 +308,11 @@ ChannelErrors ideal_errors(const TexturedMesh& input, const MaterialMapSource& m
 }
 
 /// The largest reduction (a power of two up to kMaxReduction that divides every page's sides) at which
-/// each of the map's slots (`slot_channels`), read back at the judge points, keeps at least
-/// `min_psnr_db` against the input or loses at most kMaxReductionLossDb against its full-size bake's
-/// errors `full`; a normal map (whose new texels are in another frame than the input's) against its
-/// full-size bake, at least `min_psnr_db`. Returns the reduction and its errors.
+/// each of the map's slots (`slot_channels`), read back at the judge points against the input, loses
+/// at most kMaxReductionLossDb of what it had at the base colour's size (`full`): a map is made smaller
+/// only where that costs it nothing a viewer would see, however high its PSNR (a mostly black emissive
+/// map is high and still loses its lit parts). A normal map (whose new texels are in another frame than
+/// the input's) against its full-size bake, at least `min_psnr_db`. Returns the reduction and its errors.
 std::pair<int, ChannelErrors> choose_reduction(const TexturedMesh& input, const MaterialMapSource& map, const std::vector<BakeTriangle>& triangles,
                                                const std::vector<JudgePoint>& points, const std::vector<Image>& full_pages,
                                                const std::vector<unsigned>& slot_channels, const ChannelErrors& full, double min_psnr_db) {
@@ -295,7 +330,7 @@ std::pair<int, ChannelErrors> choose_reduction(const TexturedMesh& input, const 
         judged_errors(input, map, triangles, points, page_pointers(reduced), normal ? &full_size : nullptr, factor);
     const bool kept = std::all_of(slot_channels.begin(), slot_channels.end(), [&](unsigned ch) {
       const double psnr = errors.psnr(ch);
-      return psnr >= min_psnr_db || (!normal && psnr >= full.psnr(ch) - kMaxReductionLossDb);
+      return normal ? psnr >= min_psnr_db : psnr >= full.psnr(ch) - kMaxReductionLossDb;
     });
     if (!kept) break;
     chosen = factor, chosen_errors = errors;
@@ -491,13 +526,11 @@ bool enlarge(const TexturedMesh& input, const MaterialMapSource& map, const Outp
   return grew;
 }
 
-/// A map baked and sized: its pages, its scale (one of them 1) and the PSNR of its worst slot at the
-/// judge points.
+/// A map baked and sized: its pages and its scale (one of them 1).
 struct SizedMap {
   std::vector<Image> pages;
   MaterialMapScale enlarged;
   int reduction = 1;
-  double psnr = 99;
 };
 
 /// The map baked at the base colour's size, then sized by `sizing`'s material_map_budget_db. Where some slot is
@@ -512,7 +545,7 @@ SizedMap bake_sized_map(const TexturedMesh& input, const MaterialMapSource& map,
   const double min_psnr_db = sizing.material_map_budget_db;
   ScaledBake best{blank_pages(om, {}), {}, {}};
   bake_material_map(input, map, om.bake_triangles, om.rects, best.pages, nullptr, options);
-  if (!(min_psnr_db > 0)) return {std::move(best.pages), {}, 1, 99};
+  if (!(min_psnr_db > 0)) return {std::move(best.pages), {}, 1};
   const bool normal = map.encoding == SlotEncoding::kTangentNormal;
   if (!normal) best.errors = judged_errors(input, map, om.bake_triangles, points, page_pointers(best.pages), nullptr);
   const bool below =
@@ -523,12 +556,9 @@ SizedMap bake_sized_map(const TexturedMesh& input, const MaterialMapSource& map,
     z.targets = slot_targets(*z.base, ideal_errors(input, map, om.bake_triangles, points), slot_channels, min_psnr_db);
     if (shortfall(best.errors, z) > 0) grew = enlarge(input, map, om, z, options, best);
   }
-  SizedMap sized{std::move(best.pages), best.scale, 1, 99};
-  ChannelErrors errors = best.errors;
+  SizedMap sized{std::move(best.pages), best.scale, 1};
   if (!grew)
-    std::tie(sized.reduction, errors) =
-        choose_reduction(input, map, om.bake_triangles, points, sized.pages, slot_channels, errors, min_psnr_db);
-  for (unsigned ch : slot_channels) sized.psnr = std::min(sized.psnr, normal ? 99.0 : errors.psnr(ch));
+    sized.reduction = choose_reduction(input, map, om.bake_triangles, points, sized.pages, slot_channels, best.errors, min_psnr_db).first;
   return sized;
 }
 
@@ -559,6 +589,10 @@ std::vector<MaterialMapEntry> bake_material_maps(const TexturedMesh& input, cons
   std::vector<MaterialMapEntry> entries;
   for (MapGroup& g : groups) {
     const auto start = std::chrono::steady_clock::now();
+    if (reads_base_colour(input, g)) {  // one image, one bake: the base colour's pages serve its slots too
+      for (int p = 0; p < om.new_images; ++p) bind_slots(input, g.slots, p, p, om);
+      continue;
+    }
     g.source.frames = &frames;
     BakeOptions map_options = bo;
     // A normal map without the fit: the fit would match encoded texels, which a renderer decodes through
@@ -573,13 +607,12 @@ std::vector<MaterialMapEntry> bake_material_maps(const TexturedMesh& input, cons
     for (MaterialSlot s : g.slots) entry.slots.push_back(material_slot_name(s));
     entry.encoding = encoding_name(g.source.encoding);
     entry.scale = sized.enlarged.value() / sized.reduction;
-    entry.judged_psnr_db = sized.psnr;
     for (int p = 0; p < om.new_images; ++p) {
       Texture tex;
       tex.path = om.mesh.textures[size_t(p)].path + "_" + entry.name;
       tex.image = sized.reduction > 1 ? reduce_image(sized.pages[size_t(p)], sized.reduction) : std::move(sized.pages[size_t(p)]);
       entry.sizes.push_back({tex.image.width, tex.image.height});
-      for (MaterialSlot s : g.slots) om.mesh.materials[size_t(p)].maps[size_t(s)] = int(om.mesh.textures.size());
+      bind_slots(input, g.slots, p, int(om.mesh.textures.size()), om);
       om.mesh.textures.push_back(std::move(tex));
     }
     entry.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

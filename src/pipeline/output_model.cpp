@@ -1,6 +1,7 @@
 #include "pipeline/output_model.hpp"
 
 #include <cctype>
+#include <map>
 #include <set>
 
 #include "bake/resampling_error.hpp"
@@ -63,8 +64,33 @@ void add_input_triangle(const TexturedMesh& input, uint32_t t, const uint8_t* co
     for (int k = 0; k < 3; ++k) out.corner_normal.push_back(input.corner_normal[3 * t + corner[k]]);
 }
 
-/// The mapped components' triangles: new texture coordinates in their rectangles, the new material.
-void add_mapped_triangles(const Plan::State& plan, const TexturedMesh& input, const std::vector<int>& image_index, OutputModel& om) {
+/// The output material of the mapped triangles of input material `in_mat` (-1: none) on new image
+/// `image`, made on first use (OutputModel::mapped_materials): a copy of the input material with the
+/// new image as its base colour and no other map yet (bake_material_maps binds them), named as it was
+/// (with the image's number where the material spans several).
+int32_t mapped_material(const TexturedMesh& input, int32_t in_mat, int image, std::map<std::pair<int32_t, int>, int32_t>& made,
+                        std::set<std::string>& names, OutputModel& om) {
+  const auto [it, inserted] = made.try_emplace({in_mat, image}, int32_t(om.mesh.materials.size()));
+  if (!inserted) return it->second;
+  Material m;
+  if (in_mat >= 0) m = input.materials[size_t(in_mat)];
+  const std::string name = in_mat >= 0 ? m.name : std::string("tightex");
+  m.name = unique_name(names, om.new_images == 1 ? name : fmt::format("{}_{}", name, image));
+  // An untextured material's colour is baked into the new image: white shows it as it was.
+  if (m.texture < 0) m.kd = {1.0, 1.0, 1.0};
+  m.texture = image;
+  m.maps = unbound_slots();
+  m.uv_scale = {1.0, 1.0}, m.uv_offset = {0.0, 0.0};
+  om.mesh.materials.push_back(std::move(m));
+  om.mapped_materials.push_back({in_mat, image});
+  return it->second;
+}
+
+/// The mapped components' triangles: new texture coordinates in their rectangles, each input
+/// material's copy on its new image (mapped_material).
+void add_mapped_triangles(const Plan::State& plan, const TexturedMesh& input, const std::vector<int>& image_index,
+                          std::set<std::string>& names, OutputModel& om) {
+  std::map<std::pair<int32_t, int>, int32_t> made;
   for (size_t c = 0; c < plan.components.size(); ++c) {
     if (is_kept(plan, c)) continue;
     const Rect& r = plan.rects[c];
@@ -80,18 +106,15 @@ void add_mapped_triangles(const Plan::State& plan, const TexturedMesh& input, co
       bt.image = uint32_t(image);
       add_input_triangle(input, t, &disk.input_corner[3 * size_t(f)], om.mesh, om.input_corner);
       for (const Vec2& px : bt.target_px) om.mesh.corner_uv.push_back(Vec2(px.x() / W, 1.0 - px.y() / H));
-      om.mesh.face_material.push_back(int32_t(image));
+      om.mesh.face_material.push_back(mapped_material(input, input.face_material[t], image, made, names, om));
       om.bake_triangles.push_back(bt);
     }
   }
 }
 
-/// The new textures (black until baked) and their materials, named after the input file, with the
-/// colour factor the input's textured materials share (shared_texture_factor).
-void add_new_textures(const Plan::State& plan, const TexturedMesh& input, const std::vector<int>& image_index, std::set<std::string>& names,
-                      OutputModel& om) {
+/// The new textures (black until baked), named after the input file.
+void add_new_textures(const Plan::State& plan, const std::vector<int>& image_index, std::set<std::string>& names, OutputModel& om) {
   const std::string stem = file_stem(om.mesh.source);
-  const std::array<double, 3> factor = shared_texture_factor(input).value_or(std::array<double, 3>{1.0, 1.0, 1.0});
   for (int i = 0; i < om.new_images; ++i) {
     Texture tex;
     tex.path = om.new_images == 1 ? stem + "_tightex" : fmt::format("{}_tightex_{}", stem, i);
@@ -100,18 +123,12 @@ void add_new_textures(const Plan::State& plan, const TexturedMesh& input, const 
     tex.image = Image(plan.image_size[src].first, plan.image_size[src].second, Rgba8{0, 0, 0, 255});
     names.insert(lower(tex.path));
     om.mesh.textures.push_back(std::move(tex));
-    Material m;
-    m.name = om.new_images == 1 ? "tightex" : fmt::format("tightex_{}", i);
-    m.texture = i;
-    m.kd = factor;
-    names.insert(lower(m.name));
-    om.mesh.materials.push_back(m);
   }
 }
 
 /// Input material `in_mat` (-1: none) copied for the kept triangles once, with its texture copied under
-/// the input file's own stem; both renamed only where a name is taken ("kept_" keeps a copy from ever
-/// taking an input texture's own file name).
+/// the input file's own stem ("kept_" keeps a copy from ever taking an input texture's own file name);
+/// the material keeps its name, renamed only where the name is taken.
 int32_t kept_material(const TexturedMesh& input, int32_t in_mat, std::vector<int32_t>& material_of, std::vector<int>& texture_of,
                       std::set<std::string>& names, TexturedMesh& out) {
   int32_t& om = material_of[size_t(in_mat + 1)];
@@ -119,7 +136,7 @@ int32_t kept_material(const TexturedMesh& input, int32_t in_mat, std::vector<int
   Material m;  // no input material: white, as measure() and a renderer take it
   if (in_mat >= 0) m = input.materials[size_t(in_mat)];
   m.texture = -1;
-  m.name = unique_name(names, "kept_" + file_name_safe(in_mat >= 0 ? input.materials[size_t(in_mat)].name : "none"));
+  m.name = unique_name(names, file_name_safe(in_mat >= 0 ? input.materials[size_t(in_mat)].name : "none"));
   // The input's texture copied once under a kept_ name; -1 where it is not loaded.
   auto kept_texture = [&](int in_tex) {
     int& ot = texture_of[size_t(in_tex)];
@@ -218,16 +235,6 @@ void reserve_triangles(const TexturedMesh& input, OutputModel& om) {
 
 }  // namespace
 
-std::optional<std::array<double, 3>> shared_texture_factor(const TexturedMesh& mesh) {
-  std::optional<std::array<double, 3>> shared;
-  for (const Material& m : mesh.materials) {
-    if (m.texture < 0) continue;
-    if (shared && *shared != m.kd) return std::nullopt;
-    shared = m.kd;
-  }
-  return shared;
-}
-
 OutputModel build_output_model(const Plan::State& plan, const TexturedMesh& input) {
   OutputModel om;
   om.mesh.source = input.source;
@@ -236,10 +243,10 @@ OutputModel build_output_model(const Plan::State& plan, const TexturedMesh& inpu
   om.budget_is_default = plan.budget.is_default;
   reserve_triangles(input, om);
   const std::vector<int> image_index = renumber_images(plan, &om.new_images);
-  add_mapped_triangles(plan, input, image_index, om);
-  add_repeats(plan.set_aside, input, 0, om);
   std::set<std::string> names;  // file stems and material names taken, compared without case
-  add_new_textures(plan, input, image_index, names, om);
+  add_new_textures(plan, image_index, names, om);
+  add_mapped_triangles(plan, input, image_index, names, om);
+  add_repeats(plan.set_aside, input, 0, om);
   const size_t kept_from = om.mesh.num_triangles();
   add_kept_triangles(plan, input, names, om.mesh, om.input_corner);
   add_repeats(plan.set_aside, input, kept_from, om);

@@ -19,19 +19,17 @@ struct OutputModel {
   /// Per corner of mesh (3 per triangle): which corner of its input triangle (mesh.input_triangle) it is.
   std::vector<uint8_t> input_corner;
   bool budget_is_default = true;  // the plan's TextureBudget::is_default
+  /// Per material of the mapped triangles (the first materials of mesh, one per input material and
+  /// new image they use): the input material it copies (-1: none) and its new image.
+  std::vector<std::pair<int32_t, int>> mapped_materials;
 };
 
-/// The colour factor (Material::kd) every textured material of `mesh` shares, or nullopt where they
-/// differ or none has a texture.
-std::optional<std::array<double, 3>> shared_texture_factor(const TexturedMesh& mesh);
-
-/// Builds the output model of `plan` for `input` (the mesh it was made from). Its new materials take
-/// the factor every textured material of `input` shares (OBJ's Kd, glTF's baseColorFactor: the same
-/// number; white where they differ), so that each viewer shows the output as it shows the input: the
-/// OBJ writer writes it as Kd (the MTL specification and three.js multiply map_Kd by it, Blender and
-/// MeshLab show the texture alone; Meshroom writes Kd 0.6 beside its textures). The glTF writer leaves
-/// a textured material's factor white: every glTF viewer multiplies it, which would darken what those
-/// OBJ viewers show as it is.
+/// Builds the output model of `plan` for `input` (the mesh it was made from). Each input material
+/// that mapped triangles use becomes one new material per new image it spans (OutputModel::
+/// mapped_materials): its name, factors and statements as they were, its base colour the new image.
+/// Its colour factor stays where the input material had a texture (the OBJ writer writes it as Kd, the
+/// glTF writer keeps the material's own factor); where the material had none, its colour is baked into
+/// the new image and the factor is white.
 OutputModel build_output_model(const Plan::State& plan, const TexturedMesh& input);
 
 }  // namespace tightex

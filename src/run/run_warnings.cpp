@@ -42,11 +42,9 @@ void add_plan_warnings(const Plan& plan, const nlohmann::json& report, Lines& ou
 }
 
 /// The input's textured materials whose colour factor is not white (read from glTF: the factor a
-/// glTF output keeps in its material), where `format` loses it: PLY always, OBJ where the factors
-/// differ (one they share is its Kd: build_output_model gives it to the new materials).
+/// glTF output keeps in its material), where `format` loses it: PLY (OBJ keeps each as its Kd).
 size_t tinted_textures(const TexturedMesh& input, ModelFormat format) {
-  if (!input.gltf || format == ModelFormat::kGltf || format == ModelFormat::kGlb) return 0;
-  if (format == ModelFormat::kObj && shared_texture_factor(input)) return 0;
+  if (!input.gltf || format != ModelFormat::kPly) return 0;
   size_t n = 0;
   for (const Material& m : input.materials) n += m.texture >= 0 && (m.kd[0] != 1.0 || m.kd[1] != 1.0 || m.kd[2] != 1.0);
   return n;
