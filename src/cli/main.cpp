@@ -26,7 +26,7 @@ namespace {
 int run_measure(int argc, char** argv) {
   CLI::App app{"tightex measure: the figures of METRICS.md for an input model and an output model"};
   std::string in_path, out_path;
-  size_t samples = 200000;
+  size_t samples = kPsnrPoints;
   app.add_option("input", in_path, "the original model (OBJ, PLY, glTF or GLB)")->required();
   app.add_option("output", out_path, "the re-textured model (OBJ, PLY, glTF or GLB)")->required();
   app.add_option("--samples", samples, "surface PSNR samples");

@@ -121,10 +121,6 @@ struct MaterialMapEntry {
   std::string encoding;                    // "srgb_colour", "data" or "tangent_normal"
   std::vector<std::pair<int, int>> sizes;  // per page
   double scale = 1;                        // each side is the base colour's times this (below 1: reduced)
-  /// The chosen size's PSNR at the judging points (bake_material_maps) of its worst slot, each over the
-  /// channels it reads: against the input's map (a normal map: against its full-size bake); 99 when not
-  /// judged.
-  double judged_psnr_db = 99;
   double seconds = 0;  // its bake and the choice of its size
 };
 

@@ -210,7 +210,6 @@ json to_json(const ReportData& report) {
                       {"encoding", m.encoding},
                       {"sizes", m.sizes},
                       {"scale", m.scale},
-                      {"judged_psnr_db", m.judged_psnr_db},
                       {"seconds", m.seconds}});
     j["maps"] = std::move(maps);
   }

@@ -261,15 +261,17 @@ Report run(const std::string& input, const std::string& outdir, const Options& o
 
   const std::vector<TextureSource> sources = texture_sources(planned.mesh);
   auto [choice, budgets] = choose_images(options, opt, planned.mesh, sources, budget, format, result);
-  const ModelTarget target{outdir, fs::path(input).stem().string(), format, choice.encoding, &choice.images, options.html};
+  const ModelFormat input_format = model_format_of(input);
+  const ModelTarget target{outdir,         fs::path(input).stem().string(), format, choice.encoding, &choice.images, options.html,
+                           input_format == ModelFormat::kGltf || input_format == ModelFormat::kGlb};
   WrittenAndMeasured written = write_and_measure(target, planned.mesh, result.output, timings);
-  // The surface PSNR of the files as written (a lossy codec's images decoded back), the bake's beside it.
-  if (choice.written_psnr_db) written.metrics.surface_psnr_bake = std::exchange(written.metrics.surface_psnr, *choice.written_psnr_db);
+  // The figures are the files' as written (a lossy codec's images decoded back); the bake's beside them.
+  if (choice.encoding.lossy()) written.metrics.surface_psnr_bake = surface_psnr(planned.mesh, result.output);
   const Metrics& metrics = written.metrics;
   nlohmann::json json = report_json(result.report);
   add_run_figures(json, metrics, timings, seconds_since(t0), read_stats,
                   OutputFiles{outdir, output_model_name(input, format), options.html ? kHtmlName : "", written.removed});
-  json["bytes"] = bytes_json(planned.mesh, sources, result.output, choice, metrics.surface_psnr);
+  json["bytes"] = bytes_json(planned.mesh, sources, result.output, choice, metrics.surface_psnr, format);
   json["bytes"]["surface_psnr_bake_db"] = metrics.surface_psnr_bake.value_or(metrics.surface_psnr);
   if (!budgets.is_null()) json["bytes"]["budgets_tried"] = std::move(budgets);
   add_warnings(planned.plan, planned.mesh, read_stats, format, written.removed, json);

@@ -49,11 +49,12 @@ struct ModelTarget {
   ImageEncoding encoding;
   const EncodedImages* images = nullptr;  // the textures as `encoding` gives them, encoded already (or null)
   bool html = true;                       // gather report.html's model data
+  bool input_gltf = false;                // the input is glTF (the written model is read back as `tightex measure` reads it)
 };
 
-/// Writes the output model, measures it and gathers report.html's model data (the models' shown
-/// triangles, their textures as JPEG), side by side: the three are independent. The times go to
-/// `timings`.
+/// Writes the output model beside gathering report.html's model data (the models' shown triangles,
+/// their textures as JPEG), then measures the model as written (read back from its files, as
+/// `tightex measure` reads it). The times go to `timings`.
 WrittenAndMeasured write_and_measure(const ModelTarget& target, const TexturedMesh& input, const TexturedMesh& output,
                                      RunTimings& timings);
 

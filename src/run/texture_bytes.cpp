@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <functional>
 
+#include "io/gltf_document.hpp"
 #include "io/image_io.hpp"
 #include "report/metrics.hpp"
 
@@ -141,15 +142,31 @@ EncodingChoice choose_encoding(const BytesRequest& request, const TexturedMesh& 
 
 namespace {
 
+/// Whether a model written as `format` binds `slot` (glTF: its core and KHR_materials_* slots; OBJ: the
+/// MTL's map statements; PLY: none); nullopt: the model as read, every slot.
+bool holds(std::optional<ModelFormat> format, MaterialSlot slot) {
+  if (!format) return true;
+  switch (*format) {
+    case ModelFormat::kGltf:
+    case ModelFormat::kGlb:
+      return std::any_of(std::begin(kGltfSlots), std::end(kGltfSlots), [&](const GltfSlot& g) { return g.slot == slot; });
+    case ModelFormat::kObj:
+      return slot != MaterialSlot::kOcclusion && !(slot >= MaterialSlot::kSpecularStrength && slot <= MaterialSlot::kAnisotropy);
+    case ModelFormat::kPly:
+      break;
+  }
+  return false;
+}
+
 /// The bytes of a model's images by the slot its materials bind them to (each image once, under its
-/// first slot: the base colour first), and in total.
-nlohmann::json slot_bytes(const TexturedMesh& mesh, const std::vector<uint64_t>& bytes) {
+/// first slot: the base colour first; only slots `format` holds), and in total.
+nlohmann::json slot_bytes(const TexturedMesh& mesh, const std::vector<uint64_t>& bytes, std::optional<ModelFormat> format) {
   std::vector<int> slot(mesh.textures.size(), -2);  // -1: base colour, else the MaterialSlot
   for (const Material& m : mesh.materials)
     if (m.texture >= 0) slot[size_t(m.texture)] = -1;
   for (const Material& m : mesh.materials)
     for (size_t s = 0; s < kMaterialSlots; ++s)
-      if (m.maps[s] >= 0 && slot[size_t(m.maps[s])] == -2) slot[size_t(m.maps[s])] = int(s);
+      if (m.maps[s] >= 0 && slot[size_t(m.maps[s])] == -2 && holds(format, MaterialSlot(s))) slot[size_t(m.maps[s])] = int(s);
   nlohmann::json j = {{"base_colour", 0}, {"maps", nlohmann::json::object()}, {"total", 0}};
   for (size_t i = 0; i < slot.size() && i < bytes.size(); ++i) {
     if (slot[i] == -2) continue;
@@ -165,7 +182,7 @@ nlohmann::json slot_bytes(const TexturedMesh& mesh, const std::vector<uint64_t>&
 }  // namespace
 
 nlohmann::json bytes_json(const TexturedMesh& input, const std::vector<TextureSource>& sources, const TexturedMesh& output,
-                          const EncodingChoice& choice, double bake_psnr_db) {
+                          const EncodingChoice& choice, double written_psnr_db, ModelFormat format) {
   std::vector<uint64_t> in_bytes;
   for (const TextureSource& s : sources) in_bytes.push_back(s.bytes);
   const ImageEncoding& e = choice.encoding;
@@ -178,10 +195,10 @@ nlohmann::json bytes_json(const TexturedMesh& input, const std::vector<TextureSo
   if (jpeg) encoding["quality"] = e.jpeg_quality;
   if (e.format == ImageFormat::kWebp)
     encoding[e.webp_lossless ? "lossless" : "quality"] = e.webp_lossless ? nlohmann::json(true) : nlohmann::json(e.webp_quality);
-  return {{"input", slot_bytes(input, in_bytes)},
-          {"output", slot_bytes(output, choice.bytes)},
+  return {{"input", slot_bytes(input, in_bytes, std::nullopt)},
+          {"output", slot_bytes(output, choice.bytes, format)},
           {"encoding", encoding},
-          {"surface_psnr_written_db", choice.written_psnr_db.value_or(bake_psnr_db)}};
+          {"surface_psnr_written_db", written_psnr_db}};
 }
 
 }  // namespace tightex

@@ -41,8 +41,9 @@ EncodingChoice choose_encoding(const BytesRequest& request, const TexturedMesh& 
 
 /// report.json's "bytes": per model, the bytes of the images its materials bind, as base colour and per
 /// other map slot, and in total; the encoding chosen and why; the surface PSNR as written
-/// (`bake_psnr_db` where the codec is lossless).
+/// (`written_psnr_db`, measured from the files). An output image only slots `format` cannot hold read
+/// (OBJ's specular map in a glTF, glTF's occlusion in an MTL) is not written there and not counted.
 nlohmann::json bytes_json(const TexturedMesh& input, const std::vector<TextureSource>& sources, const TexturedMesh& output,
-                          const EncodingChoice& choice, double bake_psnr_db);
+                          const EncodingChoice& choice, double written_psnr_db, ModelFormat format);
 
 }  // namespace tightex
