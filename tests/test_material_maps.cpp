@@ -157,7 +157,9 @@ TEST(MaterialMaps, NormalsAreReexpressedInTheNewFrameWhereCopiedTexelsFail) {
 TEST(MaterialMaps, ObjMapsAreReadRebakedAndWritten) {
   TexturedMesh m = plate_with_maps();
   // As an OBJ scan's MTL binds them: a normal map (norm), a specular colour and a height map.
-  m.materials[0].maps = {-1, -1, -1, 1, 2, -1, -1, 2};
+  m.materials[0].maps = unbound_slots();
+  m.materials[0].maps[size_t(MaterialSlot::kNormal)] = 1;
+  m.materials[0].maps[size_t(MaterialSlot::kSpecular)] = m.materials[0].maps[size_t(MaterialSlot::kBump)] = 2;
   const fs::path dir = fs::temp_directory_path() / fmt::format("tightex_maps_obj_{}", ::getpid());
   fs::remove_all(dir);
   write_obj(m, (dir / "in").string(), "plate", ImageFormat::kPng);
@@ -249,13 +251,17 @@ TEST(MaterialMaps, APackedImageIsJudgedByItsWorstSlot) {
   for (int y = 0; y < orm.height; ++y)
     for (int x = 0; x < orm.width; ++x) orm.at(x, y).g = 128, orm.at(x, y).b = 0;
   const Options opt = small_options();
-  const Result r = at_default_budget(in, opt);
-  const nlohmann::json* entry = map_entry(r, "metallic_roughness");
-  ASSERT_NE(entry, nullptr);
-  const std::vector<MaterialMapFigures> measured = measure_material_maps(in, r.output);
+  Options unsized = opt;
+  unsized.material_map_budget_db = 0;  // every map at the base colour's size
+  const Result r = at_default_budget(in, opt), full = at_default_budget(in, unsized);
+  ASSERT_NE(map_entry(r, "metallic_roughness"), nullptr);
+  const std::vector<MaterialMapFigures> measured = measure_material_maps(in, r.output), at_full = measure_material_maps(in, full.output);
   const MaterialMapFigures* occlusion = figures_of(measured, MaterialSlot::kOcclusion);  // points into `measured`
+  const MaterialMapFigures* occlusion_full = figures_of(at_full, MaterialSlot::kOcclusion);
   ASSERT_NE(occlusion, nullptr);
-  EXPECT_NEAR((*entry)["judged_psnr_db"].get<double>(), occlusion->surface_psnr, 1.5);
+  ASSERT_NE(occlusion_full, nullptr);
+  // Reduced only as far as the occlusion itself allows (a mean over the three channels would allow more).
+  EXPECT_GE(occlusion->surface_psnr, std::min(opt.material_map_budget_db, occlusion_full->surface_psnr - 0.25) - 0.5);
 }
 
 TEST(MaterialMaps, AReducedMapIsJudgedAtItsOwnTextureCoordinates) {
@@ -267,6 +273,7 @@ TEST(MaterialMaps, AReducedMapIsJudgedAtItsOwnTextureCoordinates) {
   for (int y = 0; y < emissive.height; ++y)
     for (int x = 0; x < emissive.width; ++x) emissive.at(x, y).g = emissive.at(x, y).b = 128;
   in.materials[0].maps[size_t(MaterialSlot::kEmissive)] = int(in.textures.size());
+  in.materials[0].factor[size_t(MaterialSlot::kEmissive)] = {1, 1, 1, 1};  // glTF's default 0 would show no emission
   in.textures.push_back(Texture{"emissive", std::move(emissive)});
   const Result r = optimize(in, small_options());
   const nlohmann::json* entry = map_entry(r, "emissive");
@@ -275,7 +282,6 @@ TEST(MaterialMaps, AReducedMapIsJudgedAtItsOwnTextureCoordinates) {
   const std::vector<MaterialMapFigures> measured = measure_material_maps(in, r.output);
   const MaterialMapFigures* figures = figures_of(measured, MaterialSlot::kEmissive);  // points into `measured`
   ASSERT_NE(figures, nullptr);
-  EXPECT_GE(figures->surface_psnr, (*entry)["judged_psnr_db"].get<double>() - 3.0);
   EXPECT_GE(figures->surface_psnr, 45.0);
 }
 
@@ -299,7 +305,8 @@ TEST(MaterialMaps, PlyAndObjOutputsNameEachMapSlotTheyCannotBind) {
   ASSERT_EQ(obj.size(), 1u);  // MTL has no occlusion statement; the others have one
   EXPECT_NE(obj[0].find("occlusion"), std::string::npos);
   TexturedMesh normal_only = in;
-  normal_only.materials[0].maps = {-1, -1, -1, 1, -1, -1, -1, -1};
+  normal_only.materials[0].maps = unbound_slots();
+  normal_only.materials[0].maps[size_t(MaterialSlot::kNormal)] = 1;
   EXPECT_TRUE(write_obj(normal_only, (dir / "obj_normal").string(), "plate", ImageFormat::kPng).empty());
 
   // The command line: one warning line per slot, and the report lists them.
