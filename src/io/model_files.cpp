@@ -136,9 +136,11 @@ NamedFile find_named_file(const fs::path& folder, std::string written, bool allo
   const fs::path normal = fs::path(written).lexically_normal();
   const bool absolute = normal.has_root_directory() || (written.size() >= 2 && written[1] == ':');
   const bool escapes = !absolute && !normal.empty() && *normal.begin() == "..";
-  // An absolute or escaping reference is looked for only inside the folder, by a tail of it (a
-  // Windows exporter's "C:/Users/me/scan/tex.jpg", "../textures/tex.jpg" after the files were moved).
-  const std::optional<fs::path> found = search_named_file(folder, absolute || escapes ? fs::path() : fs::path(written), normal, root);
+  // An absolute path into the folder is read as written; any other absolute or escaping reference is
+  // looked for only inside the folder, by a tail of it (a Windows exporter's "C:/Users/me/scan/tex.jpg",
+  // "../textures/tex.jpg" after the files were moved).
+  const bool as_written = absolute ? normal.has_root_directory() && lies_in(normal, root) : !escapes;
+  const std::optional<fs::path> found = search_named_file(folder, as_written ? fs::path(written) : fs::path(), normal, root);
   if (found) {
     if (lies_in(*found, root)) return {found, {}};
     return {std::nullopt, fmt::format("is a symbolic link that leads out of the folder {}{}", root.string(), kLift)};
