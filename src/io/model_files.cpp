@@ -63,6 +63,13 @@ std::string path_of_file_uri(std::string_view uri) {
   return std::string(rest);
 }
 
+/// Whether `written` starts with a Windows drive ("C:/", "C:"), which is a component of its own on
+/// this platform.
+bool has_windows_drive(std::string_view written) {
+  const bool letter = !written.empty() && ((written[0] >= 'A' && written[0] <= 'Z') || (written[0] >= 'a' && written[0] <= 'z'));
+  return letter && written.size() >= 2 && written[1] == ':' && (written.size() == 2 || written[2] == '/');
+}
+
 /// Whether `path` (following its symbolic links) lies in the folder `root` (canonical already).
 bool lies_in(const fs::path& path, const fs::path& root) {
   std::error_code ec;
@@ -109,8 +116,7 @@ std::optional<fs::path> search_named_file(const fs::path& folder, const fs::path
   if (!exact.empty() && fs::exists(folder / exact, ec)) return folder / exact;
   std::vector<std::string> parts;
   for (const auto& part : written.relative_path()) parts.push_back(part.string());
-  const std::string text = written.string();
-  const bool absolute = written.has_root_directory() || (text.size() >= 2 && text[1] == ':');
+  const bool absolute = written.has_root_directory() || has_windows_drive(written.string());
   for (size_t first = 0; first < parts.size(); ++first) {
     if (first == 0 && absolute) continue;
     if (parts[first] == ".." || parts[first] == ".") continue;
@@ -134,7 +140,7 @@ NamedFile find_named_file(const fs::path& folder, std::string written, bool allo
   std::error_code ec;
   const fs::path root = fs::weakly_canonical(folder.empty() ? fs::path(".") : folder, ec);
   const fs::path normal = fs::path(written).lexically_normal();
-  const bool absolute = normal.has_root_directory() || (written.size() >= 2 && written[1] == ':');
+  const bool absolute = normal.has_root_directory() || has_windows_drive(written);
   const bool escapes = !absolute && !normal.empty() && *normal.begin() == "..";
   // An absolute path into the folder is read as written; any other absolute or escaping reference is
   // looked for only inside the folder, by a tail of it (a Windows exporter's "C:/Users/me/scan/tex.jpg",
