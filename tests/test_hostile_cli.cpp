@@ -413,7 +413,7 @@ std::string grid_ply(const std::string& texture) {
   for (const std::string& face : f) {
     std::istringstream corners(face.substr(2));
     s += "3";
-    for (std::string c; corners >> c;) s += " " + std::to_string(std::stoi(c) - 1);
+    for (std::string c; corners >> c;) s.append(" ").append(std::to_string(std::stoi(c) - 1));
     s += "\n";
   }
   return s;
