@@ -36,7 +36,8 @@ command's; ``--allow-large-size`` passes the command's own ``--force``.
   written under ``OUTPUT/_outside/``: nothing is ever written outside OUTPUT.
 - Nothing is skipped in silence: a remote (http, https) content, one the runner cannot read (another
   format, an unreadable external tileset) and one refused by the rule above are listed in the summary
-  ("remote", "unreadable", "refused", with the reason) and counted in the closing line.
+  ("remote", "unreadable", "refused", with the reason) and counted in the closing line; a local content
+  of another kind is copied through unchanged, so that the tileset stays complete.
 - At the end ``OUTPUT/summary.json`` and ``summary.csv``: per tile its status, input and output texels,
   surface PSNR, time, peak memory (the worker process's peak resident set during the tile) and error.
 
@@ -381,7 +382,7 @@ def read_tileset(tileset_path, output_root, allow_outside=False):
     """The tilesets (this one and every external one its content names) and the tiles they hold.
     Returns (tilesets, tiles, not_run): each tileset a dict with "input", "output" (paths) and "json"
     (parsed), "refs" [(content dict, key, tile id, input path)], "nested" [(content dict, key, tileset
-    path)]; tiles as folder_tiles gives them;
+    path)], "copies" [(content dict, key, input path, output path)] of contents copied unchanged; tiles as folder_tiles gives them;
     not_run the records of contents not run (content_target's, an external tileset that cannot be
     read, a content of a kind the runner does not read), each named "TILESET: URI"."""
     from . import InputError
@@ -404,7 +405,7 @@ def read_tileset(tileset_path, output_root, allow_outside=False):
             not_run[named_by] = _not_run(named_by, "unreadable", f"is not a readable tileset JSON ({e})".replace("\n", " "))
             continue
         rel_path = os.path.relpath(path, input_root).replace(os.sep, "/")
-        entry = {"input": path, "output": os.path.join(output_root, _relative_output(path, input_root)), "json": data, "refs": [], "nested": []}
+        entry = {"input": path, "output": os.path.join(output_root, _relative_output(path, input_root)), "json": data, "refs": [], "nested": [], "copies": []}
         for t in _walk_tiles(data["root"]):
             for content in _contents(t):
                 key = "uri" if "uri" in content else "url"
@@ -417,6 +418,8 @@ def read_tileset(tileset_path, output_root, allow_outside=False):
                                              f"(it reads {', '.join(CONTENT_EXTENSIONS)} and tileset .json)")
                 if skipped:
                     not_run[name] = _not_run(name, skipped[0], f"{name}: content {skipped[1]}")
+                    if target:  # a local file of another kind: copied through, so that the tileset stays complete
+                        entry["copies"].append((content, key, target, os.path.join(output_root, _relative_output(target, input_root))))
                 elif ext == ".json":
                     queue.append((target, name))
                     entry["nested"].append((content, key, target))
@@ -453,6 +456,13 @@ def write_tilesets(tilesets, records, output_root):
                     shutil.copyfile(source, copy)
                 if tile_id.startswith(OUTSIDE + "/"):
                     content[key] = urllib.parse.quote(os.path.relpath(copy, base).replace(os.sep, "/"))
+        for content, key, source, copy in ts["copies"]:
+            if not inside(copy, output_root):
+                raise RuntimeError(f"{source}: {copy} is not under {output_root}")
+            if os.path.isfile(source):
+                os.makedirs(os.path.dirname(copy), exist_ok=True)
+                shutil.copyfile(source, copy)
+                content[key] = urllib.parse.quote(os.path.relpath(copy, base).replace(os.sep, "/"))
         if not inside(ts["output"], output_root):
             raise RuntimeError(f"{ts['input']}: {ts['output']} is not under {output_root}")
         _write_atomically(ts["output"], json.dumps(ts["json"], indent=2) + "\n")

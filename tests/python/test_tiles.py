@@ -314,6 +314,7 @@ def test_hostile_tileset_contents_are_listed_and_nothing_leaves_the_folders(tigh
     for uri in remote:
         assert records[f"tileset.json: {uri}"]["status"] == "remote"
     assert ".pnts" in records["tileset.json: tiles/p.pnts"]["error"]
+    assert (out / "tiles" / "p.pnts").read_bytes() == b"pnts"  # copied through: the tileset stays complete
     with open(out / "summary.csv") as f:
         assert len(f.read().splitlines()) == 1 + len(records)
     # Nothing written outside OUTPUT, nothing of the model outside INPUT in it.
