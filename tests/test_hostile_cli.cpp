@@ -6,11 +6,19 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
+#include <sstream>
 #include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "command_line.hpp"
+#include "gltf_builder.hpp"
 
 #include "core/error.hpp"
 #include "io/image_io.hpp"
@@ -33,7 +41,25 @@ struct Case {
   std::string folder;  // the model's folder inside the test's own (may contain spaces)
   std::string obj_name = "in.obj", mtl_name = "m.mtl", texture_name = "t.png";
   bool out_under_file = false;  // -o names a path below a regular file: nothing can be written there
+  /// Writes what lies outside the model's folder (or links in it), given the test's folder and the model's.
+  std::function<void(const fs::path& dir, const fs::path& model)> setup;
+  bool allow_outside = false;  // run with --allow-outside-files
+  std::string error_mentions;  // a refusal's message must contain this
 };
+
+// A 16x16 gradient PNG, the catalogue's texture.
+void write_gradient(const fs::path& path, uint8_t blue = 128) {
+  Image img(16, 16);
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 16; ++x) img.at(x, y) = {uint8_t(x * 16), uint8_t(y * 16), blue, 255};
+  save_image(path.string(), img, ImageFormat::kPng);
+}
+
+// `text` with every "@DIR@" replaced by `dir`.
+std::string with_dir(std::string text, const fs::path& dir) {
+  for (size_t p = text.find("@DIR@"); p != std::string::npos; p = text.find("@DIR@", p)) text.replace(p, 5, dir.string());
+  return text;
+}
 
 // An 8x8 PNG of the fuzz seed corpus (fuzz/corpus/fuzz_image: one file per colour type and bit depth).
 std::string seed_png(const std::string& name) {
@@ -73,6 +99,59 @@ std::string grid_obj(const std::string& header = "mtllib m.mtl\nusemtl a\n", boo
 }
 
 const std::string kMtl = "newmtl a\nKd 1 1 1\nmap_Kd t.png\n";
+
+// References out of the model's folder ("scan", inside the test's folder, where the files named lie):
+// refused with one line naming the way out unless --allow-outside-files; one found inside the folder by
+// a tail of the path as written (a Windows exporter's absolute path) is read. @DIR@: the test's folder.
+void add_outside_cases(std::vector<Case>& c) {
+  auto outside = [&c](std::string name, std::string obj, std::string mtl, bool valid, auto setup, bool allow = false) {
+    Case k{std::move(name), std::move(obj), std::move(mtl), false, "", valid, "scan"};
+    k.setup = setup;
+    k.allow_outside = allow;
+    if (!valid) k.error_mentions = "--allow-outside-files";
+    c.push_back(k);
+  };
+  auto secret = [](const fs::path& dir, const fs::path&) { write_gradient(dir / "secret.png", 7); };
+  for (bool allow : {false, true}) {
+    const std::string v = allow ? "valid_allowed_" : "";
+    outside(v + "map_kd_leads_out", grid_obj(), "newmtl a\nmap_Kd ../secret.png\n", allow, secret, allow);
+    outside(v + "map_kd_absolute", grid_obj(), "newmtl a\nmap_Kd @DIR@/secret.png\n", allow, secret, allow);
+    outside(v + "map_kd_file_uri", grid_obj(), "newmtl a\nmap_Kd file://@DIR@/secret.png\n", allow, secret, allow);
+    outside(v + "mtllib_leads_out", grid_obj("mtllib ../m.mtl\nusemtl a\n"), "", allow,
+            [](const fs::path& dir, const fs::path&) {
+              std::ofstream(dir / "m.mtl") << kMtl;
+              write_gradient(dir / "t.png");
+            },
+            allow);
+    outside(v + "texture_is_a_symlink_out", grid_obj(), kMtl, allow,
+            [](const fs::path& dir, const fs::path& model) {
+              write_gradient(dir / "secret.png", 7);
+              fs::create_symlink("../secret.png", model / "t.png");
+            },
+            allow);
+    outside(v + "folder_is_a_symlink_out", grid_obj(), "newmtl a\nmap_Kd tex/t.png\n", allow,
+            [](const fs::path& dir, const fs::path& model) {
+              fs::create_directories(dir / "elsewhere");
+              write_gradient(dir / "elsewhere" / "t.png", 7);
+              fs::create_directory_symlink(dir / "elsewhere", model / "tex");
+            },
+            allow);
+  }
+  outside("map_bump_leads_out", grid_obj(), kMtl + "map_Bump ../secret.png\n", false, [secret](const fs::path& dir, const fs::path& model) {
+    secret(dir, model);
+    write_gradient(model / "t.png");
+  });
+  // Found inside the folder by a tail of the path as written, though a file of that path exists outside.
+  outside("valid_windows_absolute_path_found_inside", grid_obj(), "newmtl a\nmap_Kd C:\\Users\\me\\scan\\t.png\n", true,
+          [](const fs::path&, const fs::path& model) { write_gradient(model / "t.png"); });
+  outside("valid_leading_out_but_found_inside", grid_obj(), "newmtl a\nmap_Kd ../textures/t.png\n", true,
+          [](const fs::path& dir, const fs::path& model) {
+            fs::create_directories(model / "textures");
+            write_gradient(model / "textures" / "t.png");
+            fs::create_directories(dir / "textures");
+            write_gradient(dir / "textures" / "t.png", 7);
+          });
+}
 
 std::vector<Case> catalogue() {
   std::vector<Case> c;
@@ -124,6 +203,7 @@ std::vector<Case> catalogue() {
     k.out_under_file = true;
     c.push_back(k);
   }
+  add_outside_cases(c);
   return c;
 }
 
@@ -135,27 +215,28 @@ TEST_P(HostileCli, RefusedCleanlyOrProcessedCorrectly) {
   fs::remove_all(dir);
   const fs::path model = dir / k.folder;
   fs::create_directories(model);
-  std::ofstream(model / k.obj_name, std::ios::binary) << k.obj;
-  if (!k.mtl.empty()) std::ofstream(model / k.mtl_name, std::ios::binary) << k.mtl;
+  std::ofstream(model / k.obj_name, std::ios::binary) << with_dir(k.obj, dir);
+  if (!k.mtl.empty()) std::ofstream(model / k.mtl_name, std::ios::binary) << with_dir(k.mtl, dir);
   if (!k.texture_bytes.empty()) {
     std::ofstream(model / k.texture_name, std::ios::binary) << k.texture_bytes;
   } else if (k.texture) {
-    Image img(16, 16);
-    for (int y = 0; y < 16; ++y)
-      for (int x = 0; x < 16; ++x) img.at(x, y) = {uint8_t(x * 16), uint8_t(y * 16), 128, 255};
-    save_image((model / k.texture_name).string(), img, ImageFormat::kPng);
+    write_gradient(model / k.texture_name);
   }
+  if (k.setup) k.setup(dir, model);
   if (k.out_under_file) std::ofstream(dir / "blocker") << "a file, not a folder";
   const fs::path out = k.out_under_file ? dir / "blocker" / "out" : dir / (k.folder.empty() ? "out" : k.folder + " out");
   const std::string cmd = std::string(TIGHTEX_CLI) + " '" + (model / k.obj_name).string() + "' -o '" + out.string() +
-                          "' --size 64 --quiet 2> '" + (dir / "stderr.txt").string() + "'";
+                          "' --size 64 --quiet" + (k.allow_outside ? " --allow-outside-files" : "") + " 2> '" +
+                          (dir / "stderr.txt").string() + "'";
   const int status = std::system(cmd.c_str());
   ASSERT_TRUE(WIFEXITED(status)) << "killed by a signal";
   std::ifstream err_file(dir / "stderr.txt");
   const std::string err((std::istreambuf_iterator<char>(err_file)), {});
   if (k.valid) {
     ASSERT_EQ(WEXITSTATUS(status), 0) << err;
-    const TexturedMesh in = read_obj((model / k.obj_name).string());
+    ModelReadOptions read_options;
+    read_options.allow_outside_files = k.allow_outside;
+    const TexturedMesh in = read_obj((model / k.obj_name).string(), read_options);
     const TexturedMesh result = read_obj((out / k.obj_name).string());
     const Metrics m = measure(in, result, 20000);
     EXPECT_EQ(m.lost_triangles, 0u);
@@ -168,6 +249,7 @@ TEST_P(HostileCli, RefusedCleanlyOrProcessedCorrectly) {
                 err.find("t.png") != std::string::npos || (k.out_under_file && err.find("blocker/out") != std::string::npos))
         << "the message names no file: " << err;
     EXPECT_FALSE(fs::exists(out / k.obj_name)) << "a failed run left a model behind";
+    if (!k.error_mentions.empty()) EXPECT_NE(err.find(k.error_mentions), std::string::npos) << err;
   }
   fs::remove_all(dir);
 }
@@ -253,6 +335,119 @@ TEST(HostileCliOutput, AnOutputFolderThatCannotBeCreatedIsRefusedBeforeAnyWorkAn
   EXPECT_NO_THROW(check_output_folder((dir / "new" / "nested").string()));
   EXPECT_FALSE(fs::exists(dir / "new"));  // checked, not created: a failed run leaves no folder behind
   fs::remove_all(dir);
+}
+
+}  // namespace
+
+namespace {
+
+// glTF and PLY models whose buffer, image or TextureFile leads out of the model's folder: refused with
+// one line naming the model, the element and the way out, nothing written; with --allow-outside-files
+// read as before. The test's folder holds the model's folder "scan" and the files named outside it.
+struct Outside {
+  fs::path dir, model, out;
+  explicit Outside(const std::string& name) : dir(tightex::testing::scratch_folder("outside_" + name)), model(dir / "scan"), out(dir / "out") {
+    fs::create_directories(model);
+  }
+  // Runs the command on scan/FILE; its exit status, stderr in `err`.
+  int run(const std::string& file, const std::string& flags, std::string& err) const {
+    const int status = tightex::testing::run_tightex("'" + (model / file).string() + "' -o '" + out.string() + "' --size 64 --quiet " + flags +
+                                            " 2> '" + (dir / "stderr.txt").string() + "'");
+    err = tightex::testing::read_whole(dir / "stderr.txt");
+    return status;
+  }
+};
+
+// The glTF grid with its buffer and base colour image named by these URIs (@DIR@: the test's folder).
+std::string grid_gltf_naming(const std::string& buffer_uri, const std::string& image_uri, const fs::path& dir) {
+  tightex::testing::GridGltf g = tightex::testing::grid_gltf();
+  g.doc["buffers"][0]["uri"] = with_dir(buffer_uri, dir);
+  g.doc["images"][0] = {{"uri", with_dir(image_uri, dir)}};
+  return g.doc.dump();
+}
+
+TEST(HostileCliReferences, GltfBuffersAndImagesOutOfTheFolderAreRefusedUnlessAllowed) {
+  const std::string bin = tightex::testing::grid_gltf().bin;
+  struct Ref {
+    std::string buffer, image, element;
+  };
+  const std::vector<Ref> refs = {{"../secret.bin", "t.png", "buffers[0]"},
+                                 {"g.bin", "../secret.png", "images[0]"},
+                                 {"@DIR@/secret.bin", "t.png", "buffers[0]"},
+                                 {"g.bin", "@DIR@/secret.png", "images[0]"},
+                                 {"file://@DIR@/secret.bin", "t.png", "buffers[0]"},
+                                 {"g.bin", "file://@DIR@/secret.png", "images[0]"},
+                                 {"g.bin", "link.png", "images[0]"},
+                                 {"sub/g.bin", "t.png", "buffers[0]"}};
+  for (const Ref& ref : refs) {
+    SCOPED_TRACE(ref.buffer + " " + ref.image);
+    Outside o("gltf");
+    tightex::testing::write_whole(o.model / "g.bin", bin);
+    tightex::testing::write_whole(o.dir / "secret.bin", bin);
+    write_gradient(o.model / "t.png");
+    write_gradient(o.dir / "secret.png", 7);
+    fs::create_symlink("../secret.png", o.model / "link.png");
+    fs::create_directory_symlink(o.dir, o.model / "sub");  // scan/sub/g.bin is the test folder's g.bin
+    tightex::testing::write_whole(o.dir / "g.bin", bin);
+    tightex::testing::write_whole(o.model / "m.gltf", grid_gltf_naming(ref.buffer, ref.image, o.dir));
+    std::string err;
+    EXPECT_EQ(o.run("m.gltf", "", err), 1) << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+    EXPECT_NE(err.find("m.gltf: " + ref.element), std::string::npos) << err;
+    EXPECT_NE(err.find("--allow-outside-files"), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(o.out / "m.gltf")) << "a refused model left a model behind";
+    EXPECT_EQ(o.run("m.gltf", "--allow-outside-files", err), 0) << err;
+    EXPECT_TRUE(fs::exists(o.out / "m.gltf")) << err;
+  }
+}
+
+// The OBJ grid as an ascii PLY whose texture is named by `texture`.
+std::string grid_ply(const std::string& texture) {
+  std::vector<std::string> v, vt, f;
+  std::istringstream obj(grid_obj(""));
+  for (std::string line; std::getline(obj, line);) (line[0] == 'f' ? f : line[1] == 't' ? vt : v).push_back(line);
+  std::string s = "ply\nformat ascii 1.0\ncomment TextureFile " + texture + "\nelement vertex " + std::to_string(v.size()) +
+                  "\nproperty float x\nproperty float y\nproperty float z\nproperty float s\nproperty float t\nelement face " +
+                  std::to_string(f.size()) + "\nproperty list uchar int vertex_indices\nend_header\n";
+  for (size_t i = 0; i < v.size(); ++i) s += v[i].substr(2) + " " + vt[i].substr(3) + "\n";
+  for (const std::string& face : f) {
+    std::istringstream corners(face.substr(2));
+    s += "3";
+    for (std::string c; corners >> c;) s.append(" ").append(std::to_string(std::stoi(c) - 1));
+    s += "\n";
+  }
+  return s;
+}
+
+TEST(HostileCliReferences, PlyTextureFilesOutOfTheFolderAreRefusedUnlessAllowed) {
+  for (const std::string texture : {"../secret.png", "@DIR@/secret.png", "file://@DIR@/secret.png"}) {
+    SCOPED_TRACE(texture);
+    Outside o("ply");
+    write_gradient(o.dir / "secret.png", 7);
+    tightex::testing::write_whole(o.model / "m.ply", grid_ply(with_dir(texture, o.dir)));
+    std::string err;
+    EXPECT_EQ(o.run("m.ply", "", err), 1) << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+    EXPECT_NE(err.find("m.ply:3: texture"), std::string::npos) << err;
+    EXPECT_NE(err.find("--allow-outside-files"), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(o.out / "m.ply"));
+    EXPECT_EQ(o.run("m.ply", "--allow-outside-files", err), 0) << err;
+    EXPECT_TRUE(fs::exists(o.out / "m.ply")) << err;
+  }
+}
+
+// Every writer renames only into the folder it was given: a name that is not one plain file name is
+// refused before anything is written.
+TEST(HostileCliReferences, WritersRenameOnlyIntoTheirFolder) {
+  const fs::path dir = tightex::testing::scratch_folder("writers_folder");
+  for (const std::string name : {"../x.obj", "/tmp/x.obj", "a/x.obj", "..", "."}) {
+    SCOPED_TRACE(name);
+    bool written = false;
+    EXPECT_THROW(write_files_atomically((dir / "out").string(), {{name, [&](const fs::path&) { written = true; }}}), InputError);
+    EXPECT_FALSE(written);
+  }
+  EXPECT_NO_THROW(check_inside_output((dir / "out").string(), "model.obj"));
+  EXPECT_FALSE(fs::exists(dir / "x.obj"));
 }
 
 }  // namespace

@@ -491,15 +491,24 @@ TEST_F(ObjReaderTest, MalformedMaterialLibrary) {
 TEST_F(ObjReaderTest, DevicesAndPipesNamedByTheModelAreRefused) {
   // A model naming /dev/zero as its library or texture would be read until memory ran out, and a FIFO
   // with no writer would block forever; only regular files are read on a model's say-so.
+  // /dev/zero lies outside the model's folder: read only with allow_outside_files.
   ASSERT_EQ(::mkfifo((dir_ / "pipe").c_str(), 0600), 0);
+  ModelReadOptions outside;
+  outside.allow_outside_files = true;
   for (const std::string special : {"/dev/zero", "pipe"}) {
     const std::string lib = write("lib.obj", "mtllib " + special + "\n" + kSquareVerts + "f 1/1 2/2 3/3\n");
-    EXPECT_EQ(error_of(lib), lib + ":1: material library '" + special + "' is not a regular file (a device, pipe or socket)");
+    EXPECT_EQ(error_of(lib, outside), lib + ":1: material library '" + special + "' is not a regular file (a device, pipe or socket)");
     const std::string mtl = write("tex.mtl", "newmtl a\nmap_Kd " + special + "\n");
     const std::string tex = write("tex.obj", std::string("mtllib tex.mtl\nusemtl a\n") + kSquareVerts + "f 1/1 2/2 3/3\n");
-    const std::string message = error_of(tex);
+    const std::string message = error_of(tex, outside);
     EXPECT_EQ(message.rfind(mtl + ":2: texture '" + special + "' of material 'a' could not be loaded: ", 0), 0u) << message;
     EXPECT_NE(message.find("is not a regular file"), std::string::npos) << message;
+    if (special[0] == '/') {
+      EXPECT_EQ(error_of(lib).rfind(lib + ":1: material library '/dev/zero' is an absolute path out of the folder ", 0), 0u) << error_of(lib);
+      EXPECT_EQ(error_of(tex).rfind(mtl + ":2: map_Kd '/dev/zero' is an absolute path out of the folder ", 0), 0u) << error_of(tex);
+    } else {
+      EXPECT_EQ(error_of(lib), error_of(lib, outside));
+    }
   }
 }
 

@@ -20,6 +20,11 @@ struct ModelReadOptions {
   /// its own copy, TexturedMesh::source_mesh its instance), as a format without a scene graph (OBJ,
   /// PLY) must hold it. Off: each mesh once, in its own space, for write_gltf to put back.
   bool flatten_scene = false;
+  /// A file the model names (mtllib, map_*, TextureFile, a glTF buffer or image URI) may lie outside the
+  /// folder of the file naming it: an absolute path, a `..` that leads out, a symbolic link out, a
+  /// file: URI. Off (the default), such a reference is refused (InputError) where the file exists;
+  /// one found inside the folder by a tail of its path (read_obj) is read.
+  bool allow_outside_files = false;
 };
 
 /// What the reader did beyond plain reading, for the report.

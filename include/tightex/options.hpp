@@ -176,6 +176,8 @@ struct Options {
   bool measure = true;
 
   // The run's resources.
+  /// The files the input model names may lie outside its folder (ModelReadOptions::allow_outside_files).
+  bool allow_outside_files = false;
   /// Refuse a run whose estimated memory exceeds this many MiB, before any pixel is allocated; 0: 90% of RAM.
   double max_memory_mib = 0;
   /// Progress and cancellation (see ProgressCallback); empty: none.

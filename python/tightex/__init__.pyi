@@ -19,6 +19,7 @@ class Options:
     texels: float = 0.0
     aspect: float = 0.0
     allow_large_textures: bool = False
+    allow_outside_files: bool = False
     layout: Literal["atlas", "per-component"] = "atlas"
     max_page_side: int = 8192
     max_piece_faces: int = 6000000

@@ -29,11 +29,20 @@ command's; ``--allow-large-size`` passes the command's own ``--force``.
   refused tile is reported failed again without a run), unless ``--force``. Tiles that failed
   otherwise (a worker died too often, a full disk) are run again. A failed tile of
   a tileset gets its input content copied unchanged, so the tileset stays complete.
+- Untrusted input stays inside its folder (docs/architecture.md, "Files a model names"): a content URI
+  must name a file inside INPUT's folder (the top tileset's) once ``..`` is resolved and symbolic links
+  followed; an absolute path, a ``file:`` URI or one that leads out is refused, unless
+  ``--allow-outside-files`` (which the models' own references obey too); such a content allowed is
+  written under ``OUTPUT/_outside/``: nothing is ever written outside OUTPUT.
+- Nothing is skipped in silence: a remote (http, https) content, one the runner cannot read (another
+  format, an unreadable external tileset) and one refused by the rule above are listed in the summary
+  ("remote", "unreadable", "refused", with the reason) and counted in the closing line; a local content
+  of another kind is copied through unchanged, so that the tileset stays complete.
 - At the end ``OUTPUT/summary.json`` and ``summary.csv``: per tile its status, input and output texels,
   surface PSNR, time, peak memory (the worker process's peak resident set during the tile) and error.
 
-Exit status: 0 when every tile is done or skipped, 1 when some failed (see the summary), 2 for a bad
-command line.
+Exit status: 0 when every tile is done or skipped, 1 when some failed, or some content was remote,
+unreadable or refused without ``--skip-unreadable`` (see the summary), 2 for a bad command line.
 """
 
 import argparse
@@ -54,6 +63,10 @@ from concurrent.futures import ThreadPoolExecutor
 MODEL_EXTENSIONS = (".obj", ".ply", ".glb")
 CONTENT_EXTENSIONS = MODEL_EXTENSIONS + (".b3dm",)
 MANIFEST = "manifest.jsonl"
+#: The statuses of contents that were not run: each listed in the summary with its reason.
+NOT_RUN = ("refused", "remote", "unreadable")
+#: Where a content outside INPUT's folder (only with --allow-outside-files) is written, under OUTPUT.
+OUTSIDE = "_outside"
 CSV_COLUMNS = ("tile", "status", "input_texels", "input_used_texels", "output_texels", "psnr_db", "lost_triangles", "flipped",
                "seconds", "peak_mib", "error")
 
@@ -144,6 +157,8 @@ def _pass_through(tile, outdir):
     base = os.path.dirname(tile["input"])
     for f in files:
         target = os.path.join(outdir, os.path.relpath(f, base))
+        if not inside(target, outdir):
+            continue  # a file named outside the model's folder (--allow-outside-files): never written outside outdir
         os.makedirs(os.path.dirname(target), exist_ok=True)
         shutil.copyfile(f, target)
     return os.path.basename(tile["input"])
@@ -175,6 +190,8 @@ def run_tile(tile, options):
         _tightex.set_max_threads(tile["threads"])
     _reset_peak_memory()
     final = tile["out_dir"]
+    if not inside(final, tile["output_root"]):
+        raise RuntimeError(f"{tile['id']}: output folder {final} is not under {tile['output_root']}")
     parent = os.path.dirname(final)
     os.makedirs(parent, exist_ok=True)
     prefix = f".{os.path.basename(final)}.tmp-"
@@ -208,10 +225,18 @@ def run_tile(tile, options):
 # Finding the tiles.
 
 
-def _referenced_files(path):
+def inside(path, folder):
+    """Whether ``path`` lies in ``folder`` (or is it), symbolic links followed (a path that does not
+    exist yet: as far as it does)."""
+    real, root = os.path.realpath(path), os.path.realpath(folder)
+    return real == root or real.startswith(root.rstrip(os.sep) + os.sep)
+
+
+def _referenced_files(path, allow_outside=False):
     """The files a model names (an OBJ's MTL libraries and their textures, a PLY's TextureFile
     comments), found as written relative to the model's folder; those missing are left out (the run
-    reports them)."""
+    reports them), and those outside the model's folder unless ``allow_outside`` (the library refuses
+    them), so that hashing or copying a model never opens a file outside its folder."""
     folder = os.path.dirname(path)
     found = []
     ext = os.path.splitext(path)[1].lower()
@@ -222,7 +247,7 @@ def _referenced_files(path):
                     if line.startswith(b"mtllib"):
                         found += [os.path.join(folder, n.decode("utf-8", "replace")) for n in line.split()[1:]]
             for mtl in list(found):
-                if os.path.isfile(mtl):
+                if (allow_outside or inside(mtl, folder)) and os.path.isfile(mtl):
                     with open(mtl, "rb") as f:
                         for line in f:
                             words = line.split()
@@ -237,16 +262,16 @@ def _referenced_files(path):
                         break
     except OSError:
         pass
-    return [p for p in found if os.path.isfile(p)]
+    return [p for p in found if (allow_outside or inside(p, folder)) and os.path.isfile(p)]
 
 
-def input_hash(path):
+def input_hash(path, allow_outside=False):
     """SHA-256 over a tile's model file and the files it names (names and contents); "missing" for a
     model file that is not there (its run reports it)."""
     if not os.path.isfile(path):
         return "missing"
     h = hashlib.sha256()
-    for p in [path] + sorted(set(_referenced_files(path))):
+    for p in [path] + sorted(set(_referenced_files(path, allow_outside))):
         h.update(os.path.basename(p).encode() + b"\0")
         with open(p, "rb") as f:
             for block in iter(lambda: f.read(1 << 20), b""):
@@ -254,27 +279,46 @@ def input_hash(path):
     return h.hexdigest()
 
 
+def _relative_output(path, input_root):
+    """Where the input file ``path`` goes, relative to OUTPUT: its path under ``input_root``; a file
+    outside it (--allow-outside-files) under _outside/ with its absolute path, so never outside OUTPUT."""
+    rel = os.path.relpath(os.path.abspath(path), input_root)
+    if rel == os.pardir or rel.startswith(os.pardir + os.sep):
+        rel = os.path.join(OUTSIDE, os.path.abspath(path).lstrip(os.sep))
+    return rel
+
+
 def _tile(input_root, output_root, path):
     """The task description of the model or content file ``path`` under ``input_root``."""
-    rel = os.path.relpath(path, input_root)
+    rel = _relative_output(path, input_root)
     stem, ext = os.path.splitext(rel)
     return {"id": rel.replace(os.sep, "/"), "input": os.path.abspath(path), "out_dir": os.path.join(output_root, stem),
-            "kind": "b3dm" if ext.lower() == ".b3dm" else "model"}
+            "output_root": output_root, "kind": "b3dm" if ext.lower() == ".b3dm" else "model"}
 
 
-def folder_tiles(input_root, output_root):
-    """Every model file under ``input_root`` (sorted), as tasks writing under ``output_root``. Two
-    models of the same stem in one folder (a.obj, a.ply) get folders named with their extension."""
-    paths = []
+def folder_tiles(input_root, output_root, allow_outside=False):
+    """Every model file under ``input_root`` (sorted), as tasks writing under ``output_root``, and the
+    records of those refused (a symbolic link out of the folder, without ``allow_outside``). Two models
+    of the same stem in one folder (a.obj, a.ply) get folders named with their extension. Symbolic
+    links to folders are not followed."""
+    paths, refused = [], []
     for folder, dirs, files in os.walk(input_root):
         dirs[:] = sorted(d for d in dirs if not d.startswith("."))
-        paths += [os.path.join(folder, f) for f in sorted(files) if os.path.splitext(f)[1].lower() in MODEL_EXTENSIONS]
+        for f in sorted(files):
+            path = os.path.join(folder, f)
+            if os.path.splitext(f)[1].lower() not in MODEL_EXTENSIONS:
+                continue
+            if allow_outside or inside(path, input_root):
+                paths.append(path)
+            else:
+                rel = os.path.relpath(path, input_root).replace(os.sep, "/")
+                refused.append(_not_run(rel, "refused", f"{rel} {_LINK_OUT}{_LIFT}"))
     tiles = [_tile(input_root, output_root, p) for p in paths]
     stems = [t["out_dir"] for t in tiles]
     for t in tiles:
         if stems.count(t["out_dir"]) > 1:
-            t["out_dir"] = os.path.join(output_root, os.path.relpath(t["input"], input_root))
-    return tiles
+            t["out_dir"] = os.path.join(output_root, _relative_output(t["input"], input_root))
+    return tiles, refused
 
 
 def _contents(tile_json):
@@ -292,67 +336,135 @@ def _walk_tiles(tile_json):
         stack += reversed(t.get("children", []))
 
 
-def _local_path(uri, base):
-    """The file a content URI names relative to the folder ``base``; None for an absolute URL."""
+_LIFT = " (--allow-outside-files reads it)"
+_LINK_OUT = "is a symbolic link that leads out of the input folder"
+
+
+def _not_run(tile_id, status, reason):
+    """The summary record of a content that was not run (NOT_RUN), with its reason."""
+    return {"tile": tile_id, "status": status, "error": reason}
+
+
+def content_target(uri, base, input_root, allow_outside=False):
+    """The file a content URI names, relative to the folder ``base`` of the tileset naming it, as
+    (path, None); or (None, (status, reason)) for a content not run: "remote" (http, https),
+    "refused" (absolute, file:, leading out of ``input_root`` or a symbolic link out, unless
+    ``allow_outside``) or "unreadable" (another URI scheme)."""
     parsed = urllib.parse.urlparse(uri)
-    if parsed.scheme or parsed.netloc or os.path.isabs(parsed.path):
-        return None
-    return os.path.normpath(os.path.join(base, urllib.parse.unquote(parsed.path)))
+    scheme = parsed.scheme.lower()
+    if len(scheme) == 1:  # a Windows drive, "C:/tiles/t.glb": an absolute path
+        scheme, path = "", uri
+    else:
+        path = urllib.parse.unquote(parsed.path)
+    if scheme in ("http", "https") or (not scheme and parsed.netloc):
+        return None, ("remote", "is remote (http, https): not fetched, the tile runner reads local files")
+    if scheme == "file":
+        if not allow_outside:
+            return None, ("refused", f"is a file: URI, which may name any file on this machine{_LIFT}")
+        return os.path.normpath(path), None
+    if scheme:
+        return None, ("unreadable", f"is a {scheme}: URI, which the tile runner does not read")
+    absolute = os.path.isabs(path) or re.match(r"[A-Za-z]:[/\\]", path) is not None
+    target = os.path.normpath(os.path.join(base, path))
+    if allow_outside:
+        return target, None
+    if absolute:
+        return None, ("refused", f"is an absolute path{_LIFT}")
+    rel = os.path.relpath(target, input_root)
+    if rel == os.pardir or rel.startswith(os.pardir + os.sep):
+        return None, ("refused", f"leads ('..') out of the input folder {input_root}{_LIFT}")
+    if not inside(target, input_root):
+        return None, ("refused", f"{_LINK_OUT}{_LIFT}")
+    return target, None
 
 
-def read_tileset(tileset_path, output_root):
+def read_tileset(tileset_path, output_root, allow_outside=False):
     """The tilesets (this one and every external one its content names) and the tiles they hold.
-    Returns (tilesets, tiles): each tileset a dict with "input", "output" (paths) and "json" (parsed),
-    "refs" [(content dict, key, tile id or None)]; tiles as folder_tiles gives them."""
+    Returns (tilesets, tiles, not_run): each tileset a dict with "input", "output" (paths) and "json"
+    (parsed), "refs" [(content dict, key, tile id, input path)], "nested" [(content dict, key, tileset
+    path)], "copies" [(content dict, key, input path, output path)] of contents copied unchanged; tiles as folder_tiles gives them;
+    not_run the records of contents not run (content_target's, an external tileset that cannot be
+    read, a content of a kind the runner does not read), each named "TILESET: URI"."""
     from . import InputError
     input_root = os.path.dirname(os.path.abspath(tileset_path))
-    tilesets, tiles, seen = [], {}, set()
-    queue = [os.path.abspath(tileset_path)]
+    tilesets, tiles, seen, not_run = [], {}, set(), {}
+    queue = [(os.path.abspath(tileset_path), None)]
     while queue:
-        path = queue.pop(0)
+        path, named_by = queue.pop(0)
         if path in seen:
             continue
         seen.add(path)
         try:
             with open(path, "rb") as f:
                 data = json.loads(f.read())
+            if not isinstance(data, dict) or not isinstance(data.get("root"), dict):
+                raise ValueError("no \"root\" tile")
         except (OSError, ValueError) as e:
-            raise InputError(f"{path}: not a readable tileset JSON ({e})")
-        if not isinstance(data.get("root"), dict):
-            raise InputError(f"{path}: no \"root\" tile")
-        entry = {"input": path, "output": os.path.join(output_root, os.path.relpath(path, input_root)), "json": data, "refs": []}
+            if named_by is None:
+                raise InputError(f"{path}: not a readable tileset JSON ({e})")
+            not_run[named_by] = _not_run(named_by, "unreadable", f"is not a readable tileset JSON ({e})".replace("\n", " "))
+            continue
+        rel_path = os.path.relpath(path, input_root).replace(os.sep, "/")
+        entry = {"input": path, "output": os.path.join(output_root, _relative_output(path, input_root)), "json": data, "refs": [], "nested": [], "copies": []}
         for t in _walk_tiles(data["root"]):
             for content in _contents(t):
                 key = "uri" if "uri" in content else "url"
-                target = _local_path(str(content.get(key, "")), os.path.dirname(path))
-                if target is None:
-                    continue
-                ext = os.path.splitext(target)[1].lower()
-                if ext == ".json":
-                    queue.append(target)
-                elif ext in CONTENT_EXTENSIONS:
+                uri = str(content.get(key, ""))
+                name = f"{rel_path}: {uri}"
+                target, skipped = content_target(uri, os.path.dirname(path), input_root, allow_outside)
+                ext = os.path.splitext(target)[1].lower() if target else ""
+                if skipped is None and ext not in CONTENT_EXTENSIONS + (".json",):
+                    skipped = ("unreadable", f"is a {ext or 'extensionless'} content, which the tile runner does not read "
+                                             f"(it reads {', '.join(CONTENT_EXTENSIONS)} and tileset .json)")
+                if skipped:
+                    not_run[name] = _not_run(name, skipped[0], f"{name}: content {skipped[1]}")
+                    if target:  # a local file of another kind: copied through, so that the tileset stays complete
+                        entry["copies"].append((content, key, target, os.path.join(output_root, _relative_output(target, input_root))))
+                elif ext == ".json":
+                    queue.append((target, name))
+                    entry["nested"].append((content, key, target))
+                else:
                     tile = _tile(input_root, output_root, target)
                     tiles.setdefault(tile["id"], tile)
-                    entry["refs"].append((content, key, tile["id"]))
+                    entry["refs"].append((content, key, tile["id"], target))
         tilesets.append(entry)
-    return tilesets, list(tiles.values())
+    for record in not_run.values():
+        if not record["error"].startswith(record["tile"]):
+            record["error"] = f"{record['tile']}: {record['error']}"
+    return tilesets, list(tiles.values()), list(not_run.values())
 
 
-def write_tilesets(tilesets, records, input_root, output_root):
+def write_tilesets(tilesets, records, output_root):
     """Writes each tileset under OUTPUT with its content URIs pointing at the new files; a tile that
     failed keeps its URI, its input content copied there unchanged."""
+    written = {ts["input"]: ts["output"] for ts in tilesets}
     for ts in tilesets:
         base = os.path.dirname(ts["output"])
-        for content, key, tile_id in ts["refs"]:
+        for content, key, target in ts["nested"]:  # an external tileset from outside INPUT: its place under OUTPUT
+            if target in written and os.path.relpath(written[target], output_root).startswith(OUTSIDE + os.sep):
+                content[key] = urllib.parse.quote(os.path.relpath(written[target], base).replace(os.sep, "/"))
+        for content, key, tile_id, source in ts["refs"]:
             record = records.get(tile_id, {})
             if record.get("status") in ("done", "skipped", "passed_through") and record.get("content"):
                 content[key] = urllib.parse.quote(os.path.relpath(record["content"], base).replace(os.sep, "/"))
             else:
-                source = os.path.join(input_root, tile_id)
                 copy = os.path.join(output_root, tile_id)
+                if not inside(copy, output_root):
+                    raise RuntimeError(f"{tile_id}: {copy} is not under {output_root}")
                 os.makedirs(os.path.dirname(copy), exist_ok=True)
                 if os.path.isfile(source) and not os.path.exists(copy):
                     shutil.copyfile(source, copy)
+                if tile_id.startswith(OUTSIDE + "/"):
+                    content[key] = urllib.parse.quote(os.path.relpath(copy, base).replace(os.sep, "/"))
+        for content, key, source, copy in ts["copies"]:
+            if not inside(copy, output_root):
+                raise RuntimeError(f"{source}: {copy} is not under {output_root}")
+            if os.path.isfile(source):
+                os.makedirs(os.path.dirname(copy), exist_ok=True)
+                shutil.copyfile(source, copy)
+                content[key] = urllib.parse.quote(os.path.relpath(copy, base).replace(os.sep, "/"))
+        if not inside(ts["output"], output_root):
+            raise RuntimeError(f"{ts['input']}: {ts['output']} is not under {output_root}")
         _write_atomically(ts["output"], json.dumps(ts["json"], indent=2) + "\n")
 
 
@@ -457,7 +569,7 @@ def _estimate(tile, options):
 def _prepare(tile, manifest, options):
     """Hashes the tile's input; returns its record if an earlier run settled it (is_done), else None
     with tile["estimate"] set."""
-    tile["hash"] = input_hash(tile["input"])
+    tile["hash"] = input_hash(tile["input"], options.get("allow_outside_files", False))
     if is_done(tile, manifest, tile["hash"], options):
         earlier = manifest[tile["id"]]["record"]
         status = {"done": "skipped", "passed_through": "passed_through"}.get(earlier["status"], "failed")
@@ -543,7 +655,7 @@ def run_tiles(client, tiles, options, output_root, use_resources, skipped=0):
 def write_summary(output_root, records, wall_seconds, workers):
     """OUTPUT/summary.json (totals and every tile's record) and summary.csv (one row per tile)."""
     rows = sorted(records.values(), key=lambda r: r["tile"])
-    counts = {s: sum(r["status"] == s for r in rows) for s in ("done", "skipped", "passed_through", "failed")}
+    counts = {s: sum(r["status"] == s for r in rows) for s in ("done", "skipped", "passed_through", "failed") + NOT_RUN}
     summary = {"tiles": len(rows), **counts, "wall_seconds": wall_seconds, "workers": workers, "per_tile": rows}
     _write_atomically(os.path.join(output_root, "summary.json"), json.dumps(summary, indent=2) + "\n")
     tmp = os.path.join(output_root, f".summary.csv.tmp-{uuid.uuid4().hex[:8]}")
@@ -615,6 +727,8 @@ def parse_command_line(argv):
                     help="LocalCluster: the memory each worker offers tiles (default: this machine's / workers)")
     ap.add_argument("--force", action="store_true", help="redo tiles an earlier run completed")
     ap.add_argument("--allow-large-size", action="store_true", help="tightex's own --force (a --size above 16384)")
+    ap.add_argument("--skip-unreadable", action="store_true",
+                    help="contents that are remote, unreadable or refused (listed in the summary) are expected: exit 0 for them")
     ap.add_argument("--html", action="store_true",
                     help="write each tile's report.html too (off by default: a page of several MB per tile; summary.json "
                          "and each tile's report.json hold the figures)")
@@ -636,15 +750,16 @@ def tileset_of_folder(path):
 
 
 def collect_tiles(opts, output_root):
-    """The tiles of INPUT and, for a tileset, the tilesets to rewrite (else None)."""
+    """The tiles of INPUT, for a tileset the tilesets to rewrite (else None), and the records of the
+    contents not run (NOT_RUN)."""
     from . import InputError
     if os.path.isfile(opts.input) and opts.input.lower().endswith(".json"):
-        return read_tileset(opts.input, output_root)
+        return read_tileset(opts.input, output_root, opts.allow_outside_files)
     if os.path.isdir(opts.input):
-        tiles = folder_tiles(os.path.abspath(opts.input), output_root)
-        if not tiles:
+        tiles, refused = folder_tiles(os.path.abspath(opts.input), output_root, opts.allow_outside_files)
+        if not tiles and not refused:
             raise InputError(f"{opts.input}: no model file ({', '.join(MODEL_EXTENSIONS)}) under this folder and no tileset.json at its top")
-        return None, tiles
+        return None, tiles, refused
     raise InputError(f"{opts.input}: neither a folder of models nor a tileset .json file")
 
 
@@ -659,13 +774,13 @@ def main(argv=None):
         input_root = os.path.dirname(os.path.abspath(opts.input)) if os.path.isfile(opts.input) else os.path.abspath(opts.input)
         if output_root == input_root or output_root.startswith(input_root + os.sep):
             raise _tightex.InputError(f"{opts.output}: the output folder must lie outside the input's")
-        tilesets, tiles = collect_tiles(opts, output_root)
+        tilesets, tiles, not_run = collect_tiles(opts, output_root)
     except Error as e:
         print(f"tightex.tiles: error: {e}", file=sys.stderr)
         return 2
     os.makedirs(output_root, exist_ok=True)
     manifest = {} if opts.force else read_manifest(output_root)
-    records, todo = {}, []
+    records, todo = {r["tile"]: r for r in not_run}, []
     with ThreadPoolExecutor(os.cpu_count() or 1) as pool:  # hashing and tightex's estimate release the GIL
         for tile, settled in zip(tiles, pool.map(lambda t: _prepare(t, manifest, options), tiles)):
             if settled:
@@ -695,17 +810,21 @@ def main(argv=None):
             if cluster is not None:
                 cluster.close()
     if tilesets is not None:
-        write_tilesets(tilesets, records, os.path.dirname(os.path.abspath(opts.input)), output_root)
+        write_tilesets(tilesets, records, output_root)
     summary = write_summary(output_root, records, time.monotonic() - start, workers)
     for r in sorted(records.values(), key=lambda r: r["tile"]):
         if r["status"] == "failed":
             print(f"tightex.tiles: {r['tile']}: {r['error']}", file=sys.stderr)
+        if r["status"] in NOT_RUN:
+            print(f"tightex.tiles: {r['status']}: {r['error']}", file=sys.stderr)
         if r["status"] == "passed_through":
             print(f"tightex.tiles: {r['tile']}: passed through: nothing to bake", file=sys.stderr)
+    not_run_count = sum(summary[s] for s in NOT_RUN)
     print(f"tightex.tiles: {summary['done']} done, {summary['skipped']} skipped, {summary['passed_through']} passed through "
-          f"(nothing to bake), {summary['failed']} failed in "
+          f"(nothing to bake), {summary['failed']} failed, {summary['refused']} refused, {summary['remote']} remote, "
+          f"{summary['unreadable']} unreadable in "
           f"{summary['wall_seconds']:.1f} s; {os.path.join(opts.output, 'summary.json')}", file=sys.stderr)
-    return 1 if summary["failed"] else 0
+    return 1 if summary["failed"] or (not_run_count and not opts.skip_unreadable) else 0
 
 
 if __name__ == "__main__":

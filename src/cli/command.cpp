@@ -110,6 +110,7 @@ void define_flags(CLI::App& app, CommandLine& line, GivenFlags& given) {
   add_flag(app, "fine_fit", o.fine_fit)->excludes(no_fit);
   add(app, "material_map_budget_db", o.material_map_budget_db)->check(CLI::Range(0.0, 99.0));
   add_flag(app, "allow_large_textures", o.allow_large_textures);
+  add_flag(app, "allow_outside_files", o.allow_outside_files);
   add(app, "max_memory_mib", o.max_memory_mib)->check(CLI::PositiveNumber);
   add(app, "layout", given.layout)->check(CLI::IsMember(names_of(kLayouts)));
   define_encoding_flags(app, o, given);

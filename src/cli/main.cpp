@@ -30,6 +30,8 @@ int run_measure(int argc, char** argv) {
   app.add_option("input", in_path, "the original model (OBJ, PLY, glTF or GLB)")->required();
   app.add_option("output", out_path, "the re-textured model (OBJ, PLY, glTF or GLB)")->required();
   app.add_option("--samples", samples, "surface PSNR samples");
+  bool allow_outside = false;
+  app.add_flag("--allow-outside-files", allow_outside, "read files the models name outside their folders (tightex --help)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -44,6 +46,7 @@ int run_measure(int argc, char** argv) {
   ModelReadOptions in_options, out_options;
   in_options.flatten_scene = is_gltf(in_path) && !is_gltf(out_path);
   out_options.flatten_scene = is_gltf(out_path) && !is_gltf(in_path);
+  in_options.allow_outside_files = out_options.allow_outside_files = allow_outside;
   const TexturedMesh in = read_model(in_path, in_options), out = read_model(out_path, out_options);
   std::cout << to_json(measure(in, out, samples)).dump(2) << "\n";
   return 0;

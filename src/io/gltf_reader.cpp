@@ -288,7 +288,9 @@ std::string_view GltfReader::bytes_of_uri(const std::string& uri, const std::str
     return doc_->storage.emplace_back(std::move(bytes));
   }
   const std::string written = with_forward_slashes(percent_decoded(uri));
-  const std::optional<fs::path> found = find_named_file(folder_, written);
+  const NamedFile named = find_named_file(folder_, written, options_.allow_outside_files);
+  if (!named.refused.empty()) fail(element, "uri '{}' {}", excerpt(written), named.refused);
+  const std::optional<fs::path>& found = named.path;
   if (!found) fail(element, "file '{}' not found", excerpt(written));
   std::error_code ec;
   const std::string key = fs::weakly_canonical(*found, ec).string();

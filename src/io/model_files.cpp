@@ -47,48 +47,114 @@ std::string with_forward_slashes(std::string_view s) {
   return out;
 }
 
-std::optional<fs::path> find_named_file(const fs::path& folder, std::string written) {
-  if (written.size() >= 2 && written.front() == '"' && written.back() == '"') written = written.substr(1, written.size() - 2);
-  if (written.empty()) return std::nullopt;
+namespace {
+
+/// Whether `written` begins with "file:", without case.
+bool is_file_uri(std::string_view written) { return written.size() >= 5 && equals_ignoring_case(written.substr(0, 5), "file:"); }
+
+/// The path a file: URI names ("file:///a/b", "file://host/a/b", "file:/a/b" -> "/a/b").
+std::string path_of_file_uri(std::string_view uri) {
+  std::string_view rest = uri.substr(5);
+  if (rest.substr(0, 2) == "//") {
+    rest.remove_prefix(2);
+    const size_t slash = rest.find('/');
+    rest = slash == std::string_view::npos ? std::string_view() : rest.substr(slash);
+  }
+  return std::string(rest);
+}
+
+/// Whether `written` starts with a Windows drive ("C:/", "C:"), which is a component of its own on
+/// this platform.
+bool has_windows_drive(std::string_view written) {
+  const bool letter = !written.empty() && ((written[0] >= 'A' && written[0] <= 'Z') || (written[0] >= 'a' && written[0] <= 'z'));
+  return letter && written.size() >= 2 && written[1] == ':' && (written.size() == 2 || written[2] == '/');
+}
+
+/// Whether `path` (following its symbolic links) lies in the folder `root` (canonical already).
+bool lies_in(const fs::path& path, const fs::path& root) {
   std::error_code ec;
-  const fs::path exact = folder / written;
-  if (fs::exists(exact, ec)) return exact;
-  // Each component matched without case, one directory listing per component (directories of scans
-  // hold few files; a folder that cannot be listed ends the search).
-  auto without_case = [&](const std::vector<std::string>& parts) -> std::optional<fs::path> {
-    fs::path at = folder;
-    for (const std::string& part : parts) {
-      if (part == ".") continue;
-      if (part == "..") {
-        at /= part;
-        continue;
-      }
-      if (fs::exists(at / part, ec)) {
-        at /= part;
-        continue;
-      }
-      std::optional<fs::path> match;
-      for (fs::directory_iterator it(at, ec), end; !ec && it != end; it.increment(ec))
-        if (equals_ignoring_case(it->path().filename().string(), part)) {
-          if (match) return std::nullopt;  // two names differ only in case: ambiguous
-          match = it->path();
-        }
-      if (!match) return std::nullopt;
-      at = *match;
+  const fs::path real = fs::weakly_canonical(path, ec);
+  if (ec) return false;
+  const fs::path rel = real.lexically_relative(root);
+  return !rel.empty() && *rel.begin() != "..";
+}
+
+/// The search of find_named_file: `parts` (no "..") matched under `folder`, each component as written
+/// or without case. `root`: where the rule keeps the search (no folder listed outside it); empty: anywhere.
+std::optional<fs::path> find_without_case(const fs::path& folder, const std::vector<std::string>& parts, const fs::path& root) {
+  std::error_code ec;
+  fs::path at = folder;
+  for (const std::string& part : parts) {
+    if (part == ".") continue;
+    if (part == "..") {
+      at /= part;
+      continue;
     }
-    return at;
-  };
+    if (fs::exists(at / part, ec)) {
+      at /= part;
+      continue;
+    }
+    // One directory listing per component (directories of scans hold few files; a folder that cannot
+    // be listed ends the search).
+    if (!root.empty() && !lies_in(at, root)) return std::nullopt;
+    std::optional<fs::path> match;
+    for (fs::directory_iterator it(at, ec), end; !ec && it != end; it.increment(ec))
+      if (equals_ignoring_case(it->path().filename().string(), part)) {
+        if (match) return std::nullopt;  // two names differ only in case: ambiguous
+        match = it->path();
+      }
+    if (!match) return std::nullopt;
+    at = *match;
+  }
+  return at;
+}
+
+/// `folder` / `exact` where it exists (`exact` empty: not tried), else the longest tail of `written`
+/// found without case under `folder` (a Windows drive, "C:", is never part of a tail).
+std::optional<fs::path> search_named_file(const fs::path& folder, const fs::path& exact, const fs::path& written, const fs::path& root) {
+  std::error_code ec;
+  if (!exact.empty() && fs::exists(folder / exact, ec)) return folder / exact;
   std::vector<std::string> parts;
-  for (const auto& part : fs::path(written).relative_path()) parts.push_back(part.string());
-  // A Windows drive ("C:") is a component of its own on this platform: never part of a tail.
-  const bool absolute = fs::path(written).has_root_directory() || (written.size() >= 2 && written[1] == ':');
+  for (const auto& part : written.relative_path()) parts.push_back(part.string());
+  const bool absolute = written.has_root_directory() || has_windows_drive(written.string());
   for (size_t first = 0; first < parts.size(); ++first) {
     if (first == 0 && absolute) continue;
     if (parts[first] == ".." || parts[first] == ".") continue;
     const std::vector<std::string> tail(parts.begin() + long(first), parts.end());
-    if (auto found = without_case(tail); found && fs::is_regular_file(*found, ec)) return found;
+    if (auto found = find_without_case(folder, tail, root); found && fs::is_regular_file(*found, ec)) return found;
   }
   return std::nullopt;
+}
+
+}  // namespace
+
+NamedFile find_named_file(const fs::path& folder, std::string written, bool allow_outside) {
+  if (written.size() >= 2 && written.front() == '"' && written.back() == '"') written = written.substr(1, written.size() - 2);
+  if (written.empty()) return {};
+  constexpr const char* kLift = " (--allow-outside-files reads it)";
+  if (allow_outside) {
+    if (is_file_uri(written)) written = path_of_file_uri(written);
+    return {search_named_file(folder, written, written, {}), {}};
+  }
+  if (is_file_uri(written)) return {std::nullopt, std::string("is a file: URI, which may name any file on this machine") + kLift};
+  std::error_code ec;
+  const fs::path root = fs::weakly_canonical(folder.empty() ? fs::path(".") : folder, ec);
+  const fs::path normal = fs::path(written).lexically_normal();
+  const bool absolute = normal.has_root_directory() || has_windows_drive(written);
+  const bool escapes = !absolute && !normal.empty() && *normal.begin() == "..";
+  // An absolute path into the folder is read as written; any other absolute or escaping reference is
+  // looked for only inside the folder, by a tail of it (a Windows exporter's "C:/Users/me/scan/tex.jpg",
+  // "../textures/tex.jpg" after the files were moved).
+  const bool as_written = absolute ? normal.has_root_directory() && lies_in(normal, root) : !escapes;
+  const std::optional<fs::path> found = search_named_file(folder, as_written ? fs::path(written) : fs::path(), normal, root);
+  if (found) {
+    if (lies_in(*found, root)) return {found, {}};
+    return {std::nullopt, fmt::format("is a symbolic link that leads out of the folder {}{}", root.string(), kLift)};
+  }
+  // Not inside the folder: refused only where the file it names exists (else it is just missing).
+  if (!absolute && !escapes) return {};
+  if (!fs::exists(folder / normal, ec)) return {};
+  return {std::nullopt, fmt::format("{} out of the folder {}{}", absolute ? "is an absolute path" : "leads ('..')", root.string(), kLift)};
 }
 
 void prefault_for_write(void* start, size_t bytes) {

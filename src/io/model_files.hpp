@@ -21,12 +21,25 @@ bool equals_ignoring_case(std::string_view a, std::string_view b);
 /// Paths written on Windows use backslashes; on every platform tightex runs on '/' works.
 std::string with_forward_slashes(std::string_view s);
 
+/// What find_named_file gives: the file, or nothing (not found, or refused: `refused` says why).
+struct NamedFile {
+  std::optional<std::filesystem::path> path;
+  /// Non-empty where the reference leads out of the folder and the rule refuses it: why, as a phrase
+  /// that follows the reference in a message ("is an absolute path out of the folder /a/b (...)").
+  std::string refused;
+};
+
 /// The file a model names, as the exporter meant it: `written` (forward slashes) under `folder`, else
 /// the same path matched without case (exported on Windows or macOS, where TEXTURE.JPG and texture.jpg
 /// are one file), else the longest tail of it that exists under `folder` that way (an absolute path of
 /// the machine that wrote it, "C:/Users/me/scan/textures/tex_0.jpg", or "../textures/tex_0.jpg" after
-/// the files were moved). One pair of surrounding double quotes is dropped. nullopt if none exists.
-std::optional<std::filesystem::path> find_named_file(const std::filesystem::path& folder, std::string written);
+/// the files were moved). One pair of surrounding double quotes is dropped.
+/// The rule for untrusted input (docs/architecture.md, "Files a model names"): unless `allow_outside`,
+/// the file must lie inside `folder` once `..` is resolved and symbolic links are followed; an
+/// absolute path, a `..` that escapes or a symbolic link leading out that names an existing file
+/// outside is refused, a `file:` URI always; no folder outside is listed and no file outside opened.
+/// With `allow_outside`, `written` may name any file (a file: URI its path).
+NamedFile find_named_file(const std::filesystem::path& folder, std::string written, bool allow_outside);
 
 /// Page faults on freshly allocated buffers can cost more than the parsing that fills them
 /// (docs/decisions.md), so large buffers a reader is about to fill are mapped in one call. Only whole

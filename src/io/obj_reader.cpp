@@ -702,9 +702,12 @@ class ObjParser {
   std::vector<std::string> loaded_mtls_;                 // each library is read once
   std::vector<std::string> paths_found_;                 // ModelReadStats::paths_found
   std::vector<std::string> not_read_;                    // ModelReadStats::not_read: maps whose file is missing
-  /// find_named_file, noting in paths_found_ a file found under another name than written.
-  std::optional<fs::path> locate(const fs::path& folder, const std::string& written) {
-    std::optional<fs::path> found = find_named_file(folder, written);
+  /// find_named_file, noting in paths_found_ a file found under another name than written; a refused
+  /// reference fails with "WHERE 'written' why" (`where`: "FILE:LINE: map_Kd").
+  std::optional<fs::path> locate(const fs::path& folder, const std::string& written, const std::string& where) {
+    NamedFile named = find_named_file(folder, written, options_.allow_outside_files);
+    if (!named.refused.empty()) fail_input("{} '{}' {}", where, excerpt(written), named.refused);
+    std::optional<fs::path>& found = named.path;
     if (found && *found != folder / written) paths_found_.push_back(fmt::format("{} -> {}", written, found->lexically_normal().string()));
     return found;
   }
@@ -893,13 +896,14 @@ void ObjParser::parse_mtllib(std::string_view rest) {
   // mtllib may list several files separated by blanks, but a single file name may also contain
   // spaces: the whole rest of the line names a file if such a file exists, otherwise each word does.
   std::vector<std::pair<std::string, fs::path>> names;  // as written, as found
-  if (auto found = locate(folder, whole)) {
+  const std::string where = fmt::format("{}:{}: material library", path_, line_);
+  if (auto found = locate(folder, whole, where)) {
     names.push_back({whole, *found});
   } else {
     Tokens words(whole);
     size_t missing = 0;
     for (std::string_view w = words.next(); !w.empty(); w = words.next()) {
-      const auto f = locate(folder, std::string(w));
+      const auto f = locate(folder, std::string(w), where);
       missing += f ? 0 : 1;
       names.push_back({std::string(w), f ? *f : folder / w});
     }
@@ -982,14 +986,14 @@ void ObjParser::load_mtl(const fs::path& mtl_path, const std::string& data) {
       current->material.uv_scale = {scale[0], scale[1]};
       current->material.uv_offset = {offset[0], offset[1]};
       current->texture_written = file;
-      const std::optional<fs::path> found = locate(folder, file);
+      const std::optional<fs::path> found = locate(folder, file, fmt::format("{}:{}: map_Kd", mtl_name, mtl_line));
       current->texture_resolved = (found ? *found : folder / file).lexically_normal().string();
       current->texture_line = mtl_line;
     } else if (const int slot = mtl_map_slot(keyword); slot >= 0) {
       skip_map_options(tokens);
       const std::string file = with_forward_slashes(tokens.rest());
       if (file.empty() || current == nullptr) continue;
-      const std::optional<fs::path> found = locate(folder, file);
+      const std::optional<fs::path> found = locate(folder, file, fmt::format("{}:{}: {}", mtl_name, mtl_line, keyword));
       if (!found) {  // as before this map was read: the model is still usable without it
         not_read_.push_back(fmt::format("{}:{}: {} '{}' (file not found)", mtl_name, mtl_line, keyword, excerpt(file)));
         continue;

@@ -15,13 +15,24 @@ namespace tightex {
 
 namespace fs = std::filesystem;
 
+void check_inside_output(const std::string& folder, const std::string& name) {
+  // One plain file name: nothing a model names ("../x", "/x", "a/b") can place a file elsewhere. (A
+  // symbolic link already at that name is replaced by the rename, not written through.)
+  const fs::path p(name);
+  if (name.empty() || name == "." || name == ".." || p.has_root_path() || p.has_parent_path())
+    fail_input("{}: refusing to write '{}': not one file name inside the output folder", folder, name);
+}
+
 void write_files_atomically(const std::string& folder, const std::vector<OutputFile>& files) {
   std::error_code ec;
   fs::create_directories(folder, ec);
   if (!fs::is_directory(folder)) fail_input("{}: cannot create output directory", folder);
   const std::string tag = fmt::format(".tmp{}", ::getpid());
   std::vector<std::pair<fs::path, fs::path>> pending;  // temporary -> final, in rename order
-  for (const OutputFile& file : files) pending.push_back({fs::path(folder) / ("." + file.name + tag), fs::path(folder) / file.name});
+  for (const OutputFile& file : files) {
+    check_inside_output(folder, file.name);
+    pending.push_back({fs::path(folder) / ("." + file.name + tag), fs::path(folder) / file.name});
+  }
   try {
     // The files are independent (a model and its texture pages): written in parallel. A failure
     // anywhere is rethrown here once every write has stopped.

@@ -24,9 +24,14 @@ struct OutputFile {
 /// (".NAME.tmpPID", so a rename never crosses file systems and a reader never sees half a file), in
 /// parallel (each `write` is called once, from any thread), and only once all are complete renames them
 /// into place in order (the model last, so a model file that exists is complete with its textures). On any failure the temporary files are
-/// removed and the exception is rethrown, so a failed run leaves no model behind.
+/// removed and the exception is rethrown, so a failed run leaves no model behind. Each name is checked
+/// first (check_inside_output).
 /// Throws InputError naming the folder or file that cannot be created, written or renamed.
 void write_files_atomically(const std::string& folder, const std::vector<OutputFile>& files);
+
+/// Refuses (InputError naming the folder and the name) to write `name` into `folder` unless it is one
+/// plain file name, so that every writer renames only into the folder it was given.
+void check_inside_output(const std::string& folder, const std::string& name);
 
 /// Refuses, before any work, an output folder that write_files_atomically could not create or write
 /// into: a path that exists and is not a folder, or whose nearest existing ancestor is not a folder this

@@ -517,7 +517,10 @@ void PlyReader::assemble_materials(TexturedMesh& mesh) {
   const fs::path folder = fs::path(path_).parent_path();
   for (const PlyTextureFile& file : header_.texture_files) {
     const std::string written = with_forward_slashes(file.name);
-    const std::optional<fs::path> found = find_named_file(folder, written);
+    const NamedFile named = find_named_file(folder, written, options_.allow_outside_files);
+    if (!named.refused.empty())
+      fail_input("{}:{}: texture '{}' (comment TextureFile) {}", path_, file.line, excerpt(file.name), named.refused);
+    const std::optional<fs::path>& found = named.path;
     if (found && *found != folder / written) paths_found_.push_back(fmt::format("{} -> {}", written, found->lexically_normal().string()));
     Material m;
     m.name = fs::path(written).stem().string();

@@ -61,6 +61,7 @@ void bind_options(py::module_& m) {
   c.def_readwrite("texels", &Options::texels, doc("texels").c_str());
   c.def_readwrite("aspect", &Options::aspect, (doc("aspect") + " (0: auto)").c_str());
   c.def_readwrite("allow_large_textures", &Options::allow_large_textures, doc("allow_large_textures").c_str());
+  c.def_readwrite("allow_outside_files", &Options::allow_outside_files, doc("allow_outside_files").c_str());
   choice(c, "layout", &Options::layout, kLayouts);
   c.def_readwrite("max_page_side", &Options::max_page_side, doc("max_page_side").c_str());
   c.def_readwrite("max_piece_faces", &Options::max_piece_faces, doc("max_piece_faces").c_str());

@@ -56,6 +56,10 @@ constexpr std::array kHelps{
                "within 0.25 dB of the base colour's size's (a normal map: against itself at full size, never larger); "
                "default 51; 0 keeps every map at the base colour's size"},
     OptionHelp{"allow_large_textures", "--force", "allow a texture side above 16384"},
+    OptionHelp{"allow_outside_files", "--allow-outside-files",
+               "read files the model names (material libraries, textures, glTF buffers and images) outside the folder of the "
+               "file that names them: absolute paths, file: URIs, '..' or symbolic links leading out (default: refused, since "
+               "a model from elsewhere could pull any readable file into its output)"},
     OptionHelp{"max_memory_mib", "--max-memory", "refuse inputs whose estimated memory exceeds this many MiB (default: 90% of RAM)"},
     OptionHelp{"layout", "--layout", "atlas: all components in one texture; per-component: one texture each (the paper's)"},
     OptionHelp{"texture_format", "--format",

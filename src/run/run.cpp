@@ -83,6 +83,7 @@ BytesRequest bytes_request(const Options& o) {
 TexturedMesh read_geometry(const std::string& input, const Options& options, ModelReadStats* read_stats) {
   ModelReadOptions geometry_only;
   geometry_only.load_textures = false;
+  geometry_only.allow_outside_files = options.allow_outside_files;
   // OBJ and PLY have no scene graph: a glTF scene written as one is placed in world space.
   const ModelFormat format = output_format(input, options);
   geometry_only.flatten_scene = format == ModelFormat::kObj || format == ModelFormat::kPly;

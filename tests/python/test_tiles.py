@@ -264,3 +264,77 @@ def test_folder_with_a_tileset_is_the_tileset_and_an_empty_folder_is_refused(tig
     rc, err = run_tiles(empty, tmp_path / "out2")
     assert rc == 2 and "no model file" in err, err
     assert not (tmp_path / "out2").exists()
+
+
+def files_under(root):
+    return sorted(os.path.relpath(os.path.join(d, n), root) for d, _, files in os.walk(root) for n in files)
+
+
+def test_hostile_tileset_contents_are_listed_and_nothing_leaves_the_folders(tightex, tmp_path):
+    """Contents that lead out of the tileset's folder (.., absolute, file:, a symbolic link, a nested
+    tileset that escapes or lies outside), remote ones and one of a kind the runner does not read: each
+    listed in the summary with its reason, counted, exit 1 (0 with --skip-unreadable); nothing outside
+    INPUT read into OUTPUT, nothing written outside OUTPUT. With --allow-outside-files the outside ones
+    run, written under OUTPUT/_outside."""
+    vendor = tmp_path / "vendor"
+    root = vendor / "in"
+    make_boxes(root / "tiles" / "t0", 6, 1)
+    make_boxes(vendor / "evil", 4, 2)
+    os.symlink(vendor / "evil", root / "tiles" / "link")
+    (root / "tiles" / "p.pnts").write_bytes(b"pnts")
+    box = {"box": [0, 0, 0, 100, 0, 0, 0, 100, 0, 0, 0, 10]}
+
+    def tileset(uris):
+        children = [{"boundingVolume": box, "geometricError": 0, "content": {"uri": u}} for u in uris]
+        return {"asset": {"version": "1.1"}, "geometricError": 100,
+                "root": {"boundingVolume": box, "geometricError": 50, "refine": "ADD", "children": children}}
+
+    (root / "sub").mkdir()
+    (root / "sub" / "tileset.json").write_text(json.dumps(tileset(["../../evil/boxes.obj"])))
+    (vendor / "outer").mkdir()
+    (vendor / "outer" / "tileset.json").write_text(json.dumps(tileset(["../evil/boxes.obj"])))
+    outside = ["../evil/boxes.obj", str(vendor / "evil" / "boxes.obj"), "file://" + str(vendor / "evil" / "boxes.obj"),
+               "tiles/link/boxes.obj", "../outer/tileset.json"]
+    remote = ["http://example.com/t.glb", "https://example.com/t.b3dm"]
+    write_tileset(root, tileset(["tiles/t0/boxes.obj", "sub/tileset.json", "tiles/p.pnts"] + outside + remote))
+    before = files_under(vendor)
+    out = vendor / "out" / "a" / "b"
+    rc, err = run_tiles(root / "tileset.json", out, "--workers", "1", "--size", "64")
+    assert rc == 1, err
+    with open(out / "summary.json") as f:
+        summary = json.load(f)
+    assert (summary["done"], summary["refused"], summary["remote"], summary["unreadable"], summary["failed"]) == (1, 6, 2, 1, 0), summary
+    assert "1 done" in err and "6 refused, 2 remote, 1 unreadable" in err, err
+    records = {r["tile"]: r for r in summary["per_tile"]}
+    for uri in outside:
+        r = records[f"tileset.json: {uri}"]
+        assert r["status"] == "refused" and uri in r["error"] and "--allow-outside-files" in r["error"], r
+    assert records["sub/tileset.json: ../../evil/boxes.obj"]["status"] == "refused"
+    assert "symbolic link" in records["tileset.json: tiles/link/boxes.obj"]["error"]
+    for uri in remote:
+        assert records[f"tileset.json: {uri}"]["status"] == "remote"
+    assert ".pnts" in records["tileset.json: tiles/p.pnts"]["error"]
+    assert (out / "tiles" / "p.pnts").read_bytes() == b"pnts"  # copied through: the tileset stays complete
+    with open(out / "summary.csv") as f:
+        assert len(f.read().splitlines()) == 1 + len(records)
+    # Nothing written outside OUTPUT, nothing of the model outside INPUT in it.
+    assert [p for p in files_under(vendor) if p not in before and not p.startswith(os.path.join("out", "a", "b") + os.sep)] == []
+    assert os.listdir(vendor / "out" / "a") == ["b"]
+    assert not [p for p in files_under(out) if "evil" in p or p.startswith("_outside")]
+
+    rc, err = run_tiles(root / "tileset.json", out, "--workers", "1", "--size", "64", "--skip-unreadable")
+    assert rc == 0, err
+
+    allowed = vendor / "allowed"
+    rc, err = run_tiles(root / "tileset.json", allowed, "--workers", "1", "--size", "64", "--allow-outside-files", "--skip-unreadable")
+    assert rc == 0, err
+    with open(allowed / "summary.json") as f:
+        summary = json.load(f)
+    assert (summary["done"], summary["refused"], summary["remote"], summary["unreadable"]) == (3, 0, 2, 1), summary
+    assert [p for p in files_under(vendor) if p not in before and not p.startswith(("out" + os.sep, "allowed" + os.sep))] == []
+    evil_out = [r["content"] for r in summary["per_tile"] if r["tile"].startswith("_outside/")]
+    assert evil_out and all(c.startswith(str(allowed / "_outside") + os.sep) for c in evil_out), evil_out
+    with open(allowed / "tileset.json") as f:
+        for child in json.load(f)["root"]["children"]:
+            uri = child["content"]["uri"]
+            assert uri.startswith("http") or os.path.exists(allowed / uri), uri
