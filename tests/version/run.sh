@@ -1,14 +1,15 @@
 #!/bin/sh
 # One version: `tightex --version` shows git describe of the source tree (the project version alone
-# outside a git checkout), report.json's "tightex_version" and tightex.__version__ are the same string,
-# and pyproject.toml's version is CMakeLists.txt's project version.
+# outside a git checkout, no SOURCE_DIR/.git, as cmake/version.cmake decides), report.json's
+# "tightex_version" and tightex.__version__ are the same string, and pyproject.toml's version is
+# CMakeLists.txt's project version.
 # Arguments: TIGHTEX SOURCE_DIR PROJECT_VERSION [PYTHON PYTHONPATH] (the Python check where given).
 set -eu
 tightex=$1 src=$2 project_version=$3
 fail() { echo "version: $*" >&2; exit 1; }
 version=$("$tightex" --version)
 [ -n "$version" ] || fail "tightex --version printed nothing"
-if command -v git >/dev/null && described=$(git -C "$src" describe --tags --always 2>/dev/null); then
+if [ -e "$src/.git" ] && command -v git >/dev/null && described=$(git -C "$src" describe --tags --always 2>/dev/null); then
   # Without --dirty: the build (which refreshes the string) may predate an edit to the tree.
   case "$version" in *"$described"*) ;; *) fail "tightex --version says '$version', git describe '$described' (rebuild?)" ;; esac
 else
