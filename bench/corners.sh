@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The corner rules (docs/corners.md) on every model in ../shared/data: for each --map and --corners, the
-# METRICS.md figures of the tool's report (the same measure() as `tightex measure IN OUT`).
+# docs/metrics.md figures of the tool's report (the same measure() as `tightex measure IN OUT`).
 # Usage: bench/corners.sh [maps="area harmonic"] [rules="arcs turning"]
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -2,7 +2,7 @@
 # texture-defrag (Maggiordomo, Cignoni, Tarini 2021; github.com/maggio-a/texture-defrag) and tightex on
 # the same inputs, one after the other in one run: wall, user and sys time and peak memory of each whole
 # process (median of N runs, /usr/bin/time), then `tightex measure INPUT OUTPUT` on both outputs
-# (METRICS.md: output texels, surface PSNR, lost and flipped triangles), as a markdown table with the
+# (docs/metrics.md: output texels, surface PSNR, lost and flipped triangles), as a markdown table with the
 # ratios texture-defrag / tightex.
 #
 # Usage:

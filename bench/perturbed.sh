@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Robustness sweep: every model in ../shared/data made messy as unseen scans come (tools/perturb_obj.py:
-# pepper, patches, noise, flip), each through every --map; one line per run with the METRICS.md figures
+# pepper, patches, noise, flip), each through every --map; one line per run with the docs/metrics.md figures
 # that must hold (flipped 0, charts = components, utilization) and the ones that measure quality.
 # Usage: [MAPS="detail area"] [MODES="pepper noise"] [TIGHTEX=binary] bench/perturbed.sh [SEED=7] [extra tightex options...]
 # (MAPS: all four by default; MODES: all four perturbations by default)

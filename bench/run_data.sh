@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # End-to-end figures of the tightex CLI on every model in ../shared/data: wall time (median of N runs)
-# and peak memory from /usr/bin/time, quality figures from the tool's report (METRICS.md).
+# and peak memory from /usr/bin/time, quality figures from the tool's report (docs/metrics.md).
 # Usage: bench/run_data.sh [RUNS=3] [extra tightex options...]   (TIGHTEX_BIN: the binary, default build/tightex)
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -273,7 +273,7 @@ inline TexturedMesh mesh_from_bytes(const uint8_t* data, size_t size, Options& o
   options.holes = (flags & 2) ? HoleMode::kCut : HoleMode::kFill;
   static constexpr int kSizes[4] = {64, 16, 8, 128};
   options.size = kSizes[(flags >> 4) & 3];
-  // The METRICS.md figures are measured below with fewer PSNR samples: optimize's own measure takes
+  // The docs/metrics.md figures are measured below with fewer PSNR samples: optimize's own measure takes
   // 200k samples, which costs ~90% of a run under the sanitizers and covers no more code.
   options.measure = false;
 

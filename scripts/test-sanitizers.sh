@@ -26,7 +26,7 @@ for ((i = 0; i < shards; ++i)); do
   GTEST_TOTAL_SHARDS=$shards GTEST_SHARD_INDEX=$i timeout 1800 ./tightex_tests --gtest_filter='-*RealData*:TextureBytes.WebpTargetPsnr*' >"$logs/shard$i.log" 2>&1 &
   pids+=($!)
 done
-timeout 900 ./tightex_tests --gtest_filter='SharedData/RealData.CliOutputIsOneFoldFreeChartPerComponentFillingTheTexture/fuze' >"$logs/fuze.log" 2>&1 &
+timeout 900 ./tightex_tests --gtest_filter='Scans/RealData.CliOutputIsOneFoldFreeChartPerComponentFillingTheTexture/fuze' >"$logs/fuze.log" 2>&1 &
 pids+=($!)
 failed=0
 for ((i = 0; i < ${#pids[@]}; ++i)); do

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The whole test suite: unit and stage tests on generated meshes, and every model in ../shared/data
-# through the CLI (those skip cleanly when ../shared/data is absent).
+# The whole test suite: unit and stage tests on generated meshes, and real scans through the CLI:
+# the repository's own (tests/data/fuze) always, every model of ../shared/data where it is present.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/build.sh

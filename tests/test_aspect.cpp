@@ -231,7 +231,7 @@ TEST(Aspect, AnAspectOutOfRangeIsRefused) {
   }
 }
 
-// Every texel centre of a chart's rectangle is inside the chart as METRICS.md measures it from the
+// Every texel centre of a chart's rectangle is inside the chart as docs/metrics.md measures it from the
 // stored texture coordinates, for sizes that are not powers of two and for long textures (the corner
 // texel centres sit on the chart's edge up to kChartInset; exactly on it, u * W could miss by an ulp).
 TEST(Aspect, ChartsCoverEveryTexelCentreAtAnySize) {

@@ -148,7 +148,7 @@ TEST_F(PlyWriterTest, AFolderThatCannotBeMadeIsAnInputError) {
   EXPECT_THROW(write_ply(two_texture_mesh(false), (dir_ / "file").string(), "m", ImageFormat::kPng), InputError);
 }
 
-/// The METRICS.md figures of `tightex measure IN OUT`, as JSON.
+/// The docs/metrics.md figures of `tightex measure IN OUT`, as JSON.
 nlohmann::json measure_cli(const fs::path& in, const fs::path& out, const fs::path& json) {
   EXPECT_EQ(run_cli("measure '" + in.string() + "' '" + out.string() + "' --samples 20000 > '" + json.string() + "'"), 0);
   std::ifstream f(json);

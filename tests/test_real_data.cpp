@@ -1,7 +1,10 @@
-// Every model in ../shared/data through the tightex command, its written output read back and
-// measured independently of the tool's own report (METRICS.md). Skips when the data is absent.
+// Every real scan through the tightex command, its written output read back and measured
+// independently of the tool's own report (docs/metrics.md): the one in the repository (tests/data/fuze,
+// so a fresh clone runs the real-data path and its quality gate) and those of ../shared/data where it
+// is present (the tests that need one of those skip without it).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include <sys/wait.h>
@@ -11,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <set>
 #include <string>
 #include <nlohmann/json.hpp>
 
@@ -25,15 +29,25 @@ using namespace tightex;
 
 namespace {
 
+/// The repository's scan (tests/data/fuze, MIT), the one every checkout has.
+const fs::path kFuze = fs::path(TIGHTEX_REPO_DATA) / "fuze" / "fuze.obj";
+
+/// The OBJ models of tests/data, then those of ../shared/data (where present) whose folder name is not
+/// already taken by the repository's: one entry per model folder, sorted within each root.
 std::vector<std::string> data_models() {
   std::vector<std::string> models;
-  const fs::path root(TIGHTEX_SHARED_DATA);
-  if (!fs::is_directory(root)) return models;
-  for (const auto& dir : fs::directory_iterator(root))
-    if (dir.is_directory())
-      for (const auto& f : fs::directory_iterator(dir.path()))
-        if (f.path().extension() == ".obj") models.push_back(f.path().string());
-  std::sort(models.begin(), models.end());
+  std::set<std::string> folders;
+  for (const fs::path root : {fs::path(TIGHTEX_REPO_DATA), fs::path(TIGHTEX_SHARED_DATA)}) {
+    if (!fs::is_directory(root)) continue;
+    std::vector<std::string> found;
+    for (const auto& dir : fs::directory_iterator(root))
+      if (dir.is_directory() && !folders.contains(dir.path().filename().string()))
+        for (const auto& f : fs::directory_iterator(dir.path()))
+          if (f.path().extension() == ".obj") found.push_back(f.path().string());
+    std::sort(found.begin(), found.end());
+    for (const std::string& m : found) folders.insert(fs::path(m).parent_path().filename().string());
+    models.insert(models.end(), found.begin(), found.end());
+  }
   return models;
 }
 
@@ -122,7 +136,7 @@ TEST_P(RealData, CliOutputIsOneFoldFreeChartPerComponentFillingTheTexture) {
   fs::remove_all(out);
 }
 
-/// Runs the CLI with `options` and returns its report (the METRICS.md figures it measured).
+/// Runs the CLI with `options` and returns its report (the docs/metrics.md figures it measured).
 nlohmann::json run_cli(const std::string& input, const std::string& options, const std::string& tag) {
   const fs::path out = fs::temp_directory_path() / ("tightex_" + tag + "_" + fs::path(input).parent_path().filename().string() + "_" + std::to_string(::getpid()));
   fs::remove_all(out);
@@ -154,7 +168,7 @@ TEST_P(RealData, AreaMapKeepsNinetyPercentWithinAFactorTwoOfTheMeanDensity) {
   EXPECT_LE(r["metrics"]["density_spread"]["p95"].get<double>(), 0.5);
 }
 
-INSTANTIATE_TEST_SUITE_P(SharedData, RealData, ::testing::ValuesIn(data_models()),
+INSTANTIATE_TEST_SUITE_P(Scans, RealData, ::testing::ValuesIn(data_models()),
                          [](const ::testing::TestParamInfo<std::string>& info) {
                            std::string n = fs::path(info.param).parent_path().filename().string();
                            for (char& c : n)
@@ -180,9 +194,14 @@ TEST(RealDataMaps, DefaultMapBeatsHarmonicAndTextureDefragOnMeshroomAt1024) {
   EXPECT_EQ(harm["metrics"]["flipped"].get<size_t>(), 0u);
 }
 
-TEST(RealDataPresence, SkipsCleanlyWithoutSharedData) {
-  if (data_models().empty()) GTEST_SKIP() << "../shared/data not present";
-  SUCCEED();
+// The real-data tests above always run on at least the repository's scan, whether ../shared/data is
+// there or not, and each model folder is run once (a folder of both roots: the repository's copy).
+TEST(RealDataPresence, TheRepositoryScanIsAlwaysAmongTheModels) {
+  ASSERT_TRUE(fs::is_regular_file(kFuze)) << kFuze;
+  const std::vector<std::string> models = data_models();
+  EXPECT_EQ(std::count(models.begin(), models.end(), kFuze.string()), 1);
+  std::set<std::string> folders;
+  for (const std::string& m : models) EXPECT_TRUE(folders.insert(fs::path(m).parent_path().filename().string()).second) << m;
 }
 
 }  // namespace
@@ -196,8 +215,7 @@ std::string file_bytes(const fs::path& p) {
 
 // Same input and options: byte-identical output, whatever the scheduling (run once on one core).
 TEST(RealDataDeterminism, SameInputGivesByteIdenticalOutput) {
-  const fs::path input = fs::path(TIGHTEX_SHARED_DATA) / "fuze" / "fuze.obj";
-  if (!fs::exists(input)) GTEST_SKIP() << "../shared/data/fuze not present";
+  const fs::path input = kFuze;
   const std::string pid = std::to_string(::getpid());
   const fs::path a = fs::temp_directory_path() / ("tightex_det_a_" + pid), b = fs::temp_directory_path() / ("tightex_det_b_" + pid);
   fs::remove_all(a);
@@ -221,8 +239,7 @@ namespace {
 
 // Resource guard: refused before anything is allocated or written, exit code 1, no output left.
 TEST(RealDataGuards, OversizeAndOverBudgetRunsAreRefusedWithoutOutput) {
-  const fs::path input = fs::path(TIGHTEX_SHARED_DATA) / "fuze" / "fuze.obj";
-  if (!fs::exists(input)) GTEST_SKIP() << "../shared/data/fuze not present";
+  const fs::path input = kFuze;
   const fs::path out = fs::temp_directory_path() / ("tightex_guard_" + std::to_string(::getpid()));
   fs::remove_all(out);
   const std::string cli = std::string(TIGHTEX_CLI) + " '" + input.string() + "' -o '" + out.string() + "' --quiet 2>/dev/null ";

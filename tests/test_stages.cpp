@@ -1855,7 +1855,7 @@ TEST(Checkers, CatchBrokenOutput) {
 
 // Progress: stages in pipeline order, fractions within [0, 1] and never decreasing within a stage,
 // calls never overlapping (the components are mapped in parallel and report from their threads).
-// Options::size 0 (the default): as the CLI, the texture holds the input's used texels (METRICS.md),
+// Options::size 0 (the default): as the CLI, the texture holds the input's used texels (docs/metrics.md),
 // rounded up to a side that is a multiple of 4 - not a fixed 4096².
 TEST(Pipeline, DefaultSizeKeepsTheInputsUsedTexels) {
   // A sheet whose UVs cover most of a 256 x 128 texture (26680 used texels: a 164² output).

@@ -1,4 +1,4 @@
-// Where does a run's surface-PSNR error come from? Samples the input surface as METRICS.md's surface PSNR
+// Where does a run's surface-PSNR error come from? Samples the input surface as docs/metrics.md's surface PSNR
 // does (uniform by area) and splits the squared error by
 //   - whether the input's bilinear sample reads a texel outside the input's used region (its chart edges,
 //     where a renderer blends in the gutter), and
@@ -149,7 +149,7 @@ double density_ratio(const TexturedMesh& in, size_t t, const TexturedMesh& out, 
   return ai > 0 ? std::sqrt(ao / ai) : 0;
 }
 
-/// Samples the input surface uniformly by area (METRICS.md's seed) and bins each sample's squared error.
+/// Samples the input surface uniformly by area (docs/metrics.md's seed) and bins each sample's squared error.
 ErrorBins sample_errors(const TexturedMesh& in, const TexturedMesh& out, const CornerIndex& index,
                         const std::vector<std::vector<uint8_t>>& used, size_t samples) {
   std::vector<double> cdf(in.num_triangles());

@@ -1,5 +1,5 @@
 // The maps' evaluator (BENCHMARKS.md, "Every map"): for each map slot of an input and its
-// tightex output, the surface PSNR (METRICS.md's points, the channels the slot reads) against what an
+// tightex output, the surface PSNR (docs/metrics.md's points, the channels the slot reads) against what an
 // ideal re-sampler keeps, and the normal maps' object-space angular error. Also makes the scan-like
 // test models: the demo's vase with a hard-mask metallic channel and a tangent-space normal map whose
 // normals tilt 20-30 degrees, and a textured scan (several atlas pages) with a packed
@@ -39,7 +39,7 @@ namespace {
 
 constexpr double kRotation = 30.0 * M_PI / 180.0;
 constexpr size_t kSamples = 200000;
-constexpr uint64_t kSeed = 20240606;  // METRICS.md's surface PSNR seed
+constexpr uint64_t kSeed = 20240606;  // docs/metrics.md's surface PSNR seed
 
 /// The ideal re-sampler's value of `img` at texture coordinates uv (8-bit levels, rounded as stored).
 std::array<float, 4> ideal_resample(const Image& img, const Vec2& uv) {

@@ -1,5 +1,5 @@
 // The input's own rate-distortion curve: every texture a model's materials bind re-encoded in a codec at
-// each quality, decoded back, and measured against the model as it is (METRICS.md surface PSNR, the same
+// each quality, decoded back, and measured against the model as it is (docs/metrics.md surface PSNR, the same
 // points as tightex's report). What a re-encode without repacking (gltf-transform, gltfpack) would give,
 // for bench/bytes.sh beside tightex's own curve.
 // Usage: tightex_reencode_curve MODEL webp|jpg Q1 [Q2 ...]   prints "quality bytes psnr_db" per line.

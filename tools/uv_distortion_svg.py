@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Draws the texture layout of tightex outputs as an SVG, one panel per model, each triangle at its
-output uv filled by its angle distortion (METRICS.md: sigma_max / sigma_min of its 3D-to-UV Jacobian;
+output uv filled by its angle distortion (docs/metrics.md: sigma_max / sigma_min of its 3D-to-UV Jacobian;
 white = conformal, dark red = 8 or more, log scale). Used for docs/corners.md; no dependencies.
 
   tools/uv_distortion_svg.py OUT.svg "TITLE=OUTDIR/model.obj" ["TITLE=..." ...]

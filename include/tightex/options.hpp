@@ -172,7 +172,7 @@ struct Options {
   /// Triangles with nothing to bake (no texture, no vertex colours) are written as they came; false:
   /// their colour is baked like any other (PLY has no material to keep it in).
   bool keep_untextured = true;
-  /// Compute the METRICS.md figures into the report (optimize, bake_plan; run always measures).
+  /// Compute the docs/metrics.md figures into the report (optimize, bake_plan; run always measures).
   bool measure = true;
 
   // The run's resources.

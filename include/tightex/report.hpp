@@ -1,4 +1,4 @@
-// What a run did and measured: the main figures as fields (../shared/METRICS.md defines each), the
+// What a run did and measured: the main figures as fields (docs/metrics.md defines each), the
 // warnings a user should read, and the whole report as report.json holds it.
 #pragma once
 #include <cstdint>
@@ -14,7 +14,7 @@ struct ReportDetail;  // tightex's own: the report's every figure, from which `j
 struct Report {
   size_t input_triangles = 0, output_triangles = 0;
   size_t components = 0;  // connected surfaces after the repair
-  /// METRICS.md figures; measured only where Options::measure (run() always measures), else 0.
+  /// docs/metrics.md figures; measured only where Options::measure (run() always measures), else 0.
   size_t charts = 0, lost_triangles = 0, flipped_triangles = 0;
   double input_texels_used = 0, output_texels_used = 0;  // fractions of each model's texels
   /// Surface PSNR against the input (dB): of the images as written (decoded back; run() with a lossy

@@ -20,7 +20,7 @@ void check_options(const Options& options);
 /// estimated memory is above Options::max_memory_mib before any pixel is allocated, decodes the
 /// textures beside the repair, plans, bakes, chooses the images' codec and quality (Options: the
 /// input's codec by default, rate control for a lossy one), writes the model (named after the input, in
-/// Options::model_format) with its textures, measures it (METRICS.md), and writes report.json and
+/// Options::model_format) with its textures, measures it (docs/metrics.md), and writes report.json and
 /// report.html (and the preview where asked). Every file is written under a temporary name and renamed
 /// into place; the input is never written to.
 /// Returns the report as written, with the warnings and notes a user should read.

@@ -19,7 +19,7 @@ namespace tightex {
 
 struct Result {
   TexturedMesh output;  // geometry of the input (same corner positions), new UVs, new textures
-  Report report;        // what was done and measured (see ../shared/METRICS.md)
+  Report report;        // what was done and measured (see docs/metrics.md)
 };
 
 /// The geometric half of the method (repair, components, handles, holes, cut, layout, map): it needs
@@ -102,7 +102,7 @@ Result optimize(const TexturedMesh& input, const Options& options);
 int size_for_texels(double texels);
 
 /// Texels the input model actually uses (texel centres covered by some triangle, over all its
-/// textures; METRICS.md "used texels"). Needs only the textures' sizes, not their pixels.
+/// textures; docs/metrics.md "used texels"). Needs only the textures' sizes, not their pixels.
 double input_used_texels(const TexturedMesh& input);
 
 /// Texels the default budget gives each vertex-coloured triangle: a triangle's colours are linear

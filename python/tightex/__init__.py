@@ -27,6 +27,9 @@ works, so other Python threads run meanwhile.
 from . import _tightex
 from ._tightex import Cancelled, Error, InputError, InternalError, Report
 
+#: The build's version: the string `tightex --version` prints and report.json's "tightex_version".
+__version__: str = _tightex.__version__
+
 __all__ = ["Options", "Report", "optimize", "optimize_arrays", "estimate_memory", "set_max_threads", "Error", "InputError",
            "InternalError", "Cancelled"]
 

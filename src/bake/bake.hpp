@@ -20,7 +20,7 @@ struct BakeTriangle {
   std::array<Vec2, 3> target_px;
   std::array<Vec2, 3> source_uv;
   int32_t material = -1;  // input material (-1: none, white)
-  double area3 = 0;       // 3D area: the least-squares fit weighs the surface uniformly, as METRICS.md's PSNR does
+  double area3 = 0;       // 3D area: the least-squares fit weighs the surface uniformly, as docs/metrics.md's PSNR does
 };
 
 /// The tangent frame at one corner of a triangle (see TexturedMesh::corner_tangent): the bitangent is
@@ -51,7 +51,7 @@ struct BakeOptions {
   /// colour is the mean of n x m bilinear samples spread over the texel's footprint in the input,
   /// n and m the footprint's extent in input pixels along the texel's two axes, at most this many.
   int max_footprint_samples = 8;
-  /// Least-squares fit: a texture read back with bilinear filtering (as every renderer and METRICS.md
+  /// Least-squares fit: a texture read back with bilinear filtering (as every renderer and docs/metrics.md
   /// do) blurs once more what a point-sampled bake already blurred. The fit chooses the texels whose
   /// bilinear reconstruction best matches the input at K x K points per texel, weighted by 3D area;
   /// solved by conjugate gradients on 64-texel tiles with a 3-texel halo (independent, deterministic).

@@ -43,7 +43,7 @@ double resampling_mse(const TexturedMesh& input, const Surface& disk, const std:
   bo.fit = false;
   bake_texture(input, tris, {Rect{0, 0, 0, w, h}}, images, nullptr, bo);
 
-  // Sample points, uniform by 3D area over the real faces; both colours bilinear, as METRICS.md reads.
+  // Sample points, uniform by 3D area over the real faces; both colours bilinear, as docs/metrics.md reads.
   std::vector<double> cdf(real.size());
   double acc = 0;
   for (size_t i = 0; i < real.size(); ++i) {

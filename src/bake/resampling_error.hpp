@@ -17,7 +17,7 @@ namespace tightex {
 /// the corner texels' centres; without the least-squares fit, a fifth of the bake's time, which lifts
 /// every map alike) and the result read back bilinearly at `samples` points spread by 3D area
 /// (stratified: jittered along the faces' cumulative area, so they come in face order), against the
-/// input's own bilinear colour there, as METRICS.md's surface PSNR compares.
+/// input's own bilinear colour there, as docs/metrics.md's surface PSNR compares.
 /// `uv`: per disk vertex, in the unit square; faces without an input triangle (Surface::input_face)
 /// (kNone: scaffolding, not sampled). Returns the mean squared error per RGB channel in 8-bit levels,
 /// or -1 when no face has loaded texture pixels. Deterministic (fixed seed): two maps of the same disk

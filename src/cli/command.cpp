@@ -16,6 +16,7 @@
 #include "report/report.hpp"
 #include "run/option_help.hpp"
 #include "tightex/run.hpp"
+#include "tightex/version.hpp"
 
 namespace fs = std::filesystem;
 
@@ -96,6 +97,7 @@ void define_flags(CLI::App& app, CommandLine& line, GivenFlags& given) {
                  "tightex.tiles)")
       ->required();
   app.add_option("-o,--output", line.outdir, "output directory")->required();
+  app.set_version_flag("--version", std::string(version()), "print the version (git describe of the build) and exit");
   given.size = add(app, "size", o.size)->check(CLI::Range(8, 65536));
   add(app, "texels", o.texels)->check(CLI::PositiveNumber)->excludes(given.size);
   add(app, "map", given.map)->check(CLI::IsMember(names_of(kMapKinds)));
@@ -174,7 +176,7 @@ void print_summary(const CommandLine& line, const Report& r) {
 }  // namespace
 
 std::optional<CommandLine> parse_command_line(int argc, char** argv, int& exit_code) {
-  CLI::App app{kDescription};
+  CLI::App app{kDescription, "tightex"};  // named, so that --help reads the same whatever path started it
   CommandLine line;
   GivenFlags given;
   define_flags(app, line, given);
@@ -189,7 +191,7 @@ std::optional<CommandLine> parse_command_line(int argc, char** argv, int& exit_c
 }
 
 CommandLine parse_arguments(const std::vector<std::string>& args) {
-  CLI::App app{kDescription};
+  CLI::App app{kDescription, "tightex"};  // named, so that --help reads the same whatever path started it
   CommandLine line;
   GivenFlags given;
   define_flags(app, line, given);
@@ -198,6 +200,8 @@ CommandLine parse_arguments(const std::vector<std::string>& args) {
     app.parse(reversed);
   } catch (const CLI::CallForHelp&) {
     fail_input("options: --help: the options are those `tightex --help` lists");
+  } catch (const CLI::CallForVersion&) {
+    fail_input("options: --version: the version is tightex.__version__");
   } catch (const CLI::ParseError& e) {
     fail_input("options: {}", e.what());
   }

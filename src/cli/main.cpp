@@ -22,9 +22,9 @@ using namespace tightex;
 
 namespace {
 
-/// `tightex measure INPUT OUTPUT`: prints the METRICS.md figures of two models as JSON.
+/// `tightex measure INPUT OUTPUT`: prints the docs/metrics.md figures of two models as JSON.
 int run_measure(int argc, char** argv) {
-  CLI::App app{"tightex measure: the figures of METRICS.md for an input model and an output model"};
+  CLI::App app{"tightex measure: the figures of docs/metrics.md for an input model and an output model", "tightex measure"};
   std::string in_path, out_path;
   size_t samples = kPsnrPoints;
   app.add_option("input", in_path, "the original model (OBJ, PLY, glTF or GLB)")->required();

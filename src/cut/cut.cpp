@@ -140,7 +140,7 @@ std::optional<Disk> cut_open(const Surface& s, const EdgeGraph& g, const std::ve
   return disk;
 }
 
-/// The seam this component gets in the output (METRICS.md): its edges whose two triangles end up apart
+/// The seam this component gets in the output (docs/metrics.md): its edges whose two triangles end up apart
 /// (handle loops, hole connections, the cut graph, slits), each counted once from both sides, and the
 /// part of it that lies on the input's texture seams.
 void measure_seam(const Surface& component, const Surface& disk, std::span<const char> seams, CutStats& st) {

@@ -1008,7 +1008,8 @@ void ObjParser::load_mtl(const fs::path& mtl_path, const std::string& data) {
       // Every other statement (Ka, Ks, Ns, d, illum, PBR factors) is kept as it came for write_obj;
       // the scalars of the slots (Ks, Ke, Pr, Pm, d, Tr, Ns) are the slots' factors.
       current->material.mtl_statements.emplace_back(line);
-      if (const auto [slot, scale] = mtl_scalar_slot(keyword); slot >= 0) set_mtl_factor(current->material, slot, scale, tokens);
+      if (const auto [scalar_slot, scale] = mtl_scalar_slot(keyword); scalar_slot >= 0)
+        set_mtl_factor(current->material, scalar_slot, scale, tokens);
     }
   }
 }

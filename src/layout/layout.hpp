@@ -14,7 +14,7 @@ namespace tightex {
 /// y down, texel centres at +0.5): the square's corners on the corner texels' centres, pushed outward
 /// by kChartInset so that the outermost texel centres lie strictly inside the chart. Exactly on its
 /// edge they would count as covered or not by an ulp of the stored texture coordinate (u = x / W read
-/// back as u * W), and whole rows of texels could miss METRICS.md's utilization.
+/// back as u * W), and whole rows of texels could miss docs/metrics.md's utilization.
 constexpr double kChartInset = 1e-6;
 inline Vec2 rect_pixel(const Rect& r, const Vec2& s) {
   return Vec2(r.x + 0.5 - kChartInset + s.x() * (r.w - 1 + 2 * kChartInset),

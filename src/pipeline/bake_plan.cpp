@@ -64,7 +64,7 @@ Result bake_state(const Plan::State& state, const TexturedMesh& input, const Opt
   if (!rep.maps.empty()) clock.done("bake_maps");
   Result result;
   result.output = std::move(om.mesh);
-  // 7. Measure (METRICS.md).
+  // 7. Measure (docs/metrics.md).
   if (options.measure) {
     progress("measure", 0);
     rep.metrics = measure(input, result.output);

@@ -15,7 +15,7 @@ namespace tightex {
 /// tightex's own output uses 99.7-100% (the texel centres along its charts' outer edges).
 constexpr double kTightUtilization = 0.99;
 
-/// The texel utilization (METRICS.md's) of `input` where every component's triangles sample an image
+/// The texel utilization (docs/metrics.md's) of `input` where every component's triangles sample an image
 /// (its pixels loaded or not yet) through coordinates continuous across every interior edge (one chart, one material) and the
 /// images are at least kTightUtilization used; 0 otherwise.
 double tight_utilization(const TexturedMesh& input, const std::vector<Surface>& components);

@@ -101,7 +101,7 @@ void bind_option_table(py::module_& m) {
 }
 
 void bind_report(py::module_& m) {
-  py::class_<Report> c(m, "Report", "What a run did and measured (../shared/METRICS.md names each figure).");
+  py::class_<Report> c(m, "Report", "What a run did and measured (docs/metrics.md names each figure).");
   c.def_readonly("input_triangles", &Report::input_triangles);
   c.def_readonly("output_triangles", &Report::output_triangles);
   c.def_readonly("components", &Report::components);

@@ -16,6 +16,7 @@
 #include "python/bind_options.hpp"
 #include "tightex/run.hpp"
 #include "tightex/tightex.hpp"
+#include "tightex/version.hpp"
 
 namespace py = pybind11;
 using namespace tightex;
@@ -226,6 +227,7 @@ py::tuple optimize_arrays(const Doubles& positions, const Indices& faces, const 
 
 PYBIND11_MODULE(_tightex, m) {
   m.doc() = "tightex's C++ core; use the package `tightex`, which wraps it.";
+  m.attr("__version__") = std::string(version());  // the same string as `tightex --version`
   static py::exception<std::runtime_error> error(m, "Error");
   error.attr("__module__") = "tightex";
   error.attr("__doc__") = "Base class of every error tightex raises.";

@@ -89,7 +89,7 @@ int texture_of(const TexturedMesh& mesh, size_t t) {
   return m >= 0 && size_t(m) < mesh.materials.size() ? mesh.materials[size_t(m)].texture : -1;
 }
 
-/// Per triangle, bit k set where edge k (corner k to corner k+1) is a seam as METRICS.md counts charts:
+/// Per triangle, bit k set where edge k (corner k to corner k+1) is a seam as docs/metrics.md counts charts:
 /// the texture coordinates (or the texture) differ on its two sides, or it has not exactly one
 /// neighbour across it (a border, or a non-manifold edge).
 std::vector<uint8_t> seam_bits(const TexturedMesh& mesh, const WeldedEdges& edges) {
@@ -114,7 +114,7 @@ std::vector<uint8_t> seam_bits(const TexturedMesh& mesh, const WeldedEdges& edge
 }
 
 /// Per triangle, log2 of its texel density (texels of its texture per unit of 3D area) over the
-/// model's mean density (all texels over all area), as METRICS.md's density spread; NaN for a triangle
+/// model's mean density (all texels over all area), as docs/metrics.md's density spread; NaN for a triangle
 /// without texture or area.
 std::vector<double> relative_density(const TexturedMesh& mesh) {
   std::vector<double> density(mesh.num_triangles(), std::numeric_limits<double>::quiet_NaN());

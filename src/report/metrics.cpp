@@ -241,7 +241,7 @@ CornerKey corner_key(const TexturedMesh& m, size_t t, const KeyRules& rules, std
   return k;
 }
 
-/// METRICS.md "Correspondence": for each input triangle, the output triangle with the same three corner
+/// docs/metrics.md "Correspondence": for each input triangle, the output triangle with the same three corner
 /// positions and which of its corners each input corner is.
 struct Correspondence {
   std::vector<uint32_t> match;                 // per input triangle: output triangle, kNone if none
@@ -351,7 +351,7 @@ Correspondence match_triangles(const TexturedMesh& in, const TexturedMesh& out) 
   return c;
 }
 
-/// METRICS.md "flipped" and "degenerate": UV signed area against the majority sign of its chart
+/// docs/metrics.md "flipped" and "degenerate": UV signed area against the majority sign of its chart
 /// (`chart`: chart_ids of out).
 void count_flips(const TexturedMesh& out, const std::vector<uint32_t>& chart, size_t* flipped, size_t* degenerate) {
   std::vector<double> sa(out.num_triangles());
@@ -404,7 +404,7 @@ std::vector<char> exact_repeats(const TexturedMesh& out) {
   return repeat;
 }
 
-/// METRICS.md "overlap": texel centres covered by two or more triangles of the same image; a centre
+/// docs/metrics.md "overlap": texel centres covered by two or more triangles of the same image; a centre
 /// exactly on a shared edge is counted for one triangle only (top-left rule via a half-open test). An
 /// exact repeat of a triangle (exact_repeats) is that triangle again, not an overlap.
 double overlap_fraction(const TexturedMesh& out) {
@@ -445,7 +445,7 @@ struct DensityFigures {
   double detail_loss_area = 0;
 };
 
-/// METRICS.md "density spread" and "detail loss area" over the matched input triangles of non-zero area.
+/// docs/metrics.md "density spread" and "detail loss area" over the matched input triangles of non-zero area.
 DensityFigures measure_density(const TexturedMesh& in, const TexturedMesh& out, const Correspondence& c) {
   // Each triangle's densities on every core; the sums in triangle order, as one loop adds them.
   std::vector<double> dens(in.num_triangles(), 0), din(in.num_triangles(), 0), texels(in.num_triangles(), 0);
@@ -494,7 +494,7 @@ double singular_value_ratio(const TexturedMesh& in, size_t t, const TexturedMesh
   return smin > 0 ? smax / smin : 1e12;
 }
 
-/// METRICS.md "angle distortion": area-weighted mean and P95 of the singular value ratio over the
+/// docs/metrics.md "angle distortion": area-weighted mean and P95 of the singular value ratio over the
 /// matched input triangles of non-zero area (the mean is over all of their area).
 std::pair<double, double> measure_angle_distortion(const TexturedMesh& in, const TexturedMesh& out, const Correspondence& c) {
   // The ratios on every core; the sums in triangle order.
@@ -524,7 +524,7 @@ struct SurfacePoint {
   double b[3] = {0, 0, 0};
 };
 
-/// METRICS.md's sample points: `samples` points uniform by area on the input (fixed seed, so the same
+/// docs/metrics.md's sample points: `samples` points uniform by area on the input (fixed seed, so the same
 /// points in every run), shared by the surface PSNR and every map's figures.
 std::vector<SurfacePoint> surface_points(const TexturedMesh& in, const Correspondence& c, size_t samples) {
   std::vector<double> cdf(in.num_triangles());
@@ -597,7 +597,7 @@ Vec2 input_uv(const TexturedMesh& in, const SurfacePoint& p) {
   return p.b[0] * in.sampled_uv(p.t, 0) + p.b[1] * in.sampled_uv(p.t, 1) + p.b[2] * in.sampled_uv(p.t, 2);
 }
 
-/// METRICS.md "surface PSNR" at `points`: the colour a viewer shows of the input (shown_colour) against
+/// docs/metrics.md "surface PSNR" at `points`: the colour a viewer shows of the input (shown_colour) against
 /// the output's at the same barycentric point of the matched triangle (black if lost), unrounded.
 /// Returns the PSNR in dB (99 for no error) and the number of points.
 std::pair<double, size_t> measure_surface_psnr(const TexturedMesh& in, const TexturedMesh& out, const Correspondence& c,

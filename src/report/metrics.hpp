@@ -1,4 +1,4 @@
-// The figures of ../shared/METRICS.md, computed from an input and an output model alone, so the same
+// The figures of docs/metrics.md, computed from an input and an output model alone, so the same
 // code measures tightex's own result (in memory) and any other tool's output (read from its files).
 #pragma once
 #include <nlohmann/json.hpp>
@@ -63,13 +63,13 @@ struct Metrics {
 ModelFigures measure_texture_space(const TexturedMesh& mesh);
 
 /// Charts (triangles joined through edges with equal uv on both sides) of a model; `seam_length`
-/// (optional) gets METRICS.md's seam length: the 3D length of the edges whose uv differs on the two
+/// (optional) gets docs/metrics.md's seam length: the 3D length of the edges whose uv differs on the two
 /// sides over the square root of the surface area.
 size_t count_charts(const TexturedMesh& mesh, double* seam_length);
 /// count_charts with the model's welded edges made already (welded_edges).
 size_t count_charts(const TexturedMesh& mesh, const WeldedEdges& edges, double* seam_length);
 
-/// Everything in METRICS.md for a result `output` of `input`. Triangles correspond by their three
+/// Everything in docs/metrics.md for a result `output` of `input`. Triangles correspond by their three
 /// corner positions (bit-exact); an input triangle without a counterpart is lost and samples black in
 /// the surface PSNR. Requires two valid meshes (as read_obj returns them); the surface PSNR draws
 /// `psnr_samples` points with a fixed seed, so the same models always give the same figures. Never
@@ -79,7 +79,7 @@ Metrics measure(const TexturedMesh& input, const TexturedMesh& output, size_t ps
 Metrics measure(const TexturedMesh& input, const TexturedMesh& output, const WeldedEdges& input_edges, const WeldedEdges& output_edges,
                 size_t psnr_samples = kPsnrPoints);
 
-/// METRICS.md's surface PSNR alone (measure's figure, the same points), for a caller that tries other
+/// docs/metrics.md's surface PSNR alone (measure's figure, the same points), for a caller that tries other
 /// encodings of the same output's images.
 double surface_psnr(const TexturedMesh& input, const TexturedMesh& output, size_t psnr_samples = kPsnrPoints);
 

@@ -3,6 +3,7 @@
 #include <string>
 
 #include "report/report.hpp"
+#include "tightex/version.hpp"
 
 namespace tightex {
 
@@ -179,6 +180,7 @@ json reader_json(const ModelReadStats& stats) {
 
 json to_json(const ReportData& report) {
   json j;
+  j["tightex_version"] = version();  // the build that wrote it (include/tightex/version.hpp)
   j["input"] = input_json(report.input);
   j["options"] = options_json(report.options);
   j["aspect"] = aspect_choice_json(report.aspect);

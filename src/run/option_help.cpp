@@ -88,7 +88,7 @@ constexpr std::array kHelps{
     OptionHelp{"keep_untextured", "",
                "triangles with nothing to bake (no texture, no vertex colours) are written as they came; false: their colour is "
                "baked like any other (PLY output always bakes it)"},
-    OptionHelp{"measure", "", "compute the METRICS.md figures into the report (optimize; a run from a file always measures)"},
+    OptionHelp{"measure", "", "compute the docs/metrics.md figures into the report (optimize; a run from a file always measures)"},
 };
 
 }  // namespace

@@ -10,6 +10,8 @@ import sys
 import pytest
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+#: The repository's own real scan (tests/data/fuze); ../shared/data holds the larger ones where present.
+REPO_DATA = os.path.join(REPO, "tests", "data")
 SHARED_DATA = os.environ.get("TIGHTEX_SHARED_DATA", os.path.join(REPO, "..", "shared", "data"))
 
 

@@ -6,7 +6,7 @@ import threading
 import numpy as np
 import pytest
 
-from conftest import SHARED_DATA, make_bad_obj
+from conftest import REPO_DATA, SHARED_DATA, make_bad_obj
 
 
 def check_output(report, folder, name):
@@ -36,9 +36,7 @@ def test_optimize_generated_model(tightex, boxes_model, tmp_path):
 
 
 def test_optimize_real_scan(tightex, tmp_path):
-    model = os.path.join(SHARED_DATA, "fuze", "fuze.obj")
-    if not os.path.isfile(model):
-        pytest.skip("../shared/data/fuze not present")
+    model = os.path.join(REPO_DATA, "fuze", "fuze.obj")  # the repository's scan: every checkout has it
     report = tightex.optimize(model, tmp_path, model_format="ply")
     check_output(report, tmp_path, "fuze.ply")
     assert report["metrics"]["input"]["utilization"] < report["metrics"]["output"]["utilization"]
