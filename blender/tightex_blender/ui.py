@@ -1,5 +1,5 @@
 """Where the operator is found (Object menu, the UV editor's UV menu, F3 search) and the panel that
-shows the last run's figures (3D View sidebar, tab "tightex")."""
+shows the last run's figures (3D View sidebar, tab "tightex", and the Properties editor's Object tab)."""
 
 import json
 
@@ -9,11 +9,9 @@ from . import library, run
 from .operator import TIGHTEX_OT_tighten_textures
 
 
-class TIGHTEX_PT_figures(bpy.types.Panel):
+class _Figures:
+    """The panel's content: the operator, and the last run's figures per object (or why tightex is missing)."""
     bl_label = "tightex"
-    bl_space_type = "VIEW_3D"
-    bl_region_type = "UI"
-    bl_category = "tightex"
 
     def draw(self, context):
         layout = self.layout
@@ -40,6 +38,22 @@ class TIGHTEX_PT_figures(bpy.types.Panel):
                 box.label(text=f"Report: {f['report_html']}")
 
 
+class TIGHTEX_PT_figures(_Figures, bpy.types.Panel):
+    """In the 3D View's sidebar, tab "tightex"."""
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "tightex"
+    bl_idname = "TIGHTEX_PT_figures"
+
+
+class TIGHTEX_PT_object_figures(_Figures, bpy.types.Panel):
+    """The same in the Properties editor's Object tab."""
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "object"
+    bl_idname = "TIGHTEX_PT_object_figures"
+
+
 def _menu(self, context):
     self.layout.separator()
     self.layout.operator(TIGHTEX_OT_tighten_textures.bl_idname, icon="UV")
@@ -55,4 +69,4 @@ def unregister_menus():
     bpy.types.IMAGE_MT_uvs.remove(_menu)
 
 
-classes = (TIGHTEX_PT_figures,)
+classes = (TIGHTEX_PT_figures, TIGHTEX_PT_object_figures)
