@@ -99,9 +99,10 @@ def _drop_unused(mesh, old_materials):
             continue
         images = [n.image for n in material.node_tree.nodes if n.type == "TEX_IMAGE" and n.image] if material.node_tree else []
         bpy.data.materials.remove(material)
-        for image in images:
-            if image.users == 0:
-                bpy.data.images.remove(image)
+        if images:  # an image's user count may hold an extra (runtime) user: no ID naming it is what counts
+            for image, users in bpy.data.user_map(subset=set(images)).items():
+                if not users and not image.use_fake_user:
+                    bpy.data.images.remove(image)
 
 
 def apply_jobs(jobs, settings):

@@ -9,7 +9,8 @@ position, gives a new active UV map with one chart per connected surface and >= 
 used, and a surface PSNR (both materials exported with Blender's glTF exporter, measured by `tightex
 measure`) at least the command line's on the same export less 0.3 dB; the export is glTF-Validator
 clean where tests/gltf's validator is installed; a second run finds the result already tight; undo
-restores the objects. Exits 1 on a failed check, 77 where no model is available.
+restores the objects. A vertex-coloured sphere checks the options (size, removal, report.html). Exits 1 on a
+failed check.
 """
 
 import hashlib
@@ -221,8 +222,13 @@ def case(name, path):
     check(mesh.uv_layers.active.name == "tightex" and len(mesh.uv_layers) == 2, "a new active UV map, the old one kept")
     charts, surfaces, uv = charts_and_surfaces(mesh)
     check(charts == surfaces, f"one chart per connected surface: {charts} charts, {surfaces} surfaces")
-    base = next(n.image for m in mesh.materials if m.name.endswith("_tightex") for n in m.node_tree.nodes
-                if n.type == "TEX_IMAGE" and n.image)
+    new_nodes = [n for m in mesh.materials if m.name.endswith("_tightex") for n in m.node_tree.nodes if n.type == "TEX_IMAGE"]
+    old_images = {n.image.name for m in bpy.data.materials if not m.name.endswith("_tightex") and m.node_tree
+                  for n in m.node_tree.nodes if n.type == "TEX_IMAGE" and n.image}
+    new_images = {n.image.name for n in new_nodes if n.image}
+    check(new_nodes and all(n.image and n.image.name.startswith(obj.name + "_tightex") for n in new_nodes)
+          and len(new_images) == len(old_images), f"every image node of the new material shows a new image: {sorted(new_images)}")
+    base = new_nodes[0].image
     used = texels_used(uv.reshape(-1, 3, 2), *base.size)
     check(used >= 0.99, f"texels used {100 * used:.2f} % of {base.size[0]}x{base.size[1]} >= 99 %")
     check(base.packed_file is not None, f"new image {base.name} packed into the .blend")
@@ -249,12 +255,38 @@ def undo(before):
     check(snapshot() == before, "one undo step restores meshes, UV maps, materials and images")
 
 
+def vertex_coloured_case():
+    """A vertex-coloured sphere (no material): baked into a new image of the size asked, the old UV map
+    and unused data removed, report.html written, as the redo panel's options ask."""
+    print("== vertex colours, options", flush=True)
+    bpy.ops.wm.read_homefile(use_empty=True)
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=32, ring_count=16)
+    obj = bpy.context.active_object
+    mesh = obj.data
+    co = np.array([v.co for v in mesh.vertices])
+    attr = mesh.color_attributes.new("Col", "BYTE_COLOR", "POINT")
+    attr.data.foreach_set("color", np.concatenate([co * 0.5 + 0.5, np.ones((len(co), 1))], 1).astype(np.float32).ravel())
+    mesh.color_attributes.active_color = attr
+    faces, corners = len(mesh.polygons), _corner_positions(mesh).copy()
+    report = os.path.join(WORK, "sphere_report.html")
+    result = bpy.ops.object.tighten_textures(budget="SIZE", size=256, old_uv="REMOVE", old_data="REMOVE", write_report=True,
+                                             report_path=report)
+    check(result == {"FINISHED"} and len(mesh.polygons) == faces and np.array_equal(_corner_positions(mesh), corners),
+          "vertex colours: run, geometry unchanged")
+    check([u.name for u in mesh.uv_layers] == ["tightex"], f"old UV map removed: {[u.name for u in mesh.uv_layers]}")
+    images = [n.image for m in mesh.materials for n in m.node_tree.nodes if n.type == "TEX_IMAGE" and n.image]
+    check(len(images) == 1 and tuple(images[0].size) == (256, 256), f"the colours baked into one 256x256 image: {images}")
+    check(os.path.exists(report) and "<html" in open(report, encoding="utf-8").read(2000).lower(), "report.html written")
+
+
 def main():
     models = model_paths()
-    if not models:
-        print("SKIP: no model found")
-        sys.exit(77)
     install_addon()
+    try:
+        vertex_coloured_case()
+    except Exception:
+        traceback.print_exc()
+        failures.append("vertex colours: an exception")
     for name, path in models:
         try:
             case(name, path)
