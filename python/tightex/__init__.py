@@ -110,7 +110,8 @@ def optimize_arrays(positions, faces, uvs, images, material_ids=None, face_uvs=N
     Returns a dict: "positions" (V, 3) float64, the input's; "faces" (F, 3) int64, the input's
     triangles (in another order, each maybe rotated, never flipped); "uvs" (F, 3, 2) float64 per
     corner, in [0, 1]; "material_ids" (F,) int64, the image of each face; "face_materials" (F,) int64,
-    the material of each face in "materials" (dicts as ``materials`` takes); "input_triangles" (F,)
+    the material of each face in "materials" (dicts as ``materials`` takes, with a "name": "tightex",
+    "tightex_1", ... for a new one, "kept_..." for an input one kept as it was); "input_triangles" (F,)
     int64, the input triangle each face is; "images", a list of H x W x 4 uint8 arrays; "report", the
     ``Report``.
 
