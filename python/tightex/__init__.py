@@ -88,7 +88,8 @@ def estimate_memory(input_path, options=None, **fields):
     return int(_tightex.estimate_memory(str(input_path), _with_fields(options, fields)))
 
 
-def optimize_arrays(positions, faces, uvs, images, material_ids=None, face_uvs=None, options=None, progress=None, **fields):
+def optimize_arrays(positions, faces, uvs, images, material_ids=None, face_uvs=None, options=None, progress=None, materials=None,
+                    colors=None, html=False, **fields):
     """Optimizes an in-memory textured mesh; nothing is read or written.
 
     positions: (V, 3) float; faces: (F, 3) int, counter-clockwise front.
@@ -98,13 +99,24 @@ def optimize_arrays(positions, faces, uvs, images, material_ids=None, face_uvs=N
       - (T, 2) with ``face_uvs`` (F, 3) indexing it (as an OBJ's ``vt`` and its face indices);
       - (V, 2) per vertex without ``face_uvs`` (trimesh's ``visual.uv``).
     images: a list of H x W x 3 or H x W x 4 uint8 arrays (one array alone is taken as a list of one).
-    material_ids: (F,) int, the image of each face (-1: none); default: every face the first image.
+    material_ids: (F,) int, the image (or, with ``materials``, the material) of each face (-1: none);
+      default: every face the first.
+    materials: None (one material per image), or a list of dicts, each with "texture" (its base colour
+      image, -1: none), "kd" (its linear base colour factor, as glTF's) and "maps" ({slot: image}; the
+      slots "metallic_roughness", "occlusion", "emissive", "normal" (tangent space), "specular",
+      "roughness", "metallic", "bump"); images may then be empty.
+    colors: (F, 3, 4) float vertex colours per corner, sRGB in [0, 1], baked into a new image as the
+      command does for a vertex-coloured model.
+    html: also return "report_html", the text of the run's report.html.
     options, fields: as for ``optimize`` (those about written files do nothing here).
 
     Returns a dict: "positions" (V, 3) float64, the input's; "faces" (F, 3) int64, the input's
     triangles (in another order, each maybe rotated, never flipped); "uvs" (F, 3, 2) float64 per
-    corner, in [0, 1]; "material_ids" (F,) int64, the image of each face; "images", a list of
-    H x W x 4 uint8 arrays; "report", the ``Report``.
+    corner, in [0, 1]; "material_ids" (F,) int64, the image of each face; "face_materials" (F,) int64,
+    the material of each face in "materials" (dicts as ``materials`` takes, with a "name": "tightex",
+    "tightex_1", ... for a new one, "kept_..." for an input one kept as it was); "input_triangles" (F,)
+    int64, the input triangle each face is; "images", a list of H x W x 4 uint8 arrays; "report", the
+    ``Report``.
 
     Raises InputError naming the array and element for a bad shape or index; Cancelled; InternalError.
     """
@@ -117,7 +129,7 @@ def optimize_arrays(positions, faces, uvs, images, material_ids=None, face_uvs=N
         if image.dtype != np.uint8:
             raise InputError(f"arrays: images[{i}] is {image.dtype}, not uint8 (0..255 per channel)")
     arrays, report = _tightex.optimize_arrays(positions, faces, uvs, images, material_ids, face_uvs, _with_fields(options, fields),
-                                              progress)
+                                              progress, materials, colors, bool(html))
     arrays["report"] = report
     return arrays
 

@@ -86,5 +86,8 @@ def optimize_arrays(
     face_uvs: Optional[npt.ArrayLike] = None,
     options: Optional[Options] = None,
     progress: Optional[ProgressCallback] = None,
+    materials: Optional[Sequence[dict[str, Any]]] = None,
+    colors: Optional[npt.ArrayLike] = None,
+    html: bool = False,
     **fields: Any,
 ) -> dict[str, Any]: ...

@@ -14,6 +14,8 @@
 #include <vector>
 
 #include "python/bind_options.hpp"
+#include "report/html_report.hpp"
+#include "tightex/io.hpp"
 #include "tightex/run.hpp"
 #include "tightex/tightex.hpp"
 #include "tightex/version.hpp"
@@ -150,13 +152,61 @@ std::vector<Vec2> corner_uvs(const Doubles& uvs, const py::object& face_uvs, con
   return out;
 }
 
-/// A TexturedMesh from NumPy arrays: one material per image, `material_ids` (F,) the image of each
-/// face (-1: none; default: all the first image).
+/// The material slot named `name` ("normal", "metallic_roughness", ...); InputError for another name.
+MaterialSlot slot_named(const std::string& name, size_t material) {
+  for (size_t s = 0; s < kMaterialSlots; ++s)
+    if (name == material_slot_name(MaterialSlot(s))) return MaterialSlot(s);
+  throw InputError("arrays: materials[" + std::to_string(material) + "] maps '" + name + "', not a material slot");
+}
+
+/// A material given as a dict: "texture" (its base colour image, -1: none), "kd" (its linear base colour
+/// factor), "maps" ({slot name: image index}).
+Material material_from_dict(const py::dict& d, size_t index, size_t num_images) {
+  Material m{"material_" + std::to_string(index), {1.0, 1.0, 1.0}, -1};
+  const auto image_index = [&](const py::handle& h, const std::string& what) {
+    const int i = h.cast<int>();
+    if (i < -1 || i >= int(num_images))
+      throw InputError("arrays: materials[" + std::to_string(index) + "] " + what + " is image " + std::to_string(i) + ", outside [-1, " +
+                       std::to_string(num_images) + ")");
+    return i;
+  };
+  if (d.contains("texture")) m.texture = image_index(d["texture"], "texture");
+  if (d.contains("kd")) m.kd = d["kd"].cast<std::array<double, 3>>();
+  if (d.contains("maps"))
+    for (const auto& [slot, image] : d["maps"].cast<py::dict>())
+      m.maps[size_t(slot_named(slot.cast<std::string>(), index))] = image_index(image, "map " + slot.cast<std::string>());
+  return m;
+}
+
+/// The mesh's materials: one per image (the default), or `materials` (a list of dicts) where given.
+void set_materials(TexturedMesh& mesh, const py::object& materials) {
+  if (materials.is_none()) {
+    for (size_t i = 0; i < mesh.textures.size(); ++i) mesh.materials.push_back(Material{"material_" + std::to_string(i), {1.0, 1.0, 1.0}, int(i)});
+    return;
+  }
+  const py::list list = materials.cast<py::list>();
+  for (size_t i = 0; i < list.size(); ++i) mesh.materials.push_back(material_from_dict(list[i].cast<py::dict>(), i, mesh.textures.size()));
+}
+
+/// Vertex colours (F,3,4) per corner, sRGB in [0, 1], baked into a texture as the readers' are.
+void set_colours(TexturedMesh& mesh, const py::object& colours) {
+  if (colours.is_none()) return;
+  const auto c = colours.cast<py::array_t<float, py::array::c_style | py::array::forcecast>>();
+  check_shape(c, "colors", {py::ssize_t(mesh.num_triangles()), 3, 4});
+  mesh.corner_color.resize(3 * mesh.num_triangles());
+  std::memcpy(static_cast<void*>(mesh.corner_color.data()), c.data(), mesh.corner_color.size() * 4 * sizeof(float));
+  texture_vertex_colours(mesh);
+}
+
+/// A TexturedMesh from NumPy arrays: one material per image unless `materials` names them,
+/// `material_ids` (F,) the material of each face (-1: none; default: all the first).
 TexturedMesh mesh_from_arrays(const Doubles& positions, const Indices& faces, const Doubles& uvs, const std::vector<Bytes>& images,
-                              const py::object& material_ids, const py::object& face_uvs) {
+                              const py::object& material_ids, const py::object& face_uvs, const py::object& materials,
+                              const py::object& colours) {
   check_shape(positions, "positions", {-1, 3});
   check_shape(faces, "faces", {-1, 3});
-  if (images.empty()) throw InputError("arrays: images is empty; give at least one texture image");
+  if (images.empty() && materials.is_none() && colours.is_none())
+    throw InputError("arrays: images is empty; give at least one texture image");
   TexturedMesh mesh;
   mesh.source = "arrays";
   const size_t v = size_t(positions.shape(0)), f = size_t(faces.shape(0));
@@ -171,16 +221,32 @@ TexturedMesh mesh_from_arrays(const Doubles& positions, const Indices& faces, co
     Texture t{"texture_" + std::to_string(i), image_from_array(images[i], i)};
     t.width = t.image.width, t.height = t.image.height;
     mesh.textures.push_back(std::move(t));
-    mesh.materials.push_back(Material{"material_" + std::to_string(i), {1.0, 1.0, 1.0}, int(i)});
   }
-  mesh.face_material.assign(f, 0);
+  set_materials(mesh, materials);
+  mesh.face_material.assign(f, mesh.materials.empty() ? -1 : 0);
   if (!material_ids.is_none()) {
     const Indices ids = material_ids.cast<Indices>();
     check_shape(ids, "material_ids", {py::ssize_t(f)});
-    check_indices(ids, "material_ids", -1, int64_t(images.size()));
+    check_indices(ids, "material_ids", -1, int64_t(mesh.materials.size()));
     for (size_t i = 0; i < f; ++i) mesh.face_material[i] = int32_t(ids.data()[i]);
   }
+  set_colours(mesh, colours);
   return mesh;
+}
+
+/// The output's materials as dicts ("texture", "kd", "maps" {slot name: image}), as `materials` takes them,
+/// with their "name" ("tightex", "tightex_1", ... new; "kept_..." an input one kept as it was).
+py::list material_dicts(const TexturedMesh& mesh) {
+  py::list out;
+  for (const Material& m : mesh.materials) {
+    py::dict maps;
+    for (size_t s = 0; s < kMaterialSlots; ++s)
+      if (m.maps[s] >= 0) maps[py::str(material_slot_name(MaterialSlot(s)))] = m.maps[s];
+    py::dict d;
+    d["name"] = m.name, d["texture"] = m.texture, d["kd"] = m.kd, d["maps"] = maps;
+    out.append(d);
+  }
+  return out;
 }
 
 /// The output mesh as a dict of NumPy arrays (positions, faces, uvs (F,3,2) as sampled, material_ids:
@@ -191,10 +257,12 @@ py::dict arrays_from_mesh(const TexturedMesh& mesh) {
   std::memcpy(positions.mutable_data(), static_cast<const void*>(mesh.positions.data()), size_t(v) * 3 * sizeof(double));
   py::array_t<int64_t> faces({f, py::ssize_t(3)});
   py::array_t<double> uvs({f, py::ssize_t(3), py::ssize_t(2)});
-  py::array_t<int64_t> ids(f);
+  py::array_t<int64_t> ids(f), face_materials(f), input_triangles(f);
   for (py::ssize_t t = 0; t < f; ++t) {
     const int m = mesh.face_material[size_t(t)];
     ids.mutable_at(t) = m < 0 ? -1 : mesh.materials[size_t(m)].texture;
+    face_materials.mutable_at(t) = m;
+    input_triangles.mutable_at(t) = mesh.input_triangle.empty() ? t : int64_t(mesh.input_triangle[size_t(t)]);
     for (int c = 0; c < 3; ++c) {
       faces.mutable_at(t, c) = mesh.triangles[size_t(t)][size_t(c)];
       const Vec2 uv = mesh.sampled_uv(size_t(t), c);
@@ -209,18 +277,30 @@ py::dict arrays_from_mesh(const TexturedMesh& mesh) {
   }
   py::dict out;
   out["positions"] = positions, out["faces"] = faces, out["uvs"] = uvs, out["material_ids"] = ids, out["images"] = images;
+  out["face_materials"] = face_materials, out["input_triangles"] = input_triangles, out["materials"] = material_dicts(mesh);
   return out;
 }
 
-/// tightex.optimize_arrays: the library on an in-memory mesh; the arrays out and the report.
+/// tightex.optimize_arrays: the library on an in-memory mesh; the arrays out and the report (with
+/// "report_html", the report.html page's text, where `html`).
 py::tuple optimize_arrays(const Doubles& positions, const Indices& faces, const Doubles& uvs, const std::vector<Bytes>& images,
-                          const py::object& material_ids, const py::object& face_uvs, Options options, py::object progress_callable) {
-  const TexturedMesh mesh = mesh_from_arrays(positions, faces, uvs, images, material_ids, face_uvs);
+                          const py::object& material_ids, const py::object& face_uvs, Options options, py::object progress_callable,
+                          const py::object& materials, const py::object& colours, bool html) {
+  const TexturedMesh mesh = mesh_from_arrays(positions, faces, uvs, images, material_ids, face_uvs, materials, colours);
   PythonProgress progress(std::move(progress_callable));
   options.progress = progress.callback();
   options.measure = true;
   const Result result = without_gil(progress, [&] { return optimize(mesh, options); });
-  return py::make_tuple(arrays_from_mesh(result.output), result.report);
+  py::dict arrays = arrays_from_mesh(result.output);
+  if (html) {
+    std::string page;
+    {
+      py::gil_scoped_release release;
+      page = html_report_page(result.report.json, html_model_data(mesh, result.output));
+    }
+    arrays["report_html"] = page;
+  }
+  return py::make_tuple(arrays, result.report);
 }
 
 }  // namespace
@@ -258,5 +338,6 @@ PYBIND11_MODULE(_tightex, m) {
   m.def("set_max_threads", &set_max_threads, py::arg("n"));
   m.def("estimate_memory", &estimate_file_memory, py::arg("input"), py::arg("options"));
   m.def("optimize_arrays", &optimize_arrays, py::arg("positions"), py::arg("faces"), py::arg("uvs"), py::arg("images"),
-        py::arg("material_ids"), py::arg("face_uvs"), py::arg("options"), py::arg("progress"));
+        py::arg("material_ids"), py::arg("face_uvs"), py::arg("options"), py::arg("progress"), py::arg("materials") = py::none(),
+        py::arg("colors") = py::none(), py::arg("html") = false);
 }

@@ -155,6 +155,25 @@ def test_arrays_bad_input(tightex):
         tightex.optimize_arrays(positions, faces, uvs, image, progress=lambda s, f: False)
 
 
+def test_arrays_material_maps_colours_and_html(tightex):
+    positions, faces, uvs, image = grid_mesh()
+    flat_normal = np.full((256, 256, 3), (128, 128, 255), np.uint8)
+    materials = [{"texture": 0, "maps": {"normal": 1, "metallic_roughness": 0}}]
+    out = tightex.optimize_arrays(positions, faces, uvs, [image, flat_normal], materials=materials, html=True)
+    new = out["materials"][out["face_materials"][0]]
+    assert new["name"] == "tightex" and set(new["maps"]) == {"normal", "metallic_roughness"}
+    # A flat normal stays flat in the new frames; each output face is the input triangle it names.
+    assert np.abs(out["images"][new["maps"]["normal"]][..., :3].astype(int) - (128, 128, 255)).max() <= 2
+    assert canonical(faces[out["input_triangles"]]) == canonical(out["faces"])
+    assert "<html" in out["report_html"].lower()
+    with pytest.raises(tightex.InputError, match="not a material slot"):
+        tightex.optimize_arrays(positions, faces, uvs, [image], materials=[{"texture": 0, "maps": {"glow": 0}}])
+    # Vertex colours alone (no image): baked into a new texture.
+    colours = np.random.default_rng(2).random((len(faces), 3, 4)).astype(np.float32)
+    baked = tightex.optimize_arrays(positions, faces, uvs, [], materials=[{"texture": -1}], colors=colours)
+    assert baked["materials"][baked["face_materials"][0]]["texture"] >= 0 and len(baked["images"]) >= 1
+
+
 def test_estimate_memory_is_the_guards(tightex, boxes_model, tmp_path):
     small = tightex.estimate_memory(boxes_model, size=256)
     large = tightex.estimate_memory(boxes_model, size=1024)
