@@ -69,6 +69,25 @@ std::vector<std::string> write_model(const ModelTarget& target, const TexturedMe
   return write_obj(output, target.outdir, target.name, target.encoding, images);
 }
 
+/// The page's links to the full-size images: the output's texture files beside it (none inside a GLB),
+/// the input's where they are files, relative to the output folder.
+HtmlReportOptions page_links(const ModelTarget& target, const TexturedMesh& input, const TexturedMesh& output) {
+  HtmlReportOptions options;
+  for (size_t i = 0; i < output.textures.size(); ++i)
+    options.output_links.push_back(target.format == ModelFormat::kGlb || output.textures[i].path.empty()
+                                       ? std::string()
+                                       : texture_file_name(output.textures[i], target.encoding.of_texture(i).format));
+  std::error_code ec;
+  const fs::path outdir = fs::absolute(target.outdir, ec);
+  for (const Texture& t : input.textures) {
+    std::string link;
+    if (!t.from_vertex_colours && !t.path.empty() && t.path != input.source && fs::is_regular_file(t.path, ec))
+      link = fs::relative(fs::absolute(t.path, ec), outdir, ec).generic_string();
+    options.input_links.push_back(ec ? std::string() : link);
+  }
+  return options;
+}
+
 }  // namespace
 
 std::string output_model_name(const std::string& input, ModelFormat format) {
@@ -89,8 +108,9 @@ void check_paths(const std::string& input, const std::string& outdir, ModelForma
 }
 
 WrittenAndMeasured write_and_measure(const ModelTarget& target, const TexturedMesh& input, const TexturedMesh& output,
-                                     RunTimings& timings) {
-  const auto tw = std::chrono::steady_clock::now();
+                                     RunTimings& timings, const StageProgress& progress) {
+  progress("measure", 0);
+  const auto tm = std::chrono::steady_clock::now();
   const CpuTimes cpu_before = process_cpu_times();
   const auto cpu_since = [&] {
     const CpuTimes now = process_cpu_times();
@@ -98,32 +118,31 @@ WrittenAndMeasured write_and_measure(const ModelTarget& target, const TexturedMe
   };
   WrittenAndMeasured r;
   nlohmann::json html_data;
-  auto measure_and_gather = [&] {
-    // The models' welded edges once, for the measure's charts and the page's seams.
-    WeldedEdges input_edges, output_edges;
-    tbb::parallel_invoke([&] { input_edges = welded_edges(input); }, [&] { output_edges = welded_edges(output); });
-    tbb::parallel_invoke(
-        [&] {
-          r.metrics = measure(input, output, input_edges, output_edges);
-          timings.measure_s = seconds_since(tw);
-          timings.measure_cpu = cpu_since();
-        },
-        [&] {
-          if (!target.html) return;
-          html_data = html_model_data_without_charts(input, output, input_edges, output_edges);
-          timings.html_s = seconds_since(tw);
-          timings.html_cpu = cpu_since();
-        });
-  };
+  // The models' welded edges once, for the measure's charts and the page's seams.
+  WeldedEdges input_edges, output_edges;
+  tbb::parallel_invoke([&] { input_edges = welded_edges(input); }, [&] { output_edges = welded_edges(output); });
   tbb::parallel_invoke(
       [&] {
-        r.removed = write_model(target, output);
-        timings.write_s = seconds_since(tw);
-        timings.write_cpu = cpu_since();
+        r.metrics = measure(input, output, input_edges, output_edges);
+        timings.measure_s = seconds_since(tm);
+        timings.measure_cpu = cpu_since();
       },
-      measure_and_gather);
+      [&] {
+        if (!target.html) return;
+        html_data = html_model_data_without_charts(input, output, input_edges, output_edges, page_links(target, input, output));
+        timings.html_s = seconds_since(tm);
+        timings.html_cpu = cpu_since();
+      });
   // The page's chart counts are the measure's.
   if (target.html) r.html_data = html_model_data(std::move(html_data), r.metrics.charts_input, r.metrics.charts);
+  // The last point a cancel is heard: from here on the files are written and renamed into place.
+  progress("write", 0);
+  const auto tw = std::chrono::steady_clock::now();
+  const CpuTimes cpu_write = process_cpu_times();
+  r.removed = write_model(target, output);
+  timings.write_s = seconds_since(tw);
+  const CpuTimes now = process_cpu_times();
+  timings.write_cpu = CpuTimes{now.user - cpu_write.user, now.sys - cpu_write.sys};
   return r;
 }
 
@@ -134,9 +153,9 @@ void add_run_figures(nlohmann::json& rep, const Metrics& metrics, const RunTimin
   auto timing = [](const char* stage, double seconds, const CpuTimes& cpu) {
     return to_json(StageTiming{stage, seconds, std::nullopt, cpu.user, cpu.sys});
   };
-  timings.push_back(timing("write (beside measure)", t.write_s, t.write_cpu));
-  timings.push_back(timing("measure (beside write)", t.measure_s, t.measure_cpu));
-  if (t.html_s > 0) timings.push_back(timing("report.html data (beside write and measure)", t.html_s, t.html_cpu));
+  timings.push_back(timing("measure (beside report.html data)", t.measure_s, t.measure_cpu));
+  if (t.html_s > 0) timings.push_back(timing("report.html data (beside measure)", t.html_s, t.html_cpu));
+  timings.push_back(timing("write model", t.write_s, t.write_cpu));
   timings.insert(timings.begin(), timing("read geometry", t.read_s, t.read_cpu));
   timings.insert(timings.begin() + 1, to_json(StageTiming{"read textures (beside the geometric stages, from start)", t.textures_s,
                                                           std::nullopt, std::nullopt, std::nullopt}));
