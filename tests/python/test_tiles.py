@@ -264,3 +264,16 @@ def test_folder_with_a_tileset_is_the_tileset_and_an_empty_folder_is_refused(tig
     rc, err = run_tiles(empty, tmp_path / "out2")
     assert rc == 2 and "no model file" in err, err
     assert not (tmp_path / "out2").exists()
+
+
+def test_redo_is_the_tile_runners_word_and_force_its_deprecated_alias(tightex, capsys):
+    from tightex.tiles import parse_command_line
+    opts, fields = parse_command_line(["in", "out", "--redo", "--size", "256"])
+    assert opts.redo and fields["size"] == 256
+    assert "--force" not in capsys.readouterr().err
+    opts, fields = parse_command_line(["in", "out", "--force"])
+    assert opts.redo and fields["allow_large_textures"] is False
+    assert "--force is deprecated here: it is --redo" in capsys.readouterr().err
+    # The tightex command's --force (large textures) is --allow-large-size here.
+    opts, fields = parse_command_line(["in", "out", "--allow-large-size"])
+    assert not opts.redo and fields["allow_large_textures"] is True
