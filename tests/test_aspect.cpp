@@ -211,6 +211,7 @@ TEST(Aspect, TheReportedShapeIsTheTexturesAtAnySize) {
     SCOPED_TRACE(size);
     Options opt;
     opt.size = size;
+    opt.aspect = kAspectAuto;  // chosen, though a size is given
     const Result r = optimize(longsheet, opt);
     const Image& img = r.output.textures.at(0).image;
     const double chosen = report_json(r.report)["aspect"]["chosen"];
@@ -224,7 +225,7 @@ TEST(Aspect, TheReportedShapeIsTheTexturesAtAnySize) {
 // turned into an absurd texture.
 TEST(Aspect, AnAspectOutOfRangeIsRefused) {
   const TexturedMesh sheet = noisy_sheet(5, 5, 0.9 / 4);
-  for (double a : {-1.0, 1e-3, 17.0, 1e300, std::nan("")}) {
+  for (double a : {-2.0, -0.5, 1e-3, 17.0, 1e300, std::nan("")}) {  // -1 is kAspectAuto
     Options opt;
     opt.aspect = a;
     EXPECT_THROW(optimize(sheet, opt), InputError) << a;

@@ -123,12 +123,18 @@ constexpr std::optional<Enum> from_string(const std::array<Enum, N>& values, std
   return std::nullopt;
 }
 
-/// Called with a stage name ("repair", "components", "cut+map", "bake", "measure", "done") and the
-/// fraction [0, 1] of it done (an estimate within "cut+map" and "bake", at most every 0.2 s there).
-/// Calls never overlap and never go backwards within a stage, but within "cut+map" and "bake" they may
-/// come from any thread working for the call. Returning false cancels the run: the call in progress
-/// throws tightex::Cancelled soon after, and nothing is returned.
+/// Called with a stage name and the fraction [0, 1] of it done (an estimate within "cut+map", "bake"
+/// and "encode", at most every 0.2 s there). The stages: ("read" for run,) "repair", "components",
+/// "cut+map", "bake", then for optimize "measure" (where Options::measure) and "done"; for run "encode" (the images' codec and
+/// rate control, --target-psnr's budget search included), "measure", "write" (the files), and "done"
+/// once the last file is renamed into place. Calls never overlap and never go backwards within a stage,
+/// but within "cut+map", "bake" and "encode" they may come from any thread working for the call.
+/// Returning false cancels the run: the call in progress throws tightex::Cancelled soon after, and
+/// nothing is returned nor written (run's "done" comes after the files: its answer changes nothing).
 using ProgressCallback = std::function<bool(std::string_view stage, double fraction)>;
+
+/// Options::aspect: the shape chosen per model, `size` given or not.
+constexpr double kAspectAuto = -1;
 
 /// Options::max_page_side's default: what WebGL and most engines accept.
 constexpr int kDefaultMaxPageSide = 8192;
@@ -145,8 +151,10 @@ struct Options {
   /// The texture holds this many texels (a square of side size_for_texels, or the shape `aspect` gives);
   /// 0: `size` decides. Not together with `size`.
   double texels = 0;
-  /// Width / height of the texture. 0: chosen per model (the square unless 2:1 or 1:2 keeps clearly
-  /// more of the input; atlas layout, area, texel and detail maps); else 1/16..16.
+  /// Width / height of the texture, 1/16..16. 0: the square where `size` is given (a side is promised,
+  /// as the command's --size: the library, the command, Python and the tile runner agree), else chosen
+  /// per model (the square unless 2:1 or 1:2 keeps clearly more of the input; atlas layout, area, texel
+  /// and detail maps). kAspectAuto: chosen per model even with `size` (the command's --aspect auto).
   double aspect = 0;
   /// A default budget's texture may be wider than 16384 texels, and `size` above 16384 is allowed.
   bool allow_large_textures = false;
@@ -209,5 +217,11 @@ struct Options {
   /// Write OUTDIR/report.html (the figures, the atlases and a 3D before/after viewer in one page).
   bool html = true;
 };
+
+/// The aspect a run makes of `o` (Options::aspect): 1 for 0 with a size, 0 (chosen per model) for
+/// kAspectAuto, else as given.
+inline double effective_aspect(const Options& o) {
+  return o.aspect == kAspectAuto ? 0.0 : o.aspect == 0 && o.size > 0 ? 1.0 : o.aspect;
+}
 
 }  // namespace tightex

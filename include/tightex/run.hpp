@@ -24,8 +24,10 @@ void check_options(const Options& options);
 /// report.html (and the preview where asked). Every file is written under a temporary name and renamed
 /// into place; the input is never written to.
 /// Returns the report as written, with the warnings and notes a user should read.
+/// Options::progress hears every stage through the last file renamed into place ("done" comes after it).
 /// Throws InputError (a bad model or option, an output folder that is the input's, a run above the
-/// memory limit), Cancelled (Options::progress returned false; nothing is written), InternalError (a bug).
+/// memory limit), Cancelled (Options::progress returned false, at any stage before "done"; nothing is
+/// written), InternalError (a bug).
 Report run(const std::string& input_path, const std::string& output_dir, const Options& options = {});
 
 /// The memory in bytes the run's guard estimates for this model and options (decoded input textures,

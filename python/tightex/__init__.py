@@ -7,20 +7,23 @@ The Python face of the tightex library (C++, pybind11), on the library's own typ
 - ``optimize(input_path, output_dir, options=None, **fields)`` runs the library's whole run on a model
   file (OBJ, PLY, glTF or GLB with its textures) and returns its ``Report``.
 - ``optimize_arrays(positions, faces, uvs, images, ...)`` runs it on an in-memory mesh (NumPy arrays,
-  as trimesh or Open3D hold them) and returns the new mesh as arrays, with the report.
+  as trimesh or Open3D hold them) and returns an ``ArraysResult``: the new mesh as arrays, and the report.
 - ``estimate_memory(input_path, options=None, **fields)`` is the memory the run's guard estimates, from
   the model's geometry and its images' headers.
 - ``Report``: the main figures as attributes (``surface_psnr_db``, ``lost_triangles``, ``warnings``,
-  ...), ``to_dict()`` for the whole report as report.json holds it, and ``report["metrics"]`` for a section.
+  ...), ``to_dict()`` for the whole report as report.json holds it, and ``report["metrics"]`` for a section
+  (the JSON is parsed once, on first use).
 
-Fields given as keywords are set on a copy of ``options`` (or of the defaults): a field the library does
-not have raises ``InputError``, a value of the wrong type ``TypeError``, one out of range ``InputError``.
+Fields given as keywords are set on a copy of ``options`` (or of the defaults): a keyword that is not a
+field raises ``TypeError``, as for any Python function, and so does a value of the wrong type; a value
+out of range raises ``InputError``.
 
 Errors: ``InputError`` (bad input, one line naming the file or array, the element and the problem),
 ``InternalError`` (a bug), ``Cancelled`` (the progress callback returned False); all subclass ``Error``.
 
-``progress(stage: str, fraction: float) -> bool | None`` is called as the run goes ("repair",
-"components", "cut+map", "bake", ...); returning False cancels it. tightex releases the GIL while it
+``progress(stage: str, fraction: float) -> bool | None`` is called as the run goes ("read", "repair",
+"components", "cut+map", "bake", "encode", "measure", "write", and "done" once every file is in place);
+returning False cancels it, and nothing is written. tightex releases the GIL while it
 works, so other Python threads run meanwhile.
 """
 
@@ -30,21 +33,28 @@ from ._tightex import Cancelled, Error, InputError, InternalError, Report
 #: The build's version: the string `tightex --version` prints and report.json's "tightex_version".
 __version__: str = _tightex.__version__
 
-__all__ = ["Options", "Report", "optimize", "optimize_arrays", "estimate_memory", "set_max_threads", "Error", "InputError",
-           "InternalError", "Cancelled"]
+__all__ = ["Options", "Report", "ArraysResult", "optimize", "optimize_arrays", "estimate_memory", "set_max_threads", "Error",
+           "InputError", "InternalError", "Cancelled", "FIELDS"]
 
-#: The fields of Options, as the library declares them.
+#: The names of the fields of Options, as the library declares them.
 FIELDS = tuple(name for name in dir(_tightex.Options) if not name.startswith("_"))
+
+
+def _check_field(name):
+    """Raises TypeError, as Python does for an unexpected keyword, unless ``name`` is a field."""
+    if name not in FIELDS:
+        raise TypeError(f"{name!r} is not a field of tightex.Options (they are: {', '.join(FIELDS)})")
 
 
 class Options(_tightex.Options):
     __doc__ = _tightex.Options.__doc__
 
     def __init__(self, **fields):
+        """Options with the command's defaults, and ``fields`` set (a keyword that is not a field:
+        TypeError)."""
         super().__init__()
         for name, value in fields.items():
-            if name not in FIELDS:
-                raise InputError(f"options: {name}: not a field of tightex.Options (they are: {', '.join(FIELDS)})")
+            _check_field(name)
             setattr(self, name, value)
 
     def __repr__(self):
@@ -62,8 +72,7 @@ def _with_fields(options, fields):
         for name in FIELDS:
             setattr(copy, name, getattr(options, name))
     for name, value in fields.items():
-        if name not in FIELDS:
-            raise InputError(f"options: {name}: not a field of tightex.Options (they are: {', '.join(FIELDS)})")
+        _check_field(name)
         setattr(copy, name, value)
     return copy
 
@@ -88,6 +97,55 @@ def estimate_memory(input_path, options=None, **fields):
     return int(_tightex.estimate_memory(str(input_path), _with_fields(options, fields)))
 
 
+class ArraysResult:
+    """What ``optimize_arrays`` returns: the optimized mesh as NumPy arrays, and its ``Report``.
+
+    positions: (V, 3) float64, the input's; faces: (F, 3) int64, the input's triangles (in another order,
+    each maybe rotated, never flipped); uvs: (F, 3, 2) float64 per corner, in [0, 1]; material_ids: (F,)
+    int64, the image of each face; face_materials: (F,) int64, the material of each face in
+    ``materials`` (dicts as ``optimize_arrays`` takes, each with its "name"); input_triangles: (F,)
+    int64, the input triangle each face is; images: a list of H x W x 4 uint8 arrays; report_html: the
+    run's report.html (with ``html=True``, else None); report: the ``Report``.
+    ``result["positions"]`` reads the same attributes, as the dict this used to be did.
+    """
+
+    __slots__ = ("positions", "faces", "uvs", "material_ids", "face_materials", "materials", "input_triangles", "images",
+                 "report_html", "report")
+
+    def __init__(self, arrays, report):
+        """The arrays (optimize_arrays's, by name; absent ones None) and the report."""
+        for name in self.__slots__:
+            setattr(self, name, arrays.get(name))
+        self.report = report
+
+    def __getitem__(self, key):
+        """The attribute ``key`` (KeyError for another name): the former dict's access."""
+        if key not in self.__slots__:
+            raise KeyError(key)
+        return getattr(self, key)
+
+    def keys(self):
+        """The names of the attributes, as the former dict's keys."""
+        return list(self.__slots__)
+
+    def __repr__(self):
+        return (f"tightex.ArraysResult({len(self.positions)} positions, {len(self.faces)} faces, "
+                f"{len(self.images)} images)")
+
+
+def _numeric(name, array, integer):
+    """``array`` as a NumPy array, refused (TypeError naming it) unless its dtype is an integer (for
+    indices) or a real number (for coordinates): a float index array is not silently truncated."""
+    import numpy as np
+
+    a = np.asarray(array)
+    if integer and not np.issubdtype(a.dtype, np.integer):
+        raise TypeError(f"arrays: {name} must be an integer array (indices), not {a.dtype}")
+    if not integer and not (np.issubdtype(a.dtype, np.floating) or np.issubdtype(a.dtype, np.integer)):
+        raise TypeError(f"arrays: {name} must be an array of real numbers, not {a.dtype}")
+    return a
+
+
 def optimize_arrays(positions, faces, uvs, images, material_ids=None, face_uvs=None, options=None, progress=None, materials=None,
                     colors=None, html=False, **fields):
     """Optimizes an in-memory textured mesh; nothing is read or written.
@@ -110,15 +168,11 @@ def optimize_arrays(positions, faces, uvs, images, material_ids=None, face_uvs=N
     html: also return "report_html", the text of the run's report.html.
     options, fields: as for ``optimize`` (those about written files do nothing here).
 
-    Returns a dict: "positions" (V, 3) float64, the input's; "faces" (F, 3) int64, the input's
-    triangles (in another order, each maybe rotated, never flipped); "uvs" (F, 3, 2) float64 per
-    corner, in [0, 1]; "material_ids" (F,) int64, the image of each face; "face_materials" (F,) int64,
-    the material of each face in "materials" (dicts as ``materials`` takes, with a "name": "tightex",
-    "tightex_1", ... for a new one, "kept_..." for an input one kept as it was); "input_triangles" (F,)
-    int64, the input triangle each face is; "images", a list of H x W x 4 uint8 arrays; "report", the
-    ``Report``.
+    Returns an ``ArraysResult`` (``.positions``, ``.faces``, ``.uvs``, ``.material_ids``, ``.images``,
+    ``.face_materials``, ``.materials``, ``.input_triangles``, ``.report_html``, ``.report``).
 
-    Raises InputError naming the array and element for a bad shape or index; Cancelled; InternalError.
+    Raises TypeError naming the array for a wrong dtype (float faces, face_uvs or material_ids; images
+    not uint8); InputError naming the array and element for a bad shape or index; Cancelled; InternalError.
     """
     import numpy as np
 
@@ -127,11 +181,16 @@ def optimize_arrays(positions, faces, uvs, images, material_ids=None, face_uvs=N
     images = [np.asarray(image) for image in images]
     for i, image in enumerate(images):
         if image.dtype != np.uint8:
-            raise InputError(f"arrays: images[{i}] is {image.dtype}, not uint8 (0..255 per channel)")
+            raise TypeError(f"arrays: images[{i}] is {image.dtype}, not uint8 (0..255 per channel)")
+    positions, uvs = _numeric("positions", positions, False), _numeric("uvs", uvs, False)
+    faces = _numeric("faces", faces, True)
+    if material_ids is not None:
+        material_ids = _numeric("material_ids", material_ids, True)
+    if face_uvs is not None:
+        face_uvs = _numeric("face_uvs", face_uvs, True)
     arrays, report = _tightex.optimize_arrays(positions, faces, uvs, images, material_ids, face_uvs, _with_fields(options, fields),
                                               progress, materials, colors, bool(html))
-    arrays["report"] = report
-    return arrays
+    return ArraysResult(arrays, report)
 
 
 def set_max_threads(n):

@@ -73,6 +73,20 @@ class Report:
     def __getitem__(self, key: str) -> Any: ...
     def __contains__(self, key: str) -> bool: ...
 
+class ArraysResult:
+    positions: npt.NDArray[np.float64]
+    faces: npt.NDArray[np.int64]
+    uvs: npt.NDArray[np.float64]
+    material_ids: npt.NDArray[np.int64]
+    face_materials: npt.NDArray[np.int64]
+    materials: list[dict[str, Any]]
+    input_triangles: npt.NDArray[np.int64]
+    images: list[npt.NDArray[np.uint8]]
+    report_html: Optional[str]
+    report: Report
+    def __getitem__(self, key: str) -> Any: ...
+    def keys(self) -> list[str]: ...
+
 def set_max_threads(n: int) -> None: ...
 def optimize(input_path: Path, output_dir: Path, options: Optional[Options] = None, progress: Optional[ProgressCallback] = None,
              **fields: Any) -> Report: ...
@@ -90,4 +104,4 @@ def optimize_arrays(
     colors: Optional[npt.ArrayLike] = None,
     html: bool = False,
     **fields: Any,
-) -> dict[str, Any]: ...
+) -> ArraysResult: ...

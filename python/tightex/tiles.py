@@ -1,6 +1,6 @@
 """Whole tile sets through tightex on a Dask cluster: one task per tile.
 
-    /usr/bin/python3 -m tightex.tiles INPUT OUTPUT [--scheduler ADDRESS] [--workers N] [--force] [tightex options]
+    /usr/bin/python3 -m tightex.tiles INPUT OUTPUT [--scheduler ADDRESS] [--workers N] [--redo] [tightex options]
 
 INPUT is a folder of models (.obj, .ply, and .glb where the library reads it; searched recursively),
 or a 3D Tiles ``tileset.json`` whose content is 1.0 ``.b3dm`` (the embedded GLB is optimized; the
@@ -26,7 +26,8 @@ command's; ``--allow-large-size`` passes the command's own ``--force``.
   temporary folder beside it and renamed into place, so a half tile never appears.
 - ``OUTPUT/manifest.jsonl`` records each tile done (or refused as bad input), with the hash of its
   input files and the options; a re-run skips those whose hash, options and output still match (a
-  refused tile is reported failed again without a run), unless ``--force``. Tiles that failed
+  refused tile is reported failed again without a run), unless ``--redo`` (``--force``, its former name,
+  still works and warns: the command's ``--force`` is another thing). Tiles that failed
   otherwise (a worker died too often, a full disk) are run again. A failed tile of
   a tileset gets its input content copied unchanged, so the tileset stays complete.
 - Untrusted input stays inside its folder (docs/architecture.md, "Files a model names"): a content URI
@@ -674,8 +675,9 @@ _FLAG_TYPES = {"png_level": int, "jpeg_quality": int, "webp_quality": int, "mode
 
 
 def _aspect(value):
-    """--aspect's value: "auto" (0) or a number."""
-    return 0.0 if value == "auto" else float(value)
+    """--aspect's value: "auto" (the library's kAspectAuto, -1: chosen per model even with --size) or a
+    number."""
+    return -1.0 if value == "auto" else float(value)
 
 
 def _add_tightex_flags(ap):
@@ -700,8 +702,6 @@ def _tightex_options(ap, opts):
     """The Options fields the command line gives (a dict), checked by the library."""
     from . import Error, FIELDS, Options, _tightex
     fields = {f: getattr(opts, f) for f in FIELDS if getattr(opts, f, None) is not None}
-    if "size" in fields and "aspect" not in fields:
-        fields["aspect"] = 1.0  # --size promises a side: a square, unless a shape is asked for
     fields["html"] = opts.html
     fields["allow_large_textures"] = opts.allow_large_size
     try:
@@ -725,7 +725,8 @@ def parse_command_line(argv):
                          "LocalCluster: cores / workers; with --scheduler: all the worker's cores)")
     ap.add_argument("--memory-per-worker", type=float, metavar="MiB",
                     help="LocalCluster: the memory each worker offers tiles (default: this machine's / workers)")
-    ap.add_argument("--force", action="store_true", help="redo tiles an earlier run completed")
+    ap.add_argument("--redo", action="store_true", help="redo tiles an earlier run completed")
+    ap.add_argument("--force", action="store_true", dest="force_deprecated", help=argparse.SUPPRESS)  # --redo's former name
     ap.add_argument("--allow-large-size", action="store_true", help="tightex's own --force (a --size above 16384)")
     ap.add_argument("--skip-unreadable", action="store_true",
                     help="contents that are remote, unreadable or refused (listed in the summary) are expected: exit 0 for them")
@@ -739,6 +740,10 @@ def parse_command_line(argv):
             ap.error(f"{a}: the tiles command sets where each tile's files go and prints its own progress")
     if unknown:
         ap.error(f"unrecognized arguments: {' '.join(unknown)}")
+    if opts.force_deprecated:
+        print("tightex.tiles: warning: --force is deprecated here: it is --redo (the tightex command's --force, large "
+              "textures, is --allow-large-size)", file=sys.stderr)
+        opts.redo = True
     return opts, _tightex_options(ap, opts)
 
 
@@ -779,7 +784,7 @@ def main(argv=None):
         print(f"tightex.tiles: error: {e}", file=sys.stderr)
         return 2
     os.makedirs(output_root, exist_ok=True)
-    manifest = {} if opts.force else read_manifest(output_root)
+    manifest = {} if opts.redo else read_manifest(output_root)
     records, todo = {r["tile"]: r for r in not_run}, []
     with ThreadPoolExecutor(os.cpu_count() or 1) as pool:  # hashing and tightex's estimate release the GIL
         for tile, settled in zip(tiles, pool.map(lambda t: _prepare(t, manifest, options), tiles)):

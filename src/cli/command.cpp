@@ -142,9 +142,9 @@ void finish_command_line(CommandLine& line, const GivenFlags& given) {
   if (given.png->count() > 0) o.png_level = given.png_level == "fast" ? kPngLevelFast : std::stoi(given.png_level);
   if (given.jpeg->count() > 0) o.jpeg_quality = given.jpeg_quality;
   if (given.webp->count() > 0) o.webp_quality = given.webp_quality;
-  // --size promises a side: a square, unless a shape is asked for.
-  const bool size_given = given.size->count() > 0;
-  o.aspect = given.aspect.empty() ? (size_given ? 1.0 : 0.0) : given.aspect == "auto" ? 0.0 : std::stod(given.aspect);
+  // --size promises a side: a square unless a shape is asked for, which the library's Options::aspect 0
+  // means with a size (effective_aspect); "auto" chooses the shape even then.
+  o.aspect = given.aspect.empty() ? 0.0 : given.aspect == "auto" ? kAspectAuto : std::stod(given.aspect);
   o.fit = !given.no_fit;
   o.html = !given.no_html;
 }

@@ -1,12 +1,10 @@
 // The tightex command: a thin shell over the library's run (tightex/run.hpp) and the command's flags (cli/command.hpp). Exit codes: 0 ok, 1 bad input (the message names
 // the file and element), 2 internal error.
-#include <malloc.h>
 #include <sys/auxv.h>
 #include <unistd.h>
 #include <CLI/CLI.hpp>
 #include <cstdlib>
 #include <iostream>
-#include <limits>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -61,22 +59,13 @@ int run_main(int argc, char** argv) {
   return 0;
 }
 
-/// glibc's allocator told to keep freed memory for the next allocation instead of giving it back to the
-/// kernel: the run allocates and frees arrays the size of the surface at every step, and each page taken
-/// again from the kernel costs a page fault and its zeroing. Blocks up to 32 MiB (glibc's largest
-/// threshold) come from the heap, which is never trimmed and grows 256 MiB at a time (address space,
-/// not memory, until written). Figures: BENCHMARKS.md, "Where the default run's time goes".
-void keep_freed_memory_for_reuse() {
-  mallopt(M_MMAP_THRESHOLD, 32 << 20);
-  mallopt(M_TRIM_THRESHOLD, std::numeric_limits<int>::max());
-  mallopt(M_TOP_PAD, 256 << 20);
-}
-
 /// Starts this program again with glibc's allocator told to ask for transparent huge pages
 /// (GLIBC_TUNABLES glibc.malloc.hugetlb=1, which only the environment of a starting process can set):
 /// the heap and the blocks mapped on their own are advised as 2 MiB pages, so that a surface-sized
 /// array costs one page fault per 2 MiB instead of per 4 KiB, and the solvers' scattered reads miss
-/// the TLB less (BENCHMARKS.md). Not done where GLIBC_TUNABLES already says how (as it does in the new
+/// the TLB less (BENCHMARKS.md). Only a starting process can ask it, so the command does it here; the
+/// allocator's other settings are the library's (run: keep_freed_memory_for_reuse), and neither changes
+/// a byte of the output. Not done where GLIBC_TUNABLES already says how (as it does in the new
 /// process); where execv fails the run goes on as it is. Not done either where the program was started
 /// by naming the dynamic loader (`ld-linux-x86-64.so.2 tightex ...`: /proc/self/exe is then the loader,
 /// and the kernel gives no interpreter base) or is linked statically.
@@ -95,7 +84,6 @@ void restart_with_huge_pages(char** argv) {
 
 int main(int argc, char** argv) {
   restart_with_huge_pages(argv);
-  keep_freed_memory_for_reuse();
   try {
     if (argc > 1 && std::string(argv[1]) == "measure") return run_measure(argc - 1, argv + 1);
     return run_main(argc, argv);

@@ -42,8 +42,9 @@ void check_budget(const TextureBudget& budget, const Options& options) {
   if (budget.side > kLargeSide && !options.allow_large_textures)
     fail_input("--size {} is above {} ({:.1f} GiB of RGBA texture); add --force (allow_large_textures) to allow it", budget.side,
                kLargeSide, double(budget.side) * budget.side * 4 / double(1 << 30));
-  if (options.aspect != 0 && !(options.aspect >= 1.0 / 16 && options.aspect <= 16))
-    fail_input("aspect {} is out of range (0 for auto, or 1/16..16)", options.aspect);
+  const double aspect = effective_aspect(options);
+  if (aspect != 0 && !(aspect >= 1.0 / 16 && aspect <= 16))
+    fail_input("aspect {} is out of range (0 or {} for auto, or 1/16..16)", options.aspect, kAspectAuto);
 }
 
 std::vector<double> component_areas(const std::vector<Surface>& components) {
@@ -370,8 +371,10 @@ PreparedMesh prepare_mesh(const TexturedMesh& geometry, const Options& options) 
 namespace {
 
 /// The rest of plan_charts after the preparation.
-Plan plan_prepared(const TexturedMesh& input, const Options& options, const TextureBudget& budget, const PlanHooks& hooks,
+Plan plan_prepared(const TexturedMesh& input, const Options& given, const TextureBudget& budget, const PlanHooks& hooks,
                    std::unique_ptr<PreparedMesh::State> prepared) {
+  Options options = given;  // the aspect as the run makes it: a square for a size (effective_aspect)
+  options.aspect = effective_aspect(given);
   check_budget(budget, options);
   const StageProgress progress(options.progress);
   auto plan = std::make_unique<Plan::State>();

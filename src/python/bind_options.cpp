@@ -49,8 +49,14 @@ void optional_choice(py::class_<Options>& c, const char* field, std::optional<En
       doc(field).c_str());
 }
 
-/// The report's JSON as Python objects (the json module's loads).
-py::object loads(const std::string& text) { return py::module_::import("json").attr("loads")(text); }
+/// A Report's JSON as Python objects (the json module's loads), parsed on first use and kept on the
+/// object (a Report's JSON never changes).
+py::dict parsed(py::object self) {
+  if (py::hasattr(self, "_parsed")) return self.attr("_parsed");
+  py::dict whole = py::module_::import("json").attr("loads")(self.cast<const Report&>().json);
+  self.attr("_parsed") = whole;
+  return whole;
+}
 
 }  // namespace
 
@@ -59,7 +65,7 @@ void bind_options(py::module_& m) {
   c.def(py::init<>());
   c.def_readwrite("size", &Options::size, doc("size").c_str());
   c.def_readwrite("texels", &Options::texels, doc("texels").c_str());
-  c.def_readwrite("aspect", &Options::aspect, (doc("aspect") + " (0: auto)").c_str());
+  c.def_readwrite("aspect", &Options::aspect, (doc("aspect") + " (0: the square with a size, else chosen per model; -1: chosen per model always)").c_str());
   c.def_readwrite("allow_large_textures", &Options::allow_large_textures, doc("allow_large_textures").c_str());
   c.def_readwrite("allow_outside_files", &Options::allow_outside_files, doc("allow_outside_files").c_str());
   choice(c, "layout", &Options::layout, kLayouts);
@@ -101,37 +107,39 @@ void bind_option_table(py::module_& m) {
 }
 
 void bind_report(py::module_& m) {
-  py::class_<Report> c(m, "Report", "What a run did and measured (docs/metrics.md names each figure).");
-  c.def_readonly("input_triangles", &Report::input_triangles);
-  c.def_readonly("output_triangles", &Report::output_triangles);
-  c.def_readonly("components", &Report::components);
-  c.def_readonly("charts", &Report::charts);
-  c.def_readonly("lost_triangles", &Report::lost_triangles);
-  c.def_readonly("flipped_triangles", &Report::flipped_triangles);
-  c.def_readonly("input_texels_used", &Report::input_texels_used);
-  c.def_readonly("output_texels_used", &Report::output_texels_used);
-  c.def_readonly("surface_psnr_db", &Report::surface_psnr_db);
-  c.def_readonly("surface_psnr_bake_db", &Report::surface_psnr_bake_db);
-  c.def_readonly("texture_sizes", &Report::texture_sizes);
-  c.def_readonly("input_texture_bytes", &Report::input_texture_bytes);
-  c.def_readonly("output_texture_bytes", &Report::output_texture_bytes);
-  c.def_readonly("texture_format", &Report::texture_format);
-  c.def_readonly("model_path", &Report::model_path);
-  c.def_readonly("report_path", &Report::report_path);
-  c.def_readonly("wall_seconds", &Report::wall_seconds);
-  c.def_readonly("peak_rss_mib", &Report::peak_rss_mib);
-  c.def_readonly("warnings", &Report::warnings);
-  c.def_readonly("notes", &Report::notes);
+  // dynamic_attr: each Report keeps its parsed JSON (parsed), so that sections are read without parsing
+  // the whole text again.
+  py::class_<Report> c(m, "Report", py::dynamic_attr(), "What a run did and measured (docs/metrics.md names each figure).");
+  c.def_readonly("input_triangles", &Report::input_triangles, "triangles of the input model");
+  c.def_readonly("output_triangles", &Report::output_triangles, "triangles of the output model");
+  c.def_readonly("components", &Report::components, "connected surfaces after the repair");
+  c.def_readonly("charts", &Report::charts, "charts of the output's texture (one per component is the aim)");
+  c.def_readonly("lost_triangles", &Report::lost_triangles, "input triangles missing from the output (must be 0)");
+  c.def_readonly("flipped_triangles", &Report::flipped_triangles, "output triangles mirrored in texture space (must be 0)");
+  c.def_readonly("input_texels_used", &Report::input_texels_used, "share of the input's texels some triangle covers");
+  c.def_readonly("output_texels_used", &Report::output_texels_used, "share of the output's texels some triangle covers");
+  c.def_readonly("surface_psnr_db", &Report::surface_psnr_db, "surface PSNR of the output as written, in dB");
+  c.def_readonly("surface_psnr_bake_db", &Report::surface_psnr_bake_db, "surface PSNR of the bake before encoding, in dB");
+  c.def_readonly("texture_sizes", &Report::texture_sizes, "(width, height) of every new texture");
+  c.def_readonly("input_texture_bytes", &Report::input_texture_bytes, "bytes of the input's images on disk");
+  c.def_readonly("output_texture_bytes", &Report::output_texture_bytes, "bytes of the output's images as written");
+  c.def_readonly("texture_format", &Report::texture_format, "the codec of the output's images (png, jpg, webp)");
+  c.def_readonly("model_path", &Report::model_path, "the output model's path (empty for optimize_arrays)");
+  c.def_readonly("report_path", &Report::report_path, "the report a reader opens: report.html, or report.json");
+  c.def_readonly("wall_seconds", &Report::wall_seconds, "the run's wall time in seconds");
+  c.def_readonly("peak_rss_mib", &Report::peak_rss_mib, "the most memory the process held, in MiB");
+  c.def_readonly("warnings", &Report::warnings, "what a user should read about the result");
+  c.def_readonly("notes", &Report::notes, "what the run chose and why, in a line each");
   c.def_readonly("json", &Report::json, "the whole report, as report.json holds it (JSON text)");
-  c.def("to_dict", [](const Report& r) { return loads(r.json); }, "the whole report as a dict, as report.json holds it");
   c.def(
-      "__getitem__",
-      [](const Report& r, const std::string& key) {
-        const py::object whole = loads(r.json);
-        return py::object(whole[py::str(key)]);  // owned: the accessor alone would outlive `whole`
-      },
-        "a section of the report (report[\"metrics\"]), as report.json holds it");
-  c.def("__contains__", [](const Report& r, const std::string& key) { return loads(r.json).contains(py::str(key)); });
+      "to_dict", [](py::object self) { return py::module_::import("copy").attr("deepcopy")(parsed(self)); },
+      "the whole report as a dict, as report.json holds it (a copy of the one parsed once)");
+  c.def(
+      "__getitem__", [](py::object self, const std::string& key) { return py::object(parsed(self)[py::str(key)]); },
+      "a section of the report (report[\"metrics\"]), as report.json holds it (parsed once, shared: copy it to change it)");
+  c.def(
+      "__contains__", [](py::object self, const std::string& key) { return parsed(self).contains(py::str(key)); },
+      "whether the report has the section `key`");
 }
 
 }  // namespace tightex

@@ -16,10 +16,10 @@
 #include <vector>
 
 #include "core/error.hpp"
-#include "core/hash.hpp"
 #include "io/image_io.hpp"
 #include "report/metrics.hpp"
 #include "report/preview.hpp"
+#include "report/view_mesh.hpp"
 
 namespace tightex {
 
@@ -58,29 +58,6 @@ template <typename T>
 std::string base64_array(const std::vector<T>& values) {
   static_assert(std::endian::native == std::endian::little, "the page reads little-endian arrays");
   return base64(values.data(), values.size() * sizeof(T));
-}
-
-/// A hash of a triangle's three corner positions that does not depend on the corners' order or the
-/// vertices' numbering: the same surface triangle hashes the same in the input and the output.
-uint64_t triangle_hash(const TexturedMesh& mesh, size_t t) {
-  uint64_t sum = 0;
-  for (int k = 0; k < 3; ++k) {
-    const Vec3& p = mesh.positions[mesh.triangles[t][k]];
-    sum += splitmix64(std::bit_cast<uint64_t>(p.x()) ^
-                      splitmix64(std::bit_cast<uint64_t>(p.y()) ^ splitmix64(std::bit_cast<uint64_t>(p.z()))));
-  }
-  return splitmix64(sum);
-}
-
-/// The triangles shown: all of them when `keep_fraction` is 1, else those whose hash falls below that
-/// fraction of the hash range (deterministic, and the same surface triangles in both models).
-std::vector<uint32_t> shown_triangles(const TexturedMesh& mesh, double keep_fraction) {
-  std::vector<uint32_t> shown;
-  // 2^11 below the fraction of 2^64, so that the double converts to an integer below 2^64.
-  const auto threshold = uint64_t(std::ldexp(std::min(keep_fraction, 1.0), 64) - std::ldexp(1.0, 11));
-  for (size_t t = 0; t < mesh.num_triangles(); ++t)
-    if (keep_fraction >= 1 || triangle_hash(mesh, t) < threshold) shown.push_back(uint32_t(t));
-  return shown;
 }
 
 /// The texture triangle t samples, or -1.
@@ -150,64 +127,80 @@ std::string map_slots_of(const TexturedMesh& mesh, int i) {
   return slots;
 }
 
-/// The model's textures for display: full size, and the image box-filtered to at most `max_side`
-/// pixels a side, as a data-URI JPEG ("" where the pixels are not loaded), and the map slots each
-/// serves ("map": "" for a base colour).
-json textures_json(const TexturedMesh& mesh, const HtmlReportOptions& options) {
+/// The model's textures as data-URI JPEGs box-filtered to at most `side` pixels on their longer side
+/// ("" where the pixels are not loaded).
+std::vector<std::string> texture_uris(const TexturedMesh& mesh, int side, int quality) {
+  std::vector<std::string> uris;
+  for (const Texture& texture : mesh.textures) {
+    const Image& image = texture.image;
+    if (image.empty()) {
+      uris.emplace_back();
+      continue;
+    }
+    const int longer = std::max(image.width, image.height);
+    const int height = longer > side ? std::max(1, int(std::lround(double(image.height) * side / longer))) : image.height;
+    const std::string jpeg = encode_jpeg(height == image.height ? image : box_shrink(image, height), quality);
+    uris.push_back("data:image/jpeg;base64," + base64(jpeg.data(), jpeg.size()));
+  }
+  return uris;
+}
+
+/// The model's textures for display: full size, the image downscaled until all of them fit
+/// HtmlReportOptions::max_image_bytes (texture_uris), the file of the full-size image (`links`, "" for
+/// none) and the map slots each serves ("map": "" for a base colour).
+json textures_json(const TexturedMesh& mesh, const HtmlReportOptions& options, const std::vector<std::string>& links) {
+  // A first side from the budget shared by the pages, then smaller until the images fit.
+  const double pages = double(std::max<size_t>(mesh.textures.size(), 1));
+  int side = std::min(options.max_texture_side, std::max(16, int(std::sqrt(double(options.max_image_bytes) * 5 / pages))));
+  std::vector<std::string> uris;
+  for (;;) {
+    uris = texture_uris(mesh, side, options.jpeg_quality);
+    size_t bytes = 0;
+    for (const std::string& u : uris) bytes += u.size();
+    if (bytes <= options.max_image_bytes * 4 / 3 || side <= 16) break;
+    side = std::max(16, int(side * 0.75));
+  }
   json textures = json::array();
   for (size_t i = 0; i < mesh.textures.size(); ++i) {
     const auto [w, h] = texture_size(mesh, int(i));
-    const Image& image = mesh.textures[i].image;
-    std::string uri;
-    if (!image.empty()) {
-      const int longer = std::max(image.width, image.height);
-      const int height = longer > options.max_texture_side
-                             ? std::max(1, int(std::lround(double(image.height) * options.max_texture_side / longer)))
-                             : image.height;
-      const std::string jpeg = encode_jpeg(height == image.height ? image : box_shrink(image, height), options.jpeg_quality);
-      uri = "data:image/jpeg;base64," + base64(jpeg.data(), jpeg.size());
-    }
-    textures.push_back({{"width", w}, {"height", h}, {"image", uri}, {"map", map_slots_of(mesh, int(i))}});
+    textures.push_back({{"width", w},
+                        {"height", h},
+                        {"image", uris[i]},
+                        {"file", i < links.size() ? links[i] : std::string()},
+                        {"map", map_slots_of(mesh, int(i))}});
   }
   return textures;
 }
 
-/// One model's entry of html_model_data.
-json model_json(const TexturedMesh& mesh, const WeldedEdges& edges, const std::string& name, double keep_fraction,
-                const HtmlReportOptions& options) {
-  const std::vector<uint32_t> shown = shown_triangles(mesh, keep_fraction);
-  const std::vector<uint8_t> all_seams = seam_bits(mesh, edges);
-  const std::vector<double> all_density = relative_density(mesh);
-  std::vector<uint32_t> vertex_index(mesh.num_vertices(), kNone), indices;
+/// One model's entry of html_model_data: `view` (the model, or a decimated copy: clustered_mesh) with
+/// its welded edges for the 3D views, `mesh`'s own counts and textures.
+json model_json(const TexturedMesh& mesh, const TexturedMesh& view, const WeldedEdges& edges, const std::string& name,
+                const HtmlReportOptions& options, const std::vector<std::string>& links) {
+  const std::vector<uint8_t> seams = seam_bits(view, edges);
+  const std::vector<double> all_density = relative_density(view);
+  std::vector<uint32_t> indices;
   std::vector<float> positions, uv, density;
   std::vector<int16_t> texture;
-  std::vector<uint8_t> seams;
-  for (uint32_t t : shown) {
+  for (const Vec3& p : view.positions) positions.insert(positions.end(), {float(p.x()), float(p.y()), float(p.z())});
+  for (size_t t = 0; t < view.num_triangles(); ++t) {
     for (int k = 0; k < 3; ++k) {
-      uint32_t& v = vertex_index[mesh.triangles[t][k]];
-      if (v == kNone) {
-        v = uint32_t(positions.size() / 3);
-        const Vec3& p = mesh.positions[mesh.triangles[t][k]];
-        positions.insert(positions.end(), {float(p.x()), float(p.y()), float(p.z())});
-      }
-      indices.push_back(v);
-      const Vec2 c = mesh.sampled_uv(t, k);
+      indices.push_back(view.triangles[t][k]);
+      const Vec2 c = view.sampled_uv(t, k);
       uv.insert(uv.end(), {float(c.x()), float(c.y())});
     }
-    texture.push_back(int16_t(std::clamp(texture_of(mesh, t), -1, int(INT16_MAX))));
-    seams.push_back(all_seams[t]);
+    texture.push_back(int16_t(std::clamp(texture_of(view, t), -1, int(INT16_MAX))));
     density.push_back(float(all_density[t]));
   }
   return {{"name", name},
           {"triangles", mesh.num_triangles()},
-          {"shown", shown.size()},
+          {"shown", view.num_triangles()},
           {"positions", base64_array(positions)},
           {"indices", base64_array(indices)},
           {"uv", base64_array(uv)},
           {"texture", base64_array(texture)},
           {"seams", base64_array(seams)},
           {"density", base64_array(density)},
-          {"textures", textures_json(mesh, options)}};
+          {"textures", textures_json(mesh, options, links)}};
 }
 
 /// `text` with every "<" written as the JSON escape "\u003c", so that no "</script>" in a string can
@@ -272,12 +265,26 @@ std::string html_model_data(json data, size_t input_charts, size_t output_charts
 
 json html_model_data_without_charts(const TexturedMesh& input, const TexturedMesh& output, const WeldedEdges& input_edges,
                                     const WeldedEdges& output_edges, const HtmlReportOptions& options) {
-  // The input's count sets the fraction for both, so that both show the same surface triangles.
-  const double keep_fraction =
-      input.num_triangles() > options.max_triangles ? double(options.max_triangles) / double(input.num_triangles()) : 1.0;
+  // One grid for both, from the input, so that both views show the same decimated surface; grown
+  // where the output (the same surface, cut otherwise) would keep more triangles than the cap.
+  double cell = cluster_cell(input, options.max_triangles);
+  TexturedMesh in_view, out_view;
+  WeldedEdges in_view_edges, out_view_edges;
+  while (cell > 0) {
+    in_view = clustered_mesh(input, cell);  // one after the other: each holds arrays per corner meanwhile
+    out_view = clustered_mesh(output, cell);
+    if (out_view.num_triangles() <= options.max_triangles) break;
+    cell *= 1.15;
+  }
+  if (cell > 0)
+    tbb::parallel_invoke([&] { in_view_edges = welded_edges(in_view); }, [&] { out_view_edges = welded_edges(out_view); });
   json in, out;  // side by side: each encodes its own textures
-  tbb::parallel_invoke([&] { in = model_json(input, input_edges, "input", keep_fraction, options); },
-                       [&] { out = model_json(output, output_edges, "output", keep_fraction, options); });
+  tbb::parallel_invoke(
+      [&] { in = model_json(input, cell > 0 ? in_view : input, cell > 0 ? in_view_edges : input_edges, "input", options, options.input_links); },
+      [&] {
+        out = model_json(output, cell > 0 ? out_view : output, cell > 0 ? out_view_edges : output_edges, "output", options,
+                         options.output_links);
+      });
   return {{"max_triangles", options.max_triangles}, {"models", json::array({std::move(in), std::move(out)})}};
 }
 

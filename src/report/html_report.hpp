@@ -2,32 +2,40 @@
 // and after, the density, the components, and both models in a 3D viewer). The page's template, style
 // and script live in src/report/html/ and, with the three.js they use (Debian's libjs-three), are
 // embedded in the binary at build time; everything the page shows is packed into it (base64 arrays,
-// data-URI images), so it opens from the file system, offline, and fetches nothing.
+// data-URI images, downscaled), so it opens from the file system, offline, and fetches nothing; the
+// full-size texture files beside it are linked, for a reader to open.
 #pragma once
 #include <cstddef>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "core/mesh.hpp"
 #include "report/welded_edges.hpp"
 
 namespace tightex {
 
-/// How much of the models the page holds.
+/// How much of the models the page holds: together with three.js (about 0.9 MB) the page stays under
+/// 3 MB whatever the model.
 struct HtmlReportOptions {
-  /// Triangles of each model in the 3D viewer at most: above it, a deterministic subsample (the same
-  /// surface triangles in both models, chosen by a hash of their corner positions) keeps the page
-  /// responsive; the page says how many it shows.
-  size_t max_triangles = 200000;
-  /// Texture images are box-filtered down to this many pixels on their longer side for display.
-  int max_texture_side = 2048;
-  int jpeg_quality = 85;
+  /// Triangles of each model in the 3D viewer at most: above it, both models decimated on one grid
+  /// (clustered_mesh: the same surface in both, each with its own texture coordinates and seams); the
+  /// page says how many it shows.
+  size_t max_triangles = 8000;
+  /// Texture images are box-filtered down to at most this many pixels on their longer side, and further
+  /// until each model's images take at most max_image_bytes as JPEG; the full-size files are linked.
+  int max_texture_side = 1024;
+  size_t max_image_bytes = 300000;
+  int jpeg_quality = 80;
+  /// Per texture of each model, the path of its full-size image relative to the page ("" for none: an
+  /// image inside a GLB, a texture made in memory), which the page links.
+  std::vector<std::string> input_links, output_links;
 };
 
 /// What the page shows of the two models, as JSON text: per model its triangle count, chart count, the
 /// shown triangles' positions, indices, texture coordinates, texture index, seam edges and log2 texel
 /// density relative to the model's mean (base64 of little-endian typed arrays), and its textures as
-/// data-URI JPEGs with their full sizes. Requires two valid meshes (as read_model returns them) with
+/// data-URI JPEGs with their full sizes and the links to their full-size files. Requires two valid meshes (as read_model returns them) with
 /// their pixels; `output` is `input` re-textured. Throws only std::bad_alloc.
 std::string html_model_data(const TexturedMesh& input, const TexturedMesh& output, const HtmlReportOptions& options = {});
 

@@ -47,15 +47,16 @@ constexpr std::array kHelps{
     OptionHelp{"fine_fit", "--fine-fit",
                "fit on 4x4 points per texel instead of 2x2: a little higher surface PSNR, about twice the bake time"},
     OptionHelp{"material_map_budget_db", "--material-map-budget",
-               "maps other than the base colour (metallic-roughness, occlusion, emissive, normal, specular, ...): a map some "
-               "slot of which (each over the channels it reads) is below this many surface-PSNR dB against the input's map at "
-               "the base colour's size may be baked larger, up to as many texels as its input image has, while a slot falls "
-               "short of what the map check asks (the base colour's PSNR plus an ideal re-sampler's difference, at most this) "
-               "and each step pays for its texels (removes as much error per added texel as the base colour's texels do); "
-               "any other map is halved (down to 1/16 of the base colour's side) while each slot stays at or above this or "
-               "within 0.25 dB of the base colour's size's (a normal map: against itself at full size, never larger); "
-               "default 51; 0 keeps every map at the base colour's size"},
-    OptionHelp{"allow_large_textures", "--force", "allow a texture side above 16384"},
+               "material maps (a material's textures other than the base colour: metallic-roughness, occlusion, emissive, "
+               "normal, specular, ...): a material map one of whose texture slots (each over the channels it reads) is below "
+               "this many surface-PSNR dB against the input's at the base colour's size may be baked larger, up to as many "
+               "texels as its input image has, while a slot falls short of what the material-map check asks (the base colour's "
+               "PSNR plus an ideal re-sampler's difference, at most this) and each step pays for its texels (removes as much "
+               "error per added texel as the base colour's texels do); any other material map is halved (down to 1/16 of the base colour's side) while each slot stays within 0.25 dB of "
+               "its figure at the base colour's size, however high (a "
+               "normal map: against itself at full size, never larger); default 51; 0 keeps every material map at the base "
+               "colour's size. (\"Map\" alone, as in --map, is the parameterization.)"},
+    OptionHelp{"allow_large_textures", "--force", "allow a texture side above 16384 (the tile runner's is --allow-large-size)"},
     OptionHelp{"allow_outside_files", "--allow-outside-files",
                "read files the model names (material libraries, textures, glTF buffers and images) outside the folder of the "
                "file that names them: absolute paths, file: URIs, '..' or symbolic links leading out (default: refused, since "

@@ -9,10 +9,12 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <mutex>
 #include <numeric>
 #include <tuple>
 
 #include "core/error.hpp"
+#include "core/progress.hpp"
 #include "core/resources.hpp"
 #include "io/image_io.hpp"
 #include "io/model_files.hpp"
@@ -21,6 +23,7 @@
 #include "pipeline/plan_state.hpp"
 #include "report/report.hpp"
 #include "run/memory_guard.hpp"
+#include "run/process_tuning.hpp"
 #include "run/run_output.hpp"
 #include "run/run_warnings.hpp"
 #include "run/texture_bytes.hpp"
@@ -75,7 +78,7 @@ BytesRequest bytes_request(const Options& o) {
   e.jpeg_quality = o.jpeg_quality.value_or(kDefaultJpegQuality);
   e.webp_quality = o.webp_quality.value_or(kDefaultWebpQuality);
   e.webp_lossless = o.webp_lossless;
-  return {o.texture_format, e, o.jpeg_quality.has_value() || o.webp_quality.has_value(), o.target_psnr_db, o.max_bytes};
+  return {o.texture_format, e, o.jpeg_quality.has_value() || o.webp_quality.has_value(), o.target_psnr_db, o.max_bytes, {}};
 }
 
 /// The model's geometry (no pixels) with its textures' sizes from their headers, checked against the
@@ -95,11 +98,14 @@ TexturedMesh read_geometry(const std::string& input, const Options& options, Mod
   return geometry;
 }
 
-/// The options the method runs with in a run writing `format`: measured beside the write, and the
-/// untextured triangles baked into PLY, which has no material to keep their colour in.
+/// The options the method runs with in a run writing `format`: measured beside the write, the
+/// untextured triangles baked into PLY, which has no material to keep their colour in, and its "done"
+/// kept for the run's own, once the files are in place.
 Options method_options(const Options& options, ModelFormat format) {
   Options o = options;
   o.measure = false;
+  if (options.progress)
+    o.progress = [progress = options.progress](std::string_view stage, double fraction) { return stage == "done" || progress(stage, fraction); };
   o.keep_untextured = options.keep_untextured && format != ModelFormat::kPly;
   return o;
 }
@@ -138,7 +144,7 @@ PlannedModel read_textures_and_plan(TexturedMesh geometry, const Options& opt, c
     }
   };
   const bool plan_needs_pixels =
-      opt.map == MapKind::kDetail || (opt.aspect == 0 && opt.map != MapKind::kHarmonic && opt.layout == Layout::kAtlas);
+      opt.map == MapKind::kDetail || (effective_aspect(opt) == 0 && opt.map != MapKind::kHarmonic && opt.layout == Layout::kAtlas);
   PreparedMesh prepared;
   tbb::parallel_invoke(read_textures, [&] {
     planning([&] {
@@ -166,12 +172,40 @@ constexpr double kTargetBudgetFractions[] = {0.7, 0.5, 0.35, 0.25, 0.18};
 
 uint64_t total_bytes(const EncodingChoice& c) { return std::accumulate(c.bytes.begin(), c.bytes.end(), uint64_t(0)); }
 
+/// The "encode" stage's progress, which never goes backwards though its parts each count from 0 (rate
+/// control's encodings, the budget search's plans and bakes): part i of n reports within [i/n, (i+1)/n].
+/// Every report asks the caller's callback, so that a cancel is heard throughout (Cancelled).
+class EncodeProgress {
+ public:
+  explicit EncodeProgress(const StageProgress& progress) : progress_(progress) {}
+  /// Part `i` of `n` begins.
+  void part(int i, int n) { lo_ = double(i) / n, hi_ = double(i + 1) / n, report(0); }
+  void report(double fraction) {
+    const std::lock_guard lock(mutex_);
+    at_ = std::max(at_, lo_ + (hi_ - lo_) * std::clamp(fraction, 0.0, 1.0));
+    progress_("encode", at_);
+  }
+  /// A callback for the method's stages run again within this stage (their names are not the run's).
+  ProgressCallback as_callback() {
+    return [this](std::string_view, double fraction) {
+      report(fraction);
+      return true;
+    };
+  }
+
+ private:
+  const StageProgress& progress_;
+  std::mutex mutex_;
+  double lo_ = 0, hi_ = 1, at_ = 0;
+};
+
 /// --target-psnr's budget search: `result` and `choice` (the default budget's, at the lowest quality
 /// that reaches the target as written) are replaced by a smaller budget's, re-planned and baked, where
 /// it reaches the target in fewer bytes. Stops at the first budget that misses the target or takes more
 /// bytes than the best so far. Returns each budget tried (side, quality, bytes, written PSNR).
 nlohmann::json smallest_reaching_target(const Options& options, const TexturedMesh& input, const std::vector<TextureSource>& sources,
-                                        const TextureBudget& budget, ModelFormat format, Result& result, EncodingChoice& choice) {
+                                        const TextureBudget& budget, ModelFormat format, Result& result, EncodingChoice& choice,
+                                        EncodeProgress& progress) {
   auto entry = [&](int side, const EncodingChoice& c) {
     return nlohmann::json{{"size", side},
                           {"quality", c.encoding.format == ImageFormat::kJpeg ? c.encoding.jpeg_quality : c.encoding.webp_quality},
@@ -181,12 +215,17 @@ nlohmann::json smallest_reaching_target(const Options& options, const TexturedMe
   nlohmann::json tried = nlohmann::json::array({entry(budget.side, choice)});
   if (!(choice.written_psnr_db.value_or(0) >= options.target_psnr_db)) return tried;  // the default budget misses it already
   Options quiet = options;
-  quiet.progress = nullptr;
-  for (const double fraction : kTargetBudgetFractions) {
+  quiet.progress = options.progress ? progress.as_callback() : nullptr;
+  const int parts = 1 + int(std::size(kTargetBudgetFractions));
+  for (int i = 0; i + 1 < parts; ++i) {
+    const double fraction = kTargetBudgetFractions[i];
+    progress.part(i + 1, parts);
     const TextureBudget smaller{std::max(8, int(std::lround(budget.side * std::sqrt(fraction) / 4)) * 4), true};
     Result r = bake_plan(plan_charts(input, quiet, smaller), input, quiet);
     round_uvs_as_stored(r.output, format);
-    EncodingChoice c = choose_encoding(bytes_request(quiet), input, sources, r.output);
+    BytesRequest request = bytes_request(quiet);
+    if (options.progress) request.progress = [&](double f) { progress.report(f); };
+    EncodingChoice c = choose_encoding(request, input, sources, r.output);
     tried.push_back(entry(smaller.side, c));
     if (!(c.written_psnr_db.value_or(0) >= options.target_psnr_db) || total_bytes(c) >= total_bytes(choice)) break;
     c.reason += fmt::format("; a texel budget of {}^2 (of the default {}^2) reaches the target in the fewest bytes", smaller.side,
@@ -200,13 +239,21 @@ nlohmann::json smallest_reaching_target(const Options& options, const TexturedMe
 /// chosen for `result`, which the search may replace. Returns the choice and the budgets tried (null
 /// where none was searched).
 /// `method` is the options the method ran with (method_options).
+/// Tells `progress` "encode" as it goes, and may throw Cancelled.
 std::pair<EncodingChoice, nlohmann::json> choose_images(const Options& options, const Options& method, const TexturedMesh& input,
                                                         const std::vector<TextureSource>& sources, const TextureBudget& budget,
-                                                        ModelFormat format, Result& result) {
-  EncodingChoice choice = choose_encoding(bytes_request(options), input, sources, result.output);
+                                                        ModelFormat format, Result& result, const StageProgress& stage) {
+  EncodeProgress progress(stage);
+  // The budget search, where it may follow, takes the stage's later parts.
+  const bool may_search = options.target_psnr_db > 0 && budget.is_default;
+  progress.part(0, may_search ? 1 + int(std::size(kTargetBudgetFractions)) : 1);
+  BytesRequest request = bytes_request(options);
+  request.progress = [&](double f) { progress.report(f); };
+  EncodingChoice choice = choose_encoding(request, input, sources, result.output);
   nlohmann::json budgets;
   if (budget_follows_target(options, budget, choice))
-    budgets = smallest_reaching_target(method, input, sources, budget, format, result, choice);
+    budgets = smallest_reaching_target(method, input, sources, budget, format, result, choice, progress);
+  progress.part(0, 1), progress.report(1);
   return {std::move(choice), std::move(budgets)};
 }
 
@@ -216,7 +263,7 @@ void check_options(const Options& o) {
   if (o.size != 0) check_range(o.size, 8, 65536, "--size");  // above 16384 without --force: texture_budget refuses it
   if (o.size != 0 && o.texels != 0) fail_input("options: --size and --texels go one without the other");
   if (o.texels < 0) fail_input("options: --texels {} must be positive", o.texels);
-  if (o.aspect != 0) check_range(o.aspect, 1.0 / 16, 16.0, "--aspect");
+  if (o.aspect != 0 && o.aspect != kAspectAuto) check_range(o.aspect, 1.0 / 16, 16.0, "--aspect");
   check_range(o.balance, 0.0, 1.0, "--balance");
   check_range(o.material_map_budget_db, 0.0, 99.0, "--material-map-budget");
   check_range(o.max_page_side, 0, 65536, "--max-size");
@@ -239,9 +286,12 @@ ModelFormat model_format_of(const std::string& path) {
 
 Report run(const std::string& input, const std::string& outdir, const Options& options) {
   const auto t0 = std::chrono::steady_clock::now();
+  keep_freed_memory_for_reuse();
   check_options(options);
   const ModelFormat format = output_format(input, options);
   check_paths(input, outdir, format);
+  const StageProgress progress(options.progress);
+  progress("read", 0);
   // Geometry first; the texture pixels are decoded while the geometric stages run, into the same model.
   RunTimings timings;
   ModelReadStats read_stats;
@@ -261,11 +311,11 @@ Report run(const std::string& input, const std::string& outdir, const Options& o
   round_uvs_as_stored(result.output, format);
 
   const std::vector<TextureSource> sources = texture_sources(planned.mesh);
-  auto [choice, budgets] = choose_images(options, opt, planned.mesh, sources, budget, format, result);
+  auto [choice, budgets] = choose_images(options, opt, planned.mesh, sources, budget, format, result, progress);
   const ModelFormat input_format = model_format_of(input);
   const ModelTarget target{outdir,         fs::path(input).stem().string(), format, choice.encoding, &choice.images, options.html,
                            input_format == ModelFormat::kGltf || input_format == ModelFormat::kGlb};
-  WrittenAndMeasured written = write_and_measure(target, planned.mesh, result.output, timings);
+  WrittenAndMeasured written = write_and_measure(target, planned.mesh, result.output, timings, progress);
   // The figures are the files' as written (a lossy codec's images decoded back); the bake's beside them.
   if (choice.encoding.lossy()) written.metrics.surface_psnr_bake = surface_psnr(planned.mesh, result.output);
   const Metrics& metrics = written.metrics;
@@ -281,6 +331,8 @@ Report run(const std::string& input, const std::string& outdir, const Options& o
   const fs::path json_path = options.report_path.empty() ? fs::path(outdir) / "report.json" : fs::path(options.report_path);
   report.report_path = write_reports(json_path, outdir, report.json, options.html ? &written.html_data : nullptr).string();
   report.model_path = (fs::path(outdir) / output_model_name(input, format)).string();
+  // Every file is in place: the last event, whose answer changes nothing.
+  if (options.progress) options.progress("done", 1);
   return report;
 }
 
@@ -294,6 +346,7 @@ double estimate_memory(const std::string& input, const Options& options) {
 
 Result optimize(const TexturedMesh& mesh, const Options& options) {
   const auto t0 = std::chrono::steady_clock::now();
+  keep_freed_memory_for_reuse();
   check_options(options);
   const std::string name = mesh.source.empty() ? std::string("mesh") : mesh.source;
   check_texture_headers(memory_guard(name, options), mesh);

@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <fstream>
+#include <set>
 
 #include "core/error.hpp"
 #include "io/output_files.hpp"
@@ -69,6 +70,25 @@ std::vector<std::string> write_model(const ModelTarget& target, const TexturedMe
   return write_obj(output, target.outdir, target.name, target.encoding, images);
 }
 
+/// The page's links to the full-size images: the output's texture files beside it (none inside a GLB),
+/// the input's where they are files, relative to the output folder.
+HtmlReportOptions page_links(const ModelTarget& target, const TexturedMesh& input, const TexturedMesh& output) {
+  HtmlReportOptions options;
+  for (size_t i = 0; i < output.textures.size(); ++i)
+    options.output_links.push_back(target.format == ModelFormat::kGlb || output.textures[i].path.empty()
+                                       ? std::string()
+                                       : texture_file_name(output.textures[i], target.encoding.of_texture(i).format));
+  std::error_code ec;
+  const fs::path outdir = fs::absolute(target.outdir, ec);
+  for (const Texture& t : input.textures) {
+    std::string link;
+    if (!t.from_vertex_colours && !t.path.empty() && t.path != input.source && fs::is_regular_file(t.path, ec))
+      link = fs::relative(fs::absolute(t.path, ec), outdir, ec).generic_string();
+    options.input_links.push_back(ec ? std::string() : link);
+  }
+  return options;
+}
+
 }  // namespace
 
 std::string output_model_name(const std::string& input, ModelFormat format) {
@@ -102,37 +122,71 @@ TexturedMesh read_written(const ModelTarget& target) {
 
 }  // namespace
 
+namespace {
+
+/// The names of the plain files in `folder` (none where it does not exist yet).
+std::set<std::string> files_in(const std::string& folder) {
+  std::set<std::string> names;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(folder, ec))
+    if (e.is_regular_file(ec)) names.insert(e.path().filename().string());
+  return names;
+}
+
+/// Removes the files of `folder` that are not in `before`: what a cancelled run wrote.
+void remove_new_files(const std::string& folder, const std::set<std::string>& before) {
+  std::error_code ec;
+  for (const std::string& name : files_in(folder))
+    if (!before.count(name)) fs::remove(fs::path(folder) / name, ec);
+}
+
+}  // namespace
+
 WrittenAndMeasured write_and_measure(const ModelTarget& target, const TexturedMesh& input, const TexturedMesh& output,
-                                     RunTimings& timings) {
+                                     RunTimings& timings, const StageProgress& progress) {
+  // The last point a cancel leaves nothing behind without undoing: the files are written and renamed
+  // into place now.
+  progress("write", 0);
+  const std::set<std::string> before = files_in(target.outdir);
   const auto tw = std::chrono::steady_clock::now();
+  const CpuTimes cpu_write = process_cpu_times();
+  WrittenAndMeasured r;
+  r.removed = write_model(target, output);
+  timings.write_s = seconds_since(tw);
+  const CpuTimes now = process_cpu_times();
+  timings.write_cpu = CpuTimes{now.user - cpu_write.user, now.sys - cpu_write.sys};
+  try {
+    progress("measure", 0);  // a cancel here removes what was just written: the run leaves nothing
+  } catch (const Cancelled&) {
+    remove_new_files(target.outdir, before);
+    throw;
+  }
+  const auto tm = std::chrono::steady_clock::now();
   const CpuTimes cpu_before = process_cpu_times();
   const auto cpu_since = [&] {
-    const CpuTimes now = process_cpu_times();
-    return CpuTimes{now.user - cpu_before.user, now.sys - cpu_before.sys};
+    const CpuTimes t = process_cpu_times();
+    return CpuTimes{t.user - cpu_before.user, t.sys - cpu_before.sys};
   };
-  WrittenAndMeasured r;
   nlohmann::json html_data;
-  WeldedEdges input_edges;
+  // The models' welded edges once, for the measure's charts and the page's seams. The measure reads the
+  // files as written (what `tightex measure INPUT OUTPUT` gives), not the model in memory: the images as
+  // their codec gives them back, the materials as the format holds them.
+  WeldedEdges input_edges, output_edges;
+  TexturedMesh written;
+  tbb::parallel_invoke([&] { input_edges = welded_edges(input); }, [&] { output_edges = welded_edges(output); },
+                       [&] { written = read_written(target); });
   tbb::parallel_invoke(
       [&] {
-        r.removed = write_model(target, output);
-        timings.write_s = seconds_since(tw);
-        timings.write_cpu = cpu_since();
+        r.metrics = measure(input, written, input_edges, welded_edges(written));
+        timings.measure_s = seconds_since(tm);
+        timings.measure_cpu = cpu_since();
       },
       [&] {
-        WeldedEdges output_edges;
-        tbb::parallel_invoke([&] { input_edges = welded_edges(input); }, [&] { output_edges = welded_edges(output); });
         if (!target.html) return;
-        html_data = html_model_data_without_charts(input, output, input_edges, output_edges);
-        timings.html_s = seconds_since(tw);
+        html_data = html_model_data_without_charts(input, output, input_edges, output_edges, page_links(target, input, output));
+        timings.html_s = seconds_since(tm);
         timings.html_cpu = cpu_since();
       });
-  // Measured from the files as written (what `tightex measure INPUT OUTPUT` gives), not the model in
-  // memory: the images as their codec gives them back, the materials as the format holds them.
-  const TexturedMesh written = read_written(target);
-  r.metrics = measure(input, written, input_edges, welded_edges(written));
-  timings.measure_s = seconds_since(tw);
-  timings.measure_cpu = cpu_since();
   // The page's chart counts are the measure's.
   if (target.html) r.html_data = html_model_data(std::move(html_data), r.metrics.charts_input, r.metrics.charts);
   return r;
@@ -145,9 +199,9 @@ void add_run_figures(nlohmann::json& rep, const Metrics& metrics, const RunTimin
   auto timing = [](const char* stage, double seconds, const CpuTimes& cpu) {
     return to_json(StageTiming{stage, seconds, std::nullopt, cpu.user, cpu.sys});
   };
-  timings.push_back(timing("write (beside report.html data)", t.write_s, t.write_cpu));
-  if (t.html_s > 0) timings.push_back(timing("report.html data (beside write)", t.html_s, t.html_cpu));
-  timings.push_back(timing("measure (the files as written, after write)", t.measure_s, t.measure_cpu));
+  timings.push_back(timing("write model", t.write_s, t.write_cpu));
+  timings.push_back(timing("measure (the files as written, beside report.html data)", t.measure_s, t.measure_cpu));
+  if (t.html_s > 0) timings.push_back(timing("report.html data (beside measure)", t.html_s, t.html_cpu));
   timings.insert(timings.begin(), timing("read geometry", t.read_s, t.read_cpu));
   timings.insert(timings.begin() + 1, to_json(StageTiming{"read textures (beside the geometric stages, from start)", t.textures_s,
                                                           std::nullopt, std::nullopt, std::nullopt}));

@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/progress.hpp"
 #include "core/resources.hpp"
 #include "io/obj_reader.hpp"
 #include "io/output_files.hpp"
@@ -27,8 +28,8 @@ std::string output_model_name(const std::string& input, ModelFormat format);
 void check_paths(const std::string& input, const std::string& outdir, ModelFormat format);
 
 /// How long the run's own stages took, in seconds (read_s, textures_s from the start), and the
-/// process's CPU time while they ran (read: from the start; write, measure and the page's data: each
-/// from the start of the three to its own end).
+/// process's CPU time while they ran (read: from the start; measure and the page's data: each from
+/// the start of the two to its own end; write: its own).
 struct RunTimings {
   double read_s = 0, textures_s = 0, write_s = 0, measure_s = 0, html_s = 0;
   CpuTimes read_cpu, write_cpu, measure_cpu, html_cpu;
@@ -52,11 +53,13 @@ struct ModelTarget {
   bool input_gltf = false;                // the input is glTF (the written model is read back as `tightex measure` reads it)
 };
 
-/// Writes the output model beside gathering report.html's model data (the models' shown triangles,
-/// their textures as JPEG), then measures the model as written (read back from its files, as
-/// `tightex measure` reads it). The times go to `timings`.
+/// Writes the output model, its files renamed into place, then measures the model as written (read
+/// back from its files, as `tightex measure` reads it) beside gathering report.html's model data (the
+/// models' decimated views, their textures as JPEG). Tells `progress` "write" and "measure" as each
+/// begins: a cancel at "write" finds nothing written, one at "measure" removes what was written. The
+/// times go to `timings`.
 WrittenAndMeasured write_and_measure(const ModelTarget& target, const TexturedMesh& input, const TexturedMesh& output,
-                                     RunTimings& timings);
+                                     RunTimings& timings, const StageProgress& progress);
 
 /// Adds what the run knows beyond the library's report: the metrics, its own stages' times (reading
 /// first, writing and measuring last), wall time, peak RSS, the reader's figures and the output files.

@@ -73,11 +73,19 @@ int lowest_quality(const std::function<bool(int)>& good) {
   return hi;
 }
 
+/// Tells request.progress that one more of rate control's encodings (at most 8 a search, then the final
+/// one) is starting.
+void step(const BytesRequest& request, int& steps) {
+  if (request.progress) request.progress(std::min(1.0, ++steps / 9.0));
+}
+
 /// Rate control of a lossy encoding: the quality and why.
 std::string pick_quality(const BytesRequest& request, const TexturedMesh& input, const std::vector<TextureSource>& sources,
                          TexturedMesh& output, ImageEncoding& e) {
+  int steps = 0;
   if (request.target_psnr_db > 0) {
     const int lowest = lowest_quality([&](int quality) {
+      step(request, steps);
       set_quality(e, quality);
       return psnr_as_written(input, output, encoded(output, e)) >= request.target_psnr_db;
     });
@@ -90,6 +98,7 @@ std::string pick_quality(const BytesRequest& request, const TexturedMesh& input,
   if (bound == 0) return "the default quality (no bound: the input's images have no bytes on disk)";
   // The highest quality within the bound: one above the lowest that exceeds it.
   const int over = lowest_quality([&](int quality) {
+    step(request, steps);
     set_quality(e, quality);
     return total(encoded(output, e)) > bound;
   });
@@ -134,9 +143,11 @@ EncodingChoice choose_encoding(const BytesRequest& request, const TexturedMesh& 
   c.encoding = request.encoding;
   c.reason = choose_codecs(request, input, sources, output, c.encoding);
   if (c.encoding.lossy() && !request.quality_given) c.reason += "; " + pick_quality(request, input, sources, output, c.encoding);
+  if (request.progress) request.progress(8.0 / 9);
   c.images = encoded(output, c.encoding);
   for (const std::string& b : c.images) c.bytes.push_back(b.size());
   if (c.encoding.lossy()) c.written_psnr_db = psnr_as_written(input, output, c.images);
+  if (request.progress) request.progress(1);
   return c;
 }
 

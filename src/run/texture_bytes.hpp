@@ -4,6 +4,7 @@
 // the materials bind, and the surface PSNR of the images as written.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -22,6 +23,9 @@ struct BytesRequest {
   bool quality_given = false;         // --jpeg-quality or --webp-quality: kept as it is
   double target_psnr_db = 0;          // --target-psnr (0: none)
   uint64_t max_bytes = 0;             // --max-bytes (0: none)
+  /// Told the fraction of the encoding done (rate control's steps, then the final images); may throw
+  /// Cancelled to stop it. Empty: none.
+  std::function<void(double)> progress;
 };
 
 /// The encoding chosen and what it gives: each output texture's encoded file, the surface PSNR of the

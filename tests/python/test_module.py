@@ -31,7 +31,9 @@ def test_optimize_generated_model(tightex, boxes_model, tmp_path):
     report = tightex.optimize(boxes_model, tmp_path / "out", progress=lambda s, f: stages.append((s, f)), map="area")
     check_output(report, tmp_path / "out", "boxes.obj")
     assert report["options"]["map"] == "area" and report["preparation"]["components"] == 12
-    assert [s for s, _ in stages][0] == "repair" and stages[-1] == ("done", 1.0)
+    names = [s for s, _ in stages]
+    assert names[0] == "read" and stages[-1] == ("done", 1.0) and names.count("done") == 1
+    assert names.index("repair") < names.index("encode") < names.index("write") < names.index("measure")
     assert all(0 <= f <= 1 for _, f in stages)
 
 
@@ -77,7 +79,7 @@ def test_bad_input_raises_input_error_and_writes_nothing(tightex, boxes_model, t
         tightex.optimize(boxes_model, out, png_level=10)
     with pytest.raises(tightex.InputError, match="--jpeg-quality does nothing"):
         tightex.optimize(boxes_model, out, jpeg_quality=80)
-    with pytest.raises(tightex.InputError, match="no_such_option"):
+    with pytest.raises(TypeError, match="no_such_option"):
         tightex.optimize(boxes_model, out, no_such_option=1)
     with pytest.raises(tightex.InputError, match="input's own folder"):
         tightex.optimize(boxes_model, os.path.dirname(boxes_model))
@@ -135,6 +137,12 @@ def test_arrays_round_trip(tightex):
     indexed = tightex.optimize_arrays(positions, faces, uvs[::-1], image, face_uvs=len(uvs) - 1 - faces)
     for other in (per_corner, indexed):
         assert np.array_equal(other["uvs"], out["uvs"]) and np.array_equal(other["images"][0], out["images"][0])
+    # A typed result: attributes, and the former dict's keys reading the same.
+    assert isinstance(out, tightex.ArraysResult) and isinstance(out.report, tightex.Report)
+    assert out.uvs is out["uvs"] and out.report is out["report"] and set(out.keys()) == {
+        "positions", "faces", "uvs", "material_ids", "images", "report"}
+    with pytest.raises(KeyError):
+        out["mesh"]
 
 
 def test_arrays_bad_input(tightex):
@@ -149,8 +157,17 @@ def test_arrays_bad_input(tightex):
         tightex.optimize_arrays(positions, faces, uvs, image, material_ids=np.full(len(faces), 1))
     with pytest.raises(tightex.InputError, match="images"):
         tightex.optimize_arrays(positions, faces, uvs, [image[:, :, 0]])
-    with pytest.raises(tightex.InputError, match="not uint8"):
+    with pytest.raises(TypeError, match=r"images\[0\].*not uint8"):
         tightex.optimize_arrays(positions, faces, uvs, [image / 255.0])
+    # Indices must be integers: a float array is refused, not truncated.
+    with pytest.raises(TypeError, match="faces must be an integer array"):
+        tightex.optimize_arrays(positions, faces.astype(float), uvs, image)
+    with pytest.raises(TypeError, match="material_ids must be an integer array"):
+        tightex.optimize_arrays(positions, faces, uvs, image, material_ids=np.zeros(len(faces)))
+    with pytest.raises(TypeError, match="face_uvs must be an integer array"):
+        tightex.optimize_arrays(positions, faces, uvs, image, face_uvs=faces * 1.0)
+    with pytest.raises(TypeError, match="positions must be an array of real numbers"):
+        tightex.optimize_arrays(positions.astype(str), faces, uvs, image)
     with pytest.raises(tightex.Cancelled):
         tightex.optimize_arrays(positions, faces, uvs, image, progress=lambda s, f: False)
 
@@ -210,7 +227,7 @@ def test_options_are_the_librarys_typed_fields(tightex):
         tightex.Options(size="large")
     with pytest.raises(tightex.InputError, match="map 'bumpy'"):
         tightex.Options(map="bumpy")
-    with pytest.raises(tightex.InputError, match="no_such_field"):
+    with pytest.raises(TypeError, match="no_such_field"):
         tightex.Options(no_such_field=1)
 
 
@@ -226,6 +243,33 @@ def test_report_attributes_are_its_figures(tightex, boxes_model, tmp_path):
     assert report.texture_sizes == [(128, 128)] and report.input_triangles == report.output_triangles
     assert report.report_path == str(tmp_path / "report.json") and os.path.isfile(report.model_path)
     assert report.output_texture_bytes == d["bytes"]["output"]["total"] > 0
+    # The JSON is parsed once: a section is the same object each time; to_dict is a copy to change.
+    assert report["metrics"] is report["metrics"] and "metrics" in report
+    d["metrics"]["charts"] = -1
+    assert report["metrics"]["charts"] == report.charts
+
+
+def test_every_public_name_has_a_docstring(tightex):
+    for name in tightex.__all__:
+        value = getattr(tightex, name)
+        if callable(value):
+            assert value.__doc__ and value.__doc__.strip(), name
+    for cls in (tightex.Report, tightex.Options):  # ArraysResult's attributes: its class docstring
+        for name in dir(cls):
+            if not name.startswith("_"):
+                assert getattr(cls, name).__doc__, f"{cls.__name__}.{name}"
+
+
+def test_size_means_a_square_everywhere(tightex, boxes_model, tmp_path):
+    # --size N is a square to the command; the library's size is the same, from a file and from arrays.
+    report = tightex.optimize(boxes_model, tmp_path / "file", size=96, html=False)
+    assert report.texture_sizes == [(96, 96)]
+    positions, faces, uvs, image = grid_mesh()
+    out = tightex.optimize_arrays(positions, faces, uvs * np.array([1.0, 0.25]), image, size=64)
+    assert [i.shape[:2] for i in out.images] == [(64, 64)]
+    # A shape asked for with it is kept.
+    report = tightex.optimize(boxes_model, tmp_path / "wide", size=96, aspect=2.0, html=False)
+    assert report.texture_sizes[0][0] == 2 * report.texture_sizes[0][1]
 
 
 def test_the_package_builds_no_command_line(tightex):

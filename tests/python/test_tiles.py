@@ -338,3 +338,16 @@ def test_hostile_tileset_contents_are_listed_and_nothing_leaves_the_folders(tigh
         for child in json.load(f)["root"]["children"]:
             uri = child["content"]["uri"]
             assert uri.startswith("http") or os.path.exists(allowed / uri), uri
+
+
+def test_redo_is_the_tile_runners_word_and_force_its_deprecated_alias(tightex, capsys):
+    from tightex.tiles import parse_command_line
+    opts, fields = parse_command_line(["in", "out", "--redo", "--size", "256"])
+    assert opts.redo and fields["size"] == 256
+    assert "--force" not in capsys.readouterr().err
+    opts, fields = parse_command_line(["in", "out", "--force"])
+    assert opts.redo and fields["allow_large_textures"] is False
+    assert "--force is deprecated here: it is --redo" in capsys.readouterr().err
+    # The tightex command's --force (large textures) is --allow-large-size here.
+    opts, fields = parse_command_line(["in", "out", "--allow-large-size"])
+    assert not opts.redo and fields["allow_large_textures"] is True

@@ -358,6 +358,10 @@
           ...(p.mi === 0 ? [] : mapFigures(p.t.map))])
         : el('figcaption', {}, [(p.mi === 0 ? 'Input' : 'Output') + (p.m.textures.length > 1 ? ' page ' + (p.ti + 1) : '') +
           ': ' + p.t.width + ' \u00d7 ' + p.t.height + ' texels, ', reportNumber(used + p.ti, 1, 100, ' % used')]);
+      // The page holds a downscaled copy; the full-size file beside it (or the input's) is linked.
+      if (p.t.file) {
+        caption.append(' (', el('a', { href: p.t.file.split('/').map(encodeURIComponent).join('/'), text: 'full size' }), ')');
+      }
       row.append(el('figure', { class: 'atlas' }, [canvas, caption]));
     }
     const box = document.getElementById('show-outlines');
@@ -637,9 +641,10 @@
     });
     const m = models[0];
     if (m.shown < m.triangles)
-      document.getElementById('shown-note').textContent = 'For a responsive page, the views show ' + formatNumber(m.shown, 0) +
-        ' of the ' + formatNumber(m.triangles, 0) + ' input triangles (at most ' + formatNumber(modelData.max_triangles, 0) +
-        ': the same surface triangles in both models, chosen deterministically), and the atlas outlines and heat map those triangles; the files hold every triangle.';
+      document.getElementById('shown-note').textContent = 'To keep this page small, the views show both models decimated to ' +
+        formatNumber(m.shown, 0) + ' and ' + formatNumber(models[1].shown, 0) + ' of their ' + formatNumber(m.triangles, 0) +
+        ' triangles (at most ' + formatNumber(modelData.max_triangles, 0) +
+        ': nearby vertices merged on one grid for both, each keeping its own texture coordinates and seams), and the atlas outlines and heat map those triangles; the atlases are downscaled copies, linked to their full-size files; the files hold every triangle.';
   }
 
   // ------------------------------------------------------------------------------------------------
