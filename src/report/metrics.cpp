@@ -81,11 +81,12 @@ double times_in_linear_light(double stored, double factor) {
   return linear_to_srgb(srgb_to_linear(std::clamp(stored / 255.0, 0.0, 1.0)) * factor) * 255.0;
 }
 
-/// The colour a viewer shows at `uv` of triangle t (docs/metrics.md, surface PSNR): its base colour
-/// texture read bilinearly, unrounded on the 0..255 scale, times the material's colour factor where the
-/// format multiplies it (glTF's baseColorFactor, in linear light); without a texture the factor alone
+/// The colour a viewer shows at `uv` (barycentrics `b` of its own corners) of triangle t
+/// (docs/metrics.md, surface PSNR): its base colour texture read bilinearly, unrounded on the 0..255
+/// scale, times the material's colour factor where the format multiplies it (glTF's baseColorFactor,
+/// and COLOR_0 where the model has vertex colours, in linear light); without a texture the factor alone
 /// (white without a material).
-std::array<double, 3> shown_colour(const TexturedMesh& m, size_t t, const Vec2& uv) {
+std::array<double, 3> shown_colour(const TexturedMesh& m, size_t t, const Vec2& uv, const double* b) {
   const int32_t mat = m.face_material[t];
   const Image* img = image_of(m, t);
   if (!img) {
@@ -96,8 +97,15 @@ std::array<double, 3> shown_colour(const TexturedMesh& m, size_t t, const Vec2& 
   const auto c = sample_bilinear(*img, uv.x(), uv.y());
   std::array<double, 3> shown{c[0], c[1], c[2]};
   const Material& material = m.materials[size_t(mat)];
-  if (material.kd_multiplies_texture)
-    for (size_t k = 0; k < 3; ++k) shown[k] = times_in_linear_light(shown[k], material.kd[k]);
+  if (!material.kd_multiplies_texture) return shown;
+  std::array<double, 3> factor = material.kd;
+  if (!m.corner_color.empty() && !m.textures[size_t(material.texture)].from_vertex_colours)
+    for (size_t k = 0; k < 3; ++k) {
+      double linear = 0;  // COLOR_0 is linear; the mesh keeps it sRGB-encoded
+      for (size_t corner = 0; corner < 3; ++corner) linear += b[corner] * srgb_to_linear(m.corner_color[3 * t + corner][k]);
+      factor[k] *= linear;
+    }
+  for (size_t k = 0; k < 3; ++k) shown[k] = times_in_linear_light(shown[k], factor[k]);
   return shown;
 }
 
@@ -603,9 +611,9 @@ Vec2 input_uv(const TexturedMesh& in, const SurfacePoint& p) {
 std::pair<double, size_t> measure_surface_psnr(const TexturedMesh& in, const TexturedMesh& out, const Correspondence& c,
                                                const std::vector<SurfacePoint>& points) {
   const double se = deterministic_sum(points.size(), [&](size_t i) {
-    const auto ci = shown_colour(in, points[i].t, input_uv(in, points[i]));
+    const auto ci = shown_colour(in, points[i].t, input_uv(in, points[i]), points[i].b);
     const OutputPoint q = output_point(out, c, points[i]);
-    const auto co = q.o == kNone ? std::array<double, 3>{0, 0, 0} : shown_colour(out, q.o, q.uv);
+    const auto co = q.o == kNone ? std::array<double, 3>{0, 0, 0} : shown_colour(out, q.o, q.uv, q.b);
     double sum = 0;
     for (size_t k = 0; k < 3; ++k) sum += (ci[k] - co[k]) * (ci[k] - co[k]);
     return sum;
