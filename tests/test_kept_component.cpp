@@ -3,6 +3,8 @@
 // material(s) and texture(s), and reported; no triangle of the input is ever lost. The failure is forced
 // with the pipeline's test hook (PlanHooks), on meshes of the catalogue.
 #include <gtest/gtest.h>
+
+#include <algorithm>
 #include <unistd.h>
 
 #include <filesystem>
@@ -58,8 +60,11 @@ void expect_kept_as_input(const TexturedMesh& in, const TexturedMesh& out, const
     }
     const Material& om = out.materials[size_t(out.face_material[o])];
     const int32_t im = in.face_material[t];
-    // Its material's name as it was ("none" without one), with a number where the name is taken.
-    EXPECT_EQ(om.name.rfind(im >= 0 ? in.materials[size_t(im)].name : std::string("none"), 0), 0u) << om.name;
+    // Its material's name as it was, made safe as an MTL token ("none" without one), with a number
+    // where the name is taken.
+    std::string name = im >= 0 ? in.materials[size_t(im)].name : std::string("none");
+    std::replace(name.begin(), name.end(), ' ', '_');
+    EXPECT_EQ(om.name.rfind(name, 0), 0u) << om.name;
     if (im < 0 || in.materials[size_t(im)].texture < 0) {
       EXPECT_EQ(om.texture, -1);
       continue;

@@ -122,7 +122,7 @@ ReportData filled_report() {
 TEST(Report, HasEveryKeyOfTheSchema) {
   const nlohmann::json j = to_json(filled_report());
   EXPECT_EQ(keys_of(j), (std::set<std::string>{"input", "options", "aspect", "pages", "preparation", "components", "timings", "bake",
-                                                "metrics", "peak_rss_mib", "wall_seconds", "output"}));
+                                                "metrics", "peak_rss_mib", "wall_seconds", "output", "tightex_version"}));
   EXPECT_EQ(keys_of(j["input"]), (std::set<std::string>{"file", "vertices", "triangles", "materials", "textures",
                                                          "polygons_triangulated", "paths_found", "vertex_coloured_triangles"}));
   EXPECT_EQ(keys_of(j["options"]), (std::set<std::string>{"size", "size_grown_from", "layout", "holes", "map", "balance", "fit",
@@ -240,7 +240,7 @@ TEST(Report, LeavesOutWhatWasNotFilled) {
   r.aspect.requested = 1.5;
   r.options.size_grown_from = 256;
   const nlohmann::json j = to_json(r);
-  EXPECT_EQ(keys_of(j), (std::set<std::string>{"input", "options", "aspect", "pages", "preparation", "components", "timings"}));
+  EXPECT_EQ(keys_of(j), (std::set<std::string>{"input", "options", "aspect", "pages", "preparation", "components", "timings", "tightex_version"}));
   EXPECT_FALSE(j["input"].contains("paths_found"));
   EXPECT_EQ(j["options"]["aspect"], 1.5);
   EXPECT_EQ(j["options"]["size_grown_from"], 256);

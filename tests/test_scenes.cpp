@@ -160,7 +160,10 @@ TEST(Scenes, ObjAndPlyHoldEveryInstanceInWorldSpace) {
               0);
     const json measured = json::parse(read_whole(dir / "measured.json"));
     EXPECT_EQ(measured["lost_triangles"], 0);
-    EXPECT_GT(measured["surface_psnr_db"].get<double>(), 30);
+    // The grid's material has a base colour factor of 0.5, which a glTF viewer multiplies into the
+    // texture and an OBJ or PLY viewer does not: what they show differs by that much, and the run says so.
+    EXPECT_GT(measured["surface_psnr_db"].get<double>(), 10);
+    EXPECT_NE(report.dump().find("colour factor"), std::string::npos);
   }
 }
 

@@ -65,12 +65,13 @@ SamplerMaker base_colour_samplers(const TexturedMesh& input, const std::vector<B
 }
 
 /// The samplers of a bake of `map`: each triangle's material's texture for the map where it has one
-/// with pixels, else the map's flat value; with the map's encoding and the triangle's frames.
+/// with pixels; a triangle whose material has none is unread (MaterialSampling::unread); with the map's
+/// encoding and the triangle's frames.
 SamplerMaker map_samplers(const TexturedMesh& input, const MaterialMapSource& map, const std::vector<BakeTriangle>& triangles) {
-  SamplerMaker maker{triangles, std::vector<MaterialSampling>(input.materials.size() + 1, MaterialSampling{nullptr, map.flat, false})};
+  SamplerMaker maker{triangles, std::vector<MaterialSampling>(input.materials.size() + 1, MaterialSampling{nullptr, map.flat, false, true})};
   for (size_t m = 0; m < input.materials.size() && m < map.texture_of_material.size(); ++m) {
     const int tex = map.texture_of_material[m];
-    if (tex >= 0 && !input.textures[size_t(tex)].image.empty()) maker.material[m].src = &input.textures[size_t(tex)].image;
+    if (tex >= 0 && !input.textures[size_t(tex)].image.empty()) maker.material[m].src = &input.textures[size_t(tex)].image, maker.material[m].unread = false;
   }
   maker.encoding = map.encoding;
   if (map.encoding == SlotEncoding::kTangentNormal) maker.frames = map.frames;
@@ -147,6 +148,7 @@ struct ScanCounts {
 /// texture. Marks the texels covered.
 void scan_convert_triangle(const BakeTriangle& tri, const TriangleSampler& smp, const TexelTile& tile, int max_samples, Image& out,
                            CoverageMask& covered, ScanCounts& counts) {
+  if (smp.unread) return;  // its texels are the neighbours' (dilation)
   const bool minified = smp.footprint_x > 1 || smp.footprint_y > 1;
   scan_triangle(tri.target_px[0], tri.target_px[1], tri.target_px[2], tile.x0, tile.x1, tile.y0, tile.y1, EdgeRule::kInclusive,
                 [&](long x, long y, double w0, double w1, double w2) {

@@ -118,7 +118,7 @@ FitSamples collect_samples(const FitTileInput& input, const SampleGrid& grid, co
   const double weight_scale = std::ldexp(1.0, -std::ilogb(max_weight));
   for (size_t n = 0; n < input.nearby.size(); ++n) {
     const TriangleSampler& smp = input.samplers[n];
-    if (!smp.valid || !(smp.weight > 0)) continue;
+    if (!smp.valid || !(smp.weight > 0) || smp.unread) continue;
     const double smp_weight = smp.weight * weight_scale;
     const BakeTriangle& tri = input.triangles[input.nearby[n]];
     for (int k = 0; k < grid.classes; ++k) {

@@ -32,6 +32,7 @@ struct TriangleSampler {
   /// the fit also samples the corners, so that the output reproduces each vertex's colour there.
   bool corner_samples = false;
   std::array<Vec2, 3> corner_uv;
+  bool unread = false;  // MaterialSampling::unread
   /// How the texels are filtered (bake_material_map); kData without `frames` is the base colour's plain path.
   SlotEncoding encoding = SlotEncoding::kData;
   const NormalFrames* frames = nullptr;  // kTangentNormal only
@@ -191,6 +192,10 @@ struct MaterialSampling {
   const Image* src = nullptr;
   Rgba8 flat{255, 255, 255, 255};
   bool corner_samples = false;
+  /// The material does not bind the map being baked: its triangles write no texel and give the fit no
+  /// sample; dilation fills their texels from the neighbours that have one, so no flat value bleeds
+  /// into a neighbouring material's read-back.
+  bool unread = false;
 };
 
 /// Makes the sampler of any triangle of one bake where a tile needs it: a sampler held for every
@@ -209,6 +214,7 @@ struct SamplerMaker {
     TriangleSampler smp = TriangleSampler();  // zeroed, as a sampler left invalid by init has always been
     smp.init(tri, m.src, m.flat);
     smp.corner_samples = m.corner_samples;
+    smp.unread = m.unread;
     smp.encoding = encoding;
     if (frames) smp.frames = &(*frames)[t];
     return smp;

@@ -712,6 +712,7 @@ class ObjParser {
     return found;
   }
   bool saw_mtllib_ = false;
+  bool coloured_file_ = false;         // every vertex of the file has a colour (settle_in_file_order)
   std::string missing_library_;        // the first mtllib not found, "FILE:LINE: problem"; empty: none
   std::vector<std::string> warnings_;  // ModelReadStats::warnings
 };
@@ -749,10 +750,7 @@ TexturedMesh ObjParser::read(ModelReadStats* stats) {
     });
   }
   mesh.face_material = std::move(triangle_use_);
-  if (!missing_library_.empty()) {
-    if (!coloured()) throw InputError(missing_library_);
-    warnings_.push_back(missing_library_ + ": the vertex colours are read without its materials");
-  }
+  if (!missing_library_.empty()) warnings_.push_back(missing_library_ + ": the vertex colours are read without its materials");
   assemble_materials(mesh);
 
   if (stats != nullptr) {
@@ -802,6 +800,10 @@ void ObjParser::settle_in_file_order(const std::vector<ObjChunk>& chunks) {
     }
     coloured_before = coloured_before && c.all_vertices_coloured;
   }
+  coloured_file_ = first_error == nullptr && !chunks.empty();
+  bool any_colour = false;
+  for (const ObjChunk& c : chunks) coloured_file_ = coloured_file_ && c.all_vertices_coloured, any_colour = any_colour || !c.vertex_colours.empty();
+  coloured_file_ = coloured_file_ && any_colour;
   for (const ObjChunk& c : chunks)
     for (const auto& [line, rest] : c.libraries) {
       if (first_error != nullptr && line > first_error->line) break;
@@ -908,8 +910,9 @@ void ObjParser::parse_mtllib(std::string_view rest) {
       names.push_back({std::string(w), f ? *f : folder / w});
     }
     // No word exists either: most likely one file name with spaces, so name it whole. A vertex-coloured
-    // model is read without it (read() decides, once the colours are known).
+    // model is read without it, with a warning.
     if (missing == names.size()) {
+      if (!coloured_file_) fail_here("material library '{}' not found", excerpt(whole));
       if (missing_library_.empty()) missing_library_ = fmt::format("{}:{}: material library '{}' not found", path_, line_, excerpt(whole));
       return;
     }

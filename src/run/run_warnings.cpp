@@ -42,9 +42,10 @@ void add_plan_warnings(const Plan& plan, const nlohmann::json& report, Lines& ou
 }
 
 /// The input's textured materials whose colour factor is not white (read from glTF: the factor a
-/// glTF output keeps in its material), where `format` loses it: PLY (OBJ keeps each as its Kd).
+/// glTF output keeps in its material), where `format` loses it: PLY has no place for it, and OBJ's Kd,
+/// where it is written, is not multiplied into map_Kd by most OBJ viewers (docs/metrics.md).
 size_t tinted_textures(const TexturedMesh& input, ModelFormat format) {
-  if (!input.gltf || format != ModelFormat::kPly) return 0;
+  if (!input.gltf || format == ModelFormat::kGltf || format == ModelFormat::kGlb) return 0;
   size_t n = 0;
   for (const Material& m : input.materials) n += m.texture >= 0 && (m.kd[0] != 1.0 || m.kd[1] != 1.0 || m.kd[2] != 1.0);
   return n;
