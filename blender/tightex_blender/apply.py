@@ -142,7 +142,7 @@ def apply(obj, job, settings, folder=None):
         warnings.append(f"{obj.name}: {cut} polygons have a seam through them (triangulate first for exact texels there)")
     temporary = folder is None
     folder = folder or tempfile.mkdtemp(prefix="tightex_")
-    new = [m for m, d in enumerate(out["materials"]) if not d.get("name", "").startswith("kept_")]
+    new = [m for m, d in enumerate(out["materials"]) if d.get("new")]
     used = sorted({i for m in new for i in [out["materials"][m]["texture"], *out["materials"][m]["maps"].values()] if i >= 0})
     images = {}
     for i in used:

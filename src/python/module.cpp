@@ -235,8 +235,9 @@ TexturedMesh mesh_from_arrays(const Doubles& positions, const Indices& faces, co
 }
 
 /// The output's materials as dicts ("texture", "kd", "maps" {slot name: image}), as `materials` takes them,
-/// with their "name" ("tightex", "tightex_1", ... new; "kept_..." an input one kept as it was).
-py::list material_dicts(const TexturedMesh& mesh) {
+/// with their "name" (the input material's) and "new": whether its base colour is one of the first
+/// `new_images` images (the new ones) rather than an input image kept as it was.
+py::list material_dicts(const TexturedMesh& mesh, size_t new_images) {
   py::list out;
   for (const Material& m : mesh.materials) {
     py::dict maps;
@@ -244,6 +245,7 @@ py::list material_dicts(const TexturedMesh& mesh) {
       if (m.maps[s] >= 0) maps[py::str(material_slot_name(MaterialSlot(s)))] = m.maps[s];
     py::dict d;
     d["name"] = m.name, d["texture"] = m.texture, d["kd"] = m.kd, d["maps"] = maps;
+    d["new"] = m.texture >= 0 && size_t(m.texture) < new_images;
     out.append(d);
   }
   return out;
@@ -251,7 +253,7 @@ py::list material_dicts(const TexturedMesh& mesh) {
 
 /// The output mesh as a dict of NumPy arrays (positions, faces, uvs (F,3,2) as sampled, material_ids:
 /// each face's image, images) and the report as JSON text.
-py::dict arrays_from_mesh(const TexturedMesh& mesh) {
+py::dict arrays_from_mesh(const TexturedMesh& mesh, size_t new_images) {
   const py::ssize_t v = py::ssize_t(mesh.num_vertices()), f = py::ssize_t(mesh.num_triangles());
   py::array_t<double> positions({v, py::ssize_t(3)});
   std::memcpy(positions.mutable_data(), static_cast<const void*>(mesh.positions.data()), size_t(v) * 3 * sizeof(double));
@@ -277,7 +279,7 @@ py::dict arrays_from_mesh(const TexturedMesh& mesh) {
   }
   py::dict out;
   out["positions"] = positions, out["faces"] = faces, out["uvs"] = uvs, out["material_ids"] = ids, out["images"] = images;
-  out["face_materials"] = face_materials, out["input_triangles"] = input_triangles, out["materials"] = material_dicts(mesh);
+  out["face_materials"] = face_materials, out["input_triangles"] = input_triangles, out["materials"] = material_dicts(mesh, new_images);
   return out;
 }
 
@@ -291,7 +293,7 @@ py::tuple optimize_arrays(const Doubles& positions, const Indices& faces, const 
   options.progress = progress.callback();
   options.measure = true;
   const Result result = without_gil(progress, [&] { return optimize(mesh, options); });
-  py::dict arrays = arrays_from_mesh(result.output);
+  py::dict arrays = arrays_from_mesh(result.output, result.report.texture_sizes.size());
   if (html) {
     std::string page;
     {

@@ -62,9 +62,10 @@ void add_not_carried(const TexturedMesh& input, const ModelReadStats& read_stats
     out.notes.push_back(fmt::format("the glTF scene's {} mesh instances are written in world space ({} has no scene graph)",
                                     read_stats.instances_flattened, name));
   if (const size_t tinted = tinted_textures(input, format); tinted > 0)
-    out.warnings.push_back(fmt::format("{} textured material(s) have a colour factor (glTF baseColorFactor) that {} cannot carry and the "
-                                       "new texture does not hold; --output-format glb keeps it",
-                                       tinted, name));
+    out.warnings.push_back(fmt::format("{} textured material(s) have a colour factor (glTF baseColorFactor) that {} and the new "
+                                       "texture does not hold; --output-format glb keeps it",
+                                       tinted, format == ModelFormat::kObj ? "obj writes as Kd, which most OBJ viewers do not multiply into map_Kd,"
+                                                                           : fmt::format("{} cannot carry", name)));
   if (!gltf && !read_stats.not_read.empty())
     out.warnings.push_back(fmt::format("{} {} of the input {} not written ({} has no place for them; --output-format glb keeps them): {}",
                                        read_stats.not_read.size(), read_stats.not_read.size() == 1 ? "part" : "parts",

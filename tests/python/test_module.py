@@ -140,7 +140,8 @@ def test_arrays_round_trip(tightex):
     # A typed result: attributes, and the former dict's keys reading the same.
     assert isinstance(out, tightex.ArraysResult) and isinstance(out.report, tightex.Report)
     assert out.uvs is out["uvs"] and out.report is out["report"] and set(out.keys()) == {
-        "positions", "faces", "uvs", "material_ids", "images", "report"}
+        "positions", "faces", "uvs", "material_ids", "face_materials", "materials", "input_triangles", "images", "report_html",
+        "report"}
     with pytest.raises(KeyError):
         out["mesh"]
 
@@ -178,7 +179,7 @@ def test_arrays_material_maps_colours_and_html(tightex):
     materials = [{"texture": 0, "maps": {"normal": 1, "metallic_roughness": 0}}]
     out = tightex.optimize_arrays(positions, faces, uvs, [image, flat_normal], materials=materials, html=True)
     new = out["materials"][out["face_materials"][0]]
-    assert new["name"] == "tightex" and set(new["maps"]) == {"normal", "metallic_roughness"}
+    assert new["new"] and set(new["maps"]) == {"normal", "metallic_roughness"}
     # A flat normal stays flat in the new frames; each output face is the input triangle it names.
     assert np.abs(out["images"][new["maps"]["normal"]][..., :3].astype(int) - (128, 128, 255)).max() <= 2
     assert canonical(faces[out["input_triangles"]]) == canonical(out["faces"])
