@@ -32,9 +32,7 @@ void or_abort(const char* harness, Run&& run) {
   }
 }
 
-inline void limit_threads() {
-  static tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
-}
+inline void limit_threads() { static tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1); }
 
 /// A folder of its own for this process, on /dev/shm when there is one (every run writes files),
 /// removed at exit.

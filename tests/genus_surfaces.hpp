@@ -30,8 +30,7 @@ inline constexpr int kArchGenera[] = {1, 5, 25, 38};
 /// (x, y) only, so the map is injective and the surface stays embedded.
 inline void bend(Geometry& g, double amplitude) {
   double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
-  for (const Vec3& p : g.positions)
-    x0 = std::min(x0, p.x()), x1 = std::max(x1, p.x()), y0 = std::min(y0, p.y()), y1 = std::max(y1, p.y());
+  for (const Vec3& p : g.positions) x0 = std::min(x0, p.x()), x1 = std::max(x1, p.x()), y0 = std::min(y0, p.y()), y1 = std::max(y1, p.y());
   for (Vec3& p : g.positions) {
     const double s = (p.x() - x0) / std::max(x1 - x0, 1e-12), t = (p.y() - y0) / std::max(y1 - y0, 1e-12);
     p.z() += amplitude * (std::sin(std::numbers::pi * s) * std::sin(std::numbers::pi * t) + 0.3 * s * t);
@@ -138,8 +137,6 @@ inline TexturedMesh perforated_plate(int genus) {
   return per_triangle_atlas("plate_g" + std::to_string(genus), perforated_plate_geometry(genus));
 }
 
-inline TexturedMesh arched_block(int genus) {
-  return per_triangle_atlas("arches_g" + std::to_string(genus), arched_block_geometry(genus));
-}
+inline TexturedMesh arched_block(int genus) { return per_triangle_atlas("arches_g" + std::to_string(genus), arched_block_geometry(genus)); }
 
 }  // namespace tightex::testing

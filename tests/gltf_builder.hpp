@@ -154,7 +154,8 @@ inline size_t add_buffer_view(GridGltf& g, const std::string& bytes) {
 
 /// Appends an accessor of `count` elements over `bytes` (a new buffer view); its index.
 inline size_t add_accessor(GridGltf& g, const std::string& bytes, int component_type, size_t count, const char* type) {
-  g.doc["accessors"].push_back({{"bufferView", add_buffer_view(g, bytes)}, {"componentType", component_type}, {"count", count}, {"type", type}});
+  g.doc["accessors"].push_back(
+      {{"bufferView", add_buffer_view(g, bytes)}, {"componentType", component_type}, {"count", count}, {"type", type}});
   return g.doc["accessors"].size() - 1;
 }
 

@@ -41,8 +41,7 @@ inline Image gradient_image(int w = 64, int h = 64) {
 inline Image checker_image(int w = 64, int h = 64, int cell = 8) {
   Image img(w, h);
   for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)
-      img.at(x, y) = ((x / cell + y / cell) % 2) ? Rgba8{230, 60, 40, 255} : Rgba8{30, 90, 200, 255};
+    for (int x = 0; x < w; ++x) img.at(x, y) = ((x / cell + y / cell) % 2) ? Rgba8{230, 60, 40, 255} : Rgba8{30, 90, 200, 255};
   return img;
 }
 
@@ -244,9 +243,15 @@ inline Geometry holey_slab_geometry(int k = 1) {
 
 // ---- the catalogue (TexturedMesh generators) ----
 
-inline TexturedMesh disk() { auto g = disk_geometry(); return make_textured("disk", g.positions, g.triangles); }
+inline TexturedMesh disk() {
+  auto g = disk_geometry();
+  return make_textured("disk", g.positions, g.triangles);
+}
 
-inline TexturedMesh sphere() { auto g = sphere_geometry(); return make_textured("sphere", g.positions, g.triangles); }
+inline TexturedMesh sphere() {
+  auto g = sphere_geometry();
+  return make_textured("sphere", g.positions, g.triangles);
+}
 
 inline TexturedMesh open_cylinder() {
   auto g = cylinder_geometry();
@@ -277,7 +282,10 @@ inline TexturedMesh sphere_with_holes() {
   return make_textured("sphere_with_holes", g.positions, kept);
 }
 
-inline TexturedMesh torus() { auto g = torus_geometry(); return make_textured("torus", g.positions, g.triangles); }
+inline TexturedMesh torus() {
+  auto g = torus_geometry();
+  return make_textured("torus", g.positions, g.triangles);
+}
 
 inline TexturedMesh double_torus() {
   auto g = double_torus_geometry();
@@ -373,8 +381,7 @@ inline TexturedMesh single_triangle() {
 }
 
 inline TexturedMesh two_triangles() {
-  return make_textured("two_triangles", {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(1, 1, 0.2), Vec3(0, 1, 0)},
-                       {Tri{0, 1, 2}, Tri{0, 2, 3}});
+  return make_textured("two_triangles", {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(1, 1, 0.2), Vec3(0, 1, 0)}, {Tri{0, 1, 2}, Tri{0, 2, 3}});
 }
 
 /// Several components in one mesh: a torus, a small disk and two tiny floaters (a triangle and a quad).

@@ -6,7 +6,6 @@
 #include <cmath>
 #include <cstdint>
 
-#include "report/report.hpp"
 #include "cut/cut.hpp"
 #include "mesh_catalogue.hpp"
 #include "param/param.hpp"
@@ -15,6 +14,7 @@
 #include "prepare/components.hpp"
 #include "prepare/repair.hpp"
 #include "report/metrics.hpp"
+#include "report/report.hpp"
 #include "tightex/tightex.hpp"
 
 namespace tightex {
@@ -55,7 +55,8 @@ TEST(Aspect, EqualArcCornersShareTheLengthAsTheRectanglesPerimeter) {
   const Disk disk = sheet_disk(25, 9);
   const auto& b = disk.boundary;
   std::vector<double> arc(b.size() + 1, 0.0);
-  for (size_t i = 0; i < b.size(); ++i) arc[i + 1] = arc[i] + (disk.mesh.positions[b[(i + 1) % b.size()]] - disk.mesh.positions[b[i]]).norm();
+  for (size_t i = 0; i < b.size(); ++i)
+    arc[i + 1] = arc[i] + (disk.mesh.positions[b[(i + 1) % b.size()]] - disk.mesh.positions[b[i]]).norm();
   const double total = arc.back();
   for (double aspect : {1.0, 3.0, 0.5}) {
     SCOPED_TRACE(aspect);
@@ -153,7 +154,8 @@ TEST(Aspect, AutoShapeFollowsTheSurfaceAndKeepsMoreOfTheTexture) {
   const Result sq = optimize(longsheet, opt);
   EXPECT_EQ(sq.output.textures.at(0).image.width, sq.output.textures.at(0).image.height);
   EXPECT_EQ(report_json(sq.report)["aspect"]["probes"].size(), 0u);
-  const double p_auto = report_json(aut.report)["metrics"]["surface_psnr_db"], p_square = report_json(sq.report)["metrics"]["surface_psnr_db"];
+  const double p_auto = report_json(aut.report)["metrics"]["surface_psnr_db"],
+               p_square = report_json(sq.report)["metrics"]["surface_psnr_db"];
   EXPECT_GT(p_auto, p_square + 1.0);
   EXPECT_EQ(report_json(aut.report)["metrics"]["flipped"].get<size_t>(), 0u);
 

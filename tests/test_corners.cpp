@@ -6,12 +6,12 @@
 #include <algorithm>
 #include <set>
 
-#include "report/report.hpp"
 #include "cut/cut.hpp"
 #include "mesh_catalogue.hpp"
 #include "param/param.hpp"
 #include "prepare/components.hpp"
 #include "prepare/repair.hpp"
+#include "report/report.hpp"
 #include "tightex/tightex.hpp"
 
 namespace tightex {
@@ -99,8 +99,8 @@ TEST(Corners, BothRulesGiveOrderedCornersAndFoldFreeMapsOnTheCatalogue) {
         const auto arc = arc_lengths(disk);
         for (CornerRule rule : {CornerRule::kEqualArcs, CornerRule::kTurningAngle})
           for (bool area : {false, true}) {
-            SCOPED_TRACE(name + (mode == HoleMode::kFill ? " fill" : " cut") + " component " + std::to_string(c) + " " +
-                         rule_name(rule) + (area ? " area" : " harmonic"));
+            SCOPED_TRACE(name + (mode == HoleMode::kFill ? " fill" : " cut") + " component " + std::to_string(c) + " " + rule_name(rule) +
+                         (area ? " area" : " harmonic"));
             const auto idx = choose_corners(disk, arc, rule);
             if (nb == 3) {
               EXPECT_EQ(idx, (std::array<size_t, 4>{0, 1, 2, 2}));
@@ -123,8 +123,8 @@ TEST(Corners, BothRulesGiveOrderedCornersAndFoldFreeMapsOnTheCatalogue) {
               mo.face_target.resize(disk.mesh.num_faces());
               for (size_t f = 0; f < mo.face_target.size(); ++f) {
                 const Tri& t = disk.mesh.triangles[f];
-                mo.face_target[f] = std::max(
-                    triangle_area(disk.mesh.positions[t[0]], disk.mesh.positions[t[1]], disk.mesh.positions[t[2]]), 1e-300);
+                mo.face_target[f] =
+                    std::max(triangle_area(disk.mesh.positions[t[0]], disk.mesh.positions[t[1]], disk.mesh.positions[t[2]]), 1e-300);
               }
             }
             SquareMapStats st;
@@ -133,8 +133,10 @@ TEST(Corners, BothRulesGiveOrderedCornersAndFoldFreeMapsOnTheCatalogue) {
             // The harmonic map may crowd a region below what written coordinates hold (the holey slab cut
             // open, turning rule: 35 triangles of 3e-14 .. 2e-12 texels): it must say so, and where, so
             // the pipeline slits there (or maps that component with the area map).
-            if (area || st.flipped == 0) EXPECT_EQ(st.flipped, 0u);
-            else EXPECT_NE(st.crowded_vertex, kNone);
+            if (area || st.flipped == 0)
+              EXPECT_EQ(st.flipped, 0u);
+            else
+              EXPECT_NE(st.crowded_vertex, kNone);
             if (nb > 3) {
               static const Vec2 kCorner[4] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
               for (int k = 0; k < 4; ++k) EXPECT_EQ(uv[st.corners[k]], kCorner[k]) << "corner " << k;

@@ -7,8 +7,8 @@
 #include <string>
 
 #include "core/cut_along_edges.hpp"
-#include "cut/cut_graph.hpp"
 #include "core/graph.hpp"
+#include "cut/cut_graph.hpp"
 #include "mesh_catalogue.hpp"
 #include "prepare/components.hpp"
 #include "prepare/holes.hpp"

@@ -6,12 +6,12 @@
 
 #include <string>
 
-#include "report/report.hpp"
 #include "cut/cut.hpp"
 #include "genus_surfaces.hpp"
 #include "prepare/components.hpp"
 #include "prepare/repair.hpp"
 #include "report/metrics.hpp"
+#include "report/report.hpp"
 #include "tightex/tightex.hpp"
 
 namespace tightex {
@@ -22,19 +22,19 @@ namespace cat = tightex::testing;
 struct GenusCase {
   std::string family;  // "plate" or "arches"
   int genus;
-  double min_psnr;     // dB at --size 512, a few dB below the measured figure (see genus_cases)
+  double min_psnr;  // dB at --size 512, a few dB below the measured figure (see genus_cases)
 };
 
 // Floors: measured surface PSNR at --size 512 (Release, deterministic, default detail map) minus 3 dB:
 // plate g1 56.1, g2 43.0, g3 32.7, g5 27.8, g8 30.3, g13 28.4, g25 21.4; arches g1 40.6, g5 37.0,
 // g25 19.0, g38 18.6. The paper's harmonic map gives plate 55.1 / 34.8 / 21.7 / 21.5 / 18.5 / 14.6 /
 // 13.9 and arches 39.2 / 29.0 / 18.2 / 15.1: cutting every hole open turns a plate into a comb-shaped
-// disk that the harmonic map crowds (density P5 down to 2^-24 at g13). For scale: the painted colour has a per-channel amplitude of 110, so an
-// output of the mean colour everywhere scores about 10.3 dB and colours at random places about 7.3 dB.
+// disk that the harmonic map crowds (density P5 down to 2^-24 at g13). For scale: the painted colour has a per-channel amplitude of 110, so
+// an output of the mean colour everywhere scores about 10.3 dB and colours at random places about 7.3 dB.
 const std::vector<GenusCase>& genus_cases() {
-  static const std::vector<GenusCase> cases = {{"plate", 1, 53.0},  {"plate", 2, 40.0},  {"plate", 3, 29.5},  {"plate", 5, 24.5},
-          {"plate", 8, 27.0},  {"plate", 13, 25.0}, {"plate", 25, 18.0}, {"arches", 1, 37.5},
-          {"arches", 5, 34.0}, {"arches", 25, 16.0}, {"arches", 38, 15.5}};
+  static const std::vector<GenusCase> cases = {{"plate", 1, 53.0},  {"plate", 2, 40.0},   {"plate", 3, 29.5},  {"plate", 5, 24.5},
+                                               {"plate", 8, 27.0},  {"plate", 13, 25.0},  {"plate", 25, 18.0}, {"arches", 1, 37.5},
+                                               {"arches", 5, 34.0}, {"arches", 25, 16.0}, {"arches", 38, 15.5}};
   return cases;
 }
 
@@ -92,8 +92,8 @@ TEST_P(Genus, OneChartEveryHandleFound) {
   const double psnr = mt["surface_psnr_db"].get<double>();
   double loops = 0;
   for (double l : comp[0]["handle_loops"]) loops += l;
-  std::printf("%s g=%d tris=%zu psnr=%.2f loops=%.4f seam=%.3f -> %.3f\n", c.family.c_str(), c.genus, m.num_triangles(), psnr,
-              loops, mt["seam_length"]["input"].get<double>(), mt["seam_length"]["output"].get<double>());
+  std::printf("%s g=%d tris=%zu psnr=%.2f loops=%.4f seam=%.3f -> %.3f\n", c.family.c_str(), c.genus, m.num_triangles(), psnr, loops,
+              mt["seam_length"]["input"].get<double>(), mt["seam_length"]["output"].get<double>());
   EXPECT_GT(psnr, c.min_psnr);
 }
 
@@ -102,7 +102,8 @@ TEST_P(Genus, OneChartEveryHandleFound) {
 std::pair<size_t, size_t> real_faces_and_groups(const Surface& d) {
   detail::UnionFind uf(d.num_faces());
   for (uint32_t h = 0; h < d.opposite.size(); ++h)
-    if (const uint32_t o = d.opposite[h]; o != kNone && d.face_parent[h / 3] != kNone && d.face_parent[o / 3] != kNone) uf.unite(h / 3, o / 3);
+    if (const uint32_t o = d.opposite[h]; o != kNone && d.face_parent[h / 3] != kNone && d.face_parent[o / 3] != kNone)
+      uf.unite(h / 3, o / 3);
   size_t real = 0, groups = 0;
   for (uint32_t f = 0; f < d.num_faces(); ++f) real += d.face_parent[f] != kNone, groups += d.face_parent[f] != kNone && uf.find(f) == f;
   return {real, groups};

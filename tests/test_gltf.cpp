@@ -19,9 +19,9 @@
 #include <string>
 
 #include "command_line.hpp"
-#include "gltf_checks.hpp"
 #include "core/error.hpp"
 #include "gltf_builder.hpp"
+#include "gltf_checks.hpp"
 #include "io/gltf_document.hpp"
 #include "mesh_catalogue.hpp"
 #include "report/metrics.hpp"
@@ -68,7 +68,7 @@ TEST(GltfReader, ReadsTheHandBuiltGlbOnceInLocalSpace) {
   ASSERT_EQ(m.materials.size(), 1u);
   EXPECT_EQ(m.materials[0].name, "grid material");
   EXPECT_EQ(m.materials[0].kd[0], 0.5);  // the linear factor, as OBJ's Kd holds it
-  ASSERT_EQ(m.textures.size(), 2u);  // the base colour, then the normal map (another slot)
+  ASSERT_EQ(m.textures.size(), 2u);      // the base colour, then the normal map (another slot)
   EXPECT_EQ(m.textures[0].image.width, 16);
   EXPECT_EQ(m.materials[0].texture, 0);
   EXPECT_EQ(m.materials[0].maps[size_t(MaterialSlot::kNormal)], 1);
@@ -319,8 +319,16 @@ std::vector<Lie> lies() {
        },
        "textures[0]: KHR_texture_basisu"},
       {"unknown required extension", [](GridGltf& g) { g.doc["extensionsRequired"] = {"EXT_made_up"}; }, "EXT_made_up"},
-      {"node matrix", [](GridGltf& g) { g.doc["nodes"][1]["matrix"] = {1, 0, 0}; }, "nodes[1]: matrix"},
-      {"node rotation", [](GridGltf& g) { g.doc["nodes"][0]["rotation"] = {0, 0, 0, 0}; }, "nodes[0]: rotation"},
+      {"node matrix",
+       [](GridGltf& g) {
+         g.doc["nodes"][1]["matrix"] = {1, 0, 0};
+       },
+       "nodes[1]: matrix"},
+      {"node rotation",
+       [](GridGltf& g) {
+         g.doc["nodes"][0]["rotation"] = {0, 0, 0, 0};
+       },
+       "nodes[0]: rotation"},
   };
 }
 

@@ -32,7 +32,8 @@ bool non_separating(const Surface& s, const EdgeGraph& g, const std::vector<uint
   std::vector<int> uses(g.num_edges(), 0);
   for (uint32_t e : edges) uses[e]++;
   uint32_t groups = 0;
-  const auto corner = group_corners(s, [&](uint32_t h) { return uses[g.halfedge_edge[h]] != 1; }, &groups);
+  const auto corner = group_corners(
+      s, [&](uint32_t h) { return uses[g.halfedge_edge[h]] != 1; }, &groups);
   const Surface cut = regroup(s, corner, groups);
   std::vector<uint32_t> label;
   return face_components(cut, label) == 1 && topology_of(cut).genus() < topology_of(s).genus();

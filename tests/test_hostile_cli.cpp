@@ -117,25 +117,28 @@ void add_outside_cases(std::vector<Case>& c) {
     outside(v + "map_kd_leads_out", grid_obj(), "newmtl a\nmap_Kd ../secret.png\n", allow, secret, allow);
     outside(v + "map_kd_absolute", grid_obj(), "newmtl a\nmap_Kd @DIR@/secret.png\n", allow, secret, allow);
     outside(v + "map_kd_file_uri", grid_obj(), "newmtl a\nmap_Kd file://@DIR@/secret.png\n", allow, secret, allow);
-    outside(v + "mtllib_leads_out", grid_obj("mtllib ../m.mtl\nusemtl a\n"), "", allow,
-            [](const fs::path& dir, const fs::path&) {
-              std::ofstream(dir / "m.mtl") << kMtl;
-              write_gradient(dir / "t.png");
-            },
-            allow);
-    outside(v + "texture_is_a_symlink_out", grid_obj(), kMtl, allow,
-            [](const fs::path& dir, const fs::path& model) {
-              write_gradient(dir / "secret.png", 7);
-              fs::create_symlink("../secret.png", model / "t.png");
-            },
-            allow);
-    outside(v + "folder_is_a_symlink_out", grid_obj(), "newmtl a\nmap_Kd tex/t.png\n", allow,
-            [](const fs::path& dir, const fs::path& model) {
-              fs::create_directories(dir / "elsewhere");
-              write_gradient(dir / "elsewhere" / "t.png", 7);
-              fs::create_directory_symlink(dir / "elsewhere", model / "tex");
-            },
-            allow);
+    outside(
+        v + "mtllib_leads_out", grid_obj("mtllib ../m.mtl\nusemtl a\n"), "", allow,
+        [](const fs::path& dir, const fs::path&) {
+          std::ofstream(dir / "m.mtl") << kMtl;
+          write_gradient(dir / "t.png");
+        },
+        allow);
+    outside(
+        v + "texture_is_a_symlink_out", grid_obj(), kMtl, allow,
+        [](const fs::path& dir, const fs::path& model) {
+          write_gradient(dir / "secret.png", 7);
+          fs::create_symlink("../secret.png", model / "t.png");
+        },
+        allow);
+    outside(
+        v + "folder_is_a_symlink_out", grid_obj(), "newmtl a\nmap_Kd tex/t.png\n", allow,
+        [](const fs::path& dir, const fs::path& model) {
+          fs::create_directories(dir / "elsewhere");
+          write_gradient(dir / "elsewhere" / "t.png", 7);
+          fs::create_directory_symlink(dir / "elsewhere", model / "tex");
+        },
+        allow);
   }
   outside("map_bump_leads_out", grid_obj(), kMtl + "map_Bump ../secret.png\n", false, [secret](const fs::path& dir, const fs::path& model) {
     secret(dir, model);
@@ -346,13 +349,14 @@ namespace {
 // read as before. The test's folder holds the model's folder "scan" and the files named outside it.
 struct Outside {
   fs::path dir, model, out;
-  explicit Outside(const std::string& name) : dir(tightex::testing::scratch_folder("outside_" + name)), model(dir / "scan"), out(dir / "out") {
+  explicit Outside(const std::string& name)
+      : dir(tightex::testing::scratch_folder("outside_" + name)), model(dir / "scan"), out(dir / "out") {
     fs::create_directories(model);
   }
   // Runs the command on scan/FILE; its exit status, stderr in `err`.
   int run(const std::string& file, const std::string& flags, std::string& err) const {
-    const int status = tightex::testing::run_tightex("'" + (model / file).string() + "' -o '" + out.string() + "' --size 64 --quiet " + flags +
-                                            " 2> '" + (dir / "stderr.txt").string() + "'");
+    const int status = tightex::testing::run_tightex("'" + (model / file).string() + "' -o '" + out.string() + "' --size 64 --quiet " +
+                                                     flags + " 2> '" + (dir / "stderr.txt").string() + "'");
     err = tightex::testing::read_whole(dir / "stderr.txt");
     return status;
   }

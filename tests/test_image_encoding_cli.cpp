@@ -81,10 +81,15 @@ TEST_F(ImageEncodingCli, BadValuesAreRefusedAndNothingIsWritten) {
     const char* options;
     const char* message;
   } cases[] = {
-      {"--png-level 10", "--png-level"},  {"--png-level -1", "--png-level"},   {"--png-level quick", "--png-level"},
-      {"--jpeg-quality 0", "--jpeg-quality"}, {"--format jpg --jpeg-quality 101", "--jpeg-quality"},
-      {"--format jpg --png-level 9", "--png-level needs --format png"}, {"--jpeg-quality 80", "--jpeg-quality does nothing"},
-      {"--webp-lossless", "--webp-lossless does nothing"}, {"--format png --webp-quality 60", "--webp-quality needs --format webp"},
+      {"--png-level 10", "--png-level"},
+      {"--png-level -1", "--png-level"},
+      {"--png-level quick", "--png-level"},
+      {"--jpeg-quality 0", "--jpeg-quality"},
+      {"--format jpg --jpeg-quality 101", "--jpeg-quality"},
+      {"--format jpg --png-level 9", "--png-level needs --format png"},
+      {"--jpeg-quality 80", "--jpeg-quality does nothing"},
+      {"--webp-lossless", "--webp-lossless does nothing"},
+      {"--format png --webp-quality 60", "--webp-quality needs --format webp"},
   };
   for (const auto& c : cases) {
     EXPECT_EQ(run("bad", c.options), 1) << c.options;

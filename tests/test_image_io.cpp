@@ -352,7 +352,8 @@ TEST_F(ImageIoTest, PngDeflatedInSlicesIsOneZlibStream) {
     Bytes idat;
     for (size_t at = 8; at + 8 <= png.size();) {
       const size_t length = size_t(png[at]) << 24 | size_t(png[at + 1]) << 16 | size_t(png[at + 2]) << 8 | png[at + 3];
-      if (std::memcmp(&png[at + 4], "IDAT", 4) == 0) idat.insert(idat.end(), png.begin() + long(at + 8), png.begin() + long(at + 8 + length));
+      if (std::memcmp(&png[at + 4], "IDAT", 4) == 0)
+        idat.insert(idat.end(), png.begin() + long(at + 8), png.begin() + long(at + 8 + length));
       at += 12 + length;
     }
     Bytes rows(size_t(900) * (1200 * 4 + 1) + 1);

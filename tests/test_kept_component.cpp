@@ -4,8 +4,8 @@
 // with the pipeline's test hook (PlanHooks), on meshes of the catalogue.
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <unistd.h>
+#include <algorithm>
 
 #include <filesystem>
 #include <fstream>
@@ -15,13 +15,13 @@
 
 #include <fmt/format.h>
 
-#include "report/report.hpp"
 #include "io/image_io.hpp"
 #include "io/obj_reader.hpp"
 #include "io/obj_writer.hpp"
 #include "mesh_catalogue.hpp"
-#include "report/metrics.hpp"
 #include "pipeline/plan_state.hpp"
+#include "report/metrics.hpp"
+#include "report/report.hpp"
 #include "tightex/tightex.hpp"
 
 namespace fs = std::filesystem;
@@ -39,7 +39,8 @@ std::set<uint32_t> triangles_of(const Plan& plan, size_t c) {
 bool same_pixels(const Image& a, const Image& b) {
   if (a.width != b.width || a.height != b.height) return false;
   for (size_t i = 0; i < a.pixels.size(); ++i)
-    if (a.pixels[i].r != b.pixels[i].r || a.pixels[i].g != b.pixels[i].g || a.pixels[i].b != b.pixels[i].b || a.pixels[i].a != b.pixels[i].a)
+    if (a.pixels[i].r != b.pixels[i].r || a.pixels[i].g != b.pixels[i].g || a.pixels[i].b != b.pixels[i].b ||
+        a.pixels[i].a != b.pixels[i].a)
       return false;
   return true;
 }
@@ -135,7 +136,8 @@ TEST(KeptComponent, KeepsInputUvsMaterialAndTextureAndLosesNothing) {
   // The mapped triangles use the new texture only, inside [0,1].
   for (uint32_t t = 0; t < out.num_triangles(); ++t)
     if (out.materials[size_t(out.face_material[t])].texture == 0)  // the new image
-      for (int k = 0; k < 3; ++k) EXPECT_TRUE(out.corner_uv[3 * t + size_t(k)].minCoeff() >= 0 && out.corner_uv[3 * t + size_t(k)].maxCoeff() <= 1);
+      for (int k = 0; k < 3; ++k)
+        EXPECT_TRUE(out.corner_uv[3 * t + size_t(k)].minCoeff() >= 0 && out.corner_uv[3 * t + size_t(k)].maxCoeff() <= 1);
   ASSERT_EQ(out.materials.size(), 2u);
   EXPECT_EQ(out.materials[1].name, "skin_2");
   ASSERT_EQ(out.textures.size(), 2u);
@@ -145,7 +147,8 @@ TEST(KeptComponent, KeepsInputUvsMaterialAndTextureAndLosesNothing) {
   // back with the kept part exactly as the input had it.
   TempDir dir("tightex_kept");
   write_obj(out, dir.path.string(), "model", ImageFormat::kPng);
-  for (const char* f : {"model.obj", "model.mtl", "multi_component_tightex.png", "kept_skin.png"}) EXPECT_TRUE(fs::is_regular_file(dir.path / f)) << f;
+  for (const char* f : {"model.obj", "model.mtl", "multi_component_tightex.png", "kept_skin.png"})
+    EXPECT_TRUE(fs::is_regular_file(dir.path / f)) << f;
   const std::string mtl = slurp(dir.path / "model.mtl");
   EXPECT_NE(mtl.find("newmtl skin_2\n"), std::string::npos) << mtl;
   EXPECT_NE(mtl.find("Kd 0.5 0.25 1\n"), std::string::npos) << mtl;

@@ -13,9 +13,9 @@
 
 #include <fmt/format.h>
 #include "bake/bake.hpp"
-#include "report/report.hpp"
 #include "core/raster.hpp"
 #include "core/tangents.hpp"
+#include "report/report.hpp"
 
 #include "genus_surfaces.hpp"
 #include "pipeline/bake_material_maps.hpp"
@@ -101,7 +101,9 @@ const MaterialMapFigures* figures_of(const std::vector<MaterialMapFigures>& all,
 
 /// optimize() with the options' size as tightex's own budget (TextureBudget::is_default), under which
 /// a map may be baked larger than the base colour.
-Result at_default_budget(const TexturedMesh& in, const Options& o) { return bake_plan(plan_charts(in, o, TextureBudget{o.size, true}), in, o); }
+Result at_default_budget(const TexturedMesh& in, const Options& o) {
+  return bake_plan(plan_charts(in, o, TextureBudget{o.size, true}), in, o);
+}
 
 TEST(MaterialMaps, EverySlotIsRebakedAndOneImageInTwoSlotsStaysOne) {
   const TexturedMesh in = plate_with_maps();
@@ -204,7 +206,8 @@ TEST(MaterialMaps, AMapShortOfItsCheckIsBakedLargerWhereItsTexelsPay) {
   EXPECT_EQ(int64_t(after.width) * base.height, int64_t(after.height) * base.width);  // the same texture coordinates
   EXPECT_LE(int64_t(after.width) * after.height, int64_t(input.width) * input.height);
   EXPECT_EQ(image_of(sized.output, MaterialSlot::kNormal).width, base.width);  // judged against itself: never larger
-  const std::vector<MaterialMapFigures> figures_before = measure_material_maps(in, plain.output), figures_after = measure_material_maps(in, sized.output);
+  const std::vector<MaterialMapFigures> figures_before = measure_material_maps(in, plain.output),
+                                        figures_after = measure_material_maps(in, sized.output);
   EXPECT_GT(figures_of(figures_after, MaterialSlot::kOcclusion)->surface_psnr,
             figures_of(figures_before, MaterialSlot::kOcclusion)->surface_psnr + 0.5);
   EXPECT_GT(report_json(sized.report)["maps"][0]["scale"].get<double>(), 1.0);

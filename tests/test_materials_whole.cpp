@@ -67,7 +67,9 @@ TEST(MaterialsWhole, GltfSlotsFactorsAndOneImagePerImage) {
   const fs::path dir = testing::scratch_folder("materials_whole_gltf");
   const testing::GridGltf g = two_material_grid();
   testing::write_whole(dir / "grid.glb", testing::make_glb(g.doc, g.bin));
-  ASSERT_EQ(testing::run_tightex(fmt::format("'{}' -o '{}' --size 64 --quiet --no-html", (dir / "grid.glb").string(), (dir / "out").string())), 0);
+  ASSERT_EQ(
+      testing::run_tightex(fmt::format("'{}' -o '{}' --size 64 --quiet --no-html", (dir / "grid.glb").string(), (dir / "out").string())),
+      0);
   std::system(fmt::format("rm -rf /tmp/dbg_mw; cp -r {} /tmp/dbg_mw", dir.string()).c_str());
   const TexturedMesh out = read_gltf((dir / "out" / "grid.glb").string());
   const json& doc = out.gltf->json;
@@ -149,8 +151,8 @@ TEST(MaterialsWhole, ObjMaterialsStaySeparateWithTheirStatementsAndMaps) {
   ASSERT_FALSE(texture.empty());
   if (texture.filename() != "sphere_texture.png") fs::copy_file(texture, dir / "in" / "sphere_texture.png");
 
-  ASSERT_EQ(testing::run_tightex(fmt::format("'{}' -o '{}' --size 64 --quiet --no-html", (dir / "in" / "sphere.obj").string(),
-                                             (dir / "out").string())),
+  ASSERT_EQ(testing::run_tightex(
+                fmt::format("'{}' -o '{}' --size 64 --quiet --no-html", (dir / "in" / "sphere.obj").string(), (dir / "out").string())),
             0);
   const std::string out = testing::read_whole(dir / "out" / "sphere.mtl");
   for (const char* line : {"newmtl skin\n", "newmtl cloth\n", "Ks 0.2 0.2 0.2\n", "Ns 12\n", "Pr 0.7\n", "Ks 0.9 0.9 0.9\n", "Ns 250\n"})

@@ -34,7 +34,8 @@ std::optional<Disk> scan_disk() {
   const fs::path input = fs::path(TIGHTEX_SHARED_DATA) / "meshroom_esp32cam" / "texturedMesh.obj";
   if (!fs::exists(input)) return std::nullopt;
   std::vector<Surface> parts = split_components(prepare_surface(read_obj(input.string()), nullptr));
-  const auto largest = std::max_element(parts.begin(), parts.end(), [](const Surface& a, const Surface& b) { return a.num_faces() < b.num_faces(); });
+  const auto largest =
+      std::max_element(parts.begin(), parts.end(), [](const Surface& a, const Surface& b) { return a.num_faces() < b.num_faces(); });
   return cut_to_disk(*largest, CutOptions{}, nullptr);
 }
 
@@ -58,7 +59,8 @@ VertexAggregates aggregates_of(const Disk& disk) {
 std::vector<Vec2> tutte_map(const Disk& disk, DirichletSolver& solver) {
   const size_t nb = disk.boundary.size();
   std::vector<Vec2> circle(nb);
-  for (size_t i = 0; i < nb; ++i) circle[i] = Vec2(std::cos(2 * std::numbers::pi * double(i) / double(nb)), std::sin(2 * std::numbers::pi * double(i) / double(nb)));
+  for (size_t i = 0; i < nb; ++i)
+    circle[i] = Vec2(std::cos(2 * std::numbers::pi * double(i) / double(nb)), std::sin(2 * std::numbers::pi * double(i) / double(nb)));
   std::vector<Vec2> uv;
   EXPECT_TRUE(harmonic_map(disk.mesh, disk.boundary, circle, edge_weights(disk.mesh, EdgeWeights::kClamped), solver, uv));
   return uv;

@@ -29,8 +29,7 @@ class ObjReaderTest : public ::testing::Test {
  protected:
   void SetUp() override {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           (std::string("tightex_obj_reader_") + info->name() + "_" + std::to_string(::getpid()));
+    dir_ = fs::temp_directory_path() / (std::string("tightex_obj_reader_") + info->name() + "_" + std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
@@ -159,8 +158,7 @@ TEST_F(ObjReaderTest, NegativeIndicesAreRelativeToTheirLine) {
 
 TEST_F(ObjReaderTest, NegativeIndexBeforeDefinitionIsRefused) {
   const std::string path = write("neg_bad.obj", "v 0 0 0\nvt 0 0\nf -1/1 -2/1 -3/1\nv 1 0 0\nv 0 1 0\n");
-  EXPECT_EQ(error_of(path),
-            path + ":3: vertex index -2 out of range (only 1 vertices defined before this line)");
+  EXPECT_EQ(error_of(path), path + ":3: vertex index -2 out of range (only 1 vertices defined before this line)");
 }
 
 TEST_F(ObjReaderTest, CrlfTabsBlankLinesAndComments) {
@@ -196,8 +194,7 @@ TEST_F(ObjReaderTest, CornerFormsAndNormals) {
 }
 
 TEST_F(ObjReaderTest, NormalsOnSomeFacesOnlyAreDropped) {
-  const std::string path =
-      write("some_normals.obj", std::string(kSquareVerts) + "vn 0 0 1\nf 1/1/1 2/2/1 3/3/1\nf 1/1 3/3 4/4\n");
+  const std::string path = write("some_normals.obj", std::string(kSquareVerts) + "vn 0 0 1\nf 1/1/1 2/2/1 3/3/1\nf 1/1 3/3 4/4\n");
   const TexturedMesh mesh = read(path);
   EXPECT_EQ(mesh.num_triangles(), 2u);
   EXPECT_TRUE(mesh.corner_normal.empty());
@@ -219,25 +216,23 @@ TEST_F(ObjReaderTest, FaceWithoutAnyTextureCoordinatesNamesItsLine) {
 TEST_F(ObjReaderTest, ModelWithoutTextureCoordinates) {
   const std::string path = write("no_vt.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\n");
   EXPECT_EQ(error_of(path),
-            path + ": model has neither texture coordinates (vt) nor vertex colours (v x y z r g b); tightex needs the input's UV atlas or "
-                   "its vertex colours");
+            path +
+                ": model has neither texture coordinates (vt) nor vertex colours (v x y z r g b); tightex needs the input's UV atlas or "
+                "its vertex colours");
 }
 
 TEST_F(ObjReaderTest, ForwardReferencesAreResolvedAtTheEnd) {
-  const std::string path =
-      write("forward.obj", "f 1/1 2/2 3/3\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n");
+  const std::string path = write("forward.obj", "f 1/1 2/2 3/3\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n");
   const TexturedMesh mesh = read(path);
   EXPECT_EQ(mesh.num_triangles(), 1u);
   EXPECT_EQ(mesh.corner_uv[1], Vec2(1, 0));
 }
 
 TEST_F(ObjReaderTest, IndexOutOfRangeNamesTheLine) {
-  const std::string path =
-      write("range.obj", std::string(kSquareVerts) + "f 1/1 2/2 3/3\n\nf 1/1 2/2 99999/3\n");
+  const std::string path = write("range.obj", std::string(kSquareVerts) + "f 1/1 2/2 3/3\n\nf 1/1 2/2 99999/3\n");
   EXPECT_EQ(error_of(path), path + ":11: vertex index 99999 out of range (file has 4 vertices)");
   const std::string vt_path = write("range_vt.obj", std::string(kSquareVerts) + "f 1/1 2/2 3/7\n");
-  EXPECT_EQ(error_of(vt_path),
-            vt_path + ":9: texture coordinate index 7 out of range (file has 4 texture coordinates)");
+  EXPECT_EQ(error_of(vt_path), vt_path + ":9: texture coordinate index 7 out of range (file has 4 texture coordinates)");
 }
 
 TEST_F(ObjReaderTest, ZeroIndexIsRefused) {
@@ -282,8 +277,7 @@ TEST_F(ObjReaderTest, FaceWithTwoCornersIsRefused) {
 }
 
 TEST_F(ObjReaderTest, UnknownStatementsAreIgnored) {
-  const std::string path =
-      write("unknown.obj", std::string(kSquareVerts) + "vp 0.5\ncstype bspline\nmg 1\nf 1/1 2/2 3/3\n");
+  const std::string path = write("unknown.obj", std::string(kSquareVerts) + "vp 0.5\ncstype bspline\nmg 1\nf 1/1 2/2 3/3\n");
   EXPECT_EQ(read(path).num_triangles(), 1u);
 }
 
@@ -323,8 +317,7 @@ TEST_F(ObjReaderTest, MaterialsAndFacesBeforeUsemtl) {
 }
 
 TEST_F(ObjReaderTest, MissingMaterialLibrary) {
-  const std::string path =
-      write("no_mtl.obj", std::string(kSquareVerts) + "mtllib nowhere.mtl\nf 1/1 2/2 3/3\n");
+  const std::string path = write("no_mtl.obj", std::string(kSquareVerts) + "mtllib nowhere.mtl\nf 1/1 2/2 3/3\n");
   EXPECT_EQ(error_of(path), path + ":9: material library 'nowhere.mtl' not found");
   const std::string spaced = write("no_mtl2.obj", "mtllib my materials.mtl\n");
   EXPECT_EQ(error_of(spaced), spaced + ":1: material library 'my materials.mtl' not found");
@@ -334,9 +327,8 @@ TEST_F(ObjReaderTest, SeveralLibrariesAndNamesWithSpaces) {
   write("a.mtl", "newmtl first\nKd 1 0 0\n");
   write("b.mtl", "newmtl second\nKd 0 1 0\n");
   write("sub dir/my mats.mtl", "newmtl third\nKd 0 0 1\n");
-  const std::string path =
-      write("multi.obj", std::string("mtllib a.mtl b.mtl\nmtllib sub dir\\my mats.mtl\n") + kSquareVerts +
-                             "usemtl third\nf 1/1 2/2 3/3\nusemtl second\nf 1/1 3/3 4/4\n");
+  const std::string path = write("multi.obj", std::string("mtllib a.mtl b.mtl\nmtllib sub dir\\my mats.mtl\n") + kSquareVerts +
+                                                  "usemtl third\nf 1/1 2/2 3/3\nusemtl second\nf 1/1 3/3 4/4\n");
   const TexturedMesh mesh = read(path);
   ASSERT_EQ(mesh.materials.size(), 2u);
   EXPECT_EQ(mesh.materials[0].name, "third");
@@ -349,18 +341,15 @@ TEST_F(ObjReaderTest, SeveralLibrariesAndNamesWithSpaces) {
 TEST_F(ObjReaderTest, UsemtlOfUndefinedMaterial) {
   write("m.mtl", "newmtl known\nKd 1 1 1\n");
   const std::string path =
-      write("undef.obj", std::string("mtllib m.mtl\n") + kSquareVerts +
-                             "usemtl known\nf 1/1 2/2 3/3\nusemtl mystery\nf 1/1 3/3 4/4\n");
+      write("undef.obj", std::string("mtllib m.mtl\n") + kSquareVerts + "usemtl known\nf 1/1 2/2 3/3\nusemtl mystery\nf 1/1 3/3 4/4\n");
   EXPECT_EQ(error_of(path), path + ":12: material 'mystery' is not defined in any material library");
   const std::string no_lib = write("no_lib.obj", std::string(kSquareVerts) + "usemtl known\nf 1/1 2/2 3/3\n");
-  EXPECT_EQ(error_of(no_lib),
-            no_lib + ":9: material 'known' used but the file names no material library (mtllib)");
+  EXPECT_EQ(error_of(no_lib), no_lib + ":9: material 'known' used but the file names no material library (mtllib)");
 }
 
 TEST_F(ObjReaderTest, UsemtlBeforeMtllibIsResolved) {
   write("late.mtl", "newmtl late\nKd 0 0 0\n");
-  const std::string path =
-      write("late.obj", std::string(kSquareVerts) + "usemtl late\nf 1/1 2/2 3/3\nmtllib late.mtl\n");
+  const std::string path = write("late.obj", std::string(kSquareVerts) + "usemtl late\nf 1/1 2/2 3/3\nmtllib late.mtl\n");
   const TexturedMesh mesh = read(path);
   ASSERT_EQ(mesh.materials.size(), 1u);
   EXPECT_EQ(mesh.face_material[0], 0);
@@ -402,10 +391,9 @@ TEST_F(ObjReaderTest, TexturesAreLoaded) {
   Image image(2, 3, Rgba8{10, 20, 30, 255});
   fs::create_directories(dir_ / "textures");
   save_image((dir_ / "textures/atlas page.png").string(), image, ImageFormat::kPng);
-  write("t.mtl",
-        "newmtl a\nmap_Kd -s 1 1 textures/atlas page.png\nnewmtl b\nmap_Kd textures/atlas page.png\n");
-  const std::string path = write("t.obj", std::string("mtllib t.mtl\n") + kSquareVerts +
-                                              "usemtl a\nf 1/1 2/2 3/3\nusemtl b\nf 1/1 3/3 4/4\n");
+  write("t.mtl", "newmtl a\nmap_Kd -s 1 1 textures/atlas page.png\nnewmtl b\nmap_Kd textures/atlas page.png\n");
+  const std::string path =
+      write("t.obj", std::string("mtllib t.mtl\n") + kSquareVerts + "usemtl a\nf 1/1 2/2 3/3\nusemtl b\nf 1/1 3/3 4/4\n");
   const TexturedMesh mesh = read(path);
   ASSERT_EQ(mesh.textures.size(), 1u);
   EXPECT_EQ(mesh.textures[0].image.width, 2);
@@ -431,8 +419,8 @@ TEST_F(ObjReaderTest, FilesNamedByAnotherMachineAreFound) {
   write("Scan.MTL",
         "newmtl a\nmap_Kd \"C:\\Users\\me\\scan\\textures\\tex_0.png\"\n"
         "newmtl b\nmap_Kd TEX_1.PNG\n");
-  const std::string path = write("scan.obj", std::string("mtllib scan.mtl\n") + kSquareVerts +
-                                                 "usemtl a\nf 1/1 2/2 3/3\nusemtl b\nf 1/1 3/3 4/4\n");
+  const std::string path =
+      write("scan.obj", std::string("mtllib scan.mtl\n") + kSquareVerts + "usemtl a\nf 1/1 2/2 3/3\nusemtl b\nf 1/1 3/3 4/4\n");
   ModelReadStats stats;
   const TexturedMesh mesh = read(path, {}, &stats);
   ASSERT_EQ(mesh.textures.size(), 2u);
@@ -460,11 +448,9 @@ TEST_F(ObjReaderTest, AmbiguousOrAbsentNamesAreNotGuessed) {
 
 TEST_F(ObjReaderTest, MissingTextureNamesTheMaterialLibraryLine) {
   const std::string mtl = write("gone.mtl", "newmtl a\nKd 1 1 1\nmap_Kd gone.png\n");
-  const std::string path =
-      write("gone.obj", std::string("mtllib gone.mtl\n") + kSquareVerts + "usemtl a\nf 1/1 2/2 3/3\n");
+  const std::string path = write("gone.obj", std::string("mtllib gone.mtl\n") + kSquareVerts + "usemtl a\nf 1/1 2/2 3/3\n");
   const std::string message = error_of(path);
-  EXPECT_EQ(message.rfind(mtl + ":3: texture 'gone.png' of material 'a' could not be loaded: ", 0), 0u)
-      << message;
+  EXPECT_EQ(message.rfind(mtl + ":3: texture 'gone.png' of material 'a' could not be loaded: ", 0), 0u) << message;
   // Without pixels the path is kept and nothing is opened; decoding it later names the same line.
   const TexturedMesh mesh = read(path, no_textures());
   ASSERT_EQ(mesh.textures.size(), 1u);
@@ -479,12 +465,10 @@ TEST_F(ObjReaderTest, MissingTextureNamesTheMaterialLibraryLine) {
 
 TEST_F(ObjReaderTest, MalformedMaterialLibrary) {
   const std::string mtl = write("bad.mtl", "newmtl a\nKd 1 x 1\n");
-  const std::string path =
-      write("bad.obj", std::string("mtllib bad.mtl\n") + kSquareVerts + "f 1/1 2/2 3/3\n");
+  const std::string path = write("bad.obj", std::string("mtllib bad.mtl\n") + kSquareVerts + "f 1/1 2/2 3/3\n");
   EXPECT_EQ(error_of(path), mtl + ":2: malformed number 'x' in 'Kd'");
   const std::string opt = write("opt.mtl", "newmtl a\nmap_Kd -zoom 2 tex.png\n");
-  const std::string opt_obj =
-      write("opt.obj", std::string("mtllib opt.mtl\n") + kSquareVerts + "f 1/1 2/2 3/3\n");
+  const std::string opt_obj = write("opt.obj", std::string("mtllib opt.mtl\n") + kSquareVerts + "f 1/1 2/2 3/3\n");
   EXPECT_EQ(error_of(opt_obj), opt + ":2: unknown option '-zoom' in 'map_Kd'");
 }
 
@@ -504,7 +488,8 @@ TEST_F(ObjReaderTest, DevicesAndPipesNamedByTheModelAreRefused) {
     EXPECT_EQ(message.rfind(mtl + ":2: texture '" + special + "' of material 'a' could not be loaded: ", 0), 0u) << message;
     EXPECT_NE(message.find("is not a regular file"), std::string::npos) << message;
     if (special[0] == '/') {
-      EXPECT_EQ(error_of(lib).rfind(lib + ":1: material library '/dev/zero' is an absolute path out of the folder ", 0), 0u) << error_of(lib);
+      EXPECT_EQ(error_of(lib).rfind(lib + ":1: material library '/dev/zero' is an absolute path out of the folder ", 0), 0u)
+          << error_of(lib);
       EXPECT_EQ(error_of(tex).rfind(mtl + ":2: map_Kd '/dev/zero' is an absolute path out of the folder ", 0), 0u) << error_of(tex);
     } else {
       EXPECT_EQ(error_of(lib), error_of(lib, outside));
@@ -608,8 +593,7 @@ TEST_F(ObjReaderTest, MeshroomScan) {
   ModelReadStats stats;
   const auto start = std::chrono::steady_clock::now();
   const TexturedMesh mesh = read_obj(obj.string(), no_textures(), &stats);
-  const double ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   std::printf("read_obj(%s): %.1f ms\n", obj.filename().c_str(), ms);
   // Cut into many stretches or read as one: the same mesh.
   for (const size_t chunk_bytes : {size_t(4096), std::numeric_limits<size_t>::max()}) {

@@ -12,11 +12,11 @@
 #include <set>
 #include <string>
 
-#include "report/report.hpp"
 #include "mesh_catalogue.hpp"
 #include "prepare/components.hpp"
 #include "prepare/repair.hpp"
 #include "report/metrics.hpp"
+#include "report/report.hpp"
 #include "tightex/io.hpp"
 #include "tightex/tightex.hpp"
 

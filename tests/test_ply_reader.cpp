@@ -22,12 +22,12 @@
 #include <type_traits>
 #include <vector>
 
-#include "report/report.hpp"
 #include "core/error.hpp"
 #include "io/image_io.hpp"
 #include "io/ply_reader.hpp"
 #include "mesh_catalogue.hpp"
 #include "report/metrics.hpp"
+#include "report/report.hpp"
 #include "tightex/io.hpp"
 #include "tightex/tightex.hpp"
 
@@ -135,8 +135,8 @@ constexpr double kTriangleUv[6] = {0.1, 0.25, 0.5, 0.25, 0.5, 0.75};
 constexpr double kQuadUv[8] = {0.125, 0.5, 0.875, 0.5, 0.875, 1.0, 0.125, 1.0};
 // Each of them as a float32 reads back, written out: computed as double(float(t)) inside the checking
 // loop, the GCC 12 -O3 build gave 0.1 itself (not so under valgrind; not understood).
-const std::map<double, double> kAsFloat32 = {{0.1, double(0.1f)}, {0.25, 0.25}, {0.5, 0.5}, {0.75, 0.75}, {0.125, 0.125},
-                                             {0.875, 0.875}, {1.0, 1.0}};
+const std::map<double, double> kAsFloat32 = {{0.1, double(0.1f)}, {0.25, 0.25},   {0.5, 0.5}, {0.75, 0.75},
+                                             {0.125, 0.125},      {0.875, 0.875}, {1.0, 1.0}};
 
 std::string textured_model(Format format) {
   PlyBuilder b(format);
@@ -275,7 +275,19 @@ TEST_P(PlyFormats, EveryScalarTypeUnderBothNames) {
   const uint8_t ys[3] = {255, 0, 1};
   const int16_t zs[3] = {-32768, 32767, 5};
   for (int i = 0; i < 3; ++i)
-    b.put(xs[i]).put(ys[i]).put(zs[i]).put(int16_t(-1)).put(uint16_t(65535)).put(int32_t(-2)).put(uint32_t(4000000000u)).put(1.5f).put(-2.5).put(int32_t(2)).put(uint8_t(1)).put(uint8_t(2)).end();
+    b.put(xs[i])
+        .put(ys[i])
+        .put(zs[i])
+        .put(int16_t(-1))
+        .put(uint16_t(65535))
+        .put(int32_t(-2))
+        .put(uint32_t(4000000000u))
+        .put(1.5f)
+        .put(-2.5)
+        .put(int32_t(2))
+        .put(uint8_t(1))
+        .put(uint8_t(2))
+        .end();
   const std::string path = write("types.ply", b.str());
   const TexturedMesh m = read_ply(path);
   ASSERT_EQ(m.positions.size(), 3u);
@@ -350,7 +362,10 @@ std::vector<Hostile> hostile_files() {
       {"empty", "", "not a PLY file"},
       {"obj text", "v 0 0 0\n", "not a PLY file"},
       {"no end_header", "ply\nformat ascii 1.0\nelement vertex 3\n", "no end_header"},
-      {"no format", "ply\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\nelement face 0\nproperty list uchar int vertex_indices\nproperty list uchar float texcoord\nend_header\n", "no format line"},
+      {"no format",
+       "ply\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\nelement face 0\nproperty list uchar int "
+       "vertex_indices\nproperty list uchar float texcoord\nend_header\n",
+       "no format line"},
       {"unknown format", "ply\nformat binary_middle_endian 1.0\nend_header\n", "unknown format"},
       {"unknown type", kHead + "property float128 w\n" + kFace + kVerts, "unknown property type 'float128'"},
       {"float list size", kHead + "element face 1\nproperty list float int vertex_indices\nend_header\n", "list size of type float"},
@@ -359,19 +374,39 @@ std::vector<Hostile> hostile_files() {
       {"second element", kHead + "element vertex 3\n" + kFace, "second element 'vertex'"},
       {"second property", kHead + "property float y\n" + kFace, "second property 'y'"},
       {"malformed count", "ply\nformat ascii 1.0\nelement vertex 99999999999999999999999\nend_header\n", "malformed count"},
-      {"no x", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float y\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n", "no property 'x'"},
+      {"no x",
+       "ply\nformat ascii 1.0\nelement vertex 1\nproperty float y\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n",
+       "no property 'x'"},
       {"point cloud", kHead + "end_header\n" + kVerts, "no 'face' element"},
       {"float indices", kHead + "element face 1\nproperty list uchar float vertex_indices\nend_header\n", "list of integers"},
-      {"no texcoords", kHead + "element face 1\nproperty list uchar int vertex_indices\nend_header\n" + kVerts + "3 0 1 2\n", "neither texture coordinates"},
+      {"no texcoords", kHead + "element face 1\nproperty list uchar int vertex_indices\nend_header\n" + kVerts + "3 0 1 2\n",
+       "neither texture coordinates"},
       {"TextureFile without name", "ply\nformat ascii 1.0\ncomment TextureFile  \nend_header\n", "without a file name"},
-      {"ascii count lie", "ply\nformat ascii 1.0\nelement vertex 3000000000\nproperty float x\nproperty float y\nproperty float z\n" + kFace + kVerts, "more than the"},
-      {"binary count lie", binary_header(xyz_float.substr(0, 15) + "100000000\nproperty float x\nproperty float y\nproperty float z\n" + face_list) + std::string(64, '\0'), "more than the"},
-      {"binary face count lie", binary_header(xyz_float + "element face 18446744073709551615\nproperty list uint int vertex_indices\n") + std::string(12, '\0'), "more than the"},
+      {"ascii count lie",
+       "ply\nformat ascii 1.0\nelement vertex 3000000000\nproperty float x\nproperty float y\nproperty float z\n" + kFace + kVerts,
+       "more than the"},
+      {"binary count lie",
+       binary_header(xyz_float.substr(0, 15) + "100000000\nproperty float x\nproperty float y\nproperty float z\n" + face_list) +
+           std::string(64, '\0'),
+       "more than the"},
+      {"binary face count lie",
+       binary_header(xyz_float + "element face 18446744073709551615\nproperty list uint int vertex_indices\n") + std::string(12, '\0'),
+       "more than the"},
       {"truncated ascii", kHead + kFace + kVerts + "3 0 1 2 6 0 0", "truncated"},
-      {"truncated binary", binary_header(xyz_float + face_list) + std::string(12, '\0') + std::string("\x03\0\0\0\0\0\0\0", 8), "truncated"},
-      {"huge skipped list", binary_header("element junk 1\nproperty list uint uchar stuff\n" + xyz_float + face_list) + std::string("\xff\xff\xff\xff", 4) + std::string(40, '\0'), "truncated"},
-      {"list too long", kHead + "element face 1\nproperty list ushort int vertex_indices\nproperty list uchar float texcoord\nend_header\n" + kVerts + "2000 0 1 2\n", "at most 1024"},
-      {"negative list size", kHead + "element face 1\nproperty list char int vertex_indices\nproperty list uchar float texcoord\nend_header\n" + kVerts + "-3 0 1 2" + kTexcoords, "negative size"},
+      {"truncated binary", binary_header(xyz_float + face_list) + std::string(12, '\0') + std::string("\x03\0\0\0\0\0\0\0", 8),
+       "truncated"},
+      {"huge skipped list",
+       binary_header("element junk 1\nproperty list uint uchar stuff\n" + xyz_float + face_list) + std::string("\xff\xff\xff\xff", 4) +
+           std::string(40, '\0'),
+       "truncated"},
+      {"list too long",
+       kHead + "element face 1\nproperty list ushort int vertex_indices\nproperty list uchar float texcoord\nend_header\n" + kVerts +
+           "2000 0 1 2\n",
+       "at most 1024"},
+      {"negative list size",
+       kHead + "element face 1\nproperty list char int vertex_indices\nproperty list uchar float texcoord\nend_header\n" + kVerts +
+           "-3 0 1 2" + kTexcoords,
+       "negative size"},
       {"two corners", kHead + kFace + kVerts + "2 0 1 4 0 0 1 0\n", "needs at least 3"},
       {"index out of range", kHead + kFace + kVerts + "3 0 1 3" + kTexcoords, "vertex index 3 out of range"},
       {"negative index", kHead + kFace + kVerts + "3 0 -1 2" + kTexcoords, "vertex index -1 out of range"},
@@ -379,14 +414,23 @@ std::vector<Hostile> hostile_files() {
       {"uchar out of range", kHead + kFace + kVerts + "256 0 1 2" + kTexcoords, "not a value of type uchar"},
       {"malformed number", kHead + kFace + "0 0 0\n1 zero 0\n0 1 0\n3 0 1 2" + kTexcoords, "malformed number 'zero'"},
       {"ascii NaN", kHead + kFace + "0 0 0\n1 nan 0\n0 1 0\n3 0 1 2" + kTexcoords, "NaN or infinite coordinate"},
-      {"binary NaN", binary_header(xyz_float + face_list) + nan_float + std::string(8, '\0') + std::string(12, '\0'), "NaN or infinite coordinate"},
+      {"binary NaN", binary_header(xyz_float + face_list) + nan_float + std::string(8, '\0') + std::string(12, '\0'),
+       "NaN or infinite coordinate"},
       {"absurd coordinate", kHead + kFace + "0 0 0\n1 1e300 0\n0 1 0\n3 0 1 2" + kTexcoords, "absurd coordinate"},
       {"NaN texcoord", kHead + kFace + kVerts + "3 0 1 2 6 0 0 1 nan 0 1\n", "NaN or infinite texture coordinate"},
       {"texcoord count", kHead + kFace + kVerts + "3 0 1 2 4 0 0 1 0\n", "texcoord list of 4 values"},
-      {"texnumber out of range", kHead + "comment TextureFile a.png\n" + kFace.substr(0, kFace.size() - 11) + "property int texnumber\nend_header\n" + kVerts + "3 0 1 2 6 0 0 1 0 0 1 1\n", "texnumber 1 out of range"},
-      {"texnumber without pages", kHead + kFace.substr(0, kFace.size() - 11) + "property uchar texnumber\nend_header\n" + kVerts + "3 0 1 2 6 0 0 1 0 0 1 0\n", "texnumber 0 out of range (the header names 0 texture files)"},
-      {"missing texture", kHead + "comment TextureFile nowhere.png\n" + kFace + kVerts + "3 0 1 2" + kTexcoords, "texture 'nowhere.png' (comment TextureFile) could not be loaded"},
-      {"no faces", kHead + "element face 0\nproperty list uchar int vertex_indices\nproperty list uchar float texcoord\nend_header\n" + kVerts, "no faces"},
+      {"texnumber out of range",
+       kHead + "comment TextureFile a.png\n" + kFace.substr(0, kFace.size() - 11) + "property int texnumber\nend_header\n" + kVerts +
+           "3 0 1 2 6 0 0 1 0 0 1 1\n",
+       "texnumber 1 out of range"},
+      {"texnumber without pages",
+       kHead + kFace.substr(0, kFace.size() - 11) + "property uchar texnumber\nend_header\n" + kVerts + "3 0 1 2 6 0 0 1 0 0 1 0\n",
+       "texnumber 0 out of range (the header names 0 texture files)"},
+      {"missing texture", kHead + "comment TextureFile nowhere.png\n" + kFace + kVerts + "3 0 1 2" + kTexcoords,
+       "texture 'nowhere.png' (comment TextureFile) could not be loaded"},
+      {"no faces",
+       kHead + "element face 0\nproperty list uchar int vertex_indices\nproperty list uchar float texcoord\nend_header\n" + kVerts,
+       "no faces"},
       {"the valid file, for reference", valid, ""},
   };
 }
@@ -521,12 +565,13 @@ TEST_F(PlyReaderTest, SurplusValuesOnALineAreRefusedAtThatLine) {
   size_t line = size_t(std::count(text.begin(), text.begin() + long(body), '\n')) + 1;
   size_t at = body;
   for (int i = 0; i < 400 + 5; ++i, ++line) at = text.find('\n', at) + 1;  // the sixth face's line
-  text[text.find('\n', at)] = ' ';                                          // the seventh joined to it
+  text[text.find('\n', at)] = ' ';                                         // the seventh joined to it
   try {
     read_ply(write("joined.ply", text), ModelReadOptions{false});
     ADD_FAILURE() << "read";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find(fmt::format("joined.ply:{}: face 5: more values on the line", line)), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(fmt::format("joined.ply:{}: face 5: more values on the line", line)), std::string::npos)
+        << e.what();
   }
 }
 

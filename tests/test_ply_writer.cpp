@@ -229,7 +229,8 @@ TEST(StoredUvs, RoundedAsTheFileHoldsThem) {
         for (int k = 0; k < 3; ++k)  // glTF stores positions as floats
           same = same && (back.positions[back.triangles[t][k]] - rounded.positions[rounded.triangles[s][k]]).norm() < 1e-6;
         if (!same) continue;
-        for (int k = 0; k < 3; ++k) EXPECT_EQ(back.corner_uv[3 * t + size_t(k)], rounded.corner_uv[3 * s + size_t(k)]) << name << " triangle " << t;
+        for (int k = 0; k < 3; ++k)
+          EXPECT_EQ(back.corner_uv[3 * t + size_t(k)], rounded.corner_uv[3 * s + size_t(k)]) << name << " triangle " << t;
         ++compared;
         break;
       }

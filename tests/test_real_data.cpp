@@ -14,9 +14,9 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <string>
-#include <nlohmann/json.hpp>
 
 #include "io/obj_reader.hpp"
 #include "pipeline/aspect.hpp"
@@ -55,7 +55,8 @@ class RealData : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(RealData, CliOutputIsOneFoldFreeChartPerComponentFillingTheTexture) {
   const std::string input = GetParam();
-  const fs::path out = fs::temp_directory_path() / ("tightex_real_" + fs::path(input).parent_path().filename().string() + "_" + std::to_string(::getpid()));
+  const fs::path out =
+      fs::temp_directory_path() / ("tightex_real_" + fs::path(input).parent_path().filename().string() + "_" + std::to_string(::getpid()));
   fs::remove_all(out);
   // The default run. Under AddressSanitizer (CI's second pass, several times slower) only fuze, the
   // smallest model, probes the texture's shape; the others keep the square (--aspect 1), which the
@@ -69,8 +70,8 @@ TEST_P(RealData, CliOutputIsOneFoldFreeChartPerComponentFillingTheTexture) {
 #else
   const bool probe_shape = true, default_budget = true;
 #endif
-  const std::string cmd = std::string(TIGHTEX_CLI) + " '" + input + "' -o '" + out.string() + "' --quiet" + (probe_shape ? "" : " --aspect 1") +
-                          (default_budget ? "" : " --size 1024");
+  const std::string cmd = std::string(TIGHTEX_CLI) + " '" + input + "' -o '" + out.string() + "' --quiet" +
+                          (probe_shape ? "" : " --aspect 1") + (default_budget ? "" : " --size 1024");
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
 
   const TexturedMesh in = read_obj(input);
@@ -138,7 +139,8 @@ TEST_P(RealData, CliOutputIsOneFoldFreeChartPerComponentFillingTheTexture) {
 
 /// Runs the CLI with `options` and returns its report (the docs/metrics.md figures it measured).
 nlohmann::json run_cli(const std::string& input, const std::string& options, const std::string& tag) {
-  const fs::path out = fs::temp_directory_path() / ("tightex_" + tag + "_" + fs::path(input).parent_path().filename().string() + "_" + std::to_string(::getpid()));
+  const fs::path out = fs::temp_directory_path() /
+                       ("tightex_" + tag + "_" + fs::path(input).parent_path().filename().string() + "_" + std::to_string(::getpid()));
   fs::remove_all(out);
   const std::string cmd = std::string(TIGHTEX_CLI) + " '" + input + "' -o '" + out.string() + "' --quiet " + options;
   EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
@@ -168,13 +170,12 @@ TEST_P(RealData, AreaMapKeepsNinetyPercentWithinAFactorTwoOfTheMeanDensity) {
   EXPECT_LE(r["metrics"]["density_spread"]["p95"].get<double>(), 0.5);
 }
 
-INSTANTIATE_TEST_SUITE_P(Scans, RealData, ::testing::ValuesIn(data_models()),
-                         [](const ::testing::TestParamInfo<std::string>& info) {
-                           std::string n = fs::path(info.param).parent_path().filename().string();
-                           for (char& c : n)
-                             if (!isalnum(static_cast<unsigned char>(c))) c = '_';
-                           return n;
-                         });
+INSTANTIATE_TEST_SUITE_P(Scans, RealData, ::testing::ValuesIn(data_models()), [](const ::testing::TestParamInfo<std::string>& info) {
+  std::string n = fs::path(info.param).parent_path().filename().string();
+  for (char& c : n)
+    if (!isalnum(static_cast<unsigned char>(c))) c = '_';
+  return n;
+});
 GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(RealData);
 
 // The Meshroom scan at --size 1024: the default map reaches texture-defrag's 41.3 dB (in
@@ -185,7 +186,8 @@ TEST(RealDataMaps, DefaultMapBeatsHarmonicAndTextureDefragOnMeshroomAt1024) {
 #ifdef __SANITIZE_ADDRESS__
   GTEST_SKIP() << "figures only: the first CI pass measures them, RealData runs the model under the sanitizers";
 #endif
-  const nlohmann::json def = run_cli(input.string(), "--size 1024", "default"), harm = run_cli(input.string(), "--size 1024 --map harmonic", "harmonic");
+  const nlohmann::json def = run_cli(input.string(), "--size 1024", "default"),
+                       harm = run_cli(input.string(), "--size 1024 --map harmonic", "harmonic");
   ASSERT_TRUE(def.contains("metrics") && harm.contains("metrics"));
   const double d = def["metrics"]["surface_psnr_db"].get<double>(), h = harm["metrics"]["surface_psnr_db"].get<double>();
   EXPECT_GE(d, 41.3);

@@ -122,29 +122,64 @@ ReportData filled_report() {
 TEST(Report, HasEveryKeyOfTheSchema) {
   const nlohmann::json j = to_json(filled_report());
   EXPECT_EQ(keys_of(j), (std::set<std::string>{"input", "options", "aspect", "pages", "preparation", "components", "timings", "bake",
-                                                "metrics", "peak_rss_mib", "wall_seconds", "output", "tightex_version"}));
-  EXPECT_EQ(keys_of(j["input"]), (std::set<std::string>{"file", "vertices", "triangles", "materials", "textures",
-                                                         "polygons_triangulated", "paths_found", "vertex_coloured_triangles"}));
-  EXPECT_EQ(keys_of(j["options"]), (std::set<std::string>{"size", "size_grown_from", "layout", "holes", "map", "balance", "fit",
-                                                           "fine_fit", "corners", "aspect", "material_map_budget_db"}));
+                                               "metrics", "peak_rss_mib", "wall_seconds", "output", "tightex_version"}));
+  EXPECT_EQ(keys_of(j["input"]), (std::set<std::string>{"file", "vertices", "triangles", "materials", "textures", "polygons_triangulated",
+                                                        "paths_found", "vertex_coloured_triangles"}));
+  EXPECT_EQ(keys_of(j["options"]), (std::set<std::string>{"size", "size_grown_from", "layout", "holes", "map", "balance", "fit", "fine_fit",
+                                                          "corners", "aspect", "material_map_budget_db"}));
   EXPECT_EQ(keys_of(j["aspect"]), (std::set<std::string>{"requested", "chosen", "probed_component", "probes", "square_texel_stretch"}));
-  EXPECT_EQ(keys_of(j["pages"]),
-            (std::set<std::string>{"max_side", "max_piece_faces", "count", "components_split", "pieces", "reason", "large_maps_one_after_another"}));
+  EXPECT_EQ(keys_of(j["pages"]), (std::set<std::string>{"max_side", "max_piece_faces", "count", "components_split", "pieces", "reason",
+                                                        "large_maps_one_after_another"}));
   EXPECT_EQ(keys_of(j["aspect"]["probes"][0]),
             (std::set<std::string>{"aspect", "width", "height", "estimated_psnr_db", "full_map_estimated_psnr_db"}));
-  EXPECT_EQ(keys_of(j["preparation"]),
-            (std::set<std::string>{"input_vertices", "welded_vertices", "zero_area_dropped", "exact_repeats_copied", "layered_triangles", "untextured_kept",
-                                   "non_manifold_edges_sliced", "inconsistent_edges_sliced", "reoriented_triangles", "vertices_sliced",
-                                   "slits_closed", "components", "holes_filled", "holes_cut", "components_with_fallback",
-                                   "components_longest_hole_capped", "components_listed", "components_kept_original_uvs", "already_tight"}));
-  const std::set<std::string> component_keys{
-      "index", "triangles", "area", "euler", "boundary_loops", "genus", "holes_filled", "holes_cut", "cut", "longest_hole_edges",
-      "longest_hole_capped", "longest_hole_kept_capped_estimated_psnr_db", "slits", "fallback", "cap_budget", "kept_original_uvs",
-      "kept_reason", "handle_loops", "cut_edges", "cut_length", "seam_length", "seam_on_input_seams", "weights",
-      "negative_cotangent_weights", "bumped_boundary_vertices", "flipped_in_map", "folds_per_weighting", "density_iterations",
-      "density_stopped", "density_correction_rounds", "density_error_log2_before", "density_error_log2", "refine_iterations",
-      "flow_steps", "flow_lead_steps", "flow_shape_steps", "flow_stopped", "refine_energy", "refine_stopped", "multilevel",
-      "float_coordinates", "rect"};
+  EXPECT_EQ(
+      keys_of(j["preparation"]),
+      (std::set<std::string>{"input_vertices", "welded_vertices", "zero_area_dropped", "exact_repeats_copied", "layered_triangles",
+                             "untextured_kept", "non_manifold_edges_sliced", "inconsistent_edges_sliced", "reoriented_triangles",
+                             "vertices_sliced", "slits_closed", "components", "holes_filled", "holes_cut", "components_with_fallback",
+                             "components_longest_hole_capped", "components_listed", "components_kept_original_uvs", "already_tight"}));
+  const std::set<std::string> component_keys{"index",
+                                             "triangles",
+                                             "area",
+                                             "euler",
+                                             "boundary_loops",
+                                             "genus",
+                                             "holes_filled",
+                                             "holes_cut",
+                                             "cut",
+                                             "longest_hole_edges",
+                                             "longest_hole_capped",
+                                             "longest_hole_kept_capped_estimated_psnr_db",
+                                             "slits",
+                                             "fallback",
+                                             "cap_budget",
+                                             "kept_original_uvs",
+                                             "kept_reason",
+                                             "handle_loops",
+                                             "cut_edges",
+                                             "cut_length",
+                                             "seam_length",
+                                             "seam_on_input_seams",
+                                             "weights",
+                                             "negative_cotangent_weights",
+                                             "bumped_boundary_vertices",
+                                             "flipped_in_map",
+                                             "folds_per_weighting",
+                                             "density_iterations",
+                                             "density_stopped",
+                                             "density_correction_rounds",
+                                             "density_error_log2_before",
+                                             "density_error_log2",
+                                             "refine_iterations",
+                                             "flow_steps",
+                                             "flow_lead_steps",
+                                             "flow_shape_steps",
+                                             "flow_stopped",
+                                             "refine_energy",
+                                             "refine_stopped",
+                                             "multilevel",
+                                             "float_coordinates",
+                                             "rect"};
   ASSERT_EQ(j["components"].size(), 2u);
   for (const auto& c : j["components"]) EXPECT_EQ(keys_of(c), component_keys);
   EXPECT_EQ(keys_of(j["components"][0]["rect"]), (std::set<std::string>{"image", "x", "y", "w", "h"}));
@@ -240,7 +275,8 @@ TEST(Report, LeavesOutWhatWasNotFilled) {
   r.aspect.requested = 1.5;
   r.options.size_grown_from = 256;
   const nlohmann::json j = to_json(r);
-  EXPECT_EQ(keys_of(j), (std::set<std::string>{"input", "options", "aspect", "pages", "preparation", "components", "timings", "tightex_version"}));
+  EXPECT_EQ(keys_of(j),
+            (std::set<std::string>{"input", "options", "aspect", "pages", "preparation", "components", "timings", "tightex_version"}));
   EXPECT_FALSE(j["input"].contains("paths_found"));
   EXPECT_EQ(j["options"]["aspect"], 1.5);
   EXPECT_EQ(j["options"]["size_grown_from"], 256);

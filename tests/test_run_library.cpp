@@ -75,8 +75,10 @@ TEST(RunLibrary, LastProgressEventComesAfterEveryFileIsInPlace) {
   EXPECT_LT(at("write"), at("measure"));
   EXPECT_LT(at("measure"), at("done"));
   for (size_t i = 0; i < events.size(); ++i) {
-    if (events[i].stage == "measure") EXPECT_EQ(events[i].files, 3u);
-    else if (events[i].stage != "done") EXPECT_EQ(events[i].files, 0u) << events[i].stage;
+    if (events[i].stage == "measure")
+      EXPECT_EQ(events[i].files, 3u);
+    else if (events[i].stage != "done")
+      EXPECT_EQ(events[i].files, 0u) << events[i].stage;
     if (i > 0 && events[i].stage == events[i - 1].stage) EXPECT_GE(events[i].fraction, events[i - 1].fraction) << events[i].stage;
   }
 }

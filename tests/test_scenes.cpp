@@ -12,7 +12,6 @@
 #include <set>
 #include <string>
 
-#include "report/report.hpp"
 #include "command_line.hpp"
 #include "core/error.hpp"
 #include "core/image.hpp"
@@ -22,6 +21,7 @@
 #include "mesh_catalogue.hpp"
 #include "prepare/repair.hpp"
 #include "report/metrics.hpp"
+#include "report/report.hpp"
 #include "tightex/io.hpp"
 #include "tightex/tightex.hpp"
 

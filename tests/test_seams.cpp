@@ -73,7 +73,8 @@ TEST(TextureSeams, FoundExactly) {
     const auto seams = find_texture_seams(m, c);
     size_t border = 0;  // halfedges whose two triangles differ in material, counted directly
     for (uint32_t h = 0; h < c.opposite.size(); ++h)
-      if (c.opposite[h] != kNone) border += m.face_material[s.face_parent[c.face_parent[h / 3]]] != m.face_material[s.face_parent[c.face_parent[c.opposite[h] / 3]]];
+      if (c.opposite[h] != kNone)
+        border += m.face_material[s.face_parent[c.face_parent[h / 3]]] != m.face_material[s.face_parent[c.face_parent[c.opposite[h] / 3]]];
     EXPECT_GT(border, 0u);
     EXPECT_EQ(count(seams), border);
   }

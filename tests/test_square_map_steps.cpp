@@ -3,11 +3,11 @@
 // together they give exactly the map map_to_square returns with the paper's cotangent weights.
 #include <gtest/gtest.h>
 
+#include "cut/cut.hpp"
 #include "mesh_catalogue.hpp"
 #include "param/param.hpp"
-#include "prepare/repair.hpp"
-#include "cut/cut.hpp"
 #include "prepare/components.hpp"
+#include "prepare/repair.hpp"
 
 namespace tightex {
 namespace {

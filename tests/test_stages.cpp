@@ -5,8 +5,8 @@
 // Every check recomputes the property from the stage's output (topology counted independently of
 // topology_of, UV areas summed independently of count_folds, tilings painted texel by texel), so a
 // stage that breaks its contract fails here even when its own statistics claim success.
-#include <gtest/gtest-spi.h>  // ScopedFakeTestPartResultReporter: the checkers' own test
 #include <dlfcn.h>
+#include <gtest/gtest-spi.h>  // ScopedFakeTestPartResultReporter: the checkers' own test
 #include <gtest/gtest.h>
 #include <Eigen/SVD>
 
@@ -21,7 +21,6 @@
 #include <set>
 #include <thread>
 
-#include "report/report.hpp"
 #include "core/eigen_vector.hpp"
 #include "core/error.hpp"
 #include "core/statistics.hpp"
@@ -34,6 +33,7 @@
 #include "prepare/components.hpp"
 #include "prepare/repair.hpp"
 #include "report/metrics.hpp"
+#include "report/report.hpp"
 #include "tightex/tightex.hpp"
 
 namespace tightex {
@@ -47,8 +47,8 @@ struct Expected {
   std::string name;
   std::function<TexturedMesh()> make;
   size_t components = 1;
-  long euler = 0;              // of the whole prepared surface (sum over components)
-  size_t boundary_loops = 0;   // of the whole prepared surface
+  long euler = 0;                                        // of the whole prepared surface (sum over components)
+  size_t boundary_loops = 0;                             // of the whole prepared surface
   std::multiset<std::pair<long, size_t>> per_component;  // (genus, boundary loops) of each component
   size_t zero_area = 0, duplicates = 0, non_manifold_edges = 0, inconsistent_edges = 0, sliced_vertices = 0;
   std::string cut_method;        // when set: CutStats::method expected for every component
@@ -142,7 +142,8 @@ bool same_bits(const Vec3& a, const Vec3& b) { return a.x() == b.x() && a.y() ==
 /// fan with at most one outgoing boundary halfedge.
 ::testing::AssertionResult is_manifold(const Surface& s) {
   const size_t nf = s.num_faces(), nv = s.num_vertices(), nh = 3 * nf;
-  if (s.opposite.size() != nh) return ::testing::AssertionFailure() << "opposite has " << s.opposite.size() << " entries for " << nf << " faces";
+  if (s.opposite.size() != nh)
+    return ::testing::AssertionFailure() << "opposite has " << s.opposite.size() << " entries for " << nf << " faces";
   if (s.positions.size() != nv) return ::testing::AssertionFailure() << "positions";
   for (uint32_t t = 0; t < nf; ++t) {
     const Tri& f = s.triangles[t];
@@ -171,7 +172,8 @@ bool same_bits(const Vec3& a, const Vec3& b) { return a.x() == b.x() && a.y() ==
     if (outgoing[v].empty()) continue;
     size_t boundary_out = 0;
     for (uint32_t h : outgoing[v]) boundary_out += s.opposite[h] == kNone;
-    if (boundary_out > 1) return ::testing::AssertionFailure() << "vertex " << v << " has " << boundary_out << " outgoing boundary halfedges";
+    if (boundary_out > 1)
+      return ::testing::AssertionFailure() << "vertex " << v << " has " << boundary_out << " outgoing boundary halfedges";
     std::set<uint32_t> reached{outgoing[v][0]};
     for (uint32_t h = outgoing[v][0];;) {  // clockwise: h -> opposite(prev(h))
       const uint32_t o = s.opposite[Surface::prev(h)];
@@ -186,7 +188,8 @@ bool same_bits(const Vec3& a, const Vec3& b) { return a.x() == b.x() && a.y() ==
       h = n;
     }
     if (reached.size() != outgoing[v].size())
-      return ::testing::AssertionFailure() << "vertex " << v << " has " << outgoing[v].size() << " corners but its fan reaches " << reached.size();
+      return ::testing::AssertionFailure() << "vertex " << v << " has " << outgoing[v].size() << " corners but its fan reaches "
+                                           << reached.size();
   }
   return ::testing::AssertionSuccess();
 }
@@ -221,8 +224,8 @@ std::pair<long, size_t> genus_and_loops(const Surface& s) {
 /// Per input triangle: how many times prepare_surface must keep it (0 or 1), and the group of
 /// triangles it is equal to (same welded vertices in the same cyclic order), computed from the input.
 struct InputTriangles {
-  std::vector<char> has_area;      // distinct welded vertices and non-zero 3D area
-  std::vector<uint32_t> group;     // index of the first equal triangle with area
+  std::vector<char> has_area;   // distinct welded vertices and non-zero 3D area
+  std::vector<uint32_t> group;  // index of the first equal triangle with area
   size_t zero_area = 0, duplicates = 0;
 };
 InputTriangles classify(const TexturedMesh& m) {
@@ -364,7 +367,8 @@ TEST_P(Catalogue, PrepareSurface) {
     kept[p]++;
     for (int k = 0; k < 3; ++k) {
       const uint32_t v = s.triangles[t][k];
-      EXPECT_TRUE(same_bits(s.positions[v], m.positions[m.triangles[p][s.input_corner[3 * t + size_t(k)]]])) << "face " << t << " corner " << k;
+      EXPECT_TRUE(same_bits(s.positions[v], m.positions[m.triangles[p][s.input_corner[3 * t + size_t(k)]]]))
+          << "face " << t << " corner " << k;
     }
   }
   std::map<uint32_t, size_t> group_kept;
@@ -480,7 +484,8 @@ void check_disk(const Surface& comp, const Disk& disk, HoleMode mode, const CutS
     double comp_area = 0, cap_area = 0;
     for (const Tri& f : comp.triangles) comp_area += triangle_area(comp.positions[f[0]], comp.positions[f[1]], comp.positions[f[2]]);
     for (uint32_t f = 0; f < d.num_faces(); ++f)
-      if (d.face_parent[f] == kNone) cap_area += triangle_area(d.positions[d.triangles[f][0]], d.positions[d.triangles[f][1]], d.positions[d.triangles[f][2]]);
+      if (d.face_parent[f] == kNone)
+        cap_area += triangle_area(d.positions[d.triangles[f][0]], d.positions[d.triangles[f][1]], d.positions[d.triangles[f][2]]);
     EXPECT_LE(cap_area, kFillBudget * comp_area * (1 + 1e-9));
     if (genus == 0) EXPECT_EQ(scaffolding > 0, st.holes_filled > 0);
   }
@@ -500,8 +505,7 @@ void check_disk(const Surface& comp, const Disk& disk, HoleMode mode, const CutS
     EXPECT_GT(st.cut_edges, 0u);
   }
   // Without caps on a genus-0 surface, the boundary grows by both sides of every cut edge.
-  if (genus == 0 && scaffolding == 0)
-    EXPECT_EQ(count(d).boundary_halfedges, cc.boundary_halfedges + 2 * st.cut_edges);
+  if (genus == 0 && scaffolding == 0) EXPECT_EQ(count(d).boundary_halfedges, cc.boundary_halfedges + 2 * st.cut_edges);
   EXPECT_EQ(st.before.euler(), cc.euler());
   EXPECT_EQ(st.before.boundary_loops, comp_loops.size());
 
@@ -526,7 +530,8 @@ void check_disk(const Surface& comp, const Disk& disk, HoleMode mode, const CutS
 TEST(CutToDisk, ASmallLongestHoleIsCappedTooWhenAsked) {
   cat::Geometry g = cat::sphere_geometry();
   g.triangles.erase(g.triangles.begin() + std::ptrdiff_t(g.triangles.size() / 3));
-  const std::vector<Surface> comps = split_components(prepare_surface(cat::make_textured("pepper_sphere", g.positions, g.triangles), nullptr));
+  const std::vector<Surface> comps =
+      split_components(prepare_surface(cat::make_textured("pepper_sphere", g.positions, g.triangles), nullptr));
   ASSERT_EQ(comps.size(), 1u);
   CutStats kept, capped, over;
   const Disk a = cut_to_disk(comps[0], {.holes = HoleMode::kFill}, &kept);
@@ -606,8 +611,7 @@ bool inward_anywhere(const Disk& disk, const std::vector<Vec2>& uv) {
 }
 
 /// Checks a map of `disk` onto the unit square made with `options`.
-void check_square_map(const Disk& disk, const std::vector<Vec2>& uv, const SquareMapOptions& options,
-                      const SquareMapStats& st) {
+void check_square_map(const Disk& disk, const std::vector<Vec2>& uv, const SquareMapOptions& options, const SquareMapStats& st) {
   const Surface& d = disk.mesh;
   ASSERT_EQ(uv.size(), d.num_vertices());
   for (uint32_t v = 0; v < uv.size(); ++v) ASSERT_TRUE(uv[v].allFinite()) << "vertex " << v;
@@ -723,11 +727,14 @@ std::pair<double, double> density_error(const Disk& disk, const std::vector<Vec2
   const Surface& m = disk.mesh;
   double total = 0, sum_t = 0;
   for (size_t f = 0; f < m.num_faces(); ++f)
-    if (m.face_parent[f] != kNone) total += signed_area(uv[m.triangles[f][0]], uv[m.triangles[f][1]], uv[m.triangles[f][2]]), sum_t += target[f];
+    if (m.face_parent[f] != kNone)
+      total += signed_area(uv[m.triangles[f][0]], uv[m.triangles[f][1]], uv[m.triangles[f][2]]), sum_t += target[f];
   std::vector<std::pair<double, double>> vw;
   for (size_t f = 0; f < m.num_faces(); ++f)
     if (m.face_parent[f] != kNone)
-      vw.push_back({std::log2(signed_area(uv[m.triangles[f][0]], uv[m.triangles[f][1]], uv[m.triangles[f][2]]) / (target[f] * total / sum_t)), target[f]});
+      vw.push_back(
+          {std::log2(signed_area(uv[m.triangles[f][0]], uv[m.triangles[f][1]], uv[m.triangles[f][2]]) / (target[f] * total / sum_t)),
+           target[f]});
   std::sort(vw.begin(), vw.end());
   auto q = [&](double p) {
     double acc = 0;
@@ -768,13 +775,18 @@ TEST_P(Catalogue, AreaMapEvensTheDensity) {
     const auto [h5, h95] = density_error(disk, harmonic, area3);
     const auto [p5, p95] = density_error(disk, uv, area3);
     const double harmonic_spread = std::max(-h5, h95), spread = std::max(-p5, p95);
-    EXPECT_LE(spread, std::max(1.0, harmonic_spread + 0.05)) << "harmonic P5/P95 " << h5 << "/" << h95 << ", area " << p5 << "/" << p95
-        << " (" << st.iterations << " iterations, " << st.stopped << ", before " << st.spread_before_p5 << "/" << st.spread_before_p95
-        << ", refine " << st.refine_iterations << " " << st.refine_stopped << ", rounds " << st.correction_rounds << ")";
+    EXPECT_LE(spread, std::max(1.0, harmonic_spread + 0.05))
+        << "harmonic P5/P95 " << h5 << "/" << h95 << ", area " << p5 << "/" << p95 << " (" << st.iterations << " iterations, " << st.stopped
+        << ", before " << st.spread_before_p5 << "/" << st.spread_before_p95 << ", refine " << st.refine_iterations << " "
+        << st.refine_stopped << ", rounds " << st.correction_rounds << ")";
     // A strip whose vertices all lie on its boundary (the Mobius strip's) can only slide them along the
     // sides; it is not held to the improvement.
     const size_t interior = disk.mesh.num_vertices() - disk.boundary.size();
-    if (harmonic_spread > 1.5 && 2 * interior >= disk.mesh.num_vertices()) EXPECT_LT(spread, harmonic_spread - 0.5) << "the area map must improve on a crowded harmonic map" << " (" << st.iterations << " iterations, " << st.stopped << ", before " << st.spread_before_p5 << "/" << st.spread_before_p95 << ", faces " << disk.mesh.num_faces() << ")";
+    if (harmonic_spread > 1.5 && 2 * interior >= disk.mesh.num_vertices())
+      EXPECT_LT(spread, harmonic_spread - 0.5) << "the area map must improve on a crowded harmonic map"
+                                               << " (" << st.iterations << " iterations, " << st.stopped << ", before "
+                                               << st.spread_before_p5 << "/" << st.spread_before_p95 << ", faces " << disk.mesh.num_faces()
+                                               << ")";
   }
 }
 
@@ -1035,7 +1047,8 @@ TEST(MapToSquare, SupernodalMatchesSimplicialWhenComponentsRunConcurrently) {
     const Tri& t = disk.mesh.triangles[f];
     // Denser towards one corner: the reweighting and the symmetric Dirichlet steps both have work.
     const Vec3 c = (disk.mesh.positions[t[0]] + disk.mesh.positions[t[1]] + disk.mesh.positions[t[2]]) / 3.0;
-    options.face_target[f] = triangle_area(disk.mesh.positions[t[0]], disk.mesh.positions[t[1]], disk.mesh.positions[t[2]]) * (1 + 3 * c.x() * c.y());
+    options.face_target[f] =
+        triangle_area(disk.mesh.positions[t[0]], disk.mesh.positions[t[1]], disk.mesh.positions[t[2]]) * (1 + 3 * c.x() * c.y());
   }
   options.refine_keeps_density = false;  // the detail map's steps: all of them run (Newton's first widens the density here)
   options.supernodal_from = 1L << 40;    // simplicial everywhere
@@ -1072,9 +1085,9 @@ TEST(MapToSquare, CollapsedTrianglesAreThoseRoundingCanFold) {
   SquareMapOptions o;
   o.rect_width = o.rect_height = 1024;
   const double y = 0.000527425151;
-  std::vector<Vec2> uv = {{0.1, 0.1}, {0.1 + 1e-6, 0.1}, {0.1, 0.1 + 1e-6},             // 5e-7 texels: clean
-                          {0.3, 0.3}, {0.6, 0.3}, {0.3, 0.6},                             // large: clean
-                          {0.37331, y}, {0.37466, y}, {0.37354, y + 1e-17}};              // 1e-14 texels
+  std::vector<Vec2> uv = {{0.1, 0.1},   {0.1 + 1e-6, 0.1}, {0.1, 0.1 + 1e-6},      // 5e-7 texels: clean
+                          {0.3, 0.3},   {0.6, 0.3},        {0.3, 0.6},             // large: clean
+                          {0.37331, y}, {0.37466, y},      {0.37354, y + 1e-17}};  // 1e-14 texels
   uint32_t worst = kNone;
   EXPECT_EQ(count_collapsed(s, uv, o, &worst), 1u);
   EXPECT_EQ(worst, 6u);
@@ -1181,8 +1194,8 @@ TEST(Pipeline, AHoleCapWithFacesOfZeroAreaDoesNotCrushTheAreaMap) {
     const Tri& f = out.triangles[t];
     const bool corner = at_corner(f);
     corner_faces += corner;
-    EXPECT_GT(density[t], (corner ? 0.25 : 0.4) * mean) << "triangle " << t << " squeezed at " << out.positions[f[0]] << " / "
-                                                        << out.positions[f[1]] << " / " << out.positions[f[2]];
+    EXPECT_GT(density[t], (corner ? 0.25 : 0.4) * mean)
+        << "triangle " << t << " squeezed at " << out.positions[f[0]] << " / " << out.positions[f[1]] << " / " << out.positions[f[2]];
   }
   EXPECT_EQ(corner_faces, 6u);  // one face at two corners, two at the others (the cells' diagonals)
   EXPECT_EQ(report_json(r.report)["metrics"]["flipped"], 0);
@@ -1701,7 +1714,9 @@ TEST(Layout, AtlasAtCapacity) {
   const auto attempt = try_layout_atlas(equal, 16, 16, 4);
   ASSERT_TRUE(attempt.has_value());
   for (size_t i = 0; i < rects.size(); ++i)
-    EXPECT_TRUE((*attempt)[i].x == rects[i].x && (*attempt)[i].y == rects[i].y && (*attempt)[i].w == rects[i].w && (*attempt)[i].h == rects[i].h) << i;
+    EXPECT_TRUE((*attempt)[i].x == rects[i].x && (*attempt)[i].y == rects[i].y && (*attempt)[i].w == rects[i].w &&
+                (*attempt)[i].h == rects[i].h)
+        << i;
   // Many tiny items beside one big one: the tiny ones still get min_side squares.
   std::vector<double> skewed(40, 1e-12);
   skewed[0] = 1.0;
@@ -1786,12 +1801,11 @@ template <typename F>
   ::testing::TestPartResultArray results;
   {
     ::testing::ScopedFakeTestPartResultReporter capture(::testing::ScopedFakeTestPartResultReporter::INTERCEPT_ONLY_CURRENT_THREAD,
-                                                       &results);
+                                                        &results);
     f();
   }
   for (int i = 0; i < results.size(); ++i)
-    if (std::string(results.GetTestPartResult(i).message()).find(needle) != std::string::npos)
-      return ::testing::AssertionSuccess();
+    if (std::string(results.GetTestPartResult(i).message()).find(needle) != std::string::npos) return ::testing::AssertionSuccess();
   return ::testing::AssertionFailure() << results.size() << " failures, none mentioning \"" << needle << "\"";
 }
 
@@ -1987,7 +2001,8 @@ TEST(Pipeline, FineFitChangesOnlyTheTexelsAndDoesNotLoseFidelity) {
   EXPECT_EQ(report_json(normal.report)["options"]["fine_fit"], false);
   ASSERT_EQ(fine.output.corner_uv.size(), normal.output.corner_uv.size());
   for (size_t i = 0; i < fine.output.corner_uv.size(); ++i) ASSERT_EQ(fine.output.corner_uv[i], normal.output.corner_uv[i]) << i;
-  const double p_normal = report_json(normal.report)["metrics"]["surface_psnr_db"], p_fine = report_json(fine.report)["metrics"]["surface_psnr_db"];
+  const double p_normal = report_json(normal.report)["metrics"]["surface_psnr_db"],
+               p_fine = report_json(fine.report)["metrics"]["surface_psnr_db"];
   EXPECT_GE(p_fine, p_normal) << "fit " << p_normal << " dB, fine fit " << p_fine << " dB";
   EXPECT_NE(fine.output.textures[0].image.pixels, normal.output.textures[0].image.pixels);
 }
@@ -2018,7 +2033,8 @@ TEST(Pipeline, TrianglesWoundTheOtherWayAreReoriented) {
   EXPECT_EQ(report_json(b.report)["metrics"]["charts"], 1);
   EXPECT_EQ(report_json(b.report)["metrics"]["flipped"], 0);
   EXPECT_EQ(report_json(b.report)["metrics"]["lost_triangles"], 0);
-  EXPECT_NEAR(report_json(b.report)["metrics"]["surface_psnr_db"].get<double>(), report_json(a.report)["metrics"]["surface_psnr_db"].get<double>(), 0.5);
+  EXPECT_NEAR(report_json(b.report)["metrics"]["surface_psnr_db"].get<double>(),
+              report_json(a.report)["metrics"]["surface_psnr_db"].get<double>(), 0.5);
   // Written the way the rest is wound: every output triangle faces out of the sphere.
   for (size_t t = 0; t < b.output.num_triangles(); ++t) {
     const Tri& f = b.output.triangles[t];
@@ -2167,7 +2183,8 @@ TEST(DetailMap, GivesTheTexelsToTheDetailedHalf) {
   Image img(256, 128);
   for (int y = 0; y < img.height; ++y)
     for (int x = 0; x < img.width; ++x)
-      img.at(x, y) = x < img.width / 2 ? (((x / 2 + y / 2) % 2) ? Rgba8{230, 60, 40, 255} : Rgba8{30, 90, 200, 255}) : Rgba8{120, 160, 90, 255};
+      img.at(x, y) =
+          x < img.width / 2 ? (((x / 2 + y / 2) % 2) ? Rgba8{230, 60, 40, 255} : Rgba8{30, 90, 200, 255}) : Rgba8{120, 160, 90, 255};
   const TexturedMesh input = cat::make_textured("half_detail", g.positions, g.triangles, std::move(img));
   auto run = [&](MapKind map) {
     Options opt;
@@ -2182,7 +2199,8 @@ TEST(DetailMap, GivesTheTexelsToTheDetailedHalf) {
       const int half = c.x() < 0.95 ? 0 : c.x() > 1.05 ? 1 : -1;
       if (half < 0) continue;
       texels[half] += std::abs(signed_area(out.corner_uv[3 * t], out.corner_uv[3 * t + 1], out.corner_uv[3 * t + 2])) * 96.0 * 96.0;
-      area[half] += triangle_area(out.positions[out.triangles[t][0]], out.positions[out.triangles[t][1]], out.positions[out.triangles[t][2]]);
+      area[half] +=
+          triangle_area(out.positions[out.triangles[t][0]], out.positions[out.triangles[t][1]], out.positions[out.triangles[t][2]]);
     }
     const Metrics m = measure(input, out);
     EXPECT_EQ(m.flipped, 0u);
@@ -2201,7 +2219,8 @@ TEST(DetailMap, GivesTheTexelsToTheDetailedHalf) {
 // input_detail: positive on a textured triangle with contrast, 0 on a flat colour, and finite (0) where
 // absurd material transforms make the texel count overflow (int(inf) would be undefined behaviour).
 TEST(DetailMap, InputDetailIsFiniteForAnyUnits) {
-  TexturedMesh m = cat::make_textured("detail_units", {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}, {Tri{0, 1, 2}}, cat::checker_image(64, 64, 2));
+  TexturedMesh m =
+      cat::make_textured("detail_units", {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}, {Tri{0, 1, 2}}, cat::checker_image(64, 64, 2));
   EXPECT_GT(input_detail(m, 0), 0.0);
   m.materials[0].uv_scale = {1e300, 1e300};
   const double huge = input_detail(m, 0);

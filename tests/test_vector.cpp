@@ -21,8 +21,7 @@ bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; 
 template <int N>
 ::testing::AssertionResult same_bits(const Eigen::Matrix<double, N, 1>& expected, const Vector<N>& v) {
   for (int i = 0; i < N; ++i)
-    if (!same_bits(expected[i], v[i]))
-      return ::testing::AssertionFailure() << "coefficient " << i << ": " << expected[i] << " vs " << v[i];
+    if (!same_bits(expected[i], v[i])) return ::testing::AssertionFailure() << "coefficient " << i << ": " << expected[i] << " vs " << v[i];
   return ::testing::AssertionSuccess();
 }
 

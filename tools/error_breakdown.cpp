@@ -107,9 +107,10 @@ void print_anisotropy(const TexturedMesh& in, const TexturedMesh& out, const Cor
     if (std::abs(Ji.determinant()) < 1e-300) continue;
     ri.push_back({anisotropy(Ji), a}), ro.push_back({anisotropy(Jo), a}), rio.push_back({anisotropy(Jo * Ji.inverse()), a});
   }
-  fmt::print("anisotropy sigma1/sigma2 (P50 / P90): input vs 3D {:.2f} / {:.2f}; output vs 3D {:.2f} / {:.2f}; output vs input {:.2f} / {:.2f}\n",
-             weighted_quantile(ri, 0.5), weighted_quantile(ri, 0.9), weighted_quantile(ro, 0.5), weighted_quantile(ro, 0.9),
-             weighted_quantile(rio, 0.5), weighted_quantile(rio, 0.9));
+  fmt::print(
+      "anisotropy sigma1/sigma2 (P50 / P90): input vs 3D {:.2f} / {:.2f}; output vs 3D {:.2f} / {:.2f}; output vs input {:.2f} / {:.2f}\n",
+      weighted_quantile(ri, 0.5), weighted_quantile(ri, 0.9), weighted_quantile(ro, 0.5), weighted_quantile(ro, 0.9),
+      weighted_quantile(rio, 0.5), weighted_quantile(rio, 0.9));
 }
 
 struct Bin {
@@ -199,9 +200,9 @@ void print_error_bins(ErrorBins& b) {
   for (auto& [k, v] : b.by_ratio_edge) keys.insert(k);
   for (int k : keys) {
     const Bin a = b.by_ratio[k], e = b.by_ratio_edge[k];
-    fmt::print("{:5.2f}..{:5.2f} | {:5.1f} | {:5.1f} | {:6.2f} | {:5.1f} | {:5.1f} | {:6.2f}\n", std::exp2(k / 2.0), std::exp2((k + 1) / 2.0),
-               100.0 * double(a.n + e.n) / double(all.n), 100 * a.se / all.se, psnr(a.se, a.n), 100.0 * double(e.n) / double(all.n),
-               100 * e.se / all.se, psnr(e.se, e.n));
+    fmt::print("{:5.2f}..{:5.2f} | {:5.1f} | {:5.1f} | {:6.2f} | {:5.1f} | {:5.1f} | {:6.2f}\n", std::exp2(k / 2.0),
+               std::exp2((k + 1) / 2.0), 100.0 * double(a.n + e.n) / double(all.n), 100 * a.se / all.se, psnr(a.se, a.n),
+               100.0 * double(e.n) / double(all.n), 100 * e.se / all.se, psnr(e.se, e.n));
   }
 }
 

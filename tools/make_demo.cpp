@@ -20,10 +20,10 @@
 // Positions are shared (one `v` per vertex) while texture coordinates differ across chart borders,
 // as in real OBJ exports. The output depends only on --seed and --segments (std::mt19937, and no
 // implementation-defined distributions).
+#include <fmt/format.h>
 #include <CLI/CLI.hpp>
 #include <Eigen/Core>
 #include <Eigen/Geometry>
-#include <fmt/format.h>
 
 #include <algorithm>
 #include <array>
@@ -52,10 +52,10 @@ using Vec3 = Eigen::Vector3d;
 constexpr double kPi = std::numbers::pi;
 
 constexpr int kTextureSize = 2048;
-constexpr int kGutter = 2;                       // texels of dilated colour around every chart
-constexpr int kMargin = kGutter + 1;             // reserved border inside every packed rectangle
+constexpr int kGutter = 2;            // texels of dilated colour around every chart
+constexpr int kMargin = kGutter + 1;  // reserved border inside every packed rectangle
 constexpr tightex::Rgba8 kBackground{48, 48, 48, 255};
-constexpr double kHeight = 1.9;                  // vase height (model units)
+constexpr double kHeight = 1.9;  // vase height (model units)
 
 // ---------------------------------------------------------------------------------------------
 // Deterministic random numbers: std::mt19937 output is fully specified; the std distributions are
@@ -65,8 +65,8 @@ class Rng {
   explicit Rng(uint32_t seed) : gen_(seed) {}
   double uniform() { return double(gen_()) * (1.0 / 4294967296.0); }  // [0, 1)
   double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
-  int index(int n) { return std::min(n - 1, int(uniform() * n)); }        // [0, n)
-  int integer(int lo, int hi) { return lo + index(hi - lo + 1); }         // [lo, hi]
+  int index(int n) { return std::min(n - 1, int(uniform() * n)); }  // [0, n)
+  int integer(int lo, int hi) { return lo + index(hi - lo + 1); }   // [lo, hi]
   uint32_t raw() { return gen_(); }
 
  private:
@@ -134,9 +134,7 @@ double value_noise(const Vec3& p) {
   const int ix = int(fx), iy = int(fy), iz = int(fz);
   auto fade = [](double v) { return v * v * (3.0 - 2.0 * v); };
   const double tx = fade(p.x() - fx), ty = fade(p.y() - fy), tz = fade(p.z() - fz);
-  auto corner = [&](int dx, int dy, int dz) {
-    return double(hash3(ix + dx, iy + dy, iz + dz)) * (1.0 / 4294967295.0);
-  };
+  auto corner = [&](int dx, int dy, int dz) { return double(hash3(ix + dx, iy + dy, iz + dz)) * (1.0 / 4294967295.0); };
   auto lerp = [](double a, double b, double f) { return a + (b - a) * f; };
   const double x00 = lerp(corner(0, 0, 0), corner(1, 0, 0), tx);
   const double x10 = lerp(corner(0, 1, 0), corner(1, 1, 0), tx);
@@ -156,12 +154,18 @@ Vec3 hsv_to_rgb(double h, double s, double v) {
   const double f = h - sector;
   const double p = v * (1.0 - s), q = v * (1.0 - s * f), t = v * (1.0 - s * (1.0 - f));
   switch (sector) {
-    case 0: return {v, t, p};
-    case 1: return {q, v, p};
-    case 2: return {p, v, t};
-    case 3: return {p, q, v};
-    case 4: return {t, p, v};
-    default: return {v, p, q};
+    case 0:
+      return {v, t, p};
+    case 1:
+      return {q, v, p};
+    case 2:
+      return {p, v, t};
+    case 3:
+      return {p, q, v};
+    case 4:
+      return {t, p, v};
+    default:
+      return {v, p, q};
   }
 }
 
@@ -174,8 +178,7 @@ Vec3 surface_colour(const Vec3& p) {
   double val = 0.86;
   // A 3D checker modulates the brightness.
   const double cell = 0.065;
-  const long parity = long(std::floor(p.x() / cell)) + long(std::floor(p.y() / cell)) +
-                      long(std::floor(p.z() / cell));
+  const long parity = long(std::floor(p.x() / cell)) + long(std::floor(p.y() / cell)) + long(std::floor(p.z() / cell));
   if (parity & 1) val *= 0.8;
   // Two octaves of value noise (grain).
   val += 0.10 * (value_noise(p * 18.0) - 0.5) + 0.06 * (value_noise(p * 70.0 + Vec3(7.1, 3.3, 1.7)) - 0.5);
@@ -200,11 +203,11 @@ Vec3 surface_colour(const Vec3& p) {
 enum Region : int { kSide = 0, kBase = 1, kFragment = 2 };
 
 struct Vertex {
-  Vec3 p;                  // jittered position
-  bool on_side = false;    // has side parameters (side rings, including the bottom ring)
-  double theta = 0.0;      // side: angle
-  double s = 0.0;          // side: arc length along the profile
-  double r = 0.0;          // side: unjittered radius
+  Vec3 p;                     // jittered position
+  bool on_side = false;       // has side parameters (side rings, including the bottom ring)
+  double theta = 0.0;         // side: angle
+  double s = 0.0;             // side: arc length along the profile
+  double r = 0.0;             // side: unjittered radius
   double dt = 0.0, ds = 0.0;  // side: tangential jitter (along the theta and profile directions)
 };
 
@@ -214,7 +217,7 @@ struct Face {
 };
 
 struct Fragment {
-  Vec3 centre;  // sphere centre
+  Vec3 centre;     // sphere centre
   Vec3 n, e1, e2;  // pole direction and tangent frame (e1 x e2 = n)
   double radius = 0.0;
 };
@@ -261,17 +264,13 @@ Topology check_topology(const std::vector<Face>& faces, const std::vector<char>&
 
 // Triangulates the annulus between two concentric rings of vertex ids whose angles increase
 // counter-clockwise (seen from +z); emits counter-clockwise triangles (normal +z).
-void stitch_rings(const std::vector<int>& inner, const std::vector<double>& inner_angle,
-                  const std::vector<int>& outer, const std::vector<double>& outer_angle,
-                  std::vector<std::array<int, 3>>& out) {
+void stitch_rings(const std::vector<int>& inner, const std::vector<double>& inner_angle, const std::vector<int>& outer,
+                  const std::vector<double>& outer_angle, std::vector<std::array<int, 3>>& out) {
   const size_t na = inner.size(), nb = outer.size();
-  auto angle = [](const std::vector<double>& a, size_t i) {
-    return a[i % a.size()] + 2.0 * kPi * double(i / a.size());
-  };
+  auto angle = [](const std::vector<double>& a, size_t i) { return a[i % a.size()] + 2.0 * kPi * double(i / a.size()); };
   size_t ia = 0, ib = 0;
   while (ia < na || ib < nb) {
-    const bool advance_outer =
-        ia == na || (ib < nb && angle(outer_angle, ib + 1) <= angle(inner_angle, ia + 1));
+    const bool advance_outer = ia == na || (ib < nb && angle(outer_angle, ib + 1) <= angle(inner_angle, ia + 1));
     if (advance_outer) {
       out.push_back({inner[ia % na], outer[ib % nb], outer[(ib + 1) % nb]});
       ++ib;
@@ -378,8 +377,7 @@ void add_base(int n, double r0, Rng& rng, Model& model) {
       const double rho = r0 * k / rings;
       Vertex v;
       v.p = Vec3(rho * std::cos(a), rho * std::sin(a), 0.0) +
-            Vec3(rng.uniform(-0.12, 0.12) * spacing, rng.uniform(-0.12, 0.12) * spacing,
-                 rng.uniform(-0.06, 0.06) * spacing);
+            Vec3(rng.uniform(-0.12, 0.12) * spacing, rng.uniform(-0.12, 0.12) * spacing, rng.uniform(-0.06, 0.06) * spacing);
       ids.push_back(int(verts.size()));
       angles.push_back(a);
       verts.push_back(v);
@@ -411,8 +409,7 @@ struct Ellipse {
 };
 
 // The live side faces (among the first num_side_faces) with a corner inside the patch.
-std::vector<size_t> faces_in_patch(const Model& model, const std::vector<char>& alive, size_t num_side_faces,
-                                   const Ellipse& patch) {
+std::vector<size_t> faces_in_patch(const Model& model, const std::vector<char>& alive, size_t num_side_faces, const Ellipse& patch) {
   std::vector<size_t> found;
   for (size_t f = 0; f < num_side_faces; ++f) {
     if (!alive[f]) continue;
@@ -489,8 +486,7 @@ void add_fragment(Rng& rng, Model& model, std::vector<char>& alive) {
   const double alpha_max = 1.0;
   const double spacing = frag.radius * alpha_max / rings;
   auto cap_point = [&](double alpha, double phi) {
-    return frag.centre + frag.radius * (std::sin(alpha) * (std::cos(phi) * frag.e1 + std::sin(phi) * frag.e2) +
-                                        std::cos(alpha) * frag.n);
+    return frag.centre + frag.radius * (std::sin(alpha) * (std::cos(phi) * frag.e1 + std::sin(phi) * frag.e2) + std::cos(alpha) * frag.n);
   };
   auto jittered = [&](const Vec3& p) {
     const Vec3 radial = (p - frag.centre).normalized();
@@ -662,8 +658,8 @@ struct Placement {
   int x = 0, y = 0, w = 0, h = 0;
 };
 
-bool pack_shelves(const std::vector<Vec2>& extent, const std::vector<int>& order, double density,
-                  uint32_t gap_seed, std::vector<Placement>& out) {
+bool pack_shelves(const std::vector<Vec2>& extent, const std::vector<int>& order, double density, uint32_t gap_seed,
+                  std::vector<Placement>& out) {
   Rng gaps(gap_seed);
   out.assign(extent.size(), {});
   const int edge = 4;
@@ -789,8 +785,8 @@ std::vector<Placement> pack_charts(const std::vector<Vec2>& extent, Rng& rng, do
 
 // Converts the chart-local coordinates to OBJ texture coordinates at the charts' placements (texel
 // positions, v up; image row 0 is v = 1).
-void to_texture_coords(const std::vector<int>& chart_of_uv, const ChartBoxes& box, const std::vector<Placement>& place,
-                       double density, std::vector<Vec2>& uv) {
+void to_texture_coords(const std::vector<int>& chart_of_uv, const ChartBoxes& box, const std::vector<Placement>& place, double density,
+                       std::vector<Vec2>& uv) {
   for (size_t k = 0; k < uv.size(); ++k) {
     const int c = chart_of_uv[k];
     const double x = place[c].x + kMargin + (uv[k].x() - box.lo[c].x()) * density;
@@ -831,9 +827,7 @@ size_t rasterize_face(const Model& model, int f, Atlas& atlas, Canvas& canvas) {
   for (int y = y0; y <= y1; ++y) {
     for (int x = x0; x <= x1; ++x) {
       const Vec2 c(x + 0.5, y + 0.5);
-      auto edge = [&](const Vec2& a, const Vec2& b) {
-        return ((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x()) / area2;
-      };
+      auto edge = [&](const Vec2& a, const Vec2& b) { return ((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x()) / area2; };
       const double b0 = edge(q[1], q[2]), b1 = edge(q[2], q[0]), b2 = edge(q[0], q[1]);
       if (b0 < -1e-9 || b1 < -1e-9 || b2 < -1e-9) continue;
       const size_t idx = size_t(y) * size + x;
@@ -940,8 +934,9 @@ void write_text(const std::filesystem::path& path, const std::string& text) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Writes a synthetic scan-like textured model (vase.obj, vase.mtl, vase_texture.png) "
-               "with a fragmented texture atlas, for demonstrating tightex."};
+  CLI::App app{
+      "Writes a synthetic scan-like textured model (vase.obj, vase.mtl, vase_texture.png) "
+      "with a fragmented texture atlas, for demonstrating tightex."};
   std::string outdir;
   uint32_t seed = 1;
   int segments = 128;
@@ -969,8 +964,8 @@ int main(int argc, char** argv) {
     obj.reserve(size_t(80) * (model.vertices.size() + atlas.uv.size() + model.faces.size()) + 256);
     auto out = std::back_inserter(obj);
     fmt::format_to(out, "# tightex_make_demo --seed {} --segments {}\n", seed, segments);
-    fmt::format_to(out, "# {} vertices, {} texture coordinates, {} triangles, {} charts\n",
-                   model.vertices.size(), atlas.uv.size(), model.faces.size(), atlas.charts);
+    fmt::format_to(out, "# {} vertices, {} texture coordinates, {} triangles, {} charts\n", model.vertices.size(), atlas.uv.size(),
+                   model.faces.size(), atlas.charts);
     fmt::format_to(out, "mtllib vase.mtl\no vase\n");
     for (const auto& v : model.vertices) fmt::format_to(out, "v {:.9g} {:.9g} {:.9g}\n", v.p.x(), v.p.y(), v.p.z());
     for (const auto& t : atlas.uv) fmt::format_to(out, "vt {:.9g} {:.9g}\n", t.x(), t.y());
@@ -986,12 +981,12 @@ int main(int argc, char** argv) {
                "map_Kd vase_texture.png\n");
     tightex::save_image((dir / "vase_texture.png").string(), atlas.image, tightex::ImageFormat::kPng);
 
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    fmt::print("wrote {}: {} vertices, {} triangles, {} holes + 1 floating fragment, {} charts, "
-               "texture {}x{} ({:.1f}% used, {:.0f} texels/unit), {:.2f} s\n",
-               (dir / "vase.obj").string(), model.vertices.size(), model.faces.size(), model.holes,
-               atlas.charts, kTextureSize, kTextureSize, 100.0 * atlas.utilization, atlas.density, seconds);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    fmt::print(
+        "wrote {}: {} vertices, {} triangles, {} holes + 1 floating fragment, {} charts, "
+        "texture {}x{} ({:.1f}% used, {:.0f} texels/unit), {:.2f} s\n",
+        (dir / "vase.obj").string(), model.vertices.size(), model.faces.size(), model.holes, atlas.charts, kTextureSize, kTextureSize,
+        100.0 * atlas.utilization, atlas.density, seconds);
   } catch (const std::exception& e) {
     fmt::print(stderr, "tightex_make_demo: {}\n", e.what());
     return 1;

@@ -45,7 +45,7 @@ constexpr uint64_t kSeed = 20240606;  // docs/metrics.md's surface PSNR seed
 std::array<float, 4> ideal_resample(const Image& img, const Vec2& uv) {
   const Eigen::Rotation2Dd rot(kRotation);
   const Vec2 X(uv.x() * img.width, (1 - uv.y()) * img.height);  // input pixel units, texel centres at +0.5
-  const Vec2 q = rot.inverse() * as_eigen(X);                             // rotated grid units
+  const Vec2 q = rot.inverse() * as_eigen(X);                   // rotated grid units
   const double gx = q.x() - 0.5, gy = q.y() - 0.5;
   const double fx = std::floor(gx), fy = std::floor(gy);
   const double tx = gx - fx, ty = gy - fy;
@@ -210,7 +210,8 @@ int make_scan(const std::string& demo_obj, const std::string& outdir) {
                     v[0] = {255, uint8_t(std::lround(255 * rough)), uint8_t(metal ? 255 : 0), 255};
                     const Vec3 n = tilted_normal(p, N.normalized(), T);
                     Eigen::Matrix3d frame;
-                    frame.col(0) = as_eigen(T), frame.col(1) = as_eigen(Vec3((tg[3 * t].w() < 0 ? -1.0 : 1.0) * N.cross(T))), frame.col(2) = as_eigen(N);
+                    frame.col(0) = as_eigen(T), frame.col(1) = as_eigen(Vec3((tg[3 * t].w() < 0 ? -1.0 : 1.0) * N.cross(T))),
+                    frame.col(2) = as_eigen(N);
                     const Vec3 e = Vec3(frame.fullPivLu().solve(as_eigen(n))).normalized();
                     auto q = [](double c) { return uint8_t(std::clamp(std::lround((c + 1) * 127.5), 0l, 255l)); };
                     v[1] = {q(e.x()), q(e.y()), q(e.z()), 255};

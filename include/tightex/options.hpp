@@ -220,8 +220,6 @@ struct Options {
 
 /// The aspect a run makes of `o` (Options::aspect): 1 for 0 with a size, 0 (chosen per model) for
 /// kAspectAuto, else as given.
-inline double effective_aspect(const Options& o) {
-  return o.aspect == kAspectAuto ? 0.0 : o.aspect == 0 && o.size > 0 ? 1.0 : o.aspect;
-}
+inline double effective_aspect(const Options& o) { return o.aspect == kAspectAuto ? 0.0 : o.aspect == 0 && o.size > 0 ? 1.0 : o.aspect; }
 
 }  // namespace tightex

@@ -47,7 +47,7 @@ class Plan {
 
  private:
   friend const State& plan_state(const Plan& plan);  // tightex's own stages and tests
-  friend State& mutable_plan_state(Plan& plan);       // tightex's own run, which frees what it has baked
+  friend State& mutable_plan_state(Plan& plan);      // tightex's own run, which frees what it has baked
 
   std::unique_ptr<State> state_;
 };

@@ -42,11 +42,13 @@ class Vector {
   /// From any other vector expression of N coefficients (read through size() and operator()(i)); one
   /// whose size is known at compile time must be N, a dynamic one must hold N at run time.
   template <class Other>
-    requires(!std::is_same_v<std::remove_cvref_t<Other>, Vector> && requires(const Other& o) {
-      o.size();
-      double(o(0));
-    } && (detail::compile_time_size<std::remove_cvref_t<Other>>() == N || detail::compile_time_size<std::remove_cvref_t<Other>>() < 0))
-  Vector(const Other& other) {  // NOLINT(google-explicit-constructor): interchangeable with Eigen's
+  requires(!std::is_same_v<std::remove_cvref_t<Other>, Vector> &&
+           requires(const Other& o) {
+             o.size();
+             double(o(0));
+           } &&
+           (detail::compile_time_size<std::remove_cvref_t<Other>>() == N || detail::compile_time_size<std::remove_cvref_t<Other>>() < 0))
+      Vector(const Other& other) {  // NOLINT(google-explicit-constructor): interchangeable with Eigen's
     assert(other.size() == N);
     for (int i = 0; i < N; ++i) c_[i] = other(i);
   }
@@ -123,23 +125,45 @@ class Vector {
     for (int i = 1; i < N; ++i) m = c_[i] > m ? c_[i] : m;
     return m;
   }
-  Vector cwiseMin(const Vector& o) const { return combine(o, [](double a, double b) { return b < a ? b : a; }); }
-  Vector cwiseMax(const Vector& o) const { return combine(o, [](double a, double b) { return b > a ? b : a; }); }
-  Vector cwiseProduct(const Vector& o) const { return combine(o, [](double a, double b) { return a * b; }); }
-  Vector cwiseQuotient(const Vector& o) const { return combine(o, [](double a, double b) { return a / b; }); }
-  Vector cwiseAbs() const { return combine(*this, [](double a, double) { return std::abs(a); }); }
+  Vector cwiseMin(const Vector& o) const {
+    return combine(o, [](double a, double b) { return b < a ? b : a; });
+  }
+  Vector cwiseMax(const Vector& o) const {
+    return combine(o, [](double a, double b) { return b > a ? b : a; });
+  }
+  Vector cwiseProduct(const Vector& o) const {
+    return combine(o, [](double a, double b) { return a * b; });
+  }
+  Vector cwiseQuotient(const Vector& o) const {
+    return combine(o, [](double a, double b) { return a / b; });
+  }
+  Vector cwiseAbs() const {
+    return combine(*this, [](double a, double) { return std::abs(a); });
+  }
   void setZero() { *this = Zero(); }
 
   Vector& operator+=(const Vector& o) { return *this = *this + o; }
   Vector& operator-=(const Vector& o) { return *this = *this - o; }
   Vector& operator*=(double s) { return *this = *this * s; }
   Vector& operator/=(double s) { return *this = *this / s; }
-  friend Vector operator+(const Vector& a, const Vector& b) { return a.combine(b, [](double p, double q) { return p + q; }); }
-  friend Vector operator-(const Vector& a, const Vector& b) { return a.combine(b, [](double p, double q) { return p - q; }); }
-  friend Vector operator-(const Vector& a) { return a.combine(a, [](double p, double) { return -p; }); }
-  friend Vector operator*(const Vector& a, double s) { return a.combine(a, [s](double p, double) { return p * s; }); }
-  friend Vector operator*(double s, const Vector& a) { return a.combine(a, [s](double p, double) { return s * p; }); }
-  friend Vector operator/(const Vector& a, double s) { return a.combine(a, [s](double p, double) { return p / s; }); }
+  friend Vector operator+(const Vector& a, const Vector& b) {
+    return a.combine(b, [](double p, double q) { return p + q; });
+  }
+  friend Vector operator-(const Vector& a, const Vector& b) {
+    return a.combine(b, [](double p, double q) { return p - q; });
+  }
+  friend Vector operator-(const Vector& a) {
+    return a.combine(a, [](double p, double) { return -p; });
+  }
+  friend Vector operator*(const Vector& a, double s) {
+    return a.combine(a, [s](double p, double) { return p * s; });
+  }
+  friend Vector operator*(double s, const Vector& a) {
+    return a.combine(a, [s](double p, double) { return s * p; });
+  }
+  friend Vector operator/(const Vector& a, double s) {
+    return a.combine(a, [s](double p, double) { return p / s; });
+  }
   friend bool operator==(const Vector& a, const Vector& b) {
     for (int i = 0; i < N; ++i)
       if (!(a.c_[i] == b.c_[i])) return false;

@@ -68,10 +68,12 @@ SamplerMaker base_colour_samplers(const TexturedMesh& input, const std::vector<B
 /// with pixels; a triangle whose material has none is unread (MaterialSampling::unread); with the map's
 /// encoding and the triangle's frames.
 SamplerMaker map_samplers(const TexturedMesh& input, const MaterialMapSource& map, const std::vector<BakeTriangle>& triangles) {
-  SamplerMaker maker{triangles, std::vector<MaterialSampling>(input.materials.size() + 1, MaterialSampling{nullptr, map.flat, false, true})};
+  SamplerMaker maker{triangles,
+                     std::vector<MaterialSampling>(input.materials.size() + 1, MaterialSampling{nullptr, map.flat, false, true})};
   for (size_t m = 0; m < input.materials.size() && m < map.texture_of_material.size(); ++m) {
     const int tex = map.texture_of_material[m];
-    if (tex >= 0 && !input.textures[size_t(tex)].image.empty()) maker.material[m].src = &input.textures[size_t(tex)].image, maker.material[m].unread = false;
+    if (tex >= 0 && !input.textures[size_t(tex)].image.empty())
+      maker.material[m].src = &input.textures[size_t(tex)].image, maker.material[m].unread = false;
   }
   maker.encoding = map.encoding;
   if (map.encoding == SlotEncoding::kTangentNormal) maker.frames = map.frames;
@@ -182,7 +184,8 @@ void rasterize_texels(const BakeContext& ctx, const TileBins& grid, Image& out, 
       const TexelTile tile = grid.tile(b, out);
       const std::vector<uint32_t>& bin = grid.bins[b];
       const std::vector<TriangleSampler> samplers = ctx.samplers.of(bin);
-      for (size_t i = 0; i < bin.size(); ++i) scan_convert_triangle(ctx.triangles[bin[i]], samplers[i], tile, ctx.max_samples, out, covered, counts);
+      for (size_t i = 0; i < bin.size(); ++i)
+        scan_convert_triangle(ctx.triangles[bin[i]], samplers[i], tile, ctx.max_samples, out, covered, counts);
     }
     ctx.counters.filled += counts.filled;
     ctx.counters.filtered += counts.filtered;
@@ -313,10 +316,11 @@ void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& tr
   bake_with_samplers(base_colour_samplers(input, triangles, options.linear_light_colour), triangles, rects, images, stats, options);
 }
 
-void bake_material_map(const TexturedMesh& input, const MaterialMapSource& map, const std::vector<BakeTriangle>& triangles, const std::vector<Rect>& rects,
-              std::vector<Image>& images, BakeStats* stats, const BakeOptions& options) {
+void bake_material_map(const TexturedMesh& input, const MaterialMapSource& map, const std::vector<BakeTriangle>& triangles,
+                       const std::vector<Rect>& rects, std::vector<Image>& images, BakeStats* stats, const BakeOptions& options) {
   if (map.encoding == SlotEncoding::kTangentNormal && (!map.frames || map.frames->size() != triangles.size()))
-    fail_internal("bake_material_map: a normal map needs one frame per triangle ({} for {})", map.frames ? map.frames->size() : 0, triangles.size());
+    fail_internal("bake_material_map: a normal map needs one frame per triangle ({} for {})", map.frames ? map.frames->size() : 0,
+                  triangles.size());
   bake_with_samplers(map_samplers(input, map, triangles), triangles, rects, images, stats, options);
 }
 

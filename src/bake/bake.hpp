@@ -84,7 +84,6 @@ struct BakeOptions {
 constexpr int kFineFitSamples = 4;
 constexpr double kFineFitLambda = 0.3;
 
-
 /// The new texture (paper §4.3, Alg. 3, scan-line texture generation), then footprint filtering,
 /// dilation and the least-squares fit for bilinear read-back.
 /// Requires: `images` allocated by the caller (any size, contents overwritten where baked); each
@@ -112,7 +111,7 @@ void bake_texture(const TexturedMesh& input, const std::vector<BakeTriangle>& tr
 /// Requires: as bake_texture, and map.texture_of_material has one entry per input material; with
 /// kTangentNormal, map.frames has one entry per triangle.
 /// Guarantees and throws: as bake_texture.
-void bake_material_map(const TexturedMesh& input, const MaterialMapSource& map, const std::vector<BakeTriangle>& triangles, const std::vector<Rect>& rects,
-              std::vector<Image>& images, BakeStats* stats, const BakeOptions& options = {});
+void bake_material_map(const TexturedMesh& input, const MaterialMapSource& map, const std::vector<BakeTriangle>& triangles,
+                       const std::vector<Rect>& rects, std::vector<Image>& images, BakeStats* stats, const BakeOptions& options = {});
 
 }  // namespace tightex

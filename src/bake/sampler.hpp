@@ -121,7 +121,7 @@ struct TriangleSampler {
   std::array<float, 4> map_sample(double x, double y) const {
     const Vec2 uv = source_uv_at(x, y);
     return encoding == SlotEncoding::kSrgbColour ? sample_bilinear_linear_light(*src, uv.x(), uv.y())
-                                                : sample_bilinear(*src, uv.x(), uv.y());
+                                                 : sample_bilinear(*src, uv.x(), uv.y());
   }
 
   /// footprint_colour of a map other than the plain base colour (see bake_material_map).

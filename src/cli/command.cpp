@@ -58,7 +58,7 @@ struct GivenFlags {
   std::string layout, format, holes, map, corners;  // format empty: the input's
   std::string output_format;                        // empty: not given
   std::string aspect;                               // empty, "auto" or a number
-  std::string png_level;  // 0..9 or "fast"
+  std::string png_level;                            // 0..9 or "fast"
   int jpeg_quality = 0, webp_quality = 0;
   bool no_fit = false, no_html = false;
   CLI::Option *size = nullptr, *png = nullptr, *jpeg = nullptr, *webp = nullptr;

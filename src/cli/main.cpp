@@ -1,5 +1,5 @@
-// The tightex command: a thin shell over the library's run (tightex/run.hpp) and the command's flags (cli/command.hpp). Exit codes: 0 ok, 1 bad input (the message names
-// the file and element), 2 internal error.
+// The tightex command: a thin shell over the library's run (tightex/run.hpp) and the command's flags (cli/command.hpp). Exit codes: 0 ok, 1
+// bad input (the message names the file and element), 2 internal error.
 #include <sys/auxv.h>
 #include <unistd.h>
 #include <CLI/CLI.hpp>

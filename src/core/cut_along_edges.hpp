@@ -2,8 +2,8 @@
 #pragma once
 #include <vector>
 
-#include "core/surface.hpp"
 #include "core/graph.hpp"
+#include "core/surface.hpp"
 
 namespace tightex {
 

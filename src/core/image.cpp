@@ -7,8 +7,8 @@
 
 namespace tightex {
 
-Rgba8* PixelAllocator::allocate(size_t n) { return LargeBufferAllocator<Rgba8>().allocate(n); }
-void PixelAllocator::deallocate(Rgba8* p, size_t n) { LargeBufferAllocator<Rgba8>().deallocate(p, n); }
+Rgba8 *PixelAllocator::allocate(size_t n) { return LargeBufferAllocator<Rgba8>().allocate(n); }
+void PixelAllocator::deallocate(Rgba8 *p, size_t n) { LargeBufferAllocator<Rgba8>().deallocate(p, n); }
 
 namespace {
 inline int wrap(int i, int n) {

@@ -16,7 +16,7 @@ struct RepairStats {
   size_t input_vertices = 0;
   size_t welded_vertices = 0;       // vertices after welding equal positions
   size_t zero_area_triangles = 0;   // dropped: repeated vertex or exactly zero 3D area
-  size_t repeated_triangles = 0;   // set aside: an exact repeat of an earlier triangle (the output repeats its copy)
+  size_t repeated_triangles = 0;    // set aside: an exact repeat of an earlier triangle (the output repeats its copy)
   size_t layered_triangles = 0;     // the corners of an earlier triangle with other texture coordinates or material: a surface of their own
   size_t reoriented_triangles = 0;  // wound against the rest of their patch: corners 1 and 2 swapped
   size_t non_manifold_edges = 0;    // edges used by more than two triangles, sliced apart

@@ -6,10 +6,10 @@
 #include <numeric>
 #include <optional>
 
-#include "core/error.hpp"
 #include "core/cut_along_edges.hpp"
-#include "cut/cut_graph.hpp"
+#include "core/error.hpp"
 #include "core/graph.hpp"
+#include "cut/cut_graph.hpp"
 #include "prepare/handles.hpp"
 #include "prepare/holes.hpp"
 

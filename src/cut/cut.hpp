@@ -17,7 +17,6 @@ namespace tightex {
 /// Chosen by measurement: docs/decisions.md.
 constexpr double kFillBudget = 0.005;
 
-
 /// What cut_to_disk does to a component.
 enum class CutMethod {
   /// The paper's method: handles cut along short loops (remove_handles), holes capped or joined into

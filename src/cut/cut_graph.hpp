@@ -3,8 +3,8 @@
 #include <string>
 #include <vector>
 
-#include "core/surface.hpp"
 #include "core/graph.hpp"
+#include "core/surface.hpp"
 
 namespace tightex {
 

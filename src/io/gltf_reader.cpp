@@ -2,8 +2,8 @@
 // nlohmann::json and every index, offset, count and stride is checked against the document and the
 // buffers' real sizes before a byte is read, so a lying file ends in one InputError line naming the
 // file and the element ("FILE: accessors[3]: ...").
-#include <Eigen/Geometry>
 #include <tbb/parallel_for.h>
+#include <Eigen/Geometry>
 
 #include <algorithm>
 #include <bit>
@@ -139,7 +139,8 @@ struct AccessorView {
 bool required_extension_understood(const json& e) {
   if (!e.is_string()) return false;
   const std::string name = e.get<std::string>();
-  for (const char* known : {"KHR_texture_transform", "EXT_texture_webp", "KHR_texture_basisu", "KHR_mesh_quantization", "KHR_lights_punctual"})
+  for (const char* known :
+       {"KHR_texture_transform", "EXT_texture_webp", "KHR_texture_basisu", "KHR_mesh_quantization", "KHR_lights_punctual"})
     if (name == known) return true;
   return name.rfind("KHR_materials_", 0) == 0;
 }
@@ -656,7 +657,8 @@ TexturedMesh GltfReader::flattened(const TexturedMesh& local, const std::vector<
   for (const MeshInstance& i : instances)
     if (range.count(i.mesh)) total += range[i.mesh][1] - range[i.mesh][0];
   if (total > kMaxFlattenedTriangles)
-    fail("scene", "its {} mesh instances hold {} triangles in world space, more than tightex flattens ({}); write glTF to keep them instanced",
+    fail("scene",
+         "its {} mesh instances hold {} triangles in world space, more than tightex flattens ({}); write glTF to keep them instanced",
          instances.size(), total, kMaxFlattenedTriangles);
   TexturedMesh out;
   out.materials = local.materials, out.textures = local.textures;
@@ -785,7 +787,7 @@ void GltfReader::read_map_slots(const json& g, const json* base, const std::stri
     const json& info = (*holder)[slot.key];
     if (uv_source(&info) != base_source) continue;
     const std::string where = std::string(slot.holder).rfind("KHR_", 0) == 0 ? ".extensions." + std::string(slot.holder) + "."
-                              : *slot.holder != '\0'                        ? "." + std::string(slot.holder) + "."
+                              : *slot.holder != '\0'                         ? "." + std::string(slot.holder) + "."
                                                                              : std::string(".");
     m.maps[size_t(slot.slot)] = texture_for(info, element + where + slot.key, state);
   }
@@ -829,7 +831,8 @@ std::array<SlotFactor, kMaterialSlots> slot_factors(const json& g, const std::st
   auto at = [&](MaterialSlot s) -> SlotFactor& { return f[size_t(s)]; };
   auto one = [](double x) { return SlotFactor{x, x, x, x}; };
   const json* pbr = g.contains("pbrMetallicRoughness") && g["pbrMetallicRoughness"].is_object() ? &g["pbrMetallicRoughness"] : nullptr;
-  at(MaterialSlot::kMetallicRoughness) = {1, factor_of(pbr, "roughnessFactor", 1, element), factor_of(pbr, "metallicFactor", 1, element), 1};
+  at(MaterialSlot::kMetallicRoughness) = {1, factor_of(pbr, "roughnessFactor", 1, element), factor_of(pbr, "metallicFactor", 1, element),
+                                          1};
   const json* occlusion = g.contains("occlusionTexture") ? &g["occlusionTexture"] : nullptr;
   at(MaterialSlot::kOcclusion) = one(factor_of(occlusion, "strength", 1, element + ".occlusionTexture"));
   const double strength = factor_of(extension_of(g, "KHR_materials_emissive_strength"), "emissiveStrength", 1, element);
@@ -939,7 +942,8 @@ std::string GltfReader::read_corner_uvs(const json& primitive, int material, con
   if (info != nullptr && info->contains("extensions") && (*info)["extensions"].contains("KHR_texture_transform")) {
     const json& t = (*info)["extensions"]["KHR_texture_transform"];
     if (!t.is_object()) fail(element, "its material's KHR_texture_transform is not an object");
-    if (t.contains("rotation") && !t["rotation"].is_number()) fail(element, "its material's KHR_texture_transform rotation is not a number");
+    if (t.contains("rotation") && !t["rotation"].is_number())
+      fail(element, "its material's KHR_texture_transform rotation is not a number");
     rotation = t.value("rotation", 0.0);
     offset = pair_of(t, "offset", 0.0), scale = pair_of(t, "scale", 1.0);
     if (t.contains("texCoord")) set = int64_t(unsigned_of(t, "texCoord", 0, element + " KHR_texture_transform"));

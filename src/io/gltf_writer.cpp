@@ -104,7 +104,8 @@ json DocumentBuilder::fresh_pbr(const Material& m) {
   json pbr = {{"metallicFactor", metallic}, {"roughnessFactor", roughness}};
   if (m.texture < 0 || gltf_factors) pbr["baseColorFactor"] = {m.kd[0], m.kd[1], m.kd[2], 1.0};
   if (m.texture >= 0) pbr["baseColorTexture"] = {{"index", texture_index(m.texture)}};
-  if (const int t = m.maps[size_t(MaterialSlot::kMetallicRoughness)]; t >= 0) pbr["metallicRoughnessTexture"] = {{"index", texture_index(t)}};
+  if (const int t = m.maps[size_t(MaterialSlot::kMetallicRoughness)]; t >= 0)
+    pbr["metallicRoughnessTexture"] = {{"index", texture_index(t)}};
   return pbr;
 }
 
@@ -495,7 +496,8 @@ void DocumentBuilder::collect_garbage() {
   for_each_texture_reference(array_of(doc_, "materials"), [&](json& r) { mark(r, used); });
   for (size_t i = 0; i < used.size(); ++i)  // a texture's extension (KTX2, WebP, DDS image) goes with it: said
     if (!used[i] && doc_["textures"][i].contains("extensions") && doc_["textures"][i]["extensions"].is_object())
-      for (const auto& [name, ext] : doc_["textures"][i]["extensions"].items()) removed_.insert(fmt::format("textures[{}].extensions.{}", i, name));
+      for (const auto& [name, ext] : doc_["textures"][i]["extensions"].items())
+        removed_.insert(fmt::format("textures[{}].extensions.{}", i, name));
   ni = compact(doc_, "textures", used);
   for_each_texture_reference(array_of(doc_, "materials"), [&](json& r) { renumber(r, ni); });
   std::vector<bool> used_images(array_of(doc_, "images").size(), false), used_samplers(array_of(doc_, "samplers").size(), false);
@@ -587,7 +589,8 @@ void DocumentBuilder::update_extensions_used() {
       if (e.is_string() && used.count(e.get<std::string>()) != 0) required.insert(e.get<std::string>());
   // A texture whose only image is WebP (tightex's own, written as WebP) needs the extension.
   for (const json& t : array_of(doc_, "textures"))
-    if (!t.contains("source") && t.contains("extensions") && t["extensions"].contains("EXT_texture_webp")) required.insert("EXT_texture_webp");
+    if (!t.contains("source") && t.contains("extensions") && t["extensions"].contains("EXT_texture_webp"))
+      required.insert("EXT_texture_webp");
   doc_.erase("extensionsUsed");
   doc_.erase("extensionsRequired");
   if (!used.empty()) doc_["extensionsUsed"] = used;
@@ -702,7 +705,8 @@ std::vector<std::string> write_gltf(const TexturedMesh& mesh, const std::string&
   }
   std::vector<OutputFile> files = texture_output_files(mesh, encoding, encoded);
   std::vector<TextureImage> images(files.size());
-  for (size_t i = 0; i < files.size(); ++i) images[i].uri = files[i].name, images[i].webp = encoding.of_texture(i).format == ImageFormat::kWebp;
+  for (size_t i = 0; i < files.size(); ++i)
+    images[i].uri = files[i].name, images[i].webp = encoding.of_texture(i).format == ImageFormat::kWebp;
   std::string bin;
   json doc = DocumentBuilder(mesh, images).build(bin, removed);
   if (!bin.empty()) {

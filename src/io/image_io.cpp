@@ -751,17 +751,17 @@ std::string encode_webp(const Image& image, const ImageEncoding& encoding, const
   int stride = image.width * 4;
   if (opaque) {
     rgb.resize(size_t(image.width) * size_t(image.height) * 3);
-    for (size_t i = 0; i < image.pixels.size(); ++i) rgb[3 * i] = image.pixels[i].r, rgb[3 * i + 1] = image.pixels[i].g, rgb[3 * i + 2] = image.pixels[i].b;
+    for (size_t i = 0; i < image.pixels.size(); ++i)
+      rgb[3 * i] = image.pixels[i].r, rgb[3 * i + 1] = image.pixels[i].g, rgb[3 * i + 2] = image.pixels[i].b;
     pixels = rgb.data();
     stride = image.width * 3;
   }
   uint8_t* out = nullptr;
   const float q = float(encoding.webp_quality);
-  const size_t size = encoding.webp_lossless
-                          ? (opaque ? WebPEncodeLosslessRGB(pixels, image.width, image.height, stride, &out)
-                                    : WebPEncodeLosslessRGBA(pixels, image.width, image.height, stride, &out))
-                          : (opaque ? WebPEncodeRGB(pixels, image.width, image.height, stride, q, &out)
-                                    : WebPEncodeRGBA(pixels, image.width, image.height, stride, q, &out));
+  const size_t size = encoding.webp_lossless ? (opaque ? WebPEncodeLosslessRGB(pixels, image.width, image.height, stride, &out)
+                                                       : WebPEncodeLosslessRGBA(pixels, image.width, image.height, stride, &out))
+                                             : (opaque ? WebPEncodeRGB(pixels, image.width, image.height, stride, q, &out)
+                                                       : WebPEncodeRGBA(pixels, image.width, image.height, stride, q, &out));
   std::string bytes(reinterpret_cast<const char*>(out), size);
   WebPFree(out);
   if (size == 0) fail_internal("{}: libwebp could not encode a {}x{} image", name, image.width, image.height);

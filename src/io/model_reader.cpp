@@ -49,12 +49,14 @@ TexturedMesh read_model(const std::string& path, const ModelReadOptions& options
   const std::string extension = std::filesystem::path(path).extension().string();
   for (const char* tile : {".b3dm", ".i3dm", ".pnts", ".cmpt"})
     if (equals_ignoring_case(extension, tile))
-      fail_input("{}: a 3D Tiles {} payload, not a model: run `python3 -m tightex.tiles` on its tileset.json (it keeps the batch and "
-                 "feature tables), or give the GLB inside it",
-                 path, tile + 1);
-  TexturedMesh mesh = equals_ignoring_case(extension, ".ply")                                                  ? read_ply(path, options, stats)
-                      : equals_ignoring_case(extension, ".gltf") || equals_ignoring_case(extension, ".glb") ? read_gltf(path, options, stats)
-                                                                                                             : read_obj(path, options, stats);
+      fail_input(
+          "{}: a 3D Tiles {} payload, not a model: run `python3 -m tightex.tiles` on its tileset.json (it keeps the batch and "
+          "feature tables), or give the GLB inside it",
+          path, tile + 1);
+  TexturedMesh mesh = equals_ignoring_case(extension, ".ply") ? read_ply(path, options, stats)
+                      : equals_ignoring_case(extension, ".gltf") || equals_ignoring_case(extension, ".glb")
+                          ? read_gltf(path, options, stats)
+                          : read_obj(path, options, stats);
   const size_t coloured = texture_vertex_colours(mesh, options.max_texture_pixels);
   if (stats != nullptr) stats->vertex_coloured_triangles = coloured;
   return mesh;

@@ -222,10 +222,10 @@ struct MaterialDef {
 /// height map, map_d opacity, map_Ns shininess, disp / map_Disp displacement.
 int mtl_map_slot(std::string_view keyword) {
   static constexpr std::pair<const char*, MaterialSlot> kKeywords[] = {
-      {"map_Ks", MaterialSlot::kSpecular}, {"map_Ke", MaterialSlot::kEmissive}, {"map_Pr", MaterialSlot::kRoughness}, {"map_Pm", MaterialSlot::kMetallic},
-      {"norm", MaterialSlot::kNormal},     {"map_Bump", MaterialSlot::kBump},   {"bump", MaterialSlot::kBump},
-      {"map_d", MaterialSlot::kOpacity},   {"map_Ns", MaterialSlot::kShininess}, {"disp", MaterialSlot::kDisplacement},
-      {"map_Disp", MaterialSlot::kDisplacement}};
+      {"map_Ks", MaterialSlot::kSpecular},   {"map_Ke", MaterialSlot::kEmissive},      {"map_Pr", MaterialSlot::kRoughness},
+      {"map_Pm", MaterialSlot::kMetallic},   {"norm", MaterialSlot::kNormal},          {"map_Bump", MaterialSlot::kBump},
+      {"bump", MaterialSlot::kBump},         {"map_d", MaterialSlot::kOpacity},        {"map_Ns", MaterialSlot::kShininess},
+      {"disp", MaterialSlot::kDisplacement}, {"map_Disp", MaterialSlot::kDisplacement}};
   for (const auto& [word, slot] : kKeywords)
     if (equals_ignoring_case(keyword, word)) return int(slot);
   return -1;
@@ -242,8 +242,8 @@ bool is_unread_map_statement(std::string_view keyword) {
 /// brings its value to a factor of 0..1 (Ns: 0..1000), or -1.
 std::pair<int, double> mtl_scalar_slot(std::string_view keyword) {
   static constexpr std::tuple<const char*, MaterialSlot, double> kScalars[] = {
-      {"Ks", MaterialSlot::kSpecular, 1},   {"Ke", MaterialSlot::kEmissive, 1}, {"Pr", MaterialSlot::kRoughness, 1},
-      {"Pm", MaterialSlot::kMetallic, 1},   {"d", MaterialSlot::kOpacity, 1},   {"Tr", MaterialSlot::kOpacity, -1},
+      {"Ks", MaterialSlot::kSpecular, 1},    {"Ke", MaterialSlot::kEmissive, 1}, {"Pr", MaterialSlot::kRoughness, 1},
+      {"Pm", MaterialSlot::kMetallic, 1},    {"d", MaterialSlot::kOpacity, 1},   {"Tr", MaterialSlot::kOpacity, -1},
       {"Ns", MaterialSlot::kShininess, 1e-3}};
   for (const auto& [word, slot, scale] : kScalars)
     if (equals_ignoring_case(keyword, word)) return {int(slot), scale};
@@ -802,7 +802,8 @@ void ObjParser::settle_in_file_order(const std::vector<ObjChunk>& chunks) {
   }
   coloured_file_ = first_error == nullptr && !chunks.empty();
   bool any_colour = false;
-  for (const ObjChunk& c : chunks) coloured_file_ = coloured_file_ && c.all_vertices_coloured, any_colour = any_colour || !c.vertex_colours.empty();
+  for (const ObjChunk& c : chunks)
+    coloured_file_ = coloured_file_ && c.all_vertices_coloured, any_colour = any_colour || !c.vertex_colours.empty();
   coloured_file_ = coloured_file_ && any_colour;
   for (const ObjChunk& c : chunks)
     for (const auto& [line, rest] : c.libraries) {

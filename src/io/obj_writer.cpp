@@ -41,8 +41,8 @@ void append(std::string& s, double v) {
 
 /// The MTL statement of each slot that has one (docs: read_obj reads the same).
 constexpr std::pair<MaterialSlot, const char*> kMapStatements[] = {
-    {MaterialSlot::kSpecular, "map_Ks"}, {MaterialSlot::kEmissive, "map_Ke"},   {MaterialSlot::kRoughness, "map_Pr"},
-    {MaterialSlot::kMetallic, "map_Pm"}, {MaterialSlot::kNormal, "norm"},       {MaterialSlot::kBump, "map_Bump"},
+    {MaterialSlot::kSpecular, "map_Ks"}, {MaterialSlot::kEmissive, "map_Ke"},  {MaterialSlot::kRoughness, "map_Pr"},
+    {MaterialSlot::kMetallic, "map_Pm"}, {MaterialSlot::kNormal, "norm"},      {MaterialSlot::kBump, "map_Bump"},
     {MaterialSlot::kOpacity, "map_d"},   {MaterialSlot::kShininess, "map_Ns"}, {MaterialSlot::kDisplacement, "disp"}};
 
 /// The MTL statements of a material's other maps (Material::maps) with map_Kd's options; glTF's

@@ -67,9 +67,7 @@ void write_whole_file(const fs::path& path, std::span<const std::string> pieces)
   if (!f) fail_input("{}: write failed ({})", path.string(), std::strerror(errno));
 }
 
-std::string texture_file_name(const Texture& texture, ImageFormat format) {
-  return texture.path + image_extension(format);
-}
+std::string texture_file_name(const Texture& texture, ImageFormat format) { return texture.path + image_extension(format); }
 
 void round_uvs_as_stored(TexturedMesh& mesh, ModelFormat format) {
   if (format == ModelFormat::kObj) return;

@@ -1,8 +1,8 @@
 // What the model writers (OBJ, PLY) share: a set of files that appears in its folder all together or
 // not at all, a file written from a string, and the names the texture files take.
 #pragma once
-#include <filesystem>
 #include <array>
+#include <filesystem>
 #include <functional>
 #include <optional>
 #include <span>
@@ -54,7 +54,6 @@ std::string texture_file_name(const Texture& texture, ImageFormat format);
 /// triangle whose material has no texture scale or offset (those store the transformed coordinate).
 /// Measured after it, a map's figures (flipped, degenerate, coverage) are those of the written file.
 void round_uvs_as_stored(TexturedMesh& mesh, ModelFormat format);
-
 
 /// Per texture of a model, its file's bytes where the caller has encoded it already as the writer's
 /// encoding says (rate control measured them); written as they are. An empty entry, or a missing one,

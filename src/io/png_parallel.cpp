@@ -105,7 +105,8 @@ std::string zlib_stream(const std::vector<unsigned char>& data, const PngSetting
     adler[k] = adler32(adler32(0, nullptr, 0), data.data() + begin, uInt(end - begin));
   });
   uLong checksum = adler[0];
-  for (size_t k = 1; k < slices; ++k) checksum = adler32_combine(checksum, adler[k], z_off_t(std::min(kSliceBytes, data.size() - k * kSliceBytes)));
+  for (size_t k = 1; k < slices; ++k)
+    checksum = adler32_combine(checksum, adler[k], z_off_t(std::min(kSliceBytes, data.size() - k * kSliceBytes)));
   // CMF 0x78: deflate with a 32 KiB window; FLG: the level class, no dictionary, check bits.
   const int level_class = settings.level <= 1 ? 0 : settings.level <= 5 ? 1 : settings.level == 6 ? 2 : 3;
   unsigned flg = unsigned(level_class) << 6;
@@ -146,7 +147,8 @@ std::string encode_png(const Image& image, const PngSettings& settings) {
   append_u32(ihdr, uint32_t(image.height));
   ihdr += {char(8), char(channels == 3 ? 2 : 6), char(0), char(0), char(0)};  // 8 bits, RGB or RGBA
   append_chunk(png, "IHDR", ihdr.data(), ihdr.size());
-  for (size_t at = 0; at < idat.size(); at += kMaxIdatBytes) append_chunk(png, "IDAT", idat.data() + at, std::min(kMaxIdatBytes, idat.size() - at));
+  for (size_t at = 0; at < idat.size(); at += kMaxIdatBytes)
+    append_chunk(png, "IDAT", idat.data() + at, std::min(kMaxIdatBytes, idat.size() - at));
   append_chunk(png, "IEND", nullptr, 0);
   return png;
 }

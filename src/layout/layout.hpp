@@ -9,7 +9,6 @@
 
 namespace tightex {
 
-
 /// Where the unit square's point s (u right, v up) lands in rectangle r, in pixel coordinates (x right,
 /// y down, texel centres at +0.5): the square's corners on the corner texels' centres, pushed outward
 /// by kChartInset so that the outermost texel centres lie strictly inside the chart. Exactly on its

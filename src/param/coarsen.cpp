@@ -239,8 +239,8 @@ class Collapser {
   std::vector<char> face_alive_, vertex_alive_, locked_, on_boundary_;
   std::vector<uint32_t> merged_into_;  // per vertex, the one it was moved onto (itself while it is there)
   std::vector<std::vector<uint32_t>> faces_;
-  std::vector<uint32_t> apex_, nv_, nu_, common_, removed_, kept_;         // scratch of run(), allowed() and collapse()
-  std::vector<std::pair<double, uint32_t>> by_distance_;                   // scratch of run()
+  std::vector<uint32_t> apex_, nv_, nu_, common_, removed_, kept_;  // scratch of run(), allowed() and collapse()
+  std::vector<std::pair<double, uint32_t>> by_distance_;            // scratch of run()
   size_t alive_ = 0;
   bool queued_ = false;  // every vertex pushed once (the first run)
   VertexQueue queue_;

@@ -200,7 +200,8 @@ DensityConstraints density_constraints(const Disk& disk, const SquareBoundary& b
     return fixed;
   };
   const std::vector<char> on_sides = side_constraints([&](size_t i) { return boundary.pinned[i] || chord_end[i]; });
-  DensityConstraints c{disk.mesh, options, map_aspect(options), on_sides, {}, on_sides, side_constraints(is_corner), std::move(vertex_order)};
+  DensityConstraints c{disk.mesh, options,  map_aspect(options),         on_sides,
+                       {},        on_sides, side_constraints(is_corner), std::move(vertex_order)};
   // The flow slides every side vertex with its field, which keeps them in order only while they all
   // lie on their sides: a map that may flow keeps its chords there.
   if (!options.chords_move_inwards || options.density_flow || !options.slide_boundary ||
@@ -209,9 +210,8 @@ DensityConstraints density_constraints(const Disk& disk, const SquareBoundary& b
   // The bumps and the chords' ends keep their place along the side (the coordinate the side does not
   // hold) and move inwards only, across the side: a chord's end from the side, a bumped vertex from its
   // bump. The vertices next to the chords' ends stay instead.
-  c.fixed = side_constraints([&](size_t i) {
-    return is_corner(i) || (!inwards(i) && (chord_end[(i + 1) % nb] || chord_end[(i + nb - 1) % nb]));
-  });
+  c.fixed = side_constraints(
+      [&](size_t i) { return is_corner(i) || (!inwards(i) && (chord_end[(i + 1) % nb] || chord_end[(i + nb - 1) % nb])); });
   for (size_t i = 0; i < nb; ++i) {
     if (!inwards(i)) continue;
     const int side = boundary.side_of[i], across = side % 2 == 0 ? 1 : 0, sign = side == 0 || side == 3 ? -1 : 1;

@@ -3,9 +3,9 @@
 #pragma once
 #include <vector>
 
+#include "core/disk.hpp"
 #include "core/mesh.hpp"
 #include "core/surface.hpp"
-#include "core/disk.hpp"
 #include "param/param.hpp"
 #include "tightex/options.hpp"
 

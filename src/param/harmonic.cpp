@@ -6,8 +6,8 @@
 
 #include <tbb/parallel_invoke.h>
 
-#include "param/folds.hpp"
 #include "core/eigen_vector.hpp"
+#include "param/folds.hpp"
 #include "param/multigrid.hpp"
 #include "param/sparse_cholesky.hpp"
 

@@ -295,8 +295,7 @@ struct MultilevelSolver::Workspace {
 };
 
 MultilevelSolver::MultilevelSolver(const Matrix& pattern, const std::vector<uint32_t>& unknown_vertex,
-                                   const std::vector<uint8_t>& unknown_axis, const VertexAggregates& aggregates,
-                                   bool halves) {
+                                   const std::vector<uint8_t>& unknown_axis, const VertexAggregates& aggregates, bool halves) {
   std::vector<uint32_t> vertex = unknown_vertex;
   std::vector<uint8_t> axis = unknown_axis;
   const Matrix* a = &pattern;

@@ -400,7 +400,7 @@ class SlimSystem {
             const int col = index_[2 * t[j] + size_t(b2)];
             if (col < 0)
               rhs(row) -= H(a, b2) * uv[t[j]](b2);  // a fixed coordinate
-            else if (row >= col)  // the lower triangle: the pair's other order adds the upper entry
+            else if (row >= col)                    // the lower triangle: the pair's other order adds the upper entry
               values[slot(f, i, j, row, col)] += H(a, b2);
           }
         }
@@ -616,8 +616,8 @@ std::shared_ptr<RefinementSystem> prepare_refinement(const Surface& m, const std
 
 SlimStats refine_map(const Surface& m, const std::vector<char>& fixed, const std::vector<double>& target, int iterations,
                      std::vector<Vec2>& uv, long supernodal_from, const std::function<void(int step)>& on_step,
-                     const std::vector<FaceShape>* shapes, const std::vector<int>* vertex_order,
-                     std::shared_ptr<RefinementSystem>* system, const std::vector<CoordinateBound>* bounds) {
+                     const std::vector<FaceShape>* shapes, const std::vector<int>* vertex_order, std::shared_ptr<RefinementSystem>* system,
+                     const std::vector<CoordinateBound>* bounds) {
   SlimStats st;
   const size_t nv = m.num_vertices();
   const auto fr = target_frames(m, target, uv, shapes);

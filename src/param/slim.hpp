@@ -64,8 +64,7 @@ SlimStats refine_map(const Surface& mesh, const std::vector<char>& fixed, const 
 /// preconditioned over these aggregates of the mesh's vertices (MultilevelSolver), not factorised:
 /// memory linear in the mesh.
 std::shared_ptr<RefinementSystem> prepare_refinement(const Surface& mesh, const std::vector<char>& fixed, const std::vector<double>& target,
-                                                     long supernodal_from = kSupernodalFrom,
-                                                     const std::vector<int>* vertex_order = nullptr,
+                                                     long supernodal_from = kSupernodalFrom, const std::vector<int>* vertex_order = nullptr,
                                                      const VertexAggregates* aggregates = nullptr);
 
 }  // namespace tightex

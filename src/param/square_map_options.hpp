@@ -100,7 +100,6 @@ struct SquareMapOptions {
   std::function<void(double)> progress;
 };
 
-
 /// The width/height of the texel rectangle the map is computed for (texel spacing the same both ways):
 /// the options' rectangle for a map with a density target, 1 (the square) for the paper's map.
 inline double map_aspect(const SquareMapOptions& options) {

@@ -135,8 +135,7 @@ void set_output_tangents(const std::vector<Vec4>& input_tangents, OutputModel& o
 }
 
 /// Each bake triangle's input and output tangent frames.
-std::vector<NormalFrames> normal_frames(const TexturedMesh& input, const std::vector<Vec4>& input_tangents,
-                                        const OutputModel& om) {
+std::vector<NormalFrames> normal_frames(const TexturedMesh& input, const std::vector<Vec4>& input_tangents, const OutputModel& om) {
   std::vector<NormalFrames> frames(om.bake_triangles.size());
   tbb::parallel_for(size_t(0), frames.size(), [&](size_t o) {
     const size_t t = om.mesh.input_triangle[o];
@@ -228,7 +227,8 @@ std::vector<const Image*> page_pointers(const std::vector<Image>& images) {
 }
 
 /// The input's map image that judge point p reads and its texture coordinates there, or nullptr.
-const Image* input_image_at(const TexturedMesh& input, const MaterialMapSource& map, const BakeTriangle& tri, const JudgePoint& p, Vec2& uv) {
+const Image* input_image_at(const TexturedMesh& input, const MaterialMapSource& map, const BakeTriangle& tri, const JudgePoint& p,
+                            Vec2& uv) {
   const int tex =
       tri.material >= 0 && size_t(tri.material) < map.texture_of_material.size() ? map.texture_of_material[size_t(tri.material)] : -1;
   if (tex < 0 || input.textures[size_t(tex)].image.empty()) return nullptr;
@@ -313,9 +313,10 @@ ChannelErrors ideal_errors(const TexturedMesh& input, const MaterialMapSource& m
 /// only where that costs it nothing a viewer would see, however high its PSNR (a mostly black emissive
 /// map is high and still loses its lit parts). A normal map (whose new texels are in another frame than
 /// the input's) against its full-size bake, at least `min_psnr_db`. Returns the reduction and its errors.
-std::pair<int, ChannelErrors> choose_reduction(const TexturedMesh& input, const MaterialMapSource& map, const std::vector<BakeTriangle>& triangles,
-                                               const std::vector<JudgePoint>& points, const std::vector<Image>& full_pages,
-                                               const std::vector<unsigned>& slot_channels, const ChannelErrors& full, double min_psnr_db) {
+std::pair<int, ChannelErrors> choose_reduction(const TexturedMesh& input, const MaterialMapSource& map,
+                                               const std::vector<BakeTriangle>& triangles, const std::vector<JudgePoint>& points,
+                                               const std::vector<Image>& full_pages, const std::vector<unsigned>& slot_channels,
+                                               const ChannelErrors& full, double min_psnr_db) {
   const bool normal = map.encoding == SlotEncoding::kTangentNormal;
   const std::vector<const Image*> full_size = page_pointers(full_pages);
   int chosen = 1;
@@ -539,9 +540,9 @@ struct SizedMap {
 /// (step_pays), within its input images' texels (enlargements); otherwise it is reduced as far as
 /// choose_reduction allows. A normal map (judged against its own full-size bake) is never enlarged.
 /// `base` gives the base colour's figures (computed once, on first use).
-SizedMap bake_sized_map(const TexturedMesh& input, const MaterialMapSource& map, const OutputModel& om, const std::vector<unsigned>& slot_channels,
-                        const Options& sizing, const BakeOptions& options, const std::vector<JudgePoint>& points,
-                        const std::function<const BaseColour&()>& base) {
+SizedMap bake_sized_map(const TexturedMesh& input, const MaterialMapSource& map, const OutputModel& om,
+                        const std::vector<unsigned>& slot_channels, const Options& sizing, const BakeOptions& options,
+                        const std::vector<JudgePoint>& points, const std::function<const BaseColour&()>& base) {
   const double min_psnr_db = sizing.material_map_budget_db;
   ScaledBake best{blank_pages(om, {}), {}, {}};
   bake_material_map(input, map, om.bake_triangles, om.rects, best.pages, nullptr, options);

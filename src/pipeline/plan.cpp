@@ -209,8 +209,8 @@ void lay_out(const Options& options, const std::vector<double>& shares, int size
 /// all of them at once (large_maps_at_once), the smaller ones beside them: returns how many went one
 /// after another (0: all at once).
 size_t map_components(const MapContext& ctx, std::optional<Mapped>& probed, size_t probed_component,
-                    std::vector<std::optional<CutInputs>>& cut_inputs, const std::string& keep_all, Plan::State& plan,
-                    std::vector<CutStats>& cuts, std::vector<SquareMapStats>& maps) {
+                      std::vector<std::optional<CutInputs>>& cut_inputs, const std::string& keep_all, Plan::State& plan,
+                      std::vector<CutStats>& cuts, std::vector<SquareMapStats>& maps) {
   const size_t nc = plan.components.size();
   plan.disks.resize(nc);
   plan.uv.resize(nc);
@@ -246,8 +246,11 @@ size_t map_components(const MapContext& ctx, std::optional<Mapped>& probed, size
     tbb::parallel_for(size_t(0), nc, map_one);
     return 0;
   }
-  tbb::parallel_invoke([&] { for (size_t c : large) map_one(c); },
-                       [&] { tbb::parallel_for(size_t(0), small.size(), [&](size_t i) { map_one(small[i]); }); });
+  tbb::parallel_invoke(
+      [&] {
+        for (size_t c : large) map_one(c);
+      },
+      [&] { tbb::parallel_for(size_t(0), small.size(), [&](size_t i) { map_one(small[i]); }); });
   return large.size();
 }
 
@@ -299,9 +302,8 @@ void scale_to_world_area(const TexturedMesh& geometry, std::vector<Surface>& com
   if (geometry.source_mesh_area_scale.empty() || geometry.source_mesh.empty()) return;
   // One scale for every component changes no share: the components stay as they are.
   const double first = geometry.source_mesh_area_scale[geometry.source_mesh[components.front().input_face[0]]];
-  if (std::all_of(components.begin(), components.end(), [&](const Surface& comp) {
-        return geometry.source_mesh_area_scale[geometry.source_mesh[comp.input_face[0]]] == first;
-      }))
+  if (std::all_of(components.begin(), components.end(),
+                  [&](const Surface& comp) { return geometry.source_mesh_area_scale[geometry.source_mesh[comp.input_face[0]]] == first; }))
     return;
   for (Surface& comp : components) {
     const double area_scale = geometry.source_mesh_area_scale[geometry.source_mesh[comp.input_face[0]]];
@@ -408,7 +410,8 @@ Plan plan_prepared(const TexturedMesh& input, const Options& given, const Textur
   // Pieces split by area can still hold more than a page, or more triangles than a piece may, where the
   // density or the triangles' size is uneven: split again.
   std::vector<char> split_piece;
-  for (int round = 0; keep_all.empty() && round < 3 && split_oversized_components(options, size, shares, plan->components, split_piece, rep.pages);
+  for (int round = 0;
+       keep_all.empty() && round < 3 && split_oversized_components(options, size, shares, plan->components, split_piece, rep.pages);
        ++round) {
     areas = component_areas(plan->components);
     shares = plan_density(input, options, plan->components, areas, size, density);
@@ -437,7 +440,8 @@ Plan plan_prepared(const TexturedMesh& input, const Options& given, const Textur
   lay_out(options, shares, size, rep.aspect.chosen, *plan);
   std::vector<CutStats> cuts;
   std::vector<SquareMapStats> maps;
-  rep.pages.large_maps_one_after_another = map_components(ctx, probed, rep.aspect.probed_component, cut_inputs, keep_all, *plan, cuts, maps);
+  rep.pages.large_maps_one_after_another =
+      map_components(ctx, probed, rep.aspect.probed_component, cut_inputs, keep_all, *plan, cuts, maps);
   release_free_memory();  // what the maps freed, before the bake allocates its own
   clock.done("cut+map");
 
@@ -452,7 +456,7 @@ TextureBudget texture_budget(const TexturedMesh& input, const Options& options) 
   if (options.size > 0 && options.texels > 0) fail_input("options: --size and --texels go one without the other");
   if (options.size < 0 || options.texels < 0) fail_input("options: --size and --texels must not be negative");
   const int max_side = options.allow_large_textures ? 65536 : kLargeSide;
-  const TextureBudget budget = options.size > 0    ? TextureBudget{options.size, false}
+  const TextureBudget budget = options.size > 0     ? TextureBudget{options.size, false}
                                : options.texels > 0 ? TextureBudget{std::min(size_for_texels(options.texels), max_side), false}
                                                     : TextureBudget{default_size(input, max_side), true};
   check_budget(budget, options);

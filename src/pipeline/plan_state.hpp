@@ -85,8 +85,8 @@ struct PreparedMesh::State {
   SetAside set_aside;
   std::vector<Surface> components;
   std::vector<std::optional<CutInputs>> cut_inputs;  // all nullopt where the input is tight (not cut)
-  double tight_utilization = 0;                       // tight_utilization(): > 0 where it is one chart per component
-  std::vector<StageTiming> timings;                   // "repair", "seams+handles"
+  double tight_utilization = 0;                      // tight_utilization(): > 0 where it is one chart per component
+  std::vector<StageTiming> timings;                  // "repair", "seams+handles"
 };
 
 /// Each component's cut_inputs, computed in parallel (nullopt where it throws InternalError).

@@ -29,8 +29,8 @@ void validate_mesh(const TexturedMesh& m) {
       fail_input("{}: material {} uses texture {} (mesh has {})", f, i, m.materials[i].texture, m.textures.size());
     for (size_t s = 0; s < kMaterialSlots; ++s)
       if (m.materials[i].maps[s] < -1 || m.materials[i].maps[s] >= int(m.textures.size()))
-        fail_input("{}: material {} binds texture {} as its {} map (mesh has {})", f, i, m.materials[i].maps[s], material_slot_name(MaterialSlot(s)),
-                   m.textures.size());
+        fail_input("{}: material {} binds texture {} as its {} map (mesh has {})", f, i, m.materials[i].maps[s],
+                   material_slot_name(MaterialSlot(s)), m.textures.size());
   }
   if (!m.source_mesh.empty()) {
     if (m.source_mesh.size() != m.triangles.size())

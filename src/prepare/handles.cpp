@@ -8,10 +8,10 @@
 #include <cmath>
 #include <limits>
 
-#include "core/error.hpp"
-#include "core/hash.hpp"
 #include "core/cut_along_edges.hpp"
+#include "core/error.hpp"
 #include "core/graph.hpp"
+#include "core/hash.hpp"
 #include "prepare/loop_classes.hpp"
 
 namespace tightex {

@@ -9,8 +9,8 @@
 #include <span>
 #include <vector>
 
-#include "core/surface.hpp"
 #include "core/graph.hpp"
+#include "core/surface.hpp"
 
 namespace tightex {
 
@@ -54,7 +54,7 @@ class RootLoopSearch {
 
  private:
   void reset();
-  void settle(uint32_t v);          // v's distance is final: its class, from its parent's
+  void settle(uint32_t v);                               // v's distance is final: its class, from its parent's
   void try_closing(uint32_t v, uint32_t w, uint32_t e);  // edge e from v to settled w closes a loop: the cheapest yet?
 
   const Surface& s_;

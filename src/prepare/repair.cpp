@@ -80,9 +80,8 @@ bool same_attributes(const TexturedMesh& mesh, const RotatedTriangle& a, const R
 /// other texture coordinates or material is kept on a layer of its own (`layer`, 1 for the first such
 /// copy; all 0 when there is none). The kept ones go to `s0` (welded vertices, in input order;
 /// face_parent = input triangle).
-void drop_degenerate_triangles(const TexturedMesh& mesh, const std::vector<uint32_t>& weld, const std::vector<char>* left_out,
-                               Surface& s0, RepairStats& st, std::vector<std::pair<uint32_t, uint32_t>>& repeats,
-                               std::vector<uint32_t>& layer) {
+void drop_degenerate_triangles(const TexturedMesh& mesh, const std::vector<uint32_t>& weld, const std::vector<char>* left_out, Surface& s0,
+                               RepairStats& st, std::vector<std::pair<uint32_t, uint32_t>>& repeats, std::vector<uint32_t>& layer) {
   std::vector<RotatedTriangle> keyed;
   keyed.reserve(mesh.num_triangles());
   for (uint32_t t = 0; t < mesh.num_triangles(); ++t) {
@@ -102,8 +101,8 @@ void drop_degenerate_triangles(const TexturedMesh& mesh, const std::vector<uint3
     while (end < keyed.size() && keyed[end].key == keyed[i].key) ++end;
     std::vector<size_t> kept_in_run;  // the first triangle of each set of attributes, its layer its place
     for (size_t k = i; k < end; ++k) {
-      const auto same = std::find_if(kept_in_run.begin(), kept_in_run.end(),
-                                     [&](size_t j) { return same_attributes(mesh, keyed[j], keyed[k]); });
+      const auto same =
+          std::find_if(kept_in_run.begin(), kept_in_run.end(), [&](size_t j) { return same_attributes(mesh, keyed[j], keyed[k]); });
       if (same != kept_in_run.end()) {
         ++st.repeated_triangles;
         repeats.push_back({keyed[k].t, keyed[*same].t});

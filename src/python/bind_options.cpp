@@ -65,7 +65,8 @@ void bind_options(py::module_& m) {
   c.def(py::init<>());
   c.def_readwrite("size", &Options::size, doc("size").c_str());
   c.def_readwrite("texels", &Options::texels, doc("texels").c_str());
-  c.def_readwrite("aspect", &Options::aspect, (doc("aspect") + " (0: the square with a size, else chosen per model; -1: chosen per model always)").c_str());
+  c.def_readwrite("aspect", &Options::aspect,
+                  (doc("aspect") + " (0: the square with a size, else chosen per model; -1: chosen per model always)").c_str());
   c.def_readwrite("allow_large_textures", &Options::allow_large_textures, doc("allow_large_textures").c_str());
   c.def_readwrite("allow_outside_files", &Options::allow_outside_files, doc("allow_outside_files").c_str());
   choice(c, "layout", &Options::layout, kLayouts);

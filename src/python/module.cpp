@@ -1,6 +1,6 @@
 // tightex._tightex: the C++ half of the Python module `tightex` (python/tightex/__init__.py wraps it).
-// Options and Report are the library's own types (bind_options.cpp); errors arrive as tightex.InputError, InternalError and Cancelled, subclasses of
-// tightex.Error. The GIL is released while tightex works; the progress callback takes it back.
+// Options and Report are the library's own types (bind_options.cpp); errors arrive as tightex.InputError, InternalError and Cancelled,
+// subclasses of tightex.Error. The GIL is released while tightex works; the progress callback takes it back.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -181,7 +181,8 @@ Material material_from_dict(const py::dict& d, size_t index, size_t num_images) 
 /// The mesh's materials: one per image (the default), or `materials` (a list of dicts) where given.
 void set_materials(TexturedMesh& mesh, const py::object& materials) {
   if (materials.is_none()) {
-    for (size_t i = 0; i < mesh.textures.size(); ++i) mesh.materials.push_back(Material{"material_" + std::to_string(i), {1.0, 1.0, 1.0}, int(i)});
+    for (size_t i = 0; i < mesh.textures.size(); ++i)
+      mesh.materials.push_back(Material{"material_" + std::to_string(i), {1.0, 1.0, 1.0}, int(i)});
     return;
   }
   const py::list list = materials.cast<py::list>();

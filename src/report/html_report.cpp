@@ -276,11 +276,12 @@ json html_model_data_without_charts(const TexturedMesh& input, const TexturedMes
     if (out_view.num_triangles() <= options.max_triangles) break;
     cell *= 1.15;
   }
-  if (cell > 0)
-    tbb::parallel_invoke([&] { in_view_edges = welded_edges(in_view); }, [&] { out_view_edges = welded_edges(out_view); });
+  if (cell > 0) tbb::parallel_invoke([&] { in_view_edges = welded_edges(in_view); }, [&] { out_view_edges = welded_edges(out_view); });
   json in, out;  // side by side: each encodes its own textures
   tbb::parallel_invoke(
-      [&] { in = model_json(input, cell > 0 ? in_view : input, cell > 0 ? in_view_edges : input_edges, "input", options, options.input_links); },
+      [&] {
+        in = model_json(input, cell > 0 ? in_view : input, cell > 0 ? in_view_edges : input_edges, "input", options, options.input_links);
+      },
       [&] {
         out = model_json(output, cell > 0 ? out_view : output, cell > 0 ? out_view_edges : output_edges, "output", options,
                          options.output_links);

@@ -31,9 +31,9 @@ struct ModelFigures {
 /// counts: a face without the slot shows its factor alone (its vertex normal).
 struct MaterialMapFigures {
   MaterialSlot slot = MaterialSlot::kMetallicRoughness;
-  double surface_psnr = 0;                                     // not for normal maps
+  double surface_psnr = 0;                                    // not for normal maps
   double angle_median = -1, angle_p95 = -1, angle_mean = -1;  // normal maps only
-  size_t samples = 0;                                          // the sample points
+  size_t samples = 0;                                         // the sample points
 };
 
 struct Metrics {

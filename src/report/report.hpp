@@ -37,7 +37,7 @@ struct OptionsUsed {
   bool fit = true;
   bool fine_fit = false;  // in effect: false without `fit`
   CornerRule corners = CornerRule::kEqualArcs;
-  double aspect = 0;          // as asked (Options::aspect); 0: "auto"
+  double aspect = 0;                   // as asked (Options::aspect); 0: "auto"
   double material_map_budget_db = 51;  // Options::material_map_budget_db
 };
 
@@ -121,7 +121,7 @@ struct MaterialMapEntry {
   std::string encoding;                    // "srgb_colour", "data" or "tangent_normal"
   std::vector<std::pair<int, int>> sizes;  // per page
   double scale = 1;                        // each side is the base colour's times this (below 1: reduced)
-  double seconds = 0;  // its bake and the choice of its size
+  double seconds = 0;                      // its bake and the choice of its size
 };
 
 /// "output": where the CLI wrote the model.

@@ -207,12 +207,8 @@ json to_json(const ReportData& report) {
   if (!report.maps.empty()) {
     json maps = json::array();
     for (const MaterialMapEntry& m : report.maps)
-      maps.push_back({{"name", m.name},
-                      {"slots", m.slots},
-                      {"encoding", m.encoding},
-                      {"sizes", m.sizes},
-                      {"scale", m.scale},
-                      {"seconds", m.seconds}});
+      maps.push_back(
+          {{"name", m.name}, {"slots", m.slots}, {"encoding", m.encoding}, {"sizes", m.sizes}, {"scale", m.scale}, {"seconds", m.seconds}});
     j["maps"] = std::move(maps);
   }
   if (report.metrics) j["metrics"] = to_json(*report.metrics);

@@ -52,7 +52,8 @@ constexpr std::array kHelps{
                "this many surface-PSNR dB against the input's at the base colour's size may be baked larger, up to as many "
                "texels as its input image has, while a slot falls short of what the material-map check asks (the base colour's "
                "PSNR plus an ideal re-sampler's difference, at most this) and each step pays for its texels (removes as much "
-               "error per added texel as the base colour's texels do); any other material map is halved (down to 1/16 of the base colour's side) while each slot stays within 0.25 dB of "
+               "error per added texel as the base colour's texels do); any other material map is halved (down to 1/16 of the base colour's "
+               "side) while each slot stays within 0.25 dB of "
                "its figure at the base colour's size, however high (a "
                "normal map: against itself at full size, never larger); default 51; 0 keeps every material map at the base "
                "colour's size. (\"Map\" alone, as in --map, is the parameterization.)"},

@@ -56,8 +56,7 @@ ModelFormat output_format(const std::string& input, const Options& options) {
 void check_codec_options(const std::string& input, const Options& o, ImageFormat format) {
   const std::string_view name = to_string(format);
   const auto refuse = [&](const char* option, ImageFormat needs) {
-    if (o.texture_format)
-      fail_input("{}: {} needs --format {} (does nothing with --format {})", input, option, to_string(needs), name);
+    if (o.texture_format) fail_input("{}: {} needs --format {} (does nothing with --format {})", input, option, to_string(needs), name);
     fail_input("{}: {} does nothing: the images are written as {}, the input's codec (--format chooses another)", input, option, name);
   };
   if (o.png_level && format != ImageFormat::kPng) refuse("--png-level", ImageFormat::kPng);
@@ -66,9 +65,10 @@ void check_codec_options(const std::string& input, const Options& o, ImageFormat
   if (o.webp_lossless && format != ImageFormat::kWebp) refuse("--webp-lossless", ImageFormat::kWebp);
   const bool lossy = format == ImageFormat::kJpeg || (format == ImageFormat::kWebp && !o.webp_lossless);
   if ((o.target_psnr_db > 0 || o.max_bytes > 0) && !lossy)
-    fail_input("{}: --target-psnr and --max-bytes choose a lossy codec's quality, and this input's images would be written as {}: "
-               "add --format webp or --format jpg",
-               input, o.webp_lossless ? "lossless WebP" : "PNG");
+    fail_input(
+        "{}: --target-psnr and --max-bytes choose a lossy codec's quality, and this input's images would be written as {}: "
+        "add --format webp or --format jpg",
+        input, o.webp_lossless ? "lossless WebP" : "PNG");
 }
 
 /// What the options ask of the output's images.
@@ -105,7 +105,9 @@ Options method_options(const Options& options, ModelFormat format) {
   Options o = options;
   o.measure = false;
   if (options.progress)
-    o.progress = [progress = options.progress](std::string_view stage, double fraction) { return stage == "done" || progress(stage, fraction); };
+    o.progress = [progress = options.progress](std::string_view stage, double fraction) {
+      return stage == "done" || progress(stage, fraction);
+    };
   o.keep_untextured = options.keep_untextured && format != ModelFormat::kPly;
   return o;
 }
@@ -228,8 +230,8 @@ nlohmann::json smallest_reaching_target(const Options& options, const TexturedMe
     EncodingChoice c = choose_encoding(request, input, sources, r.output);
     tried.push_back(entry(smaller.side, c));
     if (!(c.written_psnr_db.value_or(0) >= options.target_psnr_db) || total_bytes(c) >= total_bytes(choice)) break;
-    c.reason += fmt::format("; a texel budget of {}^2 (of the default {}^2) reaches the target in the fewest bytes", smaller.side,
-                            budget.side);
+    c.reason +=
+        fmt::format("; a texel budget of {}^2 (of the default {}^2) reaches the target in the fewest bytes", smaller.side, budget.side);
     result = std::move(r), choice = std::move(c);
   }
   return tried;
@@ -313,7 +315,12 @@ Report run(const std::string& input, const std::string& outdir, const Options& o
   const std::vector<TextureSource> sources = texture_sources(planned.mesh);
   auto [choice, budgets] = choose_images(options, opt, planned.mesh, sources, budget, format, result, progress);
   const ModelFormat input_format = model_format_of(input);
-  const ModelTarget target{outdir,         fs::path(input).stem().string(), format, choice.encoding, &choice.images, options.html,
+  const ModelTarget target{outdir,
+                           fs::path(input).stem().string(),
+                           format,
+                           choice.encoding,
+                           &choice.images,
+                           options.html,
                            input_format == ModelFormat::kGltf || input_format == ModelFormat::kGlb};
   WrittenAndMeasured written = write_and_measure(target, planned.mesh, result.output, timings, progress);
   // The figures are the files' as written (a lossy codec's images decoded back); the bake's beside them.

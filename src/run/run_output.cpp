@@ -142,8 +142,8 @@ void remove_new_files(const std::string& folder, const std::set<std::string>& be
 
 }  // namespace
 
-WrittenAndMeasured write_and_measure(const ModelTarget& target, const TexturedMesh& input, const TexturedMesh& output,
-                                     RunTimings& timings, const StageProgress& progress) {
+WrittenAndMeasured write_and_measure(const ModelTarget& target, const TexturedMesh& input, const TexturedMesh& output, RunTimings& timings,
+                                     const StageProgress& progress) {
   // The last point a cancel leaves nothing behind without undoing: the files are written and renamed
   // into place now.
   progress("write", 0);
@@ -192,8 +192,8 @@ WrittenAndMeasured write_and_measure(const ModelTarget& target, const TexturedMe
   return r;
 }
 
-void add_run_figures(nlohmann::json& rep, const Metrics& metrics, const RunTimings& t, double wall_seconds, const ModelReadStats& read_stats,
-                     const OutputFiles& files) {
+void add_run_figures(nlohmann::json& rep, const Metrics& metrics, const RunTimings& t, double wall_seconds,
+                     const ModelReadStats& read_stats, const OutputFiles& files) {
   rep["metrics"] = to_json(metrics);
   nlohmann::json& timings = rep["timings"];
   auto timing = [](const char* stage, double seconds, const CpuTimes& cpu) {
@@ -211,7 +211,8 @@ void add_run_figures(nlohmann::json& rep, const Metrics& metrics, const RunTimin
   rep["output"] = to_json(files);
 }
 
-fs::path write_reports(const fs::path& json_path, const std::string& outdir, const std::string& report_text, const std::string* model_data) {
+fs::path write_reports(const fs::path& json_path, const std::string& outdir, const std::string& report_text,
+                       const std::string* model_data) {
   if (!model_data) {
     write_texts_atomically({{json_path, report_text}});
     return json_path;

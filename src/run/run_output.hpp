@@ -58,8 +58,8 @@ struct ModelTarget {
 /// models' decimated views, their textures as JPEG). Tells `progress` "write" and "measure" as each
 /// begins: a cancel at "write" finds nothing written, one at "measure" removes what was written. The
 /// times go to `timings`.
-WrittenAndMeasured write_and_measure(const ModelTarget& target, const TexturedMesh& input, const TexturedMesh& output,
-                                     RunTimings& timings, const StageProgress& progress);
+WrittenAndMeasured write_and_measure(const ModelTarget& target, const TexturedMesh& input, const TexturedMesh& output, RunTimings& timings,
+                                     const StageProgress& progress);
 
 /// Adds what the run knows beyond the library's report: the metrics, its own stages' times (reading
 /// first, writing and measuring last), wall time, peak RSS, the reader's figures and the output files.

@@ -22,7 +22,8 @@ void set_quality(ImageEncoding& e, int quality) { e.jpeg_quality = e.webp_qualit
 std::vector<std::string> encoded(const TexturedMesh& output, const ImageEncoding& encoding) {
   std::vector<std::string> bytes(output.textures.size());
   tbb::parallel_for(size_t(0), bytes.size(), [&](size_t i) {
-    if (!output.textures[i].image.empty()) bytes[i] = encode_image(output.textures[i].image, encoding.of_texture(i), output.textures[i].path);
+    if (!output.textures[i].image.empty())
+      bytes[i] = encode_image(output.textures[i].image, encoding.of_texture(i), output.textures[i].path);
   });
   return bytes;
 }
@@ -184,7 +185,8 @@ nlohmann::json slot_bytes(const TexturedMesh& mesh, const std::vector<uint64_t>&
     if (slot[i] == -1)
       j["base_colour"] = j["base_colour"].get<uint64_t>() + bytes[i];
     else
-      j["maps"][material_slot_name(MaterialSlot(slot[i]))] = j["maps"].value(material_slot_name(MaterialSlot(slot[i])), uint64_t(0)) + bytes[i];
+      j["maps"][material_slot_name(MaterialSlot(slot[i]))] =
+          j["maps"].value(material_slot_name(MaterialSlot(slot[i])), uint64_t(0)) + bytes[i];
     j["total"] = j["total"].get<uint64_t>() + bytes[i];
   }
   return j;
