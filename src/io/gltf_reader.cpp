@@ -803,7 +803,7 @@ double factor_of(const json* holder, const char* key, double fallback, const std
   return v.get<double>();
 }
 
-/// The colour `key` (`n` numbers) of `holder`, or `fallback`.
+/// The colour `key` (3 numbers) of `holder` in the first three channels of `fallback`, or `fallback`.
 SlotFactor colour_of(const json* holder, const char* key, const SlotFactor& fallback, const std::string& element) {
   if (holder == nullptr || !holder->is_object() || !holder->contains(key)) return fallback;
   const json& v = (*holder)[key];

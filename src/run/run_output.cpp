@@ -173,7 +173,11 @@ WrittenAndMeasured write_and_measure(const ModelTarget& target, const TexturedMe
   // their codec gives them back, the materials as the format holds them.
   WeldedEdges input_edges, output_edges;
   TexturedMesh written;
-  tbb::parallel_invoke([&] { input_edges = welded_edges(input); }, [&] { output_edges = welded_edges(output); },
+  // The model in memory's edges serve the page only.
+  tbb::parallel_invoke([&] { input_edges = welded_edges(input); },
+                       [&] {
+                         if (target.html) output_edges = welded_edges(output);
+                       },
                        [&] { written = read_written(target); });
   tbb::parallel_invoke(
       [&] {
