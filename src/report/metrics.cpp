@@ -803,6 +803,12 @@ nlohmann::json to_json(const Metrics& m) {
 
 namespace tightex {
 
+TriangleMatch match_output_triangles(const TexturedMesh& input, const TexturedMesh& output) {
+  static_assert(kNone == TriangleMatch::kNoOutputTriangle);
+  Correspondence c = match_triangles(input, output);
+  return TriangleMatch{std::move(c.match), std::move(c.corner_map)};
+}
+
 std::vector<MaterialMapFigures> measure_material_maps(const TexturedMesh& input, const TexturedMesh& output, size_t samples) {
   const Correspondence c = match_triangles(input, output);
   return measure_material_maps(input, output, c, surface_points(input, c, samples));

@@ -1,6 +1,8 @@
 // The figures of docs/metrics.md, computed from an input and an output model alone, so the same
 // code measures tightex's own result (in memory) and any other tool's output (read from its files).
 #pragma once
+#include <array>
+#include <cstdint>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <vector>
@@ -85,6 +87,16 @@ double surface_psnr(const TexturedMesh& input, const TexturedMesh& output, size_
 
 /// The figures of every map slot that both models bind (MaterialMapFigures), at the surface PSNR's points.
 std::vector<MaterialMapFigures> measure_material_maps(const TexturedMesh& input, const TexturedMesh& output, size_t samples = kPsnrPoints);
+
+/// docs/metrics.md's correspondence, for tools that look at single triangles: per input triangle the output
+/// triangle with the same three corner positions (kNoOutputTriangle where it is lost), and per input
+/// corner the output corner at its position.
+struct TriangleMatch {
+  static constexpr uint32_t kNoOutputTriangle = UINT32_MAX;
+  std::vector<uint32_t> output_triangle;
+  std::vector<std::array<int, 3>> output_corner;
+};
+TriangleMatch match_output_triangles(const TexturedMesh& input, const TexturedMesh& output);
 
 /// The metrics as report.json's "metrics" section (and `tightex measure`'s output).
 nlohmann::json to_json(const Metrics& m);
