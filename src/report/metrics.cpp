@@ -764,6 +764,23 @@ double surface_psnr(const TexturedMesh& in, const TexturedMesh& out, size_t psnr
   return measure_surface_psnr(in, out, c, surface_points(in, c, psnr_samples)).first;
 }
 
+struct SurfacePsnrOfImages::Points {
+  Correspondence match;
+  std::vector<SurfacePoint> points;
+};
+
+SurfacePsnrOfImages::SurfacePsnrOfImages(const TexturedMesh& input, const TexturedMesh& output, size_t psnr_samples)
+    : input_(input), points_(std::make_unique<Points>()) {
+  points_->match = match_triangles(input, output);
+  points_->points = surface_points(input, points_->match, psnr_samples);
+}
+
+SurfacePsnrOfImages::~SurfacePsnrOfImages() = default;
+
+double SurfacePsnrOfImages::operator()(const TexturedMesh& output) const {
+  return measure_surface_psnr(input_, output, points_->match, points_->points).first;
+}
+
 nlohmann::json to_json(const Metrics& m) {
   nlohmann::json j;
   auto fig = [](const ModelFigures& f) {

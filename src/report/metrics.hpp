@@ -3,6 +3,7 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <vector>
@@ -84,6 +85,21 @@ Metrics measure(const TexturedMesh& input, const TexturedMesh& output, const Wel
 /// docs/metrics.md's surface PSNR alone (measure's figure, the same points), for a caller that tries other
 /// encodings of the same output's images.
 double surface_psnr(const TexturedMesh& input, const TexturedMesh& output, size_t psnr_samples = kPsnrPoints);
+
+/// surface_psnr of one input against outputs that differ from `output` in their images alone (the same
+/// triangles and texture coordinates; other sizes allowed): the correspondence and the points are made
+/// once, for a caller that tries many encodings or sizes of the same layout.
+class SurfacePsnrOfImages {
+ public:
+  SurfacePsnrOfImages(const TexturedMesh& input, const TexturedMesh& output, size_t psnr_samples = kPsnrPoints);
+  ~SurfacePsnrOfImages();
+  double operator()(const TexturedMesh& output) const;
+
+ private:
+  struct Points;
+  const TexturedMesh& input_;
+  std::unique_ptr<Points> points_;
+};
 
 /// The figures of every map slot that both models bind (MaterialMapFigures), at the surface PSNR's points.
 std::vector<MaterialMapFigures> measure_material_maps(const TexturedMesh& input, const TexturedMesh& output, size_t samples = kPsnrPoints);

@@ -9,7 +9,6 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <mutex>
 #include <numeric>
 #include <tuple>
 
@@ -64,10 +63,11 @@ void check_codec_options(const std::string& input, const Options& o, ImageFormat
   if (o.webp_quality && format != ImageFormat::kWebp) refuse("--webp-quality", ImageFormat::kWebp);
   if (o.webp_lossless && format != ImageFormat::kWebp) refuse("--webp-lossless", ImageFormat::kWebp);
   const bool lossy = format == ImageFormat::kJpeg || (format == ImageFormat::kWebp && !o.webp_lossless);
-  if ((o.target_psnr_db > 0 || o.max_bytes > 0) && !lossy)
+  const bool codec_searched = !o.texture_format && o.size == 0 && o.texels == 0;  // search_codecs chooses one
+  if ((o.target_psnr_db > 0 || o.max_bytes > 0) && !lossy && !codec_searched)
     fail_input(
-        "{}: --target-psnr and --max-bytes choose a lossy codec's quality, and this input's images would be written as {}: "
-        "add --format webp or --format jpg",
+        "{}: --target-psnr and --max-bytes with --size or --texels choose a lossy codec's quality, and this input's images would be "
+        "written as {}: add --format webp or --format jpg",
         input, o.webp_lossless ? "lossless WebP" : "PNG");
 }
 
@@ -78,7 +78,7 @@ BytesRequest bytes_request(const Options& o) {
   e.jpeg_quality = o.jpeg_quality.value_or(kDefaultJpegQuality);
   e.webp_quality = o.webp_quality.value_or(kDefaultWebpQuality);
   e.webp_lossless = o.webp_lossless;
-  return {o.texture_format, e, o.jpeg_quality.has_value() || o.webp_quality.has_value(), o.target_psnr_db, o.max_bytes, {}};
+  return {o.texture_format, e, o.jpeg_quality.has_value() || o.webp_quality.has_value(), o.target_psnr_db, o.max_bytes, 0, {}, {}};
 }
 
 /// The model's geometry (no pixels) with its textures' sizes from their headers, checked against the
@@ -164,99 +164,25 @@ PlannedModel read_textures_and_plan(TexturedMesh geometry, const Options& opt, c
   return r;
 }
 
-/// Whether --target-psnr chooses the texel budget too: a lossy codec, and tightex's own budget.
-bool budget_follows_target(const Options& options, const TextureBudget& budget, const EncodingChoice& choice) {
-  return options.target_psnr_db > 0 && choice.encoding.lossy() && budget.is_default;
+/// The lossy codecs --target-psnr and --max-bytes choose from without --format: those every reader of
+/// `format` decodes (glTF's core images are PNG and JPEG; WebP needs EXT_texture_webp, which a viewer
+/// may lack, so it is written only when asked for).
+std::vector<ImageFormat> search_codecs(ModelFormat format) {
+  if (format == ModelFormat::kGltf || format == ModelFormat::kGlb) return {ImageFormat::kJpeg};
+  return {ImageFormat::kWebp, ImageFormat::kJpeg};
 }
 
-/// The texel budgets --target-psnr tries, as fractions of the default's texels, largest first.
-constexpr double kTargetBudgetFractions[] = {0.7, 0.5, 0.35, 0.25, 0.18};
-
-uint64_t total_bytes(const EncodingChoice& c) { return std::accumulate(c.bytes.begin(), c.bytes.end(), uint64_t(0)); }
-
-/// The "encode" stage's progress, which never goes backwards though its parts each count from 0 (rate
-/// control's encodings, the budget search's plans and bakes): part i of n reports within [i/n, (i+1)/n].
-/// Every report asks the caller's callback, so that a cancel is heard throughout (Cancelled).
-class EncodeProgress {
- public:
-  explicit EncodeProgress(const StageProgress& progress) : progress_(progress) {}
-  /// Part `i` of `n` begins.
-  void part(int i, int n) { lo_ = double(i) / n, hi_ = double(i + 1) / n, report(0); }
-  void report(double fraction) {
-    const std::lock_guard lock(mutex_);
-    at_ = std::max(at_, lo_ + (hi_ - lo_) * std::clamp(fraction, 0.0, 1.0));
-    progress_("encode", at_);
-  }
-  /// A callback for the method's stages run again within this stage (their names are not the run's).
-  ProgressCallback as_callback() {
-    return [this](std::string_view, double fraction) {
-      report(fraction);
-      return true;
-    };
-  }
-
- private:
-  const StageProgress& progress_;
-  std::mutex mutex_;
-  double lo_ = 0, hi_ = 1, at_ = 0;
-};
-
-/// --target-psnr's budget search: `result` and `choice` (the default budget's, at the lowest quality
-/// that reaches the target as written) are replaced by a smaller budget's, re-planned and baked, where
-/// it reaches the target in fewer bytes. Stops at the first budget that misses the target or takes more
-/// bytes than the best so far. Returns each budget tried (side, quality, bytes, written PSNR).
-nlohmann::json smallest_reaching_target(const Options& options, const TexturedMesh& input, const std::vector<TextureSource>& sources,
-                                        const TextureBudget& budget, ModelFormat format, Result& result, EncodingChoice& choice,
-                                        EncodeProgress& progress) {
-  auto entry = [&](int side, const EncodingChoice& c) {
-    return nlohmann::json{{"size", side},
-                          {"quality", c.encoding.format == ImageFormat::kJpeg ? c.encoding.jpeg_quality : c.encoding.webp_quality},
-                          {"bytes", total_bytes(c)},
-                          {"surface_psnr_written_db", c.written_psnr_db.value_or(0)}};
-  };
-  nlohmann::json tried = nlohmann::json::array({entry(budget.side, choice)});
-  if (!(choice.written_psnr_db.value_or(0) >= options.target_psnr_db)) return tried;  // the default budget misses it already
-  Options quiet = options;
-  quiet.progress = options.progress ? progress.as_callback() : nullptr;
-  const int parts = 1 + int(std::size(kTargetBudgetFractions));
-  for (int i = 0; i + 1 < parts; ++i) {
-    const double fraction = kTargetBudgetFractions[i];
-    progress.part(i + 1, parts);
-    const TextureBudget smaller{std::max(8, int(std::lround(budget.side * std::sqrt(fraction) / 4)) * 4), true};
-    Result r = bake_plan(plan_charts(input, quiet, smaller), input, quiet);
-    round_uvs_as_stored(r.output, format);
-    BytesRequest request = bytes_request(quiet);
-    if (options.progress) request.progress = [&](double f) { progress.report(f); };
-    EncodingChoice c = choose_encoding(request, input, sources, r.output);
-    tried.push_back(entry(smaller.side, c));
-    if (!(c.written_psnr_db.value_or(0) >= options.target_psnr_db) || total_bytes(c) >= total_bytes(choice)) break;
-    c.reason +=
-        fmt::format("; a texel budget of {}^2 (of the default {}^2) reaches the target in the fewest bytes", smaller.side, budget.side);
-    result = std::move(r), choice = std::move(c);
-  }
-  return tried;
-}
-
-/// The images' codec and quality (the input's codec; rate control; --target-psnr's budget search),
-/// chosen for `result`, which the search may replace. Returns the choice and the budgets tried (null
-/// where none was searched).
-/// `method` is the options the method ran with (method_options).
-/// Tells `progress` "encode" as it goes, and may throw Cancelled.
-std::pair<EncodingChoice, nlohmann::json> choose_images(const Options& options, const Options& method, const TexturedMesh& input,
-                                                        const std::vector<TextureSource>& sources, const TextureBudget& budget,
-                                                        ModelFormat format, Result& result, const StageProgress& stage) {
-  EncodeProgress progress(stage);
-  // The budget search, where it may follow, takes the stage's later parts.
-  const bool may_search = options.target_psnr_db > 0 && budget.is_default;
-  progress.part(0, may_search ? 1 + int(std::size(kTargetBudgetFractions)) : 1);
+/// The images' codec and quality (the input's codec; rate control), chosen for `result`: with
+/// --target-psnr or --max-bytes and tightex's own texel budget, the texels of the baked images too
+/// (budget_search.hpp), which then shrinks them in `result`. Tells `progress` "encode" as it goes, and
+/// may throw Cancelled.
+EncodingChoice choose_images(const Options& options, const TexturedMesh& input, const std::vector<TextureSource>& sources,
+                             const TextureBudget& budget, ModelFormat format, Result& result, const StageProgress& progress) {
   BytesRequest request = bytes_request(options);
-  request.progress = [&](double f) { progress.report(f); };
-  EncodingChoice choice = choose_encoding(request, input, sources, result.output);
-  nlohmann::json budgets;
-  if (budget_follows_target(options, budget, choice))
-    budgets = smallest_reaching_target(method, input, sources, budget, format, result, choice, progress);
-  progress.part(0, 1), progress.report(1);
-  return {std::move(choice), std::move(budgets)};
+  request.progress = [&](double f) { progress("encode", f); };
+  if (budget.is_default) request.new_pages = result.report.texture_sizes.size();
+  request.codecs = search_codecs(format);
+  return choose_encoding(request, input, sources, result.output);
 }
 
 }  // namespace
@@ -313,7 +239,7 @@ Report run(const std::string& input, const std::string& outdir, const Options& o
   round_uvs_as_stored(result.output, format);
 
   const std::vector<TextureSource> sources = texture_sources(planned.mesh);
-  auto [choice, budgets] = choose_images(options, opt, planned.mesh, sources, budget, format, result, progress);
+  const EncodingChoice choice = choose_images(options, planned.mesh, sources, budget, format, result, progress);
   const ModelFormat input_format = model_format_of(input);
   const ModelTarget target{outdir,
                            fs::path(input).stem().string(),
@@ -329,9 +255,9 @@ Report run(const std::string& input, const std::string& outdir, const Options& o
   nlohmann::json json = report_json(result.report);
   add_run_figures(json, metrics, timings, seconds_since(t0), read_stats,
                   OutputFiles{outdir, output_model_name(input, format), options.html ? kHtmlName : "", written.removed});
-  json["bytes"] = bytes_json(planned.mesh, sources, result.output, choice, metrics.surface_psnr, format);
+  json["bytes"] = bytes_json(planned.mesh, sources, result.output, choice, metrics, format);
   json["bytes"]["surface_psnr_bake_db"] = metrics.surface_psnr_bake.value_or(metrics.surface_psnr);
-  if (!budgets.is_null()) json["bytes"]["budgets_tried"] = std::move(budgets);
+  if (!choice.probes.is_null()) json["bytes"]["probes"] = choice.probes;
   add_warnings(planned.plan, planned.mesh, read_stats, format, written.removed, json);
   if (!options.preview_path.empty()) write_preview(options.preview_path, planned.mesh, result.output);
   Report report = public_report(std::move(json), result.output, result.report.texture_sizes.size());

@@ -3,13 +3,17 @@
 #include <tbb/parallel_for.h>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <functional>
+#include <optional>
+#include <ranges>
 
 #include "io/gltf_document.hpp"
 #include "io/image_io.hpp"
 #include "report/metrics.hpp"
+#include "run/budget_search.hpp"
 
 namespace tightex {
 
@@ -136,6 +140,50 @@ std::string choose_codecs(const BytesRequest& request, const TexturedMesh& input
   return reason;
 }
 
+/// Whether the search's result `a` answers the request better than `b`: fewer bytes at the target (or
+/// more PSNR where neither reaches it), more PSNR within the bound (or fewer bytes where neither fits).
+bool better(const BytesRequest& request, const BudgetSearchResult& a, const BudgetSearchResult& b) {
+  const uint64_t bytes_a = total(a.images), bytes_b = total(b.images);
+  if (request.target_psnr_db > 0) {
+    const bool reach_a = a.written_psnr_db >= request.target_psnr_db, reach_b = b.written_psnr_db >= request.target_psnr_db;
+    return reach_a != reach_b ? reach_a : reach_a ? bytes_a < bytes_b : a.written_psnr_db > b.written_psnr_db;
+  }
+  const bool fit_a = bytes_a <= request.max_bytes, fit_b = bytes_b <= request.max_bytes;
+  return fit_a != fit_b ? fit_a : fit_a ? a.written_psnr_db > b.written_psnr_db : bytes_a < bytes_b;
+}
+
+/// --target-psnr / --max-bytes with tightex's own texel budget: the texels and quality searched together
+/// (budget_search.hpp) for --format's codec, or without it for each lossy codec the output format
+/// reads everywhere (request.codecs), the best kept; the output's baked images shrunk to the scale chosen.
+EncodingChoice search_codec_texels_and_quality(const BytesRequest& request, const TexturedMesh& input, TexturedMesh& output,
+                                               EncodingChoice c) {
+  std::vector<ImageFormat> codecs = request.format           ? std::vector<ImageFormat>{*request.format}
+                                    : request.codecs.empty() ? std::vector<ImageFormat>{c.encoding.format}
+                                                             : request.codecs;
+  std::optional<BudgetSearchResult> best;
+  ImageEncoding best_encoding;
+  for (size_t k = 0; k < codecs.size(); ++k) {
+    ImageEncoding e = c.encoding;
+    e.format = codecs[k], e.formats.clear();
+    BudgetSearchRequest search{request.target_psnr_db, request.max_bytes, request.new_pages, {}};
+    if (request.progress) search.progress = [&](double f) { request.progress((double(k) + f) / double(codecs.size())); };
+    BudgetSearchResult r = search_texels_and_quality(search, input, output, e);
+    if (!best || better(request, r, *best)) best = std::move(r), best_encoding = e;
+  }
+  c.encoding = best_encoding;
+  c.reason = request.format
+                 ? fmt::format("--format {}; {}", to_string(c.encoding.format), best->reason)
+                 : fmt::format("{} (the {} that answers best of {}); {}", to_string(c.encoding.format), "codec",
+                               fmt::join(codecs | std::views::transform([](ImageFormat f) { return to_string(f); }), ", "), best->reason);
+  for (size_t i = 0; i < best->scaled.size(); ++i)
+    if (!best->scaled[i].empty()) std::swap(output.textures[i].image, best->scaled[i]);
+  c.images = std::move(best->images);
+  for (const std::string& b : c.images) c.bytes.push_back(b.size());
+  c.written_psnr_db = best->written_psnr_db;
+  c.probes = std::move(best->probes);
+  return c;
+}
+
 }  // namespace
 
 EncodingChoice choose_encoding(const BytesRequest& request, const TexturedMesh& input, const std::vector<TextureSource>& sources,
@@ -143,6 +191,9 @@ EncodingChoice choose_encoding(const BytesRequest& request, const TexturedMesh& 
   EncodingChoice c;
   c.encoding = request.encoding;
   c.reason = choose_codecs(request, input, sources, output, c.encoding);
+  const bool search_texels = request.new_pages > 0 && (request.target_psnr_db > 0 || request.max_bytes > 0) && !request.quality_given;
+  if (search_texels && (c.encoding.lossy() || (!request.format && !request.codecs.empty())))
+    return search_codec_texels_and_quality(request, input, output, c);
   if (c.encoding.lossy() && !request.quality_given) c.reason += "; " + pick_quality(request, input, sources, output, c.encoding);
   if (request.progress) request.progress(8.0 / 9);
   c.images = encoded(output, c.encoding);
@@ -192,10 +243,59 @@ nlohmann::json slot_bytes(const TexturedMesh& mesh, const std::vector<uint64_t>&
   return j;
 }
 
+/// The quality a lossy codec wrote texture i at; nullopt for a lossless one.
+std::optional<int> quality_of(const ImageEncoding& e, size_t i) {
+  const ImageEncoding t = e.of_texture(i);
+  if (t.format == ImageFormat::kJpeg) return t.jpeg_quality;
+  if (t.format == ImageFormat::kWebp && !t.webp_lossless) return t.webp_quality;
+  return std::nullopt;
+}
+
+/// report.json's "bytes"."images": every image the output's file binds, once: its file name, size, the
+/// slots that bind it, codec, quality (lossy codecs), bytes, and the written PSNR of what it shows (the
+/// surface PSNR for a base colour page, the slot's figure for a map: docs/metrics.md).
+nlohmann::json written_images(const TexturedMesh& output, const EncodingChoice& choice, const Metrics& written, ModelFormat format) {
+  std::vector<std::vector<std::string>> slots(output.textures.size());
+  auto bind = [&](int tex, const char* slot) {
+    if (tex >= 0 && std::find(slots[size_t(tex)].begin(), slots[size_t(tex)].end(), slot) == slots[size_t(tex)].end())
+      slots[size_t(tex)].push_back(slot);
+  };
+  for (const Material& m : output.materials) {
+    bind(m.texture, "base_colour");
+    for (size_t s = 0; s < kMaterialSlots; ++s)
+      if (holds(format, MaterialSlot(s))) bind(m.maps[s], material_slot_name(MaterialSlot(s)));
+  }
+  auto figure = [&](const std::string& slot) -> nlohmann::json {
+    if (slot == "base_colour") return written.surface_psnr;
+    for (const MaterialMapFigures& f : written.maps)
+      if (slot == material_slot_name(f.slot))
+        return f.angle_median >= 0 ? nlohmann::json{{"angle_median_deg", f.angle_median}} : nlohmann::json(f.surface_psnr);
+    return nullptr;
+  };
+  nlohmann::json images = nlohmann::json::array();
+  for (size_t i = 0; i < slots.size(); ++i) {
+    if (slots[i].empty() || output.textures[i].image.empty()) continue;
+    const ImageFormat codec = choice.encoding.of_texture(i).format;
+    nlohmann::json figures = nlohmann::json::object();
+    for (const std::string& slot : slots[i]) figures[slot] = figure(slot);
+    nlohmann::json image = {{"file", output.textures[i].path + image_extension(codec)},
+                            {"width", output.textures[i].image.width},
+                            {"height", output.textures[i].image.height},
+                            {"slots", slots[i]},
+                            {"codec", to_string(codec)},
+                            {"bytes", i < choice.bytes.size() ? choice.bytes[i] : 0},
+                            {"written_psnr_db", figures}};
+    if (const auto q = quality_of(choice.encoding, i)) image["quality"] = *q;
+    images.push_back(std::move(image));
+  }
+  return images;
+}
+
 }  // namespace
 
 nlohmann::json bytes_json(const TexturedMesh& input, const std::vector<TextureSource>& sources, const TexturedMesh& output,
-                          const EncodingChoice& choice, double written_psnr_db, ModelFormat format) {
+                          const EncodingChoice& choice, const Metrics& written, ModelFormat format) {
+  const double written_psnr_db = written.surface_psnr;
   std::vector<uint64_t> in_bytes;
   for (const TextureSource& s : sources) in_bytes.push_back(s.bytes);
   const ImageEncoding& e = choice.encoding;
@@ -210,6 +310,7 @@ nlohmann::json bytes_json(const TexturedMesh& input, const std::vector<TextureSo
     encoding[e.webp_lossless ? "lossless" : "quality"] = e.webp_lossless ? nlohmann::json(true) : nlohmann::json(e.webp_quality);
   return {{"input", slot_bytes(input, in_bytes, std::nullopt)},
           {"output", slot_bytes(output, choice.bytes, format)},
+          {"images", written_images(output, choice, written, format)},
           {"encoding", encoding},
           {"surface_psnr_written_db", written_psnr_db}};
 }

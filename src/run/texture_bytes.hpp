@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "io/texture_sources.hpp"
+#include "report/metrics.hpp"
 #include "tightex/io.hpp"
 #include "tightex/mesh.hpp"
 
@@ -23,6 +24,12 @@ struct BytesRequest {
   bool quality_given = false;         // --jpeg-quality or --webp-quality: kept as it is
   double target_psnr_db = 0;          // --target-psnr (0: none)
   uint64_t max_bytes = 0;             // --max-bytes (0: none)
+  /// Where > 0, --target-psnr and --max-bytes choose the texels of the bake's images too (the output's
+  /// first `new_pages` textures are its pages; budget_search.hpp); 0: the quality alone.
+  size_t new_pages = 0;
+  /// Without --format, the lossy codecs that search may choose from (those the output format reads
+  /// everywhere).
+  std::vector<ImageFormat> codecs;
   /// Told the fraction of the encoding done (rate control's steps, then the final images); may throw
   /// Cancelled to stop it. Empty: none.
   std::function<void(double)> progress;
@@ -36,6 +43,7 @@ struct EncodingChoice {
   std::vector<uint64_t> bytes;      // per output texture
   std::optional<double> written_psnr_db;
   std::string reason;
+  nlohmann::json probes;  // the texel search's probes (null where it did not run)
 };
 
 /// Chooses the encoding of `output`'s images (the result of `input`, whose textures are `sources`), and
@@ -44,10 +52,11 @@ EncodingChoice choose_encoding(const BytesRequest& request, const TexturedMesh& 
                                TexturedMesh& output);
 
 /// report.json's "bytes": per model, the bytes of the images its materials bind, as base colour and per
-/// other map slot, and in total; the encoding chosen and why; the surface PSNR as written
-/// (`written_psnr_db`, measured from the files). An output image only slots `format` cannot hold read
+/// other map slot, and in total; every written image (file, size, slots, codec, quality, bytes, the
+/// written PSNR of what it shows); the encoding chosen and why; the surface PSNR as written (`written`:
+/// the metrics measured from the files). An output image only slots `format` cannot hold read
 /// (OBJ's specular map in a glTF, glTF's occlusion in an MTL) is not written there and not counted.
 nlohmann::json bytes_json(const TexturedMesh& input, const std::vector<TextureSource>& sources, const TexturedMesh& output,
-                          const EncodingChoice& choice, double written_psnr_db, ModelFormat format);
+                          const EncodingChoice& choice, const Metrics& written, ModelFormat format);
 
 }  // namespace tightex

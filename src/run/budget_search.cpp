@@ -1,0 +1,358 @@
+#include "run/budget_search.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <numeric>
+#include <optional>
+#include <tuple>
+
+#include "core/raster.hpp"
+#include "io/image_io.hpp"
+#include "report/metrics.hpp"
+
+namespace tightex {
+
+namespace {
+
+/// The scales of the baked images' sides the search encodes (texels: 1, 1/4 and 1/16 of the bake's);
+/// between them the model interpolates over log scale, to kSteps steps a halving.
+constexpr double kProbeScales[] = {1.0, 0.5, 0.25};
+constexpr int kSteps = 4;
+/// The qualities each probed scale is encoded at; between them the model interpolates.
+constexpr int kProbeQualities[] = {50, 75, 88, 96};
+/// The probes' surface PSNR points: the same points for every probe, a tenth of the report's.
+constexpr size_t kProbePoints = kPsnrPoints / 10;
+/// How far above --target-psnr the model aims, for the probes' points are not the report's.
+constexpr double kTargetMarginDb = 0.05;
+/// The most encodings the check of the model's choice makes on the images as written.
+constexpr int kMaxChecks = 5;
+
+/// Per texture of `output`, whether the bake made it: the first `new_pages` and every map of a material
+/// that binds one of them as its base colour.
+std::vector<char> baked_textures(const TexturedMesh& output, size_t new_pages) {
+  std::vector<char> baked(output.textures.size(), 0);
+  for (size_t i = 0; i < new_pages && i < baked.size(); ++i) baked[i] = 1;
+  for (const Material& m : output.materials)
+    if (m.texture >= 0 && size_t(m.texture) < new_pages)
+      for (const int t : m.maps)
+        if (t >= 0) baked[size_t(t)] = 1;
+  return baked;
+}
+
+/// Per baked texture, the texels whose centres a triangle that reads it covers (empty for the others).
+std::vector<std::vector<uint8_t>> chart_texels(const TexturedMesh& output, const std::vector<char>& baked) {
+  std::vector<std::vector<uint8_t>> inside(output.textures.size());
+  for (size_t i = 0; i < inside.size(); ++i)
+    if (baked[i]) inside[i].assign(size_t(output.textures[i].image.width) * size_t(output.textures[i].image.height), 0);
+  auto cover = [&](size_t t, int tex) {
+    if (tex < 0 || !baked[size_t(tex)]) return;
+    const Image& img = output.textures[size_t(tex)].image;
+    Vec2 px[3];
+    for (int k = 0; k < 3; ++k) px[k] = Vec2(output.sampled_uv(t, k).x() * img.width, (1 - output.sampled_uv(t, k).y()) * img.height);
+    scan_triangle(px[0], px[1], px[2], 0, img.width, 0, img.height, EdgeRule::kInclusive,
+                  [&](long x, long y, double, double, double) { inside[size_t(tex)][size_t(y) * size_t(img.width) + size_t(x)] = 1; });
+  };
+  for (size_t t = 0; t < output.num_triangles(); ++t) {
+    const int32_t mat = output.face_material[t];
+    if (mat < 0) continue;
+    const Material& m = output.materials[size_t(mat)];
+    cover(t, m.texture);
+    for (const int tex : m.maps)
+      if (tex != m.texture) cover(t, tex);
+  }
+  return inside;
+}
+
+/// A side at `scale`: a multiple of 4, at least 8, never more than the side itself.
+int scaled_side(int side, double scale) {
+  if (scale >= 1) return side;
+  return std::min(side, std::max(8, int(std::lround(side * scale / 4)) * 4));
+}
+
+/// The baked images of `output` at `scale` (empty where a texture is not baked, or at scale 1).
+std::vector<Image> images_at(const TexturedMesh& output, const std::vector<char>& baked, const std::vector<std::vector<uint8_t>>& inside,
+                             double scale) {
+  std::vector<Image> scaled(output.textures.size());
+  if (scale >= 1) return scaled;
+  for (size_t i = 0; i < scaled.size(); ++i) {
+    const Image& img = output.textures[i].image;
+    if (baked[i] && !img.empty()) scaled[i] = shrink_image(img, inside[i], scaled_side(img.width, scale), scaled_side(img.height, scale));
+  }
+  return scaled;
+}
+
+/// Each texture of `output` encoded as `e` says, a baked one as `scaled` holds it where it holds one.
+std::vector<std::string> encode_all(const TexturedMesh& output, const std::vector<Image>& scaled, const ImageEncoding& e) {
+  std::vector<std::string> files(output.textures.size());
+  tbb::parallel_for(size_t(0), files.size(), [&](size_t i) {
+    const Image& img = scaled[i].empty() ? output.textures[i].image : scaled[i];
+    if (!img.empty()) files[i] = encode_image(img, e.of_texture(i), output.textures[i].path);
+  });
+  return files;
+}
+
+uint64_t total_bytes(const std::vector<std::string>& files) {
+  return std::accumulate(files.begin(), files.end(), uint64_t(0), [](uint64_t n, const std::string& f) { return n + f.size(); });
+}
+
+/// The surface PSNR (`judge`'s points) of `output` with its images as `files` decode (swapped in, then back).
+double psnr_as_written(const SurfacePsnrOfImages& judge, TexturedMesh& output, const std::vector<std::string>& files) {
+  std::vector<Image> decoded(files.size());
+  tbb::parallel_for(size_t(0), files.size(), [&](size_t i) {
+    if (!files[i].empty())
+      decoded[i] = decode_image(reinterpret_cast<const unsigned char*>(files[i].data()), files[i].size(), output.textures[i].path);
+  });
+  for (size_t i = 0; i < decoded.size(); ++i)
+    if (!decoded[i].empty()) std::swap(output.textures[i].image, decoded[i]);
+  const double psnr = judge(output);
+  for (size_t i = 0; i < decoded.size(); ++i)
+    if (!decoded[i].empty()) std::swap(output.textures[i].image, decoded[i]);
+  return psnr;
+}
+
+/// A surface PSNR as the mean squared error it stands for, and back.
+double mse_of(double psnr) { return 255.0 * 255.0 * std::pow(10.0, -psnr / 10); }
+double psnr_of(double mse) { return 10 * std::log10(255.0 * 255.0 / std::max(mse, 1e-12)); }
+
+/// One probed scale's codec error (the log of the written images' MSE less the unencoded images' at
+/// that scale) and log bytes, at kProbeQualities.
+struct ScaleCurve {
+  std::vector<double> log_codec_mse, log_bytes;
+};
+
+/// The model of the surface PSNR and bytes over (scale, quality): the error of the images shrunk to each
+/// of `scales` (measured, unencoded) plus the codec's, which with the bytes is interpolated from the
+/// probes (piecewise linear over the quality, the quadratic through the probed scales over log scale).
+struct RateModel {
+  std::vector<double> scales, shrink_mse;
+  std::vector<ScaleCurve> probes;  // per kProbeScales
+};
+
+/// The value at quality q of the piecewise-linear curve through (kProbeQualities, y), extended along
+/// its end segments.
+double at_quality(const std::vector<double>& y, int q) {
+  const size_t n = std::size(kProbeQualities);
+  size_t i = 0;
+  while (i + 2 < n && q > kProbeQualities[i + 1]) ++i;
+  const double t = double(q - kProbeQualities[i]) / double(kProbeQualities[i + 1] - kProbeQualities[i]);
+  return y[i] + t * (y[i + 1] - y[i]);
+}
+
+/// The model's PSNR and log bytes at (model.scales[s], q).
+std::pair<double, double> predict(const RateModel& model, size_t s, int q) {
+  const double x = std::log(model.scales[s]);
+  double log_codec_mse = 0, log_bytes = 0;
+  for (size_t i = 0; i < model.probes.size(); ++i) {
+    double w = 1;  // Lagrange's weight of probe i at x
+    for (size_t j = 0; j < model.probes.size(); ++j)
+      if (j != i) w *= (x - std::log(kProbeScales[j])) / (std::log(kProbeScales[i]) - std::log(kProbeScales[j]));
+    log_codec_mse += w * at_quality(model.probes[i].log_codec_mse, q), log_bytes += w * at_quality(model.probes[i].log_bytes, q);
+  }
+  return {psnr_of(model.shrink_mse[s] + std::exp(log_codec_mse)), log_bytes};
+}
+
+/// The scales the model chooses from: kSteps a halving, from 1 down to the smallest probed.
+std::vector<double> model_scales() {
+  std::vector<double> scales;
+  for (int i = 0; std::pow(2.0, -double(i) / kSteps) >= kProbeScales[std::size(kProbeScales) - 1] - 1e-9; ++i)
+    scales.push_back(std::pow(2.0, -double(i) / kSteps));
+  return scales;
+}
+
+/// The model's (scale index, quality) for the request: the fewest predicted bytes whose predicted PSNR
+/// reaches the target, or the most predicted PSNR within the bytes; where none does, the closest.
+std::pair<size_t, int> model_choice(const BudgetSearchRequest& request, const RateModel& model) {
+  std::pair<size_t, int> best{0, 100};
+  double best_score = -1e300;
+  for (size_t s = 0; s < model.scales.size(); ++s) {
+    double running_psnr = -1e300;  // PSNR never falls as the quality rises
+    for (int q = 1; q <= 100; ++q) {
+      const auto [psnr, log_bytes] = predict(model, s, q);
+      running_psnr = std::max(running_psnr, psnr);
+      double score = 0;
+      if (request.target_psnr_db > 0)
+        score = running_psnr >= request.target_psnr_db + kTargetMarginDb ? 1e6 - log_bytes : running_psnr - 1e6;
+      else
+        score = log_bytes <= std::log(double(request.max_bytes)) ? 1e6 + running_psnr : -log_bytes;
+      if (score > best_score) best_score = score, best = {s, q};
+    }
+  }
+  return best;
+}
+
+/// Whether the images as written answer the request (the PSNR reached, or the bytes within the bound).
+bool answers(const BudgetSearchRequest& request, double psnr, uint64_t bytes) {
+  return request.target_psnr_db > 0 ? psnr >= request.target_psnr_db : bytes <= request.max_bytes;
+}
+
+/// The images of `output` at `scale` swapped in (and, called again, back).
+void swap_in(TexturedMesh& output, std::vector<Image>& scaled) {
+  for (size_t i = 0; i < scaled.size(); ++i)
+    if (!scaled[i].empty()) std::swap(output.textures[i].image, scaled[i]);
+}
+
+/// The rate model (RateModel) of `output`: every model scale's images measured unencoded, each of
+/// kProbeScales encoded at kProbeQualities and measured, at `judge`'s points; the probes into `probes`.
+RateModel fit_rate_model(const BudgetSearchRequest& request, const SurfacePsnrOfImages& judge, const std::vector<char>& baked,
+                         const std::vector<std::vector<uint8_t>>& inside, const ImageEncoding& encoding, TexturedMesh& output,
+                         nlohmann::json& probes) {
+  RateModel model;
+  model.scales = model_scales();
+  for (const double scale : model.scales) {
+    std::vector<Image> scaled = images_at(output, baked, inside, scale);
+    swap_in(output, scaled);
+    model.shrink_mse.push_back(mse_of(judge(output)));
+    swap_in(output, scaled);
+  }
+  for (const double scale : kProbeScales) {
+    if (request.progress) request.progress(0.8 * double(model.probes.size()) / double(std::size(kProbeScales)));
+    std::vector<Image> scaled = images_at(output, baked, inside, scale);
+    std::vector<std::vector<std::string>> files(std::size(kProbeQualities));
+    tbb::parallel_for(size_t(0), files.size(), [&](size_t k) {
+      ImageEncoding e = encoding;
+      e.jpeg_quality = e.webp_quality = kProbeQualities[k];
+      files[k] = encode_all(output, scaled, e);
+    });
+    const size_t s = size_t(std::find_if(model.scales.begin(), model.scales.end(), [&](double x) { return std::abs(x - scale) < 1e-9; }) -
+                            model.scales.begin());
+    ScaleCurve curve;
+    swap_in(output, scaled);
+    for (size_t k = 0; k < files.size(); ++k) {
+      const double psnr = psnr_as_written(judge, output, files[k]), mse = mse_of(psnr);
+      curve.log_codec_mse.push_back(std::log(std::max(mse - model.shrink_mse[s], 1e-3 * mse)));
+      curve.log_bytes.push_back(std::log(double(std::max<uint64_t>(1, total_bytes(files[k])))));
+      probes.push_back({{"scale", scale}, {"quality", kProbeQualities[k]}, {"bytes", total_bytes(files[k])}, {"psnr_db", psnr}});
+    }
+    swap_in(output, scaled);
+    model.probes.push_back(std::move(curve));
+  }
+  return model;
+}
+
+/// The quality the model, corrected by what the last check measured (`psnr_offset`, `log_bytes_offset`:
+/// measured less predicted), says answers the request at `scale` with the fewest bytes (a target) or
+/// the most PSNR (a bound); within (lo, hi), the qualities not yet known to fail or to answer worse.
+int corrected_quality(const BudgetSearchRequest& request, const RateModel& model, size_t scale, double psnr_offset, double log_bytes_offset,
+                      int lo, int hi) {
+  if (request.target_psnr_db > 0) {
+    for (int q = lo + 1; q < hi; ++q)
+      if (predict(model, scale, q).first + psnr_offset >= request.target_psnr_db + kTargetMarginDb) return q;
+    return hi - 1;
+  }
+  for (int q = hi - 1; q > lo; --q)
+    if (predict(model, scale, q).second + log_bytes_offset <= std::log(double(request.max_bytes))) return q;
+  return lo + 1;
+}
+
+/// Images written at one quality, and their surface PSNR as written.
+struct Written {
+  int quality = 0;
+  std::vector<std::string> images;
+  double psnr = 0;
+};
+
+/// The model's choice at scale index s, starting at quality q: checked on the images as written
+/// (`output` holds them at that scale) at `judge`'s points and moved along the quality by the model,
+/// corrected by each check, to the best quality that answers the request, at most kMaxChecks
+/// encodings. Returns the best that answers it, else the closest; each check into `probes`.
+std::pair<std::optional<Written>, Written> check_qualities(const BudgetSearchRequest& request, const RateModel& model, size_t s, int q,
+                                                           const SurfacePsnrOfImages& judge, ImageEncoding& encoding, TexturedMesh& output,
+                                                           nlohmann::json& probes) {
+  // Known so far: every quality <= lo is too low (a target) or within the bound; every quality >= hi
+  // reaches the target or is over the bound.
+  const bool target = request.target_psnr_db > 0;
+  int lo = 0, hi = 101;
+  std::optional<Written> best, closest;
+  for (int check = 0; check < kMaxChecks; ++check) {
+    if (request.progress) request.progress(0.8 + 0.2 * check / kMaxChecks);
+    encoding.jpeg_quality = encoding.webp_quality = q;
+    Written w{q, encode_all(output, std::vector<Image>(output.textures.size()), encoding), 0};
+    w.psnr = psnr_as_written(judge, output, w.images);
+    const uint64_t bytes = total_bytes(w.images);
+    probes.push_back({{"scale", model.scales[s]}, {"quality", q}, {"bytes", bytes}, {"psnr_db", w.psnr}, {"check", true}});
+    const bool ok = answers(request, w.psnr, bytes);
+    (target == ok ? hi : lo) = q;  // a target reached or a bound exceeded: so is every higher quality
+    if (ok && (!best || (target ? q < best->quality : q > best->quality))) best = w;
+    if (!ok && (!closest || (target ? w.psnr > closest->psnr : q < closest->quality))) closest = w;
+    const auto [psnr, log_bytes] = predict(model, s, q);
+    const double log_bytes_offset = std::log(double(std::max<uint64_t>(bytes, 1))) - log_bytes;
+    const int next = hi - lo <= 1 ? q : corrected_quality(request, model, s, w.psnr - psnr, log_bytes_offset, lo, hi);
+    if (next == q || next <= lo || next >= hi) break;
+    q = next;
+  }
+  return {std::move(best), best ? Written{} : std::move(*closest)};
+}
+
+}  // namespace
+
+BudgetSearchResult search_texels_and_quality(const BudgetSearchRequest& request, const TexturedMesh& input, TexturedMesh& output,
+                                             ImageEncoding& encoding) {
+  const std::vector<char> baked = baked_textures(output, request.new_pages);
+  const std::vector<std::vector<uint8_t>> inside = chart_texels(output, baked);
+  BudgetSearchResult r;
+  const RateModel model =
+      fit_rate_model(request, SurfacePsnrOfImages(input, output, kProbePoints), baked, inside, encoding, output, r.probes);
+  const SurfacePsnrOfImages judge(input, output, kPsnrPoints);
+  // The model's choice, checked; where no quality at its scale reaches a target, the bake's own size.
+  auto [s, q] = model_choice(request, model);
+  std::optional<Written> best;
+  Written closest;
+  for (;;) {
+    r.scale = model.scales[s];
+    r.scaled = images_at(output, baked, inside, r.scale);
+    swap_in(output, r.scaled);
+    std::tie(best, closest) = check_qualities(request, model, s, q, judge, encoding, output, r.probes);
+    swap_in(output, r.scaled);
+    if (best || request.target_psnr_db <= 0 || s == 0) break;
+    s = 0, q = std::max(closest.quality, kProbeQualities[std::size(kProbeQualities) - 2]);
+  }
+  const Written& chosen = best ? *best : closest;
+  encoding.jpeg_quality = encoding.webp_quality = chosen.quality;
+  r.quality = chosen.quality, r.images = chosen.images, r.written_psnr_db = chosen.psnr;
+  const Image& img = r.scaled.empty() || r.scaled[0].empty() ? output.textures[0].image : r.scaled[0];
+  const std::string asked = request.target_psnr_db > 0 ? fmt::format("--target-psnr {} dB", request.target_psnr_db)
+                                                       : fmt::format("--max-bytes {}", request.max_bytes);
+  r.reason = fmt::format(
+      "texels and quality chosen together for {}: the baked images at {:.2f} of their side ({}x{}), quality {} ({} bytes, {:.2f} dB as "
+      "written){}",
+      asked, r.scale, img.width, img.height, r.quality, total_bytes(r.images), r.written_psnr_db,
+      best ? "" : "; no quality checked answers it: the closest");
+  if (request.progress) request.progress(1);
+  return r;
+}
+
+Image shrink_image(const Image& image, const std::vector<uint8_t>& inside, int width, int height) {
+  width = std::min(width, image.width), height = std::min(height, image.height);
+  const double fx = double(image.width) / width, fy = double(image.height) / height;
+  Image out(width, height);
+  tbb::parallel_for(0, height, [&](int y) {
+    const double y0 = y * fy, y1 = (y + 1) * fy;
+    for (int x = 0; x < width; ++x) {
+      const double x0 = x * fx, x1 = (x + 1) * fx;
+      double in_sum[4] = {0, 0, 0, 0}, all_sum[4] = {0, 0, 0, 0}, in_w = 0, all_w = 0;
+      for (int sy = int(y0); sy < std::min(image.height, int(std::ceil(y1))); ++sy) {
+        const double wy = std::min(y1, sy + 1.0) - std::max(y0, double(sy));
+        for (int sx = int(x0); sx < std::min(image.width, int(std::ceil(x1))); ++sx) {
+          const double w = wy * (std::min(x1, sx + 1.0) - std::max(x0, double(sx)));
+          const Rgba8 p = image.at(sx, sy);
+          const double c[4] = {double(p.r), double(p.g), double(p.b), double(p.a)};
+          const bool in = !inside.empty() && inside[size_t(sy) * size_t(image.width) + size_t(sx)];
+          for (int k = 0; k < 4; ++k) all_sum[k] += w * c[k], in_sum[k] += in ? w * c[k] : 0;
+          all_w += w, in_w += in ? w : 0;
+        }
+      }
+      const double* sum = in_w > 0 ? in_sum : all_sum;
+      const double wsum = in_w > 0 ? in_w : all_w;
+      auto level = [&](int k) { return uint8_t(std::clamp(std::lround(sum[k] / wsum), 0l, 255l)); };
+      out.at(x, y) = {level(0), level(1), level(2), level(3)};
+    }
+  });
+  return out;
+}
+
+}  // namespace tightex

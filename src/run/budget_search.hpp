@@ -1,0 +1,48 @@
+// --target-psnr and --max-bytes with tightex's own texel budget: the texels and the quality chosen
+// together. The baked atlas is shrunk to a few scales and each encoded at a few qualities (probes,
+// never a re-bake); bytes and surface PSNR are interpolated between the probes over the quality, the
+// best (scale, quality) chosen from that model, then checked and nudged on the images as written.
+#pragma once
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "tightex/io.hpp"
+#include "tightex/mesh.hpp"
+
+namespace tightex {
+
+/// What the search asks for: the fewest bytes at `target_psnr_db`, or the most PSNR within `max_bytes`.
+struct BudgetSearchRequest {
+  double target_psnr_db = 0;  // 0: none
+  uint64_t max_bytes = 0;     // 0: none
+  size_t new_pages = 0;       // the output's first textures that are the bake's pages
+  /// Told the fraction of the search done; may throw Cancelled. Empty: none.
+  std::function<void(double)> progress;
+};
+
+/// The search's choice: the quality (set into the encoding), the scale of the baked images and the
+/// images at that scale, their encoded files and the surface PSNR as written, and the probes.
+struct BudgetSearchResult {
+  int quality = 0;
+  double scale = 1;
+  std::vector<Image> scaled;        // per texture of the output, its image at `scale` (empty: as it is)
+  std::vector<std::string> images;  // per texture of the output, its file's bytes
+  double written_psnr_db = 0;
+  std::string reason;
+  nlohmann::json probes = nlohmann::json::array();
+};
+
+/// Searches the scale of `output`'s baked images (the new pages and the maps of the materials that
+/// bind them) and the lossy quality of `encoding` together. `output` is left as it was (its images are
+/// swapped out and back while measured); `input` is the model it was made from.
+BudgetSearchResult search_texels_and_quality(const BudgetSearchRequest& request, const TexturedMesh& input, TexturedMesh& output,
+                                             ImageEncoding& encoding);
+
+/// `image` made `width` x `height` (no larger) by the mean of its texels over each new texel's
+/// footprint, counting only the texels `inside` marks where the footprint holds any, so a chart's
+/// border does not take its gutter's colour.
+Image shrink_image(const Image& image, const std::vector<uint8_t>& inside, int width, int height);
+
+}  // namespace tightex
