@@ -22,11 +22,12 @@ namespace {
 /// Rate control's one quality, for every lossy image (JPEG or WebP).
 void set_quality(ImageEncoding& e, int quality) { e.jpeg_quality = e.webp_quality = quality; }
 
-/// Each texture of `output` encoded as `encoding` says (on every core).
-std::vector<std::string> encoded(const TexturedMesh& output, const ImageEncoding& encoding) {
+/// Each texture of `output` encoded as `encoding` says (on every core); with `lossy_only`, only the lossy
+/// ones (the others empty).
+std::vector<std::string> encoded(const TexturedMesh& output, const ImageEncoding& encoding, bool lossy_only = false) {
   std::vector<std::string> bytes(output.textures.size());
   tbb::parallel_for(size_t(0), bytes.size(), [&](size_t i) {
-    if (!output.textures[i].image.empty())
+    if (!output.textures[i].image.empty() && (!lossy_only || encoding.of_texture(i).lossy()))
       bytes[i] = encode_image(output.textures[i].image, encoding.of_texture(i), output.textures[i].path);
   });
   return bytes;
@@ -66,6 +67,37 @@ uint64_t bound_input_bytes(const TexturedMesh& input, const std::vector<TextureS
   return n;
 }
 
+/// The bytes of the lossy images (JPEG, lossy WebP) among `images`, encoded as `e`: the only ones
+/// rate control's quality changes.
+uint64_t lossy_total(const std::vector<std::string>& images, const ImageEncoding& e) {
+  uint64_t n = 0;
+  for (size_t i = 0; i < images.size(); ++i) n += e.of_texture(i).lossy() ? images[i].size() : 0;
+  return n;
+}
+
+/// The bytes of the input's images in the roles (base colour, map slots) that `output`'s lossy images
+/// take under `e`, each image once: what the input spent on the images these replace.
+uint64_t input_bytes_of_lossy_roles(const TexturedMesh& input, const std::vector<TextureSource>& sources, const TexturedMesh& output,
+                                    const ImageEncoding& e) {
+  auto lossy = [&](int t) { return t >= 0 && e.of_texture(size_t(t)).lossy(); };
+  bool base_colour = false;
+  std::vector<char> slot(kMaterialSlots, 0);
+  for (const Material& m : output.materials) {
+    base_colour = base_colour || lossy(m.texture);
+    for (size_t s = 0; s < kMaterialSlots; ++s)
+      if (m.maps[s] != m.texture && lossy(m.maps[s])) slot[s] = 1;
+  }
+  std::vector<char> bound(sources.size(), 0);
+  for (const Material& m : input.materials) {
+    if (base_colour && m.texture >= 0) bound[size_t(m.texture)] = 1;
+    for (size_t s = 0; s < kMaterialSlots; ++s)
+      if (slot[s] && m.maps[s] >= 0) bound[size_t(m.maps[s])] = 1;
+  }
+  uint64_t n = 0;
+  for (size_t i = 0; i < sources.size(); ++i) n += bound[i] ? sources[i].bytes : 0;
+  return n;
+}
+
 /// The lowest quality in [1, 100] for which `good` holds, where `good` holds from some quality on
 /// (bisection); 101 where it holds for none.
 int lowest_quality(const std::function<bool(int)>& good) {
@@ -79,9 +111,29 @@ int lowest_quality(const std::function<bool(int)>& good) {
 }
 
 /// Tells request.progress that one more of rate control's encodings (at most 8 a search, then the final
-/// one) is starting.
+/// one) is starting; a second search (the fallback below) stays at the first's end.
 void step(const BytesRequest& request, int& steps) {
-  if (request.progress) request.progress(std::min(1.0, ++steps / 9.0));
+  if (request.progress) request.progress(std::min(8.0, double(++steps)) / 9.0);
+}
+
+/// Rate control's fallback where even quality 1 takes more than the input's own bytes (`bound`): the
+/// lossless images (a PNG base colour or data maps grown with the texel budget) alone outgrow them, and
+/// quality 1 would ruin the lossy maps for a bound no quality reaches. Instead, the highest quality
+/// whose lossy images take at most the input's images they replace (same roles), as a lossy-only
+/// output is bounded; the quality and why.
+std::string within_own_roles(const BytesRequest& request, const TexturedMesh& input, const std::vector<TextureSource>& sources,
+                             const TexturedMesh& output, ImageEncoding& e, int& steps, uint64_t bound) {
+  const uint64_t own = input_bytes_of_lossy_roles(input, sources, output, e);
+  const int over = lowest_quality([&](int quality) {
+    step(request, steps);
+    set_quality(e, quality);
+    return lossy_total(encoded(output, e, true), e) > own;
+  });
+  set_quality(e, std::max(over - 1, 1));
+  return fmt::format(
+      "even quality 1 takes more than the input's own texture bytes ({} bytes), the lossless images being larger: the highest "
+      "quality whose lossy images take at most the input's images in their roles ({} bytes){}",
+      bound, own, over > 1 ? "" : ", not reached: quality 1");
 }
 
 /// Rate control of a lossy encoding: the quality and why.
@@ -108,8 +160,9 @@ std::string pick_quality(const BytesRequest& request, const TexturedMesh& input,
     return total(encoded(output, e)) > bound;
   });
   set_quality(e, std::max(over - 1, 1));
-  return over > 1 ? fmt::format("the highest quality whose images take at most {} ({} bytes)", what, bound)
-                  : fmt::format("even quality 1 takes more than {} ({} bytes): quality 1", what, bound);
+  if (over > 1) return fmt::format("the highest quality whose images take at most {} ({} bytes)", what, bound);
+  if (request.max_bytes > 0) return fmt::format("even quality 1 takes more than {} ({} bytes): quality 1", what, bound);
+  return within_own_roles(request, input, sources, output, e, steps, bound);
 }
 
 /// Per texture of `output`, the codec of the input's images in the same role (base colour, or the
