@@ -154,6 +154,47 @@ TEST(TextureBytes, MaxBytesIsABound) {
   EXPECT_GT(report["bytes"]["encoding"]["quality"].get<int>(), 1);
 }
 
+/// The width of the first image a report lists as written (the base colour's page).
+int written_width(const json& report) { return report["bytes"]["images"][0]["width"].get<int>(); }
+
+TEST(TextureBytes, TargetPsnrChoosesTexelsAndQualityTogether) {
+  const fs::path dir = testing::scratch_folder("bytes_joint_target");
+  const fs::path in = scan_obj(dir / "in", ImageFormat::kPng);
+  const int side = written_width(run(in, dir / "bake", "--format webp --webp-quality 90"));
+  const json joint = run(in, dir / "joint", "--format webp --target-psnr 30");
+  const json quality_alone = run(in, dir / "alone", "--format webp --target-psnr 30 --size " + std::to_string(side));
+  EXPECT_GE(measured_psnr(in, dir / "joint" / "scan.obj"), 30.0);
+  EXPECT_FALSE(joint["bytes"]["probes"].empty());
+  // A smooth texture at a low target: fewer texels, and no more bytes than the quality alone at the bake's size.
+  EXPECT_LT(written_width(joint), side);
+  EXPECT_LE(double(bytes_of(dir / "joint", ".webp")), 1.05 * double(bytes_of(dir / "alone", ".webp")));
+  EXPECT_EQ(joint["bytes"]["output"]["total"].get<uint64_t>(), bytes_of(dir / "joint", ".webp"));
+}
+
+TEST(TextureBytes, MaxBytesChoosesTexelsAndQualityTogether) {
+  const fs::path dir = testing::scratch_folder("bytes_joint_max");
+  const fs::path in = scan_obj(dir / "in", ImageFormat::kPng);
+  const int side = written_width(run(in, dir / "bake", "--format webp --webp-quality 90"));
+  run(in, dir / "joint", "--format webp --max-bytes 2500");
+  run(in, dir / "alone", "--format webp --max-bytes 2500 --size " + std::to_string(side));
+  EXPECT_LE(bytes_of(dir / "joint", ".webp"), 2500u);
+  EXPECT_GE(measured_psnr(in, dir / "joint" / "scan.obj"), measured_psnr(in, dir / "alone" / "scan.obj") - 0.1);
+}
+
+TEST(TextureBytes, WithoutFormatTheSearchTakesALossyCodecTheModelFormatReads) {
+  const fs::path dir = testing::scratch_folder("bytes_joint_codec");
+  const fs::path in = scan_obj(dir / "in", ImageFormat::kPng);
+  const json obj = run(in, dir / "obj", "--target-psnr 30");
+  const std::string codec = obj["bytes"]["encoding"]["format"];
+  EXPECT_TRUE(codec == "webp" || codec == "jpg") << codec;
+  EXPECT_EQ(bytes_of(dir / "obj", ".png"), 0u);
+  EXPECT_GE(measured_psnr(in, dir / "obj" / "scan.obj"), 30.0);
+  // glTF's core images: JPEG, not WebP (an extension a viewer may lack).
+  const json glb = run(in, dir / "glb", "--target-psnr 30 --output-format glb");
+  EXPECT_EQ(glb["bytes"]["encoding"]["format"], "jpg");
+  testing::expect_valid_and_loading(dir / "glb" / "scan.glb", testing::sphere().num_triangles());
+}
+
 TEST(TextureBytes, WebpGlbDeclaresItsExtensionAndValidates) {
   const fs::path dir = testing::scratch_folder("bytes_webp_glb");
   testing::GridGltf g = testing::grid_gltf();

@@ -1,0 +1,40 @@
+// The texel search's shrink (run/budget_search.hpp): a chart's border keeps its own colour, whatever
+// its gutter holds, and a texel with no chart under it takes the mean of all it covers.
+#include <gtest/gtest.h>
+
+#include "run/budget_search.hpp"
+
+namespace tightex {
+namespace {
+
+TEST(BudgetSearch, ShrinkKeepsAChartsBorderFromItsGutter) {
+  // A 12 x 12 image: a red chart in columns 0..4 (its border column 4 shares each 3 x 3 footprint of
+  // the shrunk image with gutter texels), a blue gutter beyond.
+  Image image(12, 12, Rgba8{0, 0, 255, 255});
+  std::vector<uint8_t> inside(144, 0);
+  for (int y = 0; y < 12; ++y)
+    for (int x = 0; x < 5; ++x) image.at(x, y) = {255, 0, 0, 255}, inside[size_t(y * 12 + x)] = 1;
+  const Image small = shrink_image(image, inside, 4, 4);
+  ASSERT_EQ(small.width, 4);
+  ASSERT_EQ(small.height, 4);
+  for (int y = 0; y < 4; ++y) {
+    EXPECT_EQ(small.at(0, y), (Rgba8{255, 0, 0, 255}));
+    EXPECT_EQ(small.at(1, y), (Rgba8{255, 0, 0, 255})) << "the chart's border took its gutter's colour";
+    EXPECT_EQ(small.at(3, y), (Rgba8{0, 0, 255, 255}));
+  }
+  // Without a mask, the same texel is the footprint's mean: 2 of its 3 columns red.
+  const Image plain = shrink_image(image, {}, 4, 4);
+  EXPECT_EQ(plain.at(1, 0), (Rgba8{170, 0, 85, 255}));
+}
+
+TEST(BudgetSearch, ShrinkByAFractionWeighsTexelsByTheirOverlap) {
+  // 3 texels into 2: the middle one is half in each new texel.
+  Image image(3, 1);
+  image.at(0, 0) = {0, 0, 0, 255}, image.at(1, 0) = {90, 90, 90, 255}, image.at(2, 0) = {180, 180, 180, 255};
+  const Image small = shrink_image(image, {}, 2, 1);
+  EXPECT_EQ(small.at(0, 0).r, 30);   // (0 * 1 + 90 * 0.5) / 1.5
+  EXPECT_EQ(small.at(1, 0).r, 150);  // (90 * 0.5 + 180 * 1) / 1.5
+}
+
+}  // namespace
+}  // namespace tightex
