@@ -364,6 +364,73 @@ TEST(Metrics, TrianglesCorrespondByTheirCornerPositions) {
   EXPECT_EQ(measure(sphere(), moved, 20000).lost_triangles, around);
 }
 
+/// `m` with its texture coordinates turned by `degrees` about the texture's centre (then mirrored in u
+/// where `mirror`), its image a `side` x `side` square.
+TexturedMesh turned(TexturedMesh m, double degrees, bool mirror = false, int side = 64) {
+  const double a = degrees * M_PI / 180;
+  for (Vec2& uv : m.corner_uv) {
+    const Vec2 d = uv - Vec2(0.5, 0.5);
+    uv = Vec2(0.5, 0.5) + Vec2(std::cos(a) * d.x() - std::sin(a) * d.y(), std::sin(a) * d.x() + std::cos(a) * d.y());
+    if (mirror) uv.x() = 1 - uv.x();
+  }
+  m.textures[0].image = Image(side, side);
+  return m;
+}
+
+// The texture axes angle of one triangle: the turn of the input's texel axes in the output's texels,
+// modulo a right angle, whatever the scale; a shear turns one axis and not the other.
+TEST(Metrics, TextureAxesAngleIsTheTurnModuloARightAngle) {
+  const std::array<Vec2, 3> tri{Vec2(0.1, 0.2), Vec2(0.4, 0.25), Vec2(0.2, 0.6)};
+  const Vec2 square(100, 100);
+  auto turn = [&](double degrees, double scale, const Vec2& texels) {
+    const double a = degrees * M_PI / 180;
+    std::array<Vec2, 3> out;
+    for (size_t k = 0; k < 3; ++k) {
+      const Vec2 p = tri[k].cwiseProduct(square);  // input texels, turned, into `texels`
+      out[k] = scale * Vec2(std::cos(a) * p.x() - std::sin(a) * p.y(), std::sin(a) * p.x() + std::cos(a) * p.y()).cwiseQuotient(texels);
+    }
+    return texture_axes_angle(tri, square, out, texels);
+  };
+  for (const double degrees : {0.0, 90.0, 180.0, 270.0, -90.0}) EXPECT_NEAR(turn(degrees, 0.7, square), 0.0, 1e-9) << degrees;
+  EXPECT_NEAR(turn(30, 1, square), 30.0, 1e-9);
+  EXPECT_NEAR(turn(-30, 2.5, square), 30.0, 1e-9);
+  EXPECT_NEAR(turn(60, 1, square), 30.0, 1e-9);
+  EXPECT_NEAR(turn(100, 1, square), 10.0, 1e-9);
+  EXPECT_NEAR(turn(45, 1, square), 45.0, 1e-9);
+  EXPECT_NEAR(turn(-170, 1, Vec2(512, 64)), 10.0, 1e-9);  // measured in texels, not in uv
+  // Stretched along an axis, or mirrored: the axes stay axis-aligned.
+  std::array<Vec2, 3> stretched = tri, mirrored = tri;
+  for (size_t k = 0; k < 3; ++k) stretched[k].x() *= 3, mirrored[k].y() = 1 - mirrored[k].y();
+  EXPECT_NEAR(texture_axes_angle(tri, square, stretched, square), 0.0, 1e-9);
+  EXPECT_NEAR(texture_axes_angle(tri, square, mirrored, square), 0.0, 1e-9);
+  // A shear by 45 degrees: u stays, v turns by 45; the figure is their mean.
+  std::array<Vec2, 3> sheared = tri;
+  for (size_t k = 0; k < 3; ++k) sheared[k].x() += sheared[k].y();
+  EXPECT_NEAR(texture_axes_angle(tri, square, sheared, square), 22.5, 1e-9);
+  // No texture area on one side: no figure.
+  EXPECT_TRUE(std::isnan(texture_axes_angle(tri, square, {tri[0], tri[1], tri[1]}, square)));
+}
+
+// measure's texture axes angle over a whole model, matched by corner positions: an output whose texture
+// coordinates are the input's turned by 30 degrees gives 30 on every triangle; a quarter turn, a half
+// turn or a mirror gives 0.
+TEST(Metrics, TextureAxesAngleOfATurnedOutput) {
+  const TexturedMesh input = turned(sphere(), 0);
+  const Metrics thirty = measure(input, rewritten(turned(input, 30), true), 1000);
+  EXPECT_NEAR(thirty.axes_angle_mean, 30.0, 1e-6);
+  EXPECT_NEAR(thirty.axes_angle.p5, 30.0, 1e-6);
+  EXPECT_NEAR(thirty.axes_angle.p95, 30.0, 1e-6);
+  EXPECT_NEAR(measure(input, turned(input, -75), 1000).axes_angle_mean, 15.0, 1e-6);
+  for (const double degrees : {0.0, 90.0, 180.0}) {
+    const Metrics m = measure(input, turned(input, degrees, degrees == 180.0), 1000);
+    EXPECT_NEAR(m.axes_angle_mean, 0.0, 1e-6) << degrees;
+    EXPECT_NEAR(m.axes_angle.p95, 0.0, 1e-6) << degrees;
+  }
+  const nlohmann::json j = to_json(thirty);
+  EXPECT_NEAR(j["texture_axes_angle_deg"]["mean"].get<double>(), 30.0, 1e-6);
+  EXPECT_NEAR(j["texture_axes_angle_deg"]["p50"].get<double>(), 30.0, 1e-6);
+}
+
 // The used texels are the texel centres inside some UV triangle (wrapped as a renderer repeats), each
 // counted once however many triangles cover it: thousands of overlapping triangles, many beyond [0, 1],
 // against a point-in-triangle test of every centre in each triangle's box.

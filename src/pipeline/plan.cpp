@@ -11,6 +11,7 @@
 #include "core/memory_model.hpp"
 #include "core/progress.hpp"
 #include "core/resources.hpp"
+#include "layout/chart_orientation.hpp"
 #include "layout/float_coordinates.hpp"
 #include "pipeline/aspect.hpp"
 #include "pipeline/budget.hpp"
@@ -225,6 +226,8 @@ size_t map_components(const MapContext& ctx, std::optional<Mapped>& probed, size
                    : map_component(ctx, c, rect, cut_inputs[c] ? &*cut_inputs[c] : nullptr, CapChoice::kAuto);
     cut_inputs[c].reset();
     if (m.kept.empty()) {
+      // Upright in its rectangle: the input's print keeps its direction where a quarter turn can give it.
+      orient_chart(ctx.input, m.disk.mesh, rect, m.uv);
       const auto [width, height] = plan.image_size[size_t(rect.image)];
       const FloatGuard guard = keep_orientation_in_float(m.disk.mesh, rect, width, height, m.uv);
       m.map.float_moved = guard.moved, m.map.float_unfixed = guard.unfixed;

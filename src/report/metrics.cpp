@@ -26,6 +26,7 @@
 #include "core/statistics.hpp"
 #include "core/surface.hpp"
 #include "core/tangents.hpp"
+#include "layout/chart_orientation.hpp"
 
 namespace tightex {
 
@@ -523,6 +524,34 @@ std::pair<double, double> measure_angle_distortion(const TexturedMesh& in, const
   return {area_total > 0 ? angle_sum / area_total : 0, weighted_quantile(angle, 0.95)};
 }
 
+/// The angle in degrees (0..45) between direction d and the nearest axis; NaN for a zero direction.
+double folded_axis_angle(const Vec2& d) {
+  if (!(d.squaredNorm() > 0)) return NAN;
+  const double a = std::fmod(std::abs(std::atan2(d.y(), d.x())) * 180 / M_PI, 90.0);
+  return std::min(a, 90.0 - a);
+}
+
+/// docs/metrics.md "texture axes angle": area-weighted mean and quantiles over the matched input
+/// triangles of non-zero area that sample an image and have texture area on both sides.
+std::pair<double, Quantiles> measure_axes_angle(const TexturedMesh& in, const TexturedMesh& out, const Correspondence& c) {
+  std::vector<double> angle(in.num_triangles(), NAN);
+  tbb::parallel_for(uint32_t(0), uint32_t(in.num_triangles()), [&](uint32_t t) {
+    const Image* ii = image_of(in, t);
+    if (c.match[t] == kNone || !(c.area3[t] > 0) || !ii) return;
+    const uint32_t o = c.match[t];
+    const auto [Wo, Ho] = texel_scale(out, o);
+    std::array<Vec2, 3> uv_in, uv_out;
+    for (size_t k = 0; k < 3; ++k) uv_in[k] = in.sampled_uv(t, int(k)), uv_out[k] = out.sampled_uv(o, c.corner_map[t][k]);
+    angle[t] = texture_axes_angle(uv_in, Vec2(ii->width, ii->height), uv_out, Vec2(Wo, Ho));
+  });
+  std::vector<std::pair<double, double>> weighted;
+  double sum = 0, area = 0;
+  for (uint32_t t = 0; t < in.num_triangles(); ++t)
+    if (std::isfinite(angle[t])) weighted.push_back({angle[t], c.area3[t]}), sum += angle[t] * c.area3[t], area += c.area3[t];
+  if (weighted.empty()) return {0.0, Quantiles{}};
+  return {sum / area, Quantiles{weighted_quantile(weighted, 0.05), weighted_quantile(weighted, 0.5), weighted_quantile(weighted, 0.95)}};
+}
+
 /// Seed of the surface PSNR's sample points: the same points in every run.
 constexpr uint64_t kPsnrSeed = 20240606;
 
@@ -754,9 +783,17 @@ Metrics measure(const TexturedMesh& in, const TexturedMesh& out, const WeldedEdg
                          r.detail_loss_area = d.detail_loss_area;
                        },
                        [&] { std::tie(r.angle_distortion_mean, r.angle_distortion_p95) = measure_angle_distortion(in, out, c); },
+                       [&] { std::tie(r.axes_angle_mean, r.axes_angle) = measure_axes_angle(in, out, c); },
                        [&] { std::tie(r.surface_psnr, r.psnr_samples) = measure_surface_psnr(in, out, c, points); },
                        [&] { r.maps = measure_material_maps(in, out, c, points); });
   return r;
+}
+
+double texture_axes_angle(const std::array<Vec2, 3>& in_uv, const Vec2& in_texels, const std::array<Vec2, 3>& out_uv,
+                          const Vec2& out_texels) {
+  const auto axes = texel_axes_images(in_uv, in_texels, out_uv, out_texels);
+  if (!axes) return NAN;
+  return 0.5 * (folded_axis_angle((*axes)[0]) + folded_axis_angle((*axes)[1]));
 }
 
 double surface_psnr(const TexturedMesh& in, const TexturedMesh& out, size_t psnr_samples) {
@@ -798,6 +835,8 @@ nlohmann::json to_json(const Metrics& m) {
   j["density_spread"] = {{"p5", m.density_spread.p5}, {"p50", m.density_spread.p50}, {"p95", m.density_spread.p95}};
   j["detail_loss_area"] = m.detail_loss_area;
   j["angle_distortion"] = {{"mean", m.angle_distortion_mean}, {"p95", m.angle_distortion_p95}};
+  j["texture_axes_angle_deg"] = {
+      {"mean", m.axes_angle_mean}, {"p5", m.axes_angle.p5}, {"p50", m.axes_angle.p50}, {"p95", m.axes_angle.p95}};
   j["surface_psnr_db"] = m.surface_psnr;
   if (m.surface_psnr_bake) j["surface_psnr_bake_db"] = *m.surface_psnr_bake;
   j["psnr_samples"] = m.psnr_samples;

@@ -51,6 +51,10 @@ struct Metrics {
   Quantiles density_spread;  // log2(d / mean d), area-weighted
   double detail_loss_area = 0;
   double angle_distortion_mean = 0, angle_distortion_p95 = 0;
+  /// docs/metrics.md "texture axes angle": how far, in degrees (0..45), the input's texture axes turn
+  /// in the output, modulo a right angle; area-weighted mean and quantiles.
+  double axes_angle_mean = 0;
+  Quantiles axes_angle;
   double surface_psnr = 0;
   /// Where the images are written lossily (the command: JPEG, lossy WebP), surface_psnr is that of the
   /// images as written (decoded back) and this the bake's before encoding; unset otherwise.
@@ -113,6 +117,14 @@ struct TriangleMatch {
   std::vector<std::array<int, 3>> output_corner;
 };
 TriangleMatch match_output_triangles(const TexturedMesh& input, const TexturedMesh& output);
+
+/// docs/metrics.md "texture axes angle" of one triangle: the affine map from its input texels to its
+/// output texels (corner `in_uv[k]` to `out_uv[k]`, each scaled by its image's width and height) turns
+/// the input's u and v axes; the angle of each image to the nearest output axis, folded to 0..45
+/// degrees (a quarter or half turn, or a mirror, keeps the axes), averaged over the two. NaN where
+/// either triangle has no texture area.
+double texture_axes_angle(const std::array<Vec2, 3>& in_uv, const Vec2& in_texels, const std::array<Vec2, 3>& out_uv,
+                          const Vec2& out_texels);
 
 /// The metrics as report.json's "metrics" section (and `tightex measure`'s output).
 nlohmann::json to_json(const Metrics& m);
