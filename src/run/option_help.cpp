@@ -76,8 +76,10 @@ constexpr std::array kHelps{
     OptionHelp{"webp_lossless", "--webp-lossless", "WebP textures: lossless (with --format webp)"},
     OptionHelp{"target_psnr_db", "--target-psnr",
                "lossy textures: the fewest bytes whose written images reach this surface PSNR against the input (dB): the "
-               "quality and, without --size or --texels, the texel budget"},
-    OptionHelp{"max_bytes", "--max-bytes", "lossy textures: the highest quality whose images take at most this many bytes"},
+               "quality and, without --size or --texels, the texels (and, without --format, the codec)"},
+    OptionHelp{"max_bytes", "--max-bytes",
+               "lossy textures: the most surface PSNR whose images take at most this many bytes: the quality and, without --size or "
+               "--texels, the texels (and, without --format, the codec)"},
     OptionHelp{"model_format", "--output-format",
                "model file format: obj (OBJ + MTL), ply (binary PLY, textures named by comment TextureFile), gltf (.gltf + .bin "
                "+ texture files) or glb. Default: the input's kind (.ply, .gltf or .glb as the input, anything else .obj)"},
