@@ -3,9 +3,11 @@
 # default run (the input's codec, no larger on disk for a lossy input), tightex --format webp at several
 # --target-psnr, and the input's own textures re-encoded to WebP at several qualities without repacking
 # (tools/reencode_curve.cpp, what gltf-transform or gltfpack would do); tightex's bytes beside the
-# re-encode's at the same written PSNR (its curve interpolated).
+# re-encode's at the same written PSNR (its curve interpolated), and each --target-psnr run's wall time
+# over that of `--format webp` at its default quality (the time the search adds).
 #
 #   bash bench/bytes.sh [OUT] [MODEL...]    (default: every model of ../shared/data; a build with the tools)
+#   TARGETS="40" QUALITIES="50 70 80 90 95" bash bench/bytes.sh ...   (other targets and re-encode qualities)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-build/bytes-bench}
@@ -18,13 +20,14 @@ if [ ${#models[@]} -eq 0 ]; then
   done
 fi
 rm -rf "$out" && mkdir -p "$out"
-targets=(36 40 44)
-qualities=(1 5 10 20 35 50 70 80 90 95)
-echo "| model | input KiB | default: codec, KiB, written dB | webp --target-psnr: written dB, KiB, re-encode KiB at that dB, ratio | input re-encoded to WebP: quality dB KiB |"
+read -r -a targets <<< "${TARGETS:-36 40 44}"
+read -r -a qualities <<< "${QUALITIES:-1 5 10 20 35 50 70 80 90 95}"
+echo "| model | input KiB | default: codec, KiB, written dB | webp --target-psnr: written dB, KiB, re-encode KiB at that dB, ratio, time over --format webp's | input re-encoded to WebP: quality dB KiB |"
 echo "|---|---|---|---|---|"
 for model in "${models[@]}"; do
   name=$(basename "$(dirname "$model")")
   ./build/tightex "$model" -o "$out/$name/default" -q --no-html
+  ./build/tightex "$model" -o "$out/$name/webp" -q --no-html --format webp
   for t in "${targets[@]}"; do ./build/tightex "$model" -o "$out/$name/webp$t" -q --no-html --format webp --target-psnr "$t"; done
   ./build/tightex_reencode_curve "$model" webp "${qualities[@]}" > "$out/$name/reencode.txt"
   python3 - "$out/$name" "$name" "${targets[@]}" <<'PY'
@@ -38,12 +41,15 @@ def reencode_bytes_at(db):
             return b0 + (b1 - b0) * (db - p0) / (p1 - p0) if p1 > p0 else b1
     return None
 d = json.load(open(folder + "/default/report.json"))["bytes"]
+base_s = json.load(open(folder + "/webp/report.json"))["wall_seconds"]
 cells = []
 for t in targets:
-    b = json.load(open(f"{folder}/webp{t}/report.json"))["bytes"]
+    r = json.load(open(f"{folder}/webp{t}/report.json"))
+    b = r["bytes"]
     db, out = b["surface_psnr_written_db"], b["output"]["total"]
     ref = reencode_bytes_at(db)
-    cells.append(f"{t}: {db:.1f}, {out/1024:.0f}, " + (f"{ref/1024:.0f}, {out/ref:.2f}" if ref else "beyond the curve"))
+    cells.append(f"{t}: {db:.2f}, {out/1024:.0f}, " + (f"{ref/1024:.0f}, {out/ref:.2f}" if ref else "beyond the curve") +
+                 f", {r['wall_seconds'] / base_s:.2f}x")
 kib = lambda x: f"{x/1024:.0f}"
 print(f"| {name} | {kib(d['input']['total'])} | {d['encoding']['format']} q{d['encoding'].get('quality', '-')}, {kib(d['output']['total'])}, "
       f"{d['surface_psnr_written_db']:.1f} | {'; '.join(cells)} | " + "; ".join(f"{q:.0f}: {p:.1f} {b/1024:.0f}" for q, b, p in curve) + " |")

@@ -80,6 +80,15 @@
     return Array.from(counts, ([size, n]) => (n > 1 ? n + ' \u00d7 (' + size + ')' : size)).join(', ');
   }
 
+  // Every written image in one line each: file, size, codec and quality, bytes, the written figure of each slot it serves.
+  function writtenImages() {
+    const figure = (v) => (typeof v === 'number' ? formatNumber(v, 2) + ' dB'
+      : v && v.angle_median_deg !== undefined ? formatNumber(v.angle_median_deg, 2) + '\u00b0 median' : '-');
+    return (get('bytes.images') || []).map((i) => i.file + ' (' + i.width + ' \u00d7 ' + i.height + ', ' + i.codec +
+      (i.quality !== undefined ? ' q' + i.quality : '') + ', ' + formatNumber(i.bytes / 1024, 0) + ' KiB: ' +
+      Object.entries(i.written_psnr_db || {}).map(([slot, v]) => slot + ' ' + figure(v)).join(', ') + ')').join('; ');
+  }
+
   function summaryRows(input, output) {
     const dash = () => document.createTextNode('');
     const must0 = (path) => (get(path) || 0) !== 0;
@@ -96,6 +105,8 @@
         (get('bytes.encoding.format') || '?') + ': ' + (get('bytes.encoding.reason') || '') + '.'],
       ['Surface PSNR as written', dash(), reportNumber('bytes.surface_psnr_written_db', 2, 1, ' dB'),
         'The surface PSNR of the images as written (a lossy codec decoded back), against the input.'],
+      ['Written images', dash(), document.createTextNode(writtenImages()),
+        'Every image the output binds: its size, codec and quality, bytes, and the written figure of each slot it serves (docs/metrics.md).'],
       ['Surface PSNR', dash(), reportNumber('metrics.surface_psnr_db', 2, 1, ' dB'),
         "How closely the output's colours match the input's, at " + formatNumber(get('metrics.psnr_samples') || 0, 0) +
         ' points spread evenly over the surface. Higher is better; above about 40 dB differences are hard to see.'],
