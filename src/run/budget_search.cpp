@@ -25,6 +25,8 @@ constexpr double kProbeScales[] = {1.0, 0.5, 0.25};
 constexpr int kSteps = 4;
 /// The qualities each probed scale is encoded at; between them the model interpolates.
 constexpr int kProbeQualities[] = {50, 75, 88, 96};
+/// The lowest quality the model chooses: below the lowest probe it extrapolates, and not far.
+constexpr int kLowestQuality = kProbeQualities[0] - 10;
 /// The probes' surface PSNR points: the same points for every probe, a tenth of the report's.
 constexpr size_t kProbePoints = kPsnrPoints / 10;
 /// How far above --target-psnr the model aims, for the probes' points are not the report's.
@@ -42,6 +44,15 @@ std::vector<char> baked_textures(const TexturedMesh& output, size_t new_pages) {
       for (const int t : m.maps)
         if (t >= 0) baked[size_t(t)] = 1;
   return baked;
+}
+
+/// Per texture of `output`, whether a material binds it as its base colour: the images the surface PSNR
+/// reads (the other maps change the bytes alone).
+std::vector<char> colour_textures(const TexturedMesh& output) {
+  std::vector<char> colour(output.textures.size(), 0);
+  for (const Material& m : output.materials)
+    if (m.texture >= 0) colour[size_t(m.texture)] = 1;
+  return colour;
 }
 
 /// Per baked texture, the texels whose centres a triangle that reads it covers (empty for the others).
@@ -100,11 +111,13 @@ uint64_t total_bytes(const std::vector<std::string>& files) {
   return std::accumulate(files.begin(), files.end(), uint64_t(0), [](uint64_t n, const std::string& f) { return n + f.size(); });
 }
 
-/// The surface PSNR (`judge`'s points) of `output` with its images as `files` decode (swapped in, then back).
-double psnr_as_written(const SurfacePsnrOfImages& judge, TexturedMesh& output, const std::vector<std::string>& files) {
+/// The surface PSNR (`judge`'s points) of `output` with its base colour images (`colour`) as `files`
+/// decode (swapped in, then back).
+double psnr_as_written(const SurfacePsnrOfImages& judge, const std::vector<char>& colour, TexturedMesh& output,
+                       const std::vector<std::string>& files) {
   std::vector<Image> decoded(files.size());
   tbb::parallel_for(size_t(0), files.size(), [&](size_t i) {
-    if (!files[i].empty())
+    if (!files[i].empty() && colour[i])
       decoded[i] = decode_image(reinterpret_cast<const unsigned char*>(files[i].data()), files[i].size(), output.textures[i].path);
   });
   for (size_t i = 0; i < decoded.size(); ++i)
@@ -171,7 +184,7 @@ std::pair<size_t, int> model_choice(const BudgetSearchRequest& request, const Ra
   double best_score = -1e300;
   for (size_t s = 0; s < model.scales.size(); ++s) {
     double running_psnr = -1e300;  // PSNR never falls as the quality rises
-    for (int q = 1; q <= 100; ++q) {
+    for (int q = kLowestQuality; q <= 100; ++q) {
       const auto [psnr, log_bytes] = predict(model, s, q);
       running_psnr = std::max(running_psnr, psnr);
       double score = 0;
@@ -199,12 +212,14 @@ void swap_in(TexturedMesh& output, std::vector<Image>& scaled) {
 /// The rate model (RateModel) of `output`: every model scale's images measured unencoded, each of
 /// kProbeScales encoded at kProbeQualities and measured, at `judge`'s points; the probes into `probes`.
 RateModel fit_rate_model(const BudgetSearchRequest& request, const SurfacePsnrOfImages& judge, const std::vector<char>& baked,
-                         const std::vector<std::vector<uint8_t>>& inside, const ImageEncoding& encoding, TexturedMesh& output,
-                         nlohmann::json& probes) {
+                         const std::vector<char>& colour, const std::vector<std::vector<uint8_t>>& inside, const ImageEncoding& encoding,
+                         TexturedMesh& output, nlohmann::json& probes) {
   RateModel model;
   model.scales = model_scales();
-  for (const double scale : model.scales) {
-    std::vector<Image> scaled = images_at(output, baked, inside, scale);
+  std::vector<char> baked_colour(baked.size());
+  for (size_t i = 0; i < baked.size(); ++i) baked_colour[i] = baked[i] && colour[i];
+  for (const double scale : model.scales) {  // the surface PSNR reads the base colour alone
+    std::vector<Image> scaled = images_at(output, baked_colour, inside, scale);
     swap_in(output, scaled);
     model.shrink_mse.push_back(mse_of(judge(output)));
     swap_in(output, scaled);
@@ -223,7 +238,7 @@ RateModel fit_rate_model(const BudgetSearchRequest& request, const SurfacePsnrOf
     ScaleCurve curve;
     swap_in(output, scaled);
     for (size_t k = 0; k < files.size(); ++k) {
-      const double psnr = psnr_as_written(judge, output, files[k]), mse = mse_of(psnr);
+      const double psnr = psnr_as_written(judge, colour, output, files[k]), mse = mse_of(psnr);
       curve.log_codec_mse.push_back(std::log(std::max(mse - model.shrink_mse[s], 1e-3 * mse)));
       curve.log_bytes.push_back(std::log(double(std::max<uint64_t>(1, total_bytes(files[k])))));
       probes.push_back({{"scale", scale}, {"quality", kProbeQualities[k]}, {"bytes", total_bytes(files[k])}, {"psnr_db", psnr}});
@@ -240,7 +255,7 @@ RateModel fit_rate_model(const BudgetSearchRequest& request, const SurfacePsnrOf
 int corrected_quality(const BudgetSearchRequest& request, const RateModel& model, size_t scale, double psnr_offset, double log_bytes_offset,
                       int lo, int hi) {
   if (request.target_psnr_db > 0) {
-    for (int q = lo + 1; q < hi; ++q)
+    for (int q = std::max(lo + 1, kLowestQuality - 10); q < hi; ++q)
       if (predict(model, scale, q).first + psnr_offset >= request.target_psnr_db + kTargetMarginDb) return q;
     return hi - 1;
   }
@@ -261,8 +276,8 @@ struct Written {
 /// corrected by each check, to the best quality that answers the request, at most kMaxChecks
 /// encodings. Returns the best that answers it, else the closest; each check into `probes`.
 std::pair<std::optional<Written>, Written> check_qualities(const BudgetSearchRequest& request, const RateModel& model, size_t s, int q,
-                                                           const SurfacePsnrOfImages& judge, ImageEncoding& encoding, TexturedMesh& output,
-                                                           nlohmann::json& probes) {
+                                                           const SurfacePsnrOfImages& judge, const std::vector<char>& colour,
+                                                           ImageEncoding& encoding, TexturedMesh& output, nlohmann::json& probes) {
   // Known so far: every quality <= lo is too low (a target) or within the bound; every quality >= hi
   // reaches the target or is over the bound.
   const bool target = request.target_psnr_db > 0;
@@ -272,7 +287,7 @@ std::pair<std::optional<Written>, Written> check_qualities(const BudgetSearchReq
     if (request.progress) request.progress(0.8 + 0.2 * check / kMaxChecks);
     encoding.jpeg_quality = encoding.webp_quality = q;
     Written w{q, encode_all(output, std::vector<Image>(output.textures.size()), encoding), 0};
-    w.psnr = psnr_as_written(judge, output, w.images);
+    w.psnr = psnr_as_written(judge, colour, output, w.images);
     const uint64_t bytes = total_bytes(w.images);
     probes.push_back({{"scale", model.scales[s]}, {"quality", q}, {"bytes", bytes}, {"psnr_db", w.psnr}, {"check", true}});
     const bool ok = answers(request, w.psnr, bytes);
@@ -293,10 +308,11 @@ std::pair<std::optional<Written>, Written> check_qualities(const BudgetSearchReq
 BudgetSearchResult search_texels_and_quality(const BudgetSearchRequest& request, const TexturedMesh& input, TexturedMesh& output,
                                              ImageEncoding& encoding) {
   const std::vector<char> baked = baked_textures(output, request.new_pages);
+  const std::vector<char> colour = colour_textures(output);
   const std::vector<std::vector<uint8_t>> inside = chart_texels(output, baked);
   BudgetSearchResult r;
   const RateModel model =
-      fit_rate_model(request, SurfacePsnrOfImages(input, output, kProbePoints), baked, inside, encoding, output, r.probes);
+      fit_rate_model(request, SurfacePsnrOfImages(input, output, kProbePoints), baked, colour, inside, encoding, output, r.probes);
   const SurfacePsnrOfImages judge(input, output, kPsnrPoints);
   // The model's choice, checked; where no quality at its scale reaches a target, the bake's own size.
   auto [s, q] = model_choice(request, model);
@@ -306,7 +322,7 @@ BudgetSearchResult search_texels_and_quality(const BudgetSearchRequest& request,
     r.scale = model.scales[s];
     r.scaled = images_at(output, baked, inside, r.scale);
     swap_in(output, r.scaled);
-    std::tie(best, closest) = check_qualities(request, model, s, q, judge, encoding, output, r.probes);
+    std::tie(best, closest) = check_qualities(request, model, s, q, judge, colour, encoding, output, r.probes);
     swap_in(output, r.scaled);
     if (best || request.target_psnr_db <= 0 || s == 0) break;
     s = 0, q = std::max(closest.quality, kProbeQualities[std::size(kProbeQualities) - 2]);

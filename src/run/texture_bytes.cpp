@@ -99,10 +99,19 @@ uint64_t input_bytes_of_lossy_roles(const TexturedMesh& input, const std::vector
 }
 
 /// The lowest quality in [1, 100] for which `good` holds, where `good` holds from some quality on
-/// (bisection); 101 where it holds for none.
-int lowest_quality(const std::function<bool(int)>& good) {
-  if (!good(100)) return 101;
-  int lo = 0, hi = 100;  // good(hi), !good(lo) (or lo = 0)
+/// (bisection, bracketed near `hint` first where one is given); 101 where it holds for none.
+int lowest_quality(const std::function<bool(int)>& good, int hint = 0) {
+  int lo = 0, hi = 100;          // good(hi), !good(lo) (or lo = 0)
+  if (hint > 0 && hint < 100) {  // bracket the answer near the hint first: a few steps, not seven
+    constexpr int kNear = 12;
+    if (good(hint)) {
+      hi = hint, lo = std::max(0, hint - kNear);
+      if (lo > 0 && good(lo)) hi = lo, lo = 0;
+    } else {
+      lo = hint;
+    }
+  }
+  if (hi == 100 && !good(100)) return 101;
   while (hi - lo > 1) {
     const int mid = (lo + hi) / 2;
     (good(mid) ? hi : lo) = mid;
@@ -141,11 +150,13 @@ std::string pick_quality(const BytesRequest& request, const TexturedMesh& input,
                          TexturedMesh& output, ImageEncoding& e) {
   int steps = 0;
   if (request.target_psnr_db > 0) {
-    const int lowest = lowest_quality([&](int quality) {
-      step(request, steps);
-      set_quality(e, quality);
-      return psnr_as_written(input, output, encoded(output, e)) >= request.target_psnr_db;
-    });
+    const int lowest = lowest_quality(
+        [&](int quality) {
+          step(request, steps);
+          set_quality(e, quality);
+          return psnr_as_written(input, output, encoded(output, e)) >= request.target_psnr_db;
+        },
+        request.quality_hint);
     set_quality(e, std::min(lowest, 100));
     return lowest <= 100 ? fmt::format("the lowest quality whose written images reach --target-psnr {} dB", request.target_psnr_db)
                          : fmt::format("no quality reaches --target-psnr {} dB at this texel budget: the highest", request.target_psnr_db);
@@ -154,11 +165,13 @@ std::string pick_quality(const BytesRequest& request, const TexturedMesh& input,
   const char* what = request.max_bytes > 0 ? "--max-bytes" : "the input's own texture bytes";
   if (bound == 0) return "the default quality (no bound: the input's images have no bytes on disk)";
   // The highest quality within the bound: one above the lowest that exceeds it.
-  const int over = lowest_quality([&](int quality) {
-    step(request, steps);
-    set_quality(e, quality);
-    return total(encoded(output, e)) > bound;
-  });
+  const int over = lowest_quality(
+      [&](int quality) {
+        step(request, steps);
+        set_quality(e, quality);
+        return total(encoded(output, e)) > bound;
+      },
+      request.quality_hint > 0 ? request.quality_hint + 1 : 0);
   set_quality(e, std::max(over - 1, 1));
   if (over > 1) return fmt::format("the highest quality whose images take at most {} ({} bytes)", what, bound);
   if (request.max_bytes > 0) return fmt::format("even quality 1 takes more than {} ({} bytes): quality 1", what, bound);
@@ -234,6 +247,7 @@ EncodingChoice search_codec_texels_and_quality(const BytesRequest& request, cons
   for (const std::string& b : c.images) c.bytes.push_back(b.size());
   c.written_psnr_db = best->written_psnr_db;
   c.probes = std::move(best->probes);
+  c.texel_scale = best->scale;
   return c;
 }
 

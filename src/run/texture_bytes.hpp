@@ -27,6 +27,8 @@ struct BytesRequest {
   /// Where > 0, --target-psnr and --max-bytes choose the texels of the bake's images too (the output's
   /// first `new_pages` textures are its pages; budget_search.hpp); 0: the quality alone.
   size_t new_pages = 0;
+  /// Where > 0, the quality rate control expects near the answer (it brackets there first).
+  int quality_hint = 0;
   /// Without --format, the lossy codecs that search may choose from (those the output format reads
   /// everywhere).
   std::vector<ImageFormat> codecs;
@@ -43,7 +45,8 @@ struct EncodingChoice {
   std::vector<uint64_t> bytes;      // per output texture
   std::optional<double> written_psnr_db;
   std::string reason;
-  nlohmann::json probes;  // the texel search's probes (null where it did not run)
+  nlohmann::json probes;   // the texel search's probes (null where it did not run)
+  double texel_scale = 1;  // the texel search's scale of the baked images' side (1: as baked)
 };
 
 /// Chooses the encoding of `output`'s images (the result of `input`, whose textures are `sources`), and
