@@ -313,9 +313,17 @@ BudgetSearchResult search_texels_and_quality(const BudgetSearchRequest& request,
   BudgetSearchResult r;
   const RateModel model =
       fit_rate_model(request, SurfacePsnrOfImages(input, output, kProbePoints), baked, colour, inside, encoding, output, r.probes);
-  const SurfacePsnrOfImages judge(input, output, kPsnrPoints);
   // The model's choice, checked; where no quality at its scale reaches a target, the bake's own size.
   auto [s, q] = model_choice(request, model);
+  const std::string asked = request.target_psnr_db > 0 ? fmt::format("--target-psnr {} dB", request.target_psnr_db)
+                                                       : fmt::format("--max-bytes {}", request.max_bytes);
+  if (!request.check_shrunk && s > 0) {
+    r.scale = model.scales[s], r.quality = q;
+    encoding.jpeg_quality = encoding.webp_quality = q;
+    r.reason = fmt::format("texels and quality chosen together for {}: the model's {:.2f} of the side at quality {}", asked, r.scale, q);
+    return r;
+  }
+  const SurfacePsnrOfImages judge(input, output, kPsnrPoints);
   std::optional<Written> best;
   Written closest;
   for (;;) {
@@ -331,8 +339,6 @@ BudgetSearchResult search_texels_and_quality(const BudgetSearchRequest& request,
   encoding.jpeg_quality = encoding.webp_quality = chosen.quality;
   r.quality = chosen.quality, r.images = chosen.images, r.written_psnr_db = chosen.psnr;
   const Image& img = r.scaled.empty() || r.scaled[0].empty() ? output.textures[0].image : r.scaled[0];
-  const std::string asked = request.target_psnr_db > 0 ? fmt::format("--target-psnr {} dB", request.target_psnr_db)
-                                                       : fmt::format("--max-bytes {}", request.max_bytes);
   r.reason = fmt::format(
       "texels and quality chosen together for {}: the baked images at {:.2f} of their side ({}x{}), quality {} ({} bytes, {:.2f} dB as "
       "written){}",

@@ -18,6 +18,9 @@ struct BudgetSearchRequest {
   double target_psnr_db = 0;  // 0: none
   uint64_t max_bytes = 0;     // 0: none
   size_t new_pages = 0;       // the output's first textures that are the bake's pages
+  /// false: a scale below 1 is returned as the model chose it, unchecked and without images (the caller
+  /// plans and bakes at that budget again and chooses its quality there).
+  bool check_shrunk = true;
   /// Told the fraction of the search done; may throw Cancelled. Empty: none.
   std::function<void(double)> progress;
 };
@@ -25,7 +28,7 @@ struct BudgetSearchRequest {
 /// The search's choice: the quality (set into the encoding), the scale of the baked images and the
 /// images at that scale, their encoded files and the surface PSNR as written, and the probes.
 struct BudgetSearchResult {
-  int quality = 0;
+  int quality = 0;  // the model's alone where `images` is empty (BudgetSearchRequest::check_shrunk)
   double scale = 1;
   std::vector<Image> scaled;        // per texture of the output, its image at `scale` (empty: as it is)
   std::vector<std::string> images;  // per texture of the output, its file's bytes

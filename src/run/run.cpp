@@ -215,7 +215,7 @@ EncodingChoice choose_images(const Options& options, const Options& method, cons
   alone.quality_hint = choice.encoding.format == ImageFormat::kJpeg ? choice.encoding.jpeg_quality : choice.encoding.webp_quality;
   alone.progress = [&](double f) { progress("encode", 0.8 + 0.2 * f); };
   EncodingChoice c = choose_encoding(alone, input, sources, rebaked.output);
-  if (!answers_better(options, c, choice)) return choice;
+  if (!choice.images.empty() && !answers_better(options, c, choice)) return choice;  // empty: the model's choice, unchecked
   c.reason = fmt::format("{}; planned and baked again at that budget ({}^2 of the default {}^2), {}", choice.reason, smaller.side,
                          budget.side, c.reason);
   c.probes = std::move(choice.probes);

@@ -39,16 +39,20 @@ uint64_t total(const std::vector<std::string>& images) {
   return n;
 }
 
-/// The surface PSNR of `output` with its images as `images` decode (swapped in, then back).
-double psnr_as_written(const TexturedMesh& input, TexturedMesh& output, const std::vector<std::string>& images) {
+/// The surface PSNR (`judge`'s points) of `output` with its base colour images as `images` decode
+/// (swapped in, then back; the surface PSNR reads no other map).
+double psnr_as_written(const SurfacePsnrOfImages& judge, TexturedMesh& output, const std::vector<std::string>& images) {
+  std::vector<char> colour(output.textures.size(), 0);
+  for (const Material& m : output.materials)
+    if (m.texture >= 0) colour[size_t(m.texture)] = 1;
   std::vector<Image> decoded(images.size());
   tbb::parallel_for(size_t(0), images.size(), [&](size_t i) {
-    if (!images[i].empty())
+    if (!images[i].empty() && colour[i])
       decoded[i] = decode_image(reinterpret_cast<const unsigned char*>(images[i].data()), images[i].size(), output.textures[i].path);
   });
   for (size_t i = 0; i < decoded.size(); ++i)
     if (!decoded[i].empty()) std::swap(output.textures[i].image, decoded[i]);
-  const double psnr = surface_psnr(input, output);
+  const double psnr = judge(output);
   for (size_t i = 0; i < decoded.size(); ++i)
     if (!decoded[i].empty()) std::swap(output.textures[i].image, decoded[i]);
   return psnr;
@@ -103,7 +107,7 @@ uint64_t input_bytes_of_lossy_roles(const TexturedMesh& input, const std::vector
 int lowest_quality(const std::function<bool(int)>& good, int hint = 0) {
   int lo = 0, hi = 100;          // good(hi), !good(lo) (or lo = 0)
   if (hint > 0 && hint < 100) {  // bracket the answer near the hint first: a few steps, not seven
-    constexpr int kNear = 12;
+    constexpr int kNear = 8;
     if (good(hint)) {
       hi = hint, lo = std::max(0, hint - kNear);
       if (lo > 0 && good(lo)) hi = lo, lo = 0;
@@ -145,18 +149,28 @@ std::string within_own_roles(const BytesRequest& request, const TexturedMesh& in
       bound, own, over > 1 ? "" : ", not reached: quality 1");
 }
 
+/// The most qualities rate control steps up where its bisection's points erred against the report's.
+constexpr int kMaxStepsUp = 4;
+
 /// Rate control of a lossy encoding: the quality and why.
 std::string pick_quality(const BytesRequest& request, const TexturedMesh& input, const std::vector<TextureSource>& sources,
                          TexturedMesh& output, ImageEncoding& e) {
   int steps = 0;
   if (request.target_psnr_db > 0) {
-    const int lowest = lowest_quality(
+    // Bisection at a tenth of the report's points, then the report's own points, a quality up at a time
+    // where the few erred.
+    const SurfacePsnrOfImages few(input, output, kPsnrPoints / 10), judge(input, output);
+    int lowest = lowest_quality(
         [&](int quality) {
           step(request, steps);
           set_quality(e, quality);
-          return psnr_as_written(input, output, encoded(output, e)) >= request.target_psnr_db;
+          return psnr_as_written(few, output, encoded(output, e)) >= request.target_psnr_db;
         },
         request.quality_hint);
+    for (int up = 0; lowest <= 100 && up < kMaxStepsUp; ++up, ++lowest) {
+      set_quality(e, lowest);
+      if (psnr_as_written(judge, output, encoded(output, e)) >= request.target_psnr_db) break;
+    }
     set_quality(e, std::min(lowest, 100));
     return lowest <= 100 ? fmt::format("the lowest quality whose written images reach --target-psnr {} dB", request.target_psnr_db)
                          : fmt::format("no quality reaches --target-psnr {} dB at this texel budget: the highest", request.target_psnr_db);
@@ -231,7 +245,7 @@ EncodingChoice search_codec_texels_and_quality(const BytesRequest& request, cons
   for (size_t k = 0; k < codecs.size(); ++k) {
     ImageEncoding e = c.encoding;
     e.format = codecs[k], e.formats.clear();
-    BudgetSearchRequest search{request.target_psnr_db, request.max_bytes, request.new_pages, {}};
+    BudgetSearchRequest search{request.target_psnr_db, request.max_bytes, request.new_pages, codecs.size() > 1, {}};
     if (request.progress) search.progress = [&](double f) { request.progress((double(k) + f) / double(codecs.size())); };
     BudgetSearchResult r = search_texels_and_quality(search, input, output, e);
     if (!best || better(request, r, *best)) best = std::move(r), best_encoding = e;
@@ -245,7 +259,7 @@ EncodingChoice search_codec_texels_and_quality(const BytesRequest& request, cons
     if (!best->scaled[i].empty()) std::swap(output.textures[i].image, best->scaled[i]);
   c.images = std::move(best->images);
   for (const std::string& b : c.images) c.bytes.push_back(b.size());
-  c.written_psnr_db = best->written_psnr_db;
+  if (!c.images.empty()) c.written_psnr_db = best->written_psnr_db;
   c.probes = std::move(best->probes);
   c.texel_scale = best->scale;
   return c;
@@ -265,7 +279,7 @@ EncodingChoice choose_encoding(const BytesRequest& request, const TexturedMesh& 
   if (request.progress) request.progress(8.0 / 9);
   c.images = encoded(output, c.encoding);
   for (const std::string& b : c.images) c.bytes.push_back(b.size());
-  if (c.encoding.lossy()) c.written_psnr_db = psnr_as_written(input, output, c.images);
+  if (c.encoding.lossy()) c.written_psnr_db = psnr_as_written(SurfacePsnrOfImages(input, output), output, c.images);
   if (request.progress) request.progress(1);
   return c;
 }
