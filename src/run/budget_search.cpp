@@ -46,15 +46,6 @@ std::vector<char> baked_textures(const TexturedMesh& output, size_t new_pages) {
   return baked;
 }
 
-/// Per texture of `output`, whether a material binds it as its base colour: the images the surface PSNR
-/// reads (the other maps change the bytes alone).
-std::vector<char> colour_textures(const TexturedMesh& output) {
-  std::vector<char> colour(output.textures.size(), 0);
-  for (const Material& m : output.materials)
-    if (m.texture >= 0) colour[size_t(m.texture)] = 1;
-  return colour;
-}
-
 /// Per baked texture, the texels whose centres a triangle that reads it covers (empty for the others).
 std::vector<std::vector<uint8_t>> chart_texels(const TexturedMesh& output, const std::vector<char>& baked) {
   std::vector<std::vector<uint8_t>> inside(output.textures.size());
@@ -109,23 +100,6 @@ std::vector<std::string> encode_all(const TexturedMesh& output, const std::vecto
 
 uint64_t total_bytes(const std::vector<std::string>& files) {
   return std::accumulate(files.begin(), files.end(), uint64_t(0), [](uint64_t n, const std::string& f) { return n + f.size(); });
-}
-
-/// The surface PSNR (`judge`'s points) of `output` with its base colour images (`colour`) as `files`
-/// decode (swapped in, then back).
-double psnr_as_written(const SurfacePsnrOfImages& judge, const std::vector<char>& colour, TexturedMesh& output,
-                       const std::vector<std::string>& files) {
-  std::vector<Image> decoded(files.size());
-  tbb::parallel_for(size_t(0), files.size(), [&](size_t i) {
-    if (!files[i].empty() && colour[i])
-      decoded[i] = decode_image(reinterpret_cast<const unsigned char*>(files[i].data()), files[i].size(), output.textures[i].path);
-  });
-  for (size_t i = 0; i < decoded.size(); ++i)
-    if (!decoded[i].empty()) std::swap(output.textures[i].image, decoded[i]);
-  const double psnr = judge(output);
-  for (size_t i = 0; i < decoded.size(); ++i)
-    if (!decoded[i].empty()) std::swap(output.textures[i].image, decoded[i]);
-  return psnr;
 }
 
 /// A surface PSNR as the mean squared error it stands for, and back.
@@ -304,6 +278,28 @@ std::pair<std::optional<Written>, Written> check_qualities(const BudgetSearchReq
 }
 
 }  // namespace
+
+std::vector<char> colour_textures(const TexturedMesh& output) {
+  std::vector<char> colour(output.textures.size(), 0);
+  for (const Material& m : output.materials)
+    if (m.texture >= 0) colour[size_t(m.texture)] = 1;
+  return colour;
+}
+
+double psnr_as_written(const SurfacePsnrOfImages& judge, const std::vector<char>& colour, TexturedMesh& output,
+                       const std::vector<std::string>& files) {
+  std::vector<Image> decoded(files.size());
+  tbb::parallel_for(size_t(0), files.size(), [&](size_t i) {
+    if (!files[i].empty() && colour[i])
+      decoded[i] = decode_image(reinterpret_cast<const unsigned char*>(files[i].data()), files[i].size(), output.textures[i].path);
+  });
+  for (size_t i = 0; i < decoded.size(); ++i)
+    if (!decoded[i].empty()) std::swap(output.textures[i].image, decoded[i]);
+  const double psnr = judge(output);
+  for (size_t i = 0; i < decoded.size(); ++i)
+    if (!decoded[i].empty()) std::swap(output.textures[i].image, decoded[i]);
+  return psnr;
+}
 
 BudgetSearchResult search_texels_and_quality(const BudgetSearchRequest& request, const TexturedMesh& input, TexturedMesh& output,
                                              ImageEncoding& encoding) {

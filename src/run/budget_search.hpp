@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "report/metrics.hpp"
 #include "tightex/io.hpp"
 #include "tightex/mesh.hpp"
 
@@ -36,6 +37,15 @@ struct BudgetSearchResult {
   std::string reason;
   nlohmann::json probes = nlohmann::json::array();
 };
+
+/// Per texture of `output`, whether a material binds it as its base colour: the images the surface PSNR
+/// reads (the other maps change the bytes alone).
+std::vector<char> colour_textures(const TexturedMesh& output);
+
+/// The surface PSNR (`judge`'s points) of `output` with its base colour images (`colour`) as `files`
+/// decode (swapped in, then back).
+double psnr_as_written(const SurfacePsnrOfImages& judge, const std::vector<char>& colour, TexturedMesh& output,
+                       const std::vector<std::string>& files);
 
 /// Searches the scale of `output`'s baked images (the new pages and the maps of the materials that
 /// bind them) and the lossy quality of `encoding` together. `output` is left as it was (its images are

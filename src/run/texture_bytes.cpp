@@ -39,23 +39,9 @@ uint64_t total(const std::vector<std::string>& images) {
   return n;
 }
 
-/// The surface PSNR (`judge`'s points) of `output` with its base colour images as `images` decode
-/// (swapped in, then back; the surface PSNR reads no other map).
+/// The surface PSNR (`judge`'s points) of `output` with its base colour images as `images` decode.
 double psnr_as_written(const SurfacePsnrOfImages& judge, TexturedMesh& output, const std::vector<std::string>& images) {
-  std::vector<char> colour(output.textures.size(), 0);
-  for (const Material& m : output.materials)
-    if (m.texture >= 0) colour[size_t(m.texture)] = 1;
-  std::vector<Image> decoded(images.size());
-  tbb::parallel_for(size_t(0), images.size(), [&](size_t i) {
-    if (!images[i].empty() && colour[i])
-      decoded[i] = decode_image(reinterpret_cast<const unsigned char*>(images[i].data()), images[i].size(), output.textures[i].path);
-  });
-  for (size_t i = 0; i < decoded.size(); ++i)
-    if (!decoded[i].empty()) std::swap(output.textures[i].image, decoded[i]);
-  const double psnr = judge(output);
-  for (size_t i = 0; i < decoded.size(); ++i)
-    if (!decoded[i].empty()) std::swap(output.textures[i].image, decoded[i]);
-  return psnr;
+  return psnr_as_written(judge, colour_textures(output), output, images);
 }
 
 /// The bytes of the input's images that its materials bind (base colour or another map), each once.
