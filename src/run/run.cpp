@@ -283,7 +283,11 @@ Report run(const std::string& input, const std::string& outdir, const Options& o
   round_uvs_as_stored(result.output, format);
 
   const std::vector<TextureSource> sources = texture_sources(planned.mesh);
+  const auto encode_start = std::chrono::steady_clock::now();
+  const CpuTimes encode_cpu = process_cpu_times();
   const EncodingChoice choice = choose_images(options, opt, planned.mesh, sources, budget, format, result, progress);
+  timings.encode_s = seconds_since(encode_start);
+  timings.encode_cpu = CpuTimes{process_cpu_times().user - encode_cpu.user, process_cpu_times().sys - encode_cpu.sys};
   const ModelFormat input_format = model_format_of(input);
   const ModelTarget target{outdir,
                            fs::path(input).stem().string(),

@@ -31,8 +31,8 @@ void check_paths(const std::string& input, const std::string& outdir, ModelForma
 /// process's CPU time while they ran (read: from the start; measure and the page's data: each from
 /// the start of the two to its own end; write: its own).
 struct RunTimings {
-  double read_s = 0, textures_s = 0, write_s = 0, measure_s = 0, html_s = 0;
-  CpuTimes read_cpu, write_cpu, measure_cpu, html_cpu;
+  double read_s = 0, textures_s = 0, encode_s = 0, write_s = 0, measure_s = 0, html_s = 0;
+  CpuTimes read_cpu, encode_cpu, write_cpu, measure_cpu, html_cpu;
 };
 
 /// What the run's last stage gives: the output's metrics, what the writer left out, and report.html's
