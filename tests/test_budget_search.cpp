@@ -1,8 +1,13 @@
 // The texel search's shrink (run/budget_search.hpp): a chart's border keeps its own colour, whatever
-// its gutter holds, and a texel with no chart under it takes the mean of all it covers.
+// its gutter holds, and a texel with no chart under it takes the mean of all it covers. Rate control's
+// quality search (run/texture_bytes.hpp): the lowest quality that reaches a target, in a few measures.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <map>
+
 #include "run/budget_search.hpp"
+#include "run/texture_bytes.hpp"
 
 namespace tightex {
 namespace {
@@ -34,6 +39,31 @@ TEST(BudgetSearch, ShrinkByAFractionWeighsTexelsByTheirOverlap) {
   const Image small = shrink_image(image, {}, 2, 1);
   EXPECT_EQ(small.at(0, 0).r, 30);   // (0 * 1 + 90 * 0.5) / 1.5
   EXPECT_EQ(small.at(1, 0).r, 150);  // (90 * 0.5 + 180 * 1) / 1.5
+}
+
+/// A codec's PSNR over its quality: rising, steeper towards the top, a little flat step in the middle.
+double codec_curve(int q) { return 28 + 0.12 * q + 6 * std::pow(q / 100.0, 6) + (q >= 60 && q < 63 ? -0.05 : 0); }
+
+TEST(QualitySearch, FindsTheLowestQualityReachingTheTargetInFewMeasures) {
+  for (const double target : {29.0, 35.0, 38.5, 41.0, 45.9}) {
+    int expected = 101;  // by brute force
+    for (int q = 100; q >= 1; --q)
+      if (codec_curve(q) >= target) expected = q;
+    for (const int hint : {0, 10, 50, 90}) {
+      std::map<int, int> measured;
+      const int q = lowest_quality_reaching([&](int quality) { return ++measured[quality], codec_curve(quality); }, target, hint);
+      EXPECT_EQ(q, expected) << target << " from " << hint;
+      EXPECT_LE(measured.size(), 7u) << target << " from " << hint;
+      for (const auto& [quality, times] : measured) EXPECT_EQ(times, 1) << "quality " << quality << " measured again";
+    }
+  }
+}
+
+TEST(QualitySearch, NoQualityReachingTheTargetGives101) {
+  int measures = 0;
+  EXPECT_EQ(lowest_quality_reaching([&](int q) { return ++measures, 30.0 + q / 100.0; }, 40, 80), 101);
+  EXPECT_LE(measures, 4);
+  EXPECT_EQ(lowest_quality_reaching([](int) { return 50.0; }, 40, 0), 1);
 }
 
 }  // namespace

@@ -17,6 +17,34 @@
 
 namespace tightex {
 
+int lowest_quality_reaching(const std::function<double(int)>& psnr_at, double target, int hint) {
+  int lo = 0, hi = 101;                    // lo fails (or is 0), hi reaches (or is 101)
+  std::optional<double> psnr_lo, psnr_hi;  // their PSNR, where measured
+  std::optional<std::pair<int, double>> last;
+  int q = hint > 0 && hint <= 100 ? hint : 75;
+  for (;;) {
+    const double p = psnr_at(q);
+    if (p >= target)
+      hi = q, psnr_hi = p;
+    else
+      lo = q, psnr_lo = p;
+    if (hi - lo <= 1 || lo == 100) return hi;
+    int next = 0;
+    if (psnr_lo && psnr_hi && *psnr_hi > *psnr_lo) {  // bracketed: interpolate, rounding towards reaching
+      next = int(std::ceil(lo + (target - *psnr_lo) * double(hi - lo) / (*psnr_hi - *psnr_lo)));
+    } else if (last && std::abs(p - last->second) > 1e-9) {  // one side only: the secant, 2 beyond to bracket
+      const double at = q + (target - p) * double(q - last->first) / (p - last->second);
+      next = p < target ? int(std::ceil(at + 2)) : int(std::floor(at - 2));
+    } else if (last) {  // flat: no slope to follow
+      next = (lo + hi) / 2;
+    } else {
+      next = p < target ? q + 8 : q - 8;
+    }
+    last = std::pair{q, p};
+    q = std::clamp(next, lo + 1, std::min(hi - 1, 100));
+  }
+}
+
 namespace {
 
 /// Rate control's one quality, for every lossy image (JPEG or WebP).
@@ -135,27 +163,33 @@ std::string within_own_roles(const BytesRequest& request, const TexturedMesh& in
       bound, own, over > 1 ? "" : ", not reached: quality 1");
 }
 
-/// The most qualities rate control steps up where its bisection's points erred against the report's.
+/// The most qualities rate control steps up where its search's points erred against the report's.
 constexpr int kMaxStepsUp = 4;
 
-/// Rate control of a lossy encoding: the quality and why.
+/// Rate control of a lossy encoding: the quality and why. With --target-psnr, the images chosen and
+/// their PSNR at the report's points into `checked`.
 std::string pick_quality(const BytesRequest& request, const TexturedMesh& input, const std::vector<TextureSource>& sources,
-                         TexturedMesh& output, ImageEncoding& e) {
+                         TexturedMesh& output, ImageEncoding& e, std::optional<std::pair<std::vector<std::string>, double>>& checked) {
   int steps = 0;
   if (request.target_psnr_db > 0) {
-    // Bisection at a tenth of the report's points, then the report's own points, a quality up at a time
-    // where the few erred.
+    // The search at a tenth of the report's points, then the report's own points, a quality up at a
+    // time where the few erred.
     const SurfacePsnrOfImages few(input, output, kPsnrPoints / 10), judge(input, output);
-    int lowest = lowest_quality(
+    int lowest = lowest_quality_reaching(
         [&](int quality) {
           step(request, steps);
           set_quality(e, quality);
-          return psnr_as_written(few, output, encoded(output, e)) >= request.target_psnr_db;
+          return psnr_as_written(few, output, encoded(output, e));
         },
-        request.quality_hint);
+        request.target_psnr_db, request.quality_hint);
     for (int up = 0; lowest <= 100 && up < kMaxStepsUp; ++up, ++lowest) {
       set_quality(e, lowest);
-      if (psnr_as_written(judge, output, encoded(output, e)) >= request.target_psnr_db) break;
+      std::vector<std::string> images = encoded(output, e);
+      const double psnr = psnr_as_written(judge, output, images);
+      if (psnr >= request.target_psnr_db) {
+        checked.emplace(std::move(images), psnr);
+        break;
+      }
     }
     set_quality(e, std::min(lowest, 100));
     return lowest <= 100 ? fmt::format("the lowest quality whose written images reach --target-psnr {} dB", request.target_psnr_db)
@@ -261,11 +295,16 @@ EncodingChoice choose_encoding(const BytesRequest& request, const TexturedMesh& 
   const bool search_texels = request.new_pages > 0 && (request.target_psnr_db > 0 || request.max_bytes > 0) && !request.quality_given;
   if (search_texels && (c.encoding.lossy() || (!request.format && !request.codecs.empty())))
     return search_codec_texels_and_quality(request, input, output, c);
-  if (c.encoding.lossy() && !request.quality_given) c.reason += "; " + pick_quality(request, input, sources, output, c.encoding);
+  std::optional<std::pair<std::vector<std::string>, double>> checked;  // the images rate control measured last
+  if (c.encoding.lossy() && !request.quality_given) c.reason += "; " + pick_quality(request, input, sources, output, c.encoding, checked);
   if (request.progress) request.progress(8.0 / 9);
-  c.images = encoded(output, c.encoding);
+  if (checked) {
+    c.images = std::move(checked->first), c.written_psnr_db = checked->second;
+  } else {
+    c.images = encoded(output, c.encoding);
+    if (c.encoding.lossy()) c.written_psnr_db = psnr_as_written(SurfacePsnrOfImages(input, output), output, c.images);
+  }
   for (const std::string& b : c.images) c.bytes.push_back(b.size());
-  if (c.encoding.lossy()) c.written_psnr_db = psnr_as_written(SurfacePsnrOfImages(input, output), output, c.images);
   if (request.progress) request.progress(1);
   return c;
 }

@@ -49,6 +49,12 @@ struct EncodingChoice {
   double texel_scale = 1;  // the texel search's scale of the baked images' side (1: as baked)
 };
 
+/// The lowest quality in [1, 100] whose surface PSNR (`psnr_at`, rising with the quality) reaches
+/// `target`; 101 where none does. Starts at `hint` (75 without one) and steps by the secant through the
+/// last two qualities measured, bisecting where the secant stalls on one side: three to five measures
+/// on a codec's curve, where bisection takes seven or eight. Each quality is measured at most once.
+int lowest_quality_reaching(const std::function<double(int)>& psnr_at, double target, int hint);
+
 /// Chooses the encoding of `output`'s images (the result of `input`, whose textures are `sources`), and
 /// measures what it gives. Leaves `output` as it was.
 EncodingChoice choose_encoding(const BytesRequest& request, const TexturedMesh& input, const std::vector<TextureSource>& sources,
