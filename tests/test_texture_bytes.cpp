@@ -195,6 +195,41 @@ TEST(TextureBytes, WithoutFormatTheSearchTakesALossyCodecTheModelFormatReads) {
   testing::expect_valid_and_loading(dir / "glb" / "scan.glb", testing::sphere().num_triangles());
 }
 
+/// `in`'s model written again with its texture re-encoded as WebP at `quality` (no repacking), into `dir`.
+fs::path reencoded_obj(const fs::path& in, const fs::path& dir, int quality) {
+  ImageEncoding e(ImageFormat::kWebp);
+  e.webp_quality = quality;
+  TexturedMesh m = read_model(in.string());
+  m.textures[0].path = "scan_texture";  // a file name inside `dir`
+  write_obj(m, dir.string(), "scan", e);
+  return dir / "scan.obj";
+}
+
+TEST(TextureBytes, CompareReencodeGivesTheInputsOwnBytesAtTheWrittenPsnr) {
+  const fs::path dir = testing::scratch_folder("bytes_reencode");
+  const fs::path in = scan_obj(dir / "in", ImageFormat::kPng);
+  const json report = run(in, dir / "out", "--format webp --target-psnr 46 --compare-reencode");
+  const json& r = report["bytes"]["reencode"];
+  ASSERT_TRUE(r.contains("quality")) << r.dump();
+  const double written = report["bytes"]["surface_psnr_written_db"].get<double>();
+  const int q = r["quality"].get<int>();
+  ASSERT_GT(q, 1);
+  ASSERT_LE(q, 100);
+  // The input written again at that quality, measured from its files: it reaches the output's PSNR,
+  // one quality lower does not, and its texture takes the bytes the report gives.
+  const fs::path at = reencoded_obj(in, dir / "at", q), below = reencoded_obj(in, dir / "below", q - 1);
+  EXPECT_GE(measured_psnr(in, at), written - 0.05);
+  EXPECT_LT(measured_psnr(in, below), written + 0.05);
+  EXPECT_NEAR(r["psnr_db"].get<double>(), measured_psnr(in, at), 0.05);
+  EXPECT_EQ(r["bytes"].get<uint64_t>(), bytes_of(dir / "at", ".webp"));
+  EXPECT_LE(r["bytes_at_written_psnr"].get<double>(), r["bytes"].get<double>());
+  EXPECT_GE(r["bytes_at_written_psnr"].get<double>(), double(bytes_of(dir / "below", ".webp")));
+  EXPECT_NEAR(r["output_over_reencode"].get<double>(),
+              double(report["bytes"]["output"]["total"].get<uint64_t>()) / r["bytes_at_written_psnr"].get<double>(), 1e-9);
+  // A lossless output has nothing to compare.
+  EXPECT_TRUE(run(in, dir / "png", "--compare-reencode")["bytes"]["reencode"].contains("reason"));
+}
+
 TEST(TextureBytes, WebpGlbDeclaresItsExtensionAndValidates) {
   const fs::path dir = testing::scratch_folder("bytes_webp_glb");
   testing::GridGltf g = testing::grid_gltf();

@@ -210,6 +210,9 @@ struct Options {
   double target_psnr_db = 0;
   /// Lossy codecs: the highest quality whose images take at most this many bytes (0: none).
   uint64_t max_bytes = 0;
+  /// A lossy output: the report also gives the bytes the input's own images take re-encoded in the same
+  /// codec at the surface PSNR the output's reach (report.json bytes.reencode): what tightex saves.
+  bool compare_reencode = false;
   /// report.json's path; empty: OUTDIR/report.json.
   std::string report_path;
   /// A PNG of the input texture(s) beside the output's; empty: none.

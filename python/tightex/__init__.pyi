@@ -42,6 +42,7 @@ class Options:
     webp_lossless: bool = False
     target_psnr_db: float = 0.0
     max_bytes: int = 0
+    compare_reencode: bool = False
     report_path: str = ""
     preview_path: str = ""
     html: bool = True

@@ -85,6 +85,7 @@ void define_encoding_flags(CLI::App& app, Options& o, GivenFlags& given) {
   add_flag(app, "webp_lossless", o.webp_lossless);
   add(app, "target_psnr_db", o.target_psnr_db)->check(CLI::Range(1.0, 99.0));
   add(app, "max_bytes", o.max_bytes)->check(CLI::PositiveNumber);
+  add_flag(app, "compare_reencode", o.compare_reencode);
 }
 
 /// Declares every flag of the main command on `app`, bound to `line` and `given`.

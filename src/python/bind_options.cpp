@@ -90,6 +90,7 @@ void bind_options(py::module_& m) {
   c.def_readwrite("webp_lossless", &Options::webp_lossless, doc("webp_lossless").c_str());
   c.def_readwrite("target_psnr_db", &Options::target_psnr_db, doc("target_psnr_db").c_str());
   c.def_readwrite("max_bytes", &Options::max_bytes, doc("max_bytes").c_str());
+  c.def_readwrite("compare_reencode", &Options::compare_reencode, doc("compare_reencode").c_str());
   c.def_readwrite("report_path", &Options::report_path, doc("report_path").c_str());
   c.def_readwrite("preview_path", &Options::preview_path, doc("preview_path").c_str());
   c.def_readwrite("html", &Options::html, doc("html").c_str());

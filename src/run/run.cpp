@@ -23,6 +23,7 @@
 #include "report/report.hpp"
 #include "run/memory_guard.hpp"
 #include "run/process_tuning.hpp"
+#include "run/reencode.hpp"
 #include "run/run_output.hpp"
 #include "run/run_warnings.hpp"
 #include "run/texture_bytes.hpp"
@@ -229,6 +230,40 @@ EncodingChoice choose_images(const Options& options, const Options& method, cons
   return c;
 }
 
+/// --compare-reencode: report.json bytes.reencode, the input's own images re-encoded in the output's
+/// lossy codec at the surface PSNR the written images reach (`written_psnr_db`), beside the output's
+/// bytes; a reason where there is nothing to compare (a lossless output, an input without images).
+/// Its time into the report's timings.
+void add_reencode(TexturedMesh& input, const ImageEncoding& encoding, double written_psnr_db, nlohmann::json& json) {
+  nlohmann::json& r = json["bytes"]["reencode"];
+  if (!encoding.lossy()) {
+    r = {{"reason", "the output's images are lossless: a re-encode at the same PSNR is the input as it is"}};
+    return;
+  }
+  const bool has_images = std::any_of(input.materials.begin(), input.materials.end(), [&](const Material& m) {
+    return m.texture >= 0 && !input.textures[size_t(m.texture)].from_vertex_colours;
+  });
+  if (!has_images) {
+    r = {{"reason", "the input's colours are vertex colours: no image to re-encode"}};
+    return;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  const CpuTimes cpu = process_cpu_times();
+  const ReencodeFigures f = reencode_at_psnr(input, encoding.format, written_psnr_db);
+  const uint64_t output_bytes = json["bytes"]["output"]["total"].get<uint64_t>();
+  r = {{"codec", to_string(encoding.format)},
+       {"quality", f.quality},
+       {"bytes", f.bytes},
+       {"psnr_db", f.reached_psnr_db},
+       {"bytes_at_written_psnr", f.bytes_at_psnr},
+       {"output_over_reencode", double(output_bytes) / std::max(1.0, f.bytes_at_psnr)},
+       {"probes", f.probes}};
+  if (f.quality > 100) r["reason"] = "even quality 100 does not reach the output's PSNR: its bytes and PSNR at 100";
+  const CpuTimes now = process_cpu_times();
+  json["timings"].push_back(to_json(
+      StageTiming{"re-encode the input (--compare-reencode)", seconds_since(t0), std::nullopt, now.user - cpu.user, now.sys - cpu.sys}));
+}
+
 }  // namespace
 
 void check_options(const Options& o) {
@@ -306,6 +341,7 @@ Report run(const std::string& input, const std::string& outdir, const Options& o
   json["bytes"] = bytes_json(planned.mesh, sources, result.output, choice, metrics, format);
   json["bytes"]["surface_psnr_bake_db"] = metrics.surface_psnr_bake.value_or(metrics.surface_psnr);
   if (!choice.probes.is_null()) json["bytes"]["probes"] = choice.probes;
+  if (options.compare_reencode) add_reencode(planned.mesh, choice.encoding, metrics.surface_psnr, json);
   add_warnings(planned.plan, planned.mesh, read_stats, format, written.removed, json);
   if (!options.preview_path.empty()) write_preview(options.preview_path, planned.mesh, result.output);
   Report report = public_report(std::move(json), result.output, result.report.texture_sizes.size());

@@ -1,0 +1,79 @@
+#include "run/reencode.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "io/image_io.hpp"
+#include "report/metrics.hpp"
+#include "run/budget_search.hpp"
+#include "run/texture_bytes.hpp"
+
+namespace tightex {
+
+namespace {
+
+/// Per texture of `mesh`, whether a material binds it (as base colour or any other map) and it holds
+/// an image of its own (not vertex colours).
+std::vector<char> bound_images(const TexturedMesh& mesh) {
+  std::vector<char> bound(mesh.textures.size(), 0);
+  auto mark = [&](int t) {
+    if (t >= 0 && !mesh.textures[size_t(t)].image.empty() && !mesh.textures[size_t(t)].from_vertex_colours) bound[size_t(t)] = 1;
+  };
+  for (const Material& m : mesh.materials) {
+    mark(m.texture);
+    for (const int t : m.maps) mark(t);
+  }
+  return bound;
+}
+
+/// `mesh` without its images (the textures' other fields kept): the side of the comparison that the
+/// re-encoded images are swapped into, while `mesh` keeps its own.
+TexturedMesh without_images(TexturedMesh& mesh) {
+  std::vector<Image> images(mesh.textures.size());
+  for (size_t i = 0; i < images.size(); ++i) std::swap(images[i], mesh.textures[i].image);
+  TexturedMesh copy = mesh;
+  for (size_t i = 0; i < images.size(); ++i) std::swap(images[i], mesh.textures[i].image);
+  return copy;
+}
+
+}  // namespace
+
+ReencodeFigures reencode_at_psnr(TexturedMesh& input, ImageFormat codec, double psnr_db) {
+  const std::vector<char> bound = bound_images(input);
+  const std::vector<char> colour = colour_textures(input);
+  TexturedMesh reencoded = without_images(input);
+  const SurfacePsnrOfImages judge(input, reencoded);
+  std::map<int, std::pair<uint64_t, double>> measured;  // quality -> bytes, PSNR
+  ImageEncoding encoding(codec);
+  auto psnr_at = [&](int quality) {
+    encoding.jpeg_quality = encoding.webp_quality = quality;
+    std::vector<std::string> files(input.textures.size());
+    tbb::parallel_for(size_t(0), files.size(), [&](size_t i) {
+      if (bound[i]) files[i] = encode_image(input.textures[i].image, encoding, input.textures[i].path);
+    });
+    uint64_t bytes = 0;
+    for (const std::string& f : files) bytes += f.size();
+    const double psnr = psnr_as_written(judge, colour, reencoded, files);
+    measured[quality] = {bytes, psnr};
+    return psnr;
+  };
+  ReencodeFigures r;
+  r.quality = lowest_quality_reaching(psnr_at, psnr_db, 0);
+  for (const auto& [q, m] : measured) r.probes.push_back({{"quality", q}, {"bytes", m.first}, {"psnr_db", m.second}});
+  const auto at = measured.find(std::min(r.quality, 100));
+  r.bytes = at->second.first, r.reached_psnr_db = at->second.second;
+  r.bytes_at_psnr = double(r.bytes);
+  const auto below = measured.find(r.quality - 1);
+  if (r.quality <= 100 && below != measured.end() && at->second.second > below->second.second) {
+    const double t = (psnr_db - below->second.second) / (at->second.second - below->second.second);
+    r.bytes_at_psnr =
+        std::exp(std::log(double(below->second.first)) + t * (std::log(double(r.bytes)) - std::log(double(below->second.first))));
+  }
+  return r;
+}
+
+}  // namespace tightex
