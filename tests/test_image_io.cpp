@@ -266,6 +266,25 @@ TEST_F(ImageIoTest, PngRgbaRoundTripIsExact) {
   EXPECT_TRUE(loaded.pixels == image.pixels);
 }
 
+TEST_F(ImageIoTest, PngOfAGreyImageIsGreyAndExact) {
+  // An occlusion or roughness map: red, green and blue agree everywhere. One sample a pixel, not three.
+  Image image = noise_image(61, 37, false, 3);
+  for (Rgba8& p : image.pixels) p.g = p.b = p.r;
+  save_image(path("grey.png"), image, ImageFormat::kPng);
+  EXPECT_EQ(png_color_type(read_bytes(path("grey.png"))), 0);
+  EXPECT_TRUE(load_image(path("grey.png")).pixels == image.pixels);
+  // With alpha: grey and alpha.
+  image.pixels[5].a = 17;
+  save_image(path("grey_alpha.png"), image, ImageFormat::kPng);
+  EXPECT_EQ(png_color_type(read_bytes(path("grey_alpha.png"))), 4);
+  EXPECT_TRUE(load_image(path("grey_alpha.png")).pixels == image.pixels);
+  // One pixel whose blue differs: RGB again.
+  image.pixels[5].a = 255, image.pixels[9].b = uint8_t(image.pixels[9].r ^ 1);
+  save_image(path("almost_grey.png"), image, ImageFormat::kPng);
+  EXPECT_EQ(png_color_type(read_bytes(path("almost_grey.png"))), 2);
+  EXPECT_TRUE(load_image(path("almost_grey.png")).pixels == image.pixels);
+}
+
 TEST_F(ImageIoTest, PngOnePixelAndOneRowRoundTrip) {
   for (const auto& [w, h] : {std::pair{1, 1}, std::pair{300, 1}, std::pair{1, 300}}) {
     const Image image = noise_image(w, h, true, 3);

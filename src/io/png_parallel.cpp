@@ -19,11 +19,30 @@ constexpr size_t kSliceBytes = size_t(1) << 20;  // filtered bytes deflated as o
 constexpr size_t kWindowBytes = 32768;           // deflate's window: the dictionary a slice is primed with
 constexpr size_t kMaxIdatBytes = size_t(1) << 30;
 
-/// Row y's samples: RGB (`channels` 3) or RGBA.
+/// Row y's samples: grey (`channels` 1: the red of an image whose red, green and blue agree), grey and
+/// alpha (2), RGB (3) or RGBA (4).
 void raw_row(const Image& image, size_t y, size_t channels, unsigned char* out) {
   const Rgba8* row = image.pixels.data() + y * size_t(image.width);
-  for (size_t x = 0; x < size_t(image.width); ++x) std::memcpy(out + x * channels, &row[x], channels);
+  if (channels >= 3) {
+    for (size_t x = 0; x < size_t(image.width); ++x) std::memcpy(out + x * channels, &row[x], channels);
+  } else {
+    for (size_t x = 0; x < size_t(image.width); ++x) {
+      out[x * channels] = row[x].r;
+      if (channels == 2) out[x * channels + 1] = row[x].a;
+    }
+  }
 }
+
+/// The fewest 8-bit channels that hold every pixel of `image` exactly: 1 (grey) or 2 (grey and alpha)
+/// where red, green and blue agree everywhere (an occlusion, roughness, height or greyscale scan), else
+/// 3 (RGB) or 4 (RGBA); alpha only where some pixel's is not 255.
+size_t channels_needed(const Image& image) {
+  const bool grey = std::all_of(image.pixels.begin(), image.pixels.end(), [](const Rgba8& p) { return p.r == p.g && p.g == p.b; });
+  return (grey ? 1 : 3) + (is_opaque(image) ? 0 : 1);
+}
+
+/// PNG's colour type for `channels` 8-bit channels: grey 0, grey and alpha 4, RGB 2, RGBA 6.
+char colour_type(size_t channels) { return char(channels == 1 ? 0 : channels == 2 ? 4 : channels == 3 ? 2 : 6); }
 
 uint8_t paeth(int a, int b, int c) {
   const int p = a + b - c, pa = std::abs(p - a), pb = std::abs(p - b), pc = std::abs(p - c);
@@ -139,13 +158,13 @@ bool is_opaque(const Image& image) {
 
 std::string encode_png(const Image& image, const PngSettings& settings) {
   if (image.width <= 0 || image.height <= 0) fail_internal("encode_png of a {}x{} image", image.width, image.height);
-  const size_t channels = is_opaque(image) ? 3 : 4;
+  const size_t channels = channels_needed(image);
   const std::string idat = zlib_stream(filtered_rows(image, channels, settings.filter), settings);
   std::string png("\x89PNG\r\n\x1a\n", 8);
   std::string ihdr;
   append_u32(ihdr, uint32_t(image.width));
   append_u32(ihdr, uint32_t(image.height));
-  ihdr += {char(8), char(channels == 3 ? 2 : 6), char(0), char(0), char(0)};  // 8 bits, RGB or RGBA
+  ihdr += {char(8), colour_type(channels), char(0), char(0), char(0)};  // 8 bits a channel
   append_chunk(png, "IHDR", ihdr.data(), ihdr.size());
   for (size_t at = 0; at < idat.size(); at += kMaxIdatBytes)
     append_chunk(png, "IDAT", idat.data() + at, std::min(kMaxIdatBytes, idat.size() - at));

@@ -24,7 +24,8 @@ struct PngSettings {
 /// Whether every pixel's alpha is 255 (an encoder may then store RGB alone).
 bool is_opaque(const Image& image);
 
-/// The PNG file of `image`: 8-bit RGB where every alpha is 255, else RGBA. The same pixels as any
+/// The PNG file of `image`: 8-bit grey where red, green and blue agree in every pixel (a one-channel
+/// map takes a third of the samples), else RGB; with alpha where some alpha is not 255. The same pixels as any
 /// encoder's; the bytes depend on the settings and the slice size, not on the number of cores.
 std::string encode_png(const Image& image, const PngSettings& settings);
 
