@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <map>
 
 #include "run/budget_search.hpp"
@@ -44,26 +45,49 @@ TEST(BudgetSearch, ShrinkByAFractionWeighsTexelsByTheirOverlap) {
 /// A codec's PSNR over its quality: rising, steeper towards the top, a little flat step in the middle.
 double codec_curve(int q) { return 28 + 0.12 * q + 6 * std::pow(q / 100.0, 6) + (q >= 60 && q < 63 ? -0.05 : 0); }
 
-TEST(QualitySearch, FindsTheLowestQualityReachingTheTargetInFewMeasures) {
+TEST(QualitySearch, FindsTheLowestQualityReachingTheTargetInFewRounds) {
   for (const double target : {29.0, 35.0, 38.5, 41.0, 45.9}) {
     int expected = 101;  // by brute force
     for (int q = 100; q >= 1; --q)
       if (codec_curve(q) >= target) expected = q;
-    for (const int hint : {0, 10, 50, 90}) {
+    for (const int hint : {0, 1, 10, 50, 90, 100, expected - 5, expected + 3}) {
       std::map<int, int> measured;
-      const int q = lowest_quality_reaching([&](int quality) { return ++measured[quality], codec_curve(quality); }, target, hint);
+      int rounds = 0;
+      const int q = lowest_quality_reaching(
+          [&](const std::vector<int>& qualities) {
+            ++rounds;
+            std::vector<double> psnr;
+            for (const int quality : qualities) ++measured[quality], psnr.push_back(codec_curve(quality));
+            return psnr;
+          },
+          target, hint);
       EXPECT_EQ(q, expected) << target << " from " << hint;
-      EXPECT_LE(measured.size(), 7u) << target << " from " << hint;
+      EXPECT_LE(rounds, 7) << target << " from " << hint;
+      if (std::abs(hint - expected) <= 5) EXPECT_LE(rounds, 4) << target << " from " << hint;
       for (const auto& [quality, times] : measured) EXPECT_EQ(times, 1) << "quality " << quality << " measured again";
     }
   }
 }
 
+/// A search whose PSNR is `curve` of each quality, one quality a round.
+int search(const std::function<double(int)>& curve, double target, int hint, int* rounds) {
+  return lowest_quality_reaching(
+      [&](const std::vector<int>& qualities) {
+        ++*rounds;
+        std::vector<double> psnr;
+        for (const int q : qualities) psnr.push_back(curve(q));
+        return psnr;
+      },
+      target, hint);
+}
+
 TEST(QualitySearch, NoQualityReachingTheTargetGives101) {
-  int measures = 0;
-  EXPECT_EQ(lowest_quality_reaching([&](int q) { return ++measures, 30.0 + q / 100.0; }, 40, 80), 101);
-  EXPECT_LE(measures, 4);
-  EXPECT_EQ(lowest_quality_reaching([](int) { return 50.0; }, 40, 0), 1);
+  int rounds = 0;
+  EXPECT_EQ(search([](int q) { return 30.0 + q / 100.0; }, 40, 80, &rounds), 101);
+  EXPECT_LE(rounds, 3);
+  rounds = 0;
+  EXPECT_EQ(search([](int) { return 50.0; }, 40, 0, &rounds), 1);
+  EXPECT_EQ(search([](int q) { return 30.0 + q / 10.0; }, 38, 1, &rounds), 80);
 }
 
 }  // namespace

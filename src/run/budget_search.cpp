@@ -19,9 +19,14 @@ namespace tightex {
 
 namespace {
 
-/// The scales of the baked images' sides the search encodes (texels: 1, 1/4 and 1/16 of the bake's);
-/// between them the model interpolates over log scale, to kSteps steps a halving.
-constexpr double kProbeScales[] = {1.0, 0.5, 0.25};
+/// The scales of the baked images' sides the search encodes (texels: 1/16, 1/4 and 1 of the bake's),
+/// the cheap ones first; between them the model interpolates over log scale, to kSteps steps a halving.
+constexpr double kProbeScales[] = {0.25, 0.5, 1.0};
+/// Where the texels are planned and baked again at the scale chosen (BudgetSearchRequest::check_shrunk
+/// false), a model of the two smaller probes alone that chooses at most this scale is kept: the
+/// probes at full size (the costliest, every map included) would not move a choice that far below
+/// it by much, and the re-bake's own quality search corrects the rest.
+constexpr double kLargestScaleWithoutFullProbes = 0.75;
 constexpr int kSteps = 4;
 /// The qualities each probed scale is encoded at; between them the model interpolates.
 constexpr int kProbeQualities[] = {50, 75, 88, 96};
@@ -109,6 +114,7 @@ double psnr_of(double mse) { return 10 * std::log10(255.0 * 255.0 / std::max(mse
 /// One probed scale's codec error (the log of the written images' MSE less the unencoded images' at
 /// that scale) and log bytes, at kProbeQualities.
 struct ScaleCurve {
+  double scale = 1;
   std::vector<double> log_codec_mse, log_bytes;
 };
 
@@ -117,7 +123,7 @@ struct ScaleCurve {
 /// probes (piecewise linear over the quality, the quadratic through the probed scales over log scale).
 struct RateModel {
   std::vector<double> scales, shrink_mse;
-  std::vector<ScaleCurve> probes;  // per kProbeScales
+  std::vector<ScaleCurve> probes;  // per probed scale, in kProbeScales' order
 };
 
 /// The value at quality q of the piecewise-linear curve through (kProbeQualities, y), extended along
@@ -137,7 +143,7 @@ std::pair<double, double> predict(const RateModel& model, size_t s, int q) {
   for (size_t i = 0; i < model.probes.size(); ++i) {
     double w = 1;  // Lagrange's weight of probe i at x
     for (size_t j = 0; j < model.probes.size(); ++j)
-      if (j != i) w *= (x - std::log(kProbeScales[j])) / (std::log(kProbeScales[i]) - std::log(kProbeScales[j]));
+      if (j != i) w *= (x - std::log(model.probes[j].scale)) / (std::log(model.probes[i].scale) - std::log(model.probes[j].scale));
     log_codec_mse += w * at_quality(model.probes[i].log_codec_mse, q), log_bytes += w * at_quality(model.probes[i].log_bytes, q);
   }
   return {psnr_of(model.shrink_mse[s] + std::exp(log_codec_mse)), log_bytes};
@@ -146,8 +152,7 @@ std::pair<double, double> predict(const RateModel& model, size_t s, int q) {
 /// The scales the model chooses from: kSteps a halving, from 1 down to the smallest probed.
 std::vector<double> model_scales() {
   std::vector<double> scales;
-  for (int i = 0; std::pow(2.0, -double(i) / kSteps) >= kProbeScales[std::size(kProbeScales) - 1] - 1e-9; ++i)
-    scales.push_back(std::pow(2.0, -double(i) / kSteps));
+  for (int i = 0; std::pow(2.0, -double(i) / kSteps) >= kProbeScales[0] - 1e-9; ++i) scales.push_back(std::pow(2.0, -double(i) / kSteps));
   return scales;
 }
 
@@ -183,44 +188,69 @@ void swap_in(TexturedMesh& output, std::vector<Image>& scaled) {
     if (!scaled[i].empty()) std::swap(output.textures[i].image, scaled[i]);
 }
 
-/// The rate model (RateModel) of `output`: every model scale's images measured unencoded, each of
-/// kProbeScales encoded at kProbeQualities and measured, at `judge`'s points; the probes into `probes`.
-RateModel fit_rate_model(const BudgetSearchRequest& request, const SurfacePsnrOfImages& judge, const std::vector<char>& baked,
-                         const std::vector<char>& colour, const std::vector<std::vector<uint8_t>>& inside, const ImageEncoding& encoding,
-                         TexturedMesh& output, nlohmann::json& probes) {
+/// What the rate model is fitted from: `judge`'s points, the baked textures and which of them are base
+/// colour, and the chart texels of each.
+struct ProbeContext {
+  const BudgetSearchRequest& request;
+  const SurfacePsnrOfImages& judge;
+  const std::vector<char>&baked, &colour;
+  const std::vector<std::vector<uint8_t>>& inside;
+  const ImageEncoding& encoding;
+};
+
+/// The rate model (RateModel) of `output` without probes yet: every model scale's base colour images
+/// measured unencoded (the surface PSNR reads the base colour alone).
+RateModel shrink_model(const ProbeContext& c, TexturedMesh& output) {
   RateModel model;
   model.scales = model_scales();
-  std::vector<char> baked_colour(baked.size());
-  for (size_t i = 0; i < baked.size(); ++i) baked_colour[i] = baked[i] && colour[i];
-  for (const double scale : model.scales) {  // the surface PSNR reads the base colour alone
-    std::vector<Image> scaled = images_at(output, baked_colour, inside, scale);
+  std::vector<char> baked_colour(c.baked.size());
+  for (size_t i = 0; i < c.baked.size(); ++i) baked_colour[i] = c.baked[i] && c.colour[i];
+  for (const double scale : model.scales) {
+    std::vector<Image> scaled = images_at(output, baked_colour, c.inside, scale);
     swap_in(output, scaled);
-    model.shrink_mse.push_back(mse_of(judge(output)));
+    model.shrink_mse.push_back(mse_of(c.judge(output)));
     swap_in(output, scaled);
-  }
-  for (const double scale : kProbeScales) {
-    if (request.progress) request.progress(0.8 * double(model.probes.size()) / double(std::size(kProbeScales)));
-    std::vector<Image> scaled = images_at(output, baked, inside, scale);
-    std::vector<std::vector<std::string>> files(std::size(kProbeQualities));
-    tbb::parallel_for(size_t(0), files.size(), [&](size_t k) {
-      ImageEncoding e = encoding;
-      e.jpeg_quality = e.webp_quality = kProbeQualities[k];
-      files[k] = encode_all(output, scaled, e);
-    });
-    const size_t s = size_t(std::find_if(model.scales.begin(), model.scales.end(), [&](double x) { return std::abs(x - scale) < 1e-9; }) -
-                            model.scales.begin());
-    ScaleCurve curve;
-    swap_in(output, scaled);
-    for (size_t k = 0; k < files.size(); ++k) {
-      const double psnr = psnr_as_written(judge, colour, output, files[k]), mse = mse_of(psnr);
-      curve.log_codec_mse.push_back(std::log(std::max(mse - model.shrink_mse[s], 1e-3 * mse)));
-      curve.log_bytes.push_back(std::log(double(std::max<uint64_t>(1, total_bytes(files[k])))));
-      probes.push_back({{"scale", scale}, {"quality", kProbeQualities[k]}, {"bytes", total_bytes(files[k])}, {"psnr_db", psnr}});
-    }
-    swap_in(output, scaled);
-    model.probes.push_back(std::move(curve));
   }
   return model;
+}
+
+/// Adds to `model` the probes at `scale`: every baked image at that scale encoded at kProbeQualities
+/// and measured; each into `probes`.
+void add_probes(const ProbeContext& c, double scale, TexturedMesh& output, RateModel& model, nlohmann::json& probes) {
+  if (c.request.progress) c.request.progress(0.8 * double(model.probes.size()) / double(std::size(kProbeScales)));
+  std::vector<Image> scaled = images_at(output, c.baked, c.inside, scale);
+  std::vector<std::vector<std::string>> files(std::size(kProbeQualities));
+  tbb::parallel_for(size_t(0), files.size(), [&](size_t k) {
+    ImageEncoding e = c.encoding;
+    e.jpeg_quality = e.webp_quality = kProbeQualities[k];
+    files[k] = encode_all(output, scaled, e);
+  });
+  const size_t s = size_t(std::find_if(model.scales.begin(), model.scales.end(), [&](double x) { return std::abs(x - scale) < 1e-9; }) -
+                          model.scales.begin());
+  ScaleCurve curve{scale, {}, {}};
+  swap_in(output, scaled);
+  for (size_t k = 0; k < files.size(); ++k) {
+    const double psnr = psnr_as_written(c.judge, c.colour, output, files[k]), mse = mse_of(psnr);
+    curve.log_codec_mse.push_back(std::log(std::max(mse - model.shrink_mse[s], 1e-3 * mse)));
+    curve.log_bytes.push_back(std::log(double(std::max<uint64_t>(1, total_bytes(files[k])))));
+    probes.push_back({{"scale", scale}, {"quality", kProbeQualities[k]}, {"bytes", total_bytes(files[k])}, {"psnr_db", psnr}});
+  }
+  swap_in(output, scaled);
+  model.probes.push_back(std::move(curve));
+}
+
+/// The rate model of `output` and its choice (model_choice): the shrink measured, then the probes
+/// scale by scale from the smallest; the full-size probes are left out where the caller re-bakes at
+/// the scale chosen and the smaller probes alone choose at most kLargestScaleWithoutFullProbes.
+std::pair<RateModel, std::pair<size_t, int>> fit_and_choose(const ProbeContext& c, TexturedMesh& output, nlohmann::json& probes) {
+  RateModel model = shrink_model(c, output);
+  std::pair<size_t, int> choice{0, 100};
+  for (const double scale : kProbeScales) {
+    if (!c.request.check_shrunk && model.probes.size() >= 2 && model.scales[choice.first] <= kLargestScaleWithoutFullProbes) break;
+    add_probes(c, scale, output, model, probes);
+    if (model.probes.size() >= 2) choice = model_choice(c.request, model);
+  }
+  return {std::move(model), choice};
 }
 
 /// The quality the model, corrected by what the last check measured (`psnr_offset`, `log_bytes_offset`:
@@ -307,10 +337,10 @@ BudgetSearchResult search_texels_and_quality(const BudgetSearchRequest& request,
   const std::vector<char> colour = colour_textures(output);
   const std::vector<std::vector<uint8_t>> inside = chart_texels(output, baked);
   BudgetSearchResult r;
-  const RateModel model =
-      fit_rate_model(request, SurfacePsnrOfImages(input, output, kProbePoints), baked, colour, inside, encoding, output, r.probes);
+  const SurfacePsnrOfImages few(input, output, kProbePoints);
+  const auto [model, choice] = fit_and_choose(ProbeContext{request, few, baked, colour, inside, encoding}, output, r.probes);
   // The model's choice, checked; where no quality at its scale reaches a target, the bake's own size.
-  auto [s, q] = model_choice(request, model);
+  auto [s, q] = choice;
   const std::string asked = request.target_psnr_db > 0 ? fmt::format("--target-psnr {} dB", request.target_psnr_db)
                                                        : fmt::format("--max-bytes {}", request.max_bytes);
   if (!request.check_shrunk && s > 0) {

@@ -48,17 +48,22 @@ ReencodeFigures reencode_at_psnr(TexturedMesh& input, ImageFormat codec, double 
   TexturedMesh reencoded = without_images(input);
   const SurfacePsnrOfImages judge(input, reencoded);
   std::map<int, std::pair<uint64_t, double>> measured;  // quality -> bytes, PSNR
-  ImageEncoding encoding(codec);
-  auto psnr_at = [&](int quality) {
-    encoding.jpeg_quality = encoding.webp_quality = quality;
-    std::vector<std::string> files(input.textures.size());
-    tbb::parallel_for(size_t(0), files.size(), [&](size_t i) {
-      if (bound[i]) files[i] = encode_image(input.textures[i].image, encoding, input.textures[i].path);
+  // Each quality's images encoded side by side with the other's (one core an image), then measured.
+  auto psnr_at = [&](const std::vector<int>& qualities) {
+    std::vector<std::vector<std::string>> files(qualities.size(), std::vector<std::string>(input.textures.size()));
+    tbb::parallel_for(size_t(0), qualities.size() * files[0].size(), [&](size_t k) {
+      const size_t q = k / files[0].size(), i = k % files[0].size();
+      ImageEncoding encoding(codec);
+      encoding.jpeg_quality = encoding.webp_quality = qualities[q];
+      if (bound[i]) files[q][i] = encode_image(input.textures[i].image, encoding, input.textures[i].path);
     });
-    uint64_t bytes = 0;
-    for (const std::string& f : files) bytes += f.size();
-    const double psnr = psnr_as_written(judge, colour, reencoded, files);
-    measured[quality] = {bytes, psnr};
+    std::vector<double> psnr;
+    for (size_t q = 0; q < qualities.size(); ++q) {
+      uint64_t bytes = 0;
+      for (const std::string& f : files[q]) bytes += f.size();
+      psnr.push_back(psnr_as_written(judge, colour, reencoded, files[q]));
+      measured[qualities[q]] = {bytes, psnr.back()};
+    }
     return psnr;
   };
   ReencodeFigures r;

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <functional>
+#include <map>
 #include <optional>
 #include <ranges>
 
@@ -17,30 +18,39 @@
 
 namespace tightex {
 
-int lowest_quality_reaching(const std::function<double(int)>& psnr_at, double target, int hint) {
-  int lo = 0, hi = 101;                    // lo fails (or is 0), hi reaches (or is 101)
-  std::optional<double> psnr_lo, psnr_hi;  // their PSNR, where measured
-  std::optional<std::pair<int, double>> last;
+int lowest_quality_reaching(const std::function<std::vector<double>(const std::vector<int>&)>& psnr_at, double target, int hint) {
+  int lo = 0, hi = 101;        // lo fails (or is 0), hi reaches (or is 101)
+  std::map<int, double> psnr;  // every quality measured
   int q = hint > 0 && hint <= 100 ? hint : 75;
   for (;;) {
-    const double p = psnr_at(q);
-    if (p >= target)
-      hi = q, psnr_hi = p;
-    else
-      lo = q, psnr_lo = p;
-    if (hi - lo <= 1 || lo == 100) return hi;
-    int next = 0;
-    if (psnr_lo && psnr_hi && *psnr_hi > *psnr_lo) {  // bracketed: interpolate, rounding towards reaching
-      next = int(std::ceil(lo + (target - *psnr_lo) * double(hi - lo) / (*psnr_hi - *psnr_lo)));
-    } else if (last && std::abs(p - last->second) > 1e-9) {  // one side only: the secant, 2 beyond to bracket
-      const double at = q + (target - p) * double(q - last->first) / (p - last->second);
-      next = p < target ? int(std::ceil(at + 2)) : int(std::floor(at - 2));
-    } else if (last) {  // flat: no slope to follow
-      next = (lo + hi) / 2;
-    } else {
-      next = p < target ? q + 8 : q - 8;
+    std::vector<int> qualities{q};  // and the one below: where q is the answer, that proves it
+    if (q - 1 > lo && !psnr.count(q - 1)) qualities.push_back(q - 1);
+    const std::vector<double> measured = psnr_at(qualities);
+    for (size_t i = 0; i < qualities.size(); ++i) {
+      psnr[qualities[i]] = measured[i];
+      if (measured[i] >= target)
+        hi = std::min(hi, qualities[i]);
+      else
+        lo = std::max(lo, qualities[i]);
     }
-    last = std::pair{q, p};
+    if (hi - lo <= 1 || lo == 100) return hi;
+    const auto at_lo = psnr.find(lo), at_hi = psnr.find(hi);
+    int next = (lo + hi) / 2;  // flat: no slope to follow
+    if (psnr.size() < 2) {     // one measure (the hint was 1 or 100): a step towards the target
+      next = at_hi != psnr.end() ? q - 8 : q + 8;
+    } else if (at_lo != psnr.end() && at_hi != psnr.end() && at_hi->second > at_lo->second) {
+      // Bracketed: interpolate, rounding towards reaching.
+      next = int(std::ceil(lo + (target - at_lo->second) * double(hi - lo) / (at_hi->second - at_lo->second)));
+    } else {
+      // One side only: the secant through the two measures nearest the other side, a little beyond it.
+      const bool reached = at_hi != psnr.end();
+      const auto [q1, p1] = reached ? *psnr.begin() : *std::next(psnr.rbegin());
+      const auto [q2, p2] = reached ? *std::next(psnr.begin()) : *psnr.rbegin();
+      if (std::abs(p2 - p1) > 1e-9) {
+        const double at = q1 + (target - p1) * double(q2 - q1) / (p2 - p1);
+        next = reached ? int(std::floor(at - 1)) : int(std::ceil(at + 2));
+      }
+    }
     q = std::clamp(next, lo + 1, std::min(hi - 1, 100));
   }
 }
@@ -176,10 +186,17 @@ std::string pick_quality(const BytesRequest& request, const TexturedMesh& input,
     // time where the few erred.
     const SurfacePsnrOfImages few(input, output, kPsnrPoints / 10), judge(input, output);
     int lowest = lowest_quality_reaching(
-        [&](int quality) {
-          step(request, steps);
-          set_quality(e, quality);
-          return psnr_as_written(few, output, encoded(output, e));
+        [&](const std::vector<int>& qualities) {
+          // The qualities encoded side by side: a single image's encoder uses one core.
+          std::vector<std::vector<std::string>> images(qualities.size());
+          tbb::parallel_for(size_t(0), qualities.size(), [&](size_t i) {
+            ImageEncoding at = e;
+            set_quality(at, qualities[i]);
+            images[i] = encoded(output, at);
+          });
+          std::vector<double> psnr;
+          for (const std::vector<std::string>& files : images) step(request, steps), psnr.push_back(psnr_as_written(few, output, files));
+          return psnr;
         },
         request.target_psnr_db, request.quality_hint);
     for (int up = 0; lowest <= 100 && up < kMaxStepsUp; ++up, ++lowest) {

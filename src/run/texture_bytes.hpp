@@ -50,10 +50,12 @@ struct EncodingChoice {
 };
 
 /// The lowest quality in [1, 100] whose surface PSNR (`psnr_at`, rising with the quality) reaches
-/// `target`; 101 where none does. Starts at `hint` (75 without one) and steps by the secant through the
-/// last two qualities measured, bisecting where the secant stalls on one side: three to five measures
-/// on a codec's curve, where bisection takes seven or eight. Each quality is measured at most once.
-int lowest_quality_reaching(const std::function<double(int)>& psnr_at, double target, int hint);
+/// `target`; 101 where none does. `psnr_at` measures a quality and, where not yet known, the one
+/// below it (a caller encodes them side by side): where the first is the answer, the second proves
+/// it. Starts at `hint` (75 without one), then interpolates between the two sides once both are known,
+/// else follows the secant a little beyond: two or three rounds from a hint within ten qualities of
+/// the answer. Each quality is measured at most once.
+int lowest_quality_reaching(const std::function<std::vector<double>(const std::vector<int>&)>& psnr_at, double target, int hint);
 
 /// Chooses the encoding of `output`'s images (the result of `input`, whose textures are `sources`), and
 /// measures what it gives. Leaves `output` as it was.
