@@ -136,8 +136,11 @@ double at_quality(const std::vector<double>& y, int q) {
   return y[i] + t * (y[i + 1] - y[i]);
 }
 
-/// The model's PSNR and log bytes at (model.scales[s], q).
-std::pair<double, double> predict(const RateModel& model, size_t s, int q) {
+/// The model's PSNR and log bytes at (model.scales[s], q), and its codec error (mean squared).
+struct Prediction {
+  double psnr = 0, log_bytes = 0, codec_mse = 0;
+};
+Prediction predict(const RateModel& model, size_t s, int q) {
   const double x = std::log(model.scales[s]);
   double log_codec_mse = 0, log_bytes = 0;
   for (size_t i = 0; i < model.probes.size(); ++i) {
@@ -146,7 +149,7 @@ std::pair<double, double> predict(const RateModel& model, size_t s, int q) {
       if (j != i) w *= (x - std::log(model.probes[j].scale)) / (std::log(model.probes[i].scale) - std::log(model.probes[j].scale));
     log_codec_mse += w * at_quality(model.probes[i].log_codec_mse, q), log_bytes += w * at_quality(model.probes[i].log_bytes, q);
   }
-  return {psnr_of(model.shrink_mse[s] + std::exp(log_codec_mse)), log_bytes};
+  return {psnr_of(model.shrink_mse[s] + std::exp(log_codec_mse)), log_bytes, std::exp(log_codec_mse)};
 }
 
 /// The scales the model chooses from: kSteps a halving, from 1 down to the smallest probed.
@@ -164,7 +167,7 @@ std::pair<size_t, int> model_choice(const BudgetSearchRequest& request, const Ra
   for (size_t s = 0; s < model.scales.size(); ++s) {
     double running_psnr = -1e300;  // PSNR never falls as the quality rises
     for (int q = kLowestQuality; q <= 100; ++q) {
-      const auto [psnr, log_bytes] = predict(model, s, q);
+      const auto [psnr, log_bytes, codec_mse] = predict(model, s, q);
       running_psnr = std::max(running_psnr, psnr);
       double score = 0;
       if (request.target_psnr_db > 0)
@@ -260,11 +263,11 @@ int corrected_quality(const BudgetSearchRequest& request, const RateModel& model
                       int lo, int hi) {
   if (request.target_psnr_db > 0) {
     for (int q = std::max(lo + 1, kLowestQuality - 10); q < hi; ++q)
-      if (predict(model, scale, q).first + psnr_offset >= request.target_psnr_db + kTargetMarginDb) return q;
+      if (predict(model, scale, q).psnr + psnr_offset >= request.target_psnr_db + kTargetMarginDb) return q;
     return hi - 1;
   }
   for (int q = hi - 1; q > lo; --q)
-    if (predict(model, scale, q).second + log_bytes_offset <= std::log(double(request.max_bytes))) return q;
+    if (predict(model, scale, q).log_bytes + log_bytes_offset <= std::log(double(request.max_bytes))) return q;
   return lo + 1;
 }
 
@@ -298,7 +301,7 @@ std::pair<std::optional<Written>, Written> check_qualities(const BudgetSearchReq
     (target == ok ? hi : lo) = q;  // a target reached or a bound exceeded: so is every higher quality
     if (ok && (!best || (target ? q < best->quality : q > best->quality))) best = w;
     if (!ok && (!closest || (target ? w.psnr > closest->psnr : q < closest->quality))) closest = w;
-    const auto [psnr, log_bytes] = predict(model, s, q);
+    const auto [psnr, log_bytes, codec_mse] = predict(model, s, q);
     const double log_bytes_offset = std::log(double(std::max<uint64_t>(bytes, 1))) - log_bytes;
     const int next = hi - lo <= 1 ? q : corrected_quality(request, model, s, w.psnr - psnr, log_bytes_offset, lo, hi);
     if (next == q || next <= lo || next >= hi) break;
@@ -346,6 +349,7 @@ BudgetSearchResult search_texels_and_quality(const BudgetSearchRequest& request,
   if (!request.check_shrunk && s > 0) {
     r.scale = model.scales[s], r.quality = q;
     encoding.jpeg_quality = encoding.webp_quality = q;
+    for (int quality = 0; quality <= 100; ++quality) r.codec_mse_by_quality.push_back(predict(model, s, quality).codec_mse);
     r.reason = fmt::format("texels and quality chosen together for {}: the model's {:.2f} of the side at quality {}", asked, r.scale, q);
     return r;
   }

@@ -36,6 +36,10 @@ struct BudgetSearchResult {
   double written_psnr_db = 0;
   std::string reason;
   nlohmann::json probes = nlohmann::json::array();
+  /// The model's codec error (mean squared, 8-bit levels) at `scale`, per quality 0..100, where the
+  /// images come back unchecked (BudgetSearchRequest::check_shrunk): with the re-bake's own error it
+  /// tells the quality to start its search at. Empty otherwise.
+  std::vector<double> codec_mse_by_quality;
 };
 
 /// Per texture of `output`, whether a material binds it as its base colour: the images the surface PSNR

@@ -219,6 +219,7 @@ EncodingChoice choose_images(const Options& options, const Options& method, cons
   BytesRequest alone = bytes_request(options);
   alone.format = choice.encoding.format;
   alone.quality_hint = choice.encoding.format == ImageFormat::kJpeg ? choice.encoding.jpeg_quality : choice.encoding.webp_quality;
+  alone.codec_mse_by_quality = choice.codec_mse_by_quality;
   alone.progress = [&](double f) { progress("encode", 0.8 + 0.2 * f); };
   EncodingChoice c = choose_encoding(alone, input, sources, rebaked.output);
   if (!choice.images.empty() && !answers_better(options, c, choice)) return choice;  // empty: the model's choice, unchecked

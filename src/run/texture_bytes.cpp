@@ -6,6 +6,7 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <cmath>
 #include <functional>
 #include <map>
 #include <optional>
@@ -176,6 +177,18 @@ std::string within_own_roles(const BytesRequest& request, const TexturedMesh& in
 /// The most qualities rate control steps up where its search's points erred against the report's.
 constexpr int kMaxStepsUp = 4;
 
+/// Where rate control's search for --target-psnr starts: with the texel search's codec error, the
+/// lowest quality at which it and the images' own error (measured unencoded at `few`'s points) meet the
+/// target; else request.quality_hint.
+int starting_quality(const BytesRequest& request, const SurfacePsnrOfImages& few, const TexturedMesh& output) {
+  if (request.codec_mse_by_quality.size() != 101) return request.quality_hint;
+  const auto mse = [](double psnr) { return 255.0 * 255.0 * std::pow(10.0, -psnr / 10); };
+  const double room = mse(request.target_psnr_db) - mse(few(output));
+  for (int q = 1; q <= 100; ++q)
+    if (request.codec_mse_by_quality[size_t(q)] <= room) return q;
+  return 100;
+}
+
 /// Rate control of a lossy encoding: the quality and why. With --target-psnr, the images chosen and
 /// their PSNR at the report's points into `checked`.
 std::string pick_quality(const BytesRequest& request, const TexturedMesh& input, const std::vector<TextureSource>& sources,
@@ -185,26 +198,31 @@ std::string pick_quality(const BytesRequest& request, const TexturedMesh& input,
     // The search at a tenth of the report's points, then the report's own points, a quality up at a
     // time where the few erred.
     const SurfacePsnrOfImages few(input, output, kPsnrPoints / 10), judge(input, output);
+    std::map<int, std::vector<std::string>> images;  // per quality tried, its files
     int lowest = lowest_quality_reaching(
         [&](const std::vector<int>& qualities) {
           // The qualities encoded side by side: a single image's encoder uses one core.
-          std::vector<std::vector<std::string>> images(qualities.size());
+          std::vector<std::vector<std::string>> files(qualities.size());
           tbb::parallel_for(size_t(0), qualities.size(), [&](size_t i) {
             ImageEncoding at = e;
             set_quality(at, qualities[i]);
-            images[i] = encoded(output, at);
+            files[i] = encoded(output, at);
           });
           std::vector<double> psnr;
-          for (const std::vector<std::string>& files : images) step(request, steps), psnr.push_back(psnr_as_written(few, output, files));
+          for (size_t i = 0; i < qualities.size(); ++i) {
+            step(request, steps);
+            psnr.push_back(psnr_as_written(few, output, files[i]));
+            images[qualities[i]] = std::move(files[i]);
+          }
           return psnr;
         },
-        request.target_psnr_db, request.quality_hint);
+        request.target_psnr_db, starting_quality(request, few, output));
     for (int up = 0; lowest <= 100 && up < kMaxStepsUp; ++up, ++lowest) {
       set_quality(e, lowest);
-      std::vector<std::string> images = encoded(output, e);
-      const double psnr = psnr_as_written(judge, output, images);
+      std::vector<std::string> images_at = images.count(lowest) ? std::move(images[lowest]) : encoded(output, e);
+      const double psnr = psnr_as_written(judge, output, images_at);
       if (psnr >= request.target_psnr_db) {
-        checked.emplace(std::move(images), psnr);
+        checked.emplace(std::move(images_at), psnr);
         break;
       }
     }
@@ -299,6 +317,7 @@ EncodingChoice search_codec_texels_and_quality(const BytesRequest& request, cons
   if (!c.images.empty()) c.written_psnr_db = best->written_psnr_db;
   c.probes = std::move(best->probes);
   c.texel_scale = best->scale;
+  c.codec_mse_by_quality = std::move(best->codec_mse_by_quality);
   return c;
 }
 

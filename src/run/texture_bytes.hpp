@@ -29,6 +29,10 @@ struct BytesRequest {
   size_t new_pages = 0;
   /// Where > 0, the quality rate control expects near the answer (it brackets there first).
   int quality_hint = 0;
+  /// --target-psnr: the codec's expected error (mean squared, 8-bit levels) per quality 0..100 (the texel
+  /// search's model); rate control then starts where it and the images' own error, measured, meet the
+  /// target, instead of at quality_hint. Empty: none.
+  std::vector<double> codec_mse_by_quality;
   /// Without --format, the lossy codecs that search may choose from (those the output format reads
   /// everywhere).
   std::vector<ImageFormat> codecs;
@@ -45,8 +49,9 @@ struct EncodingChoice {
   std::vector<uint64_t> bytes;      // per output texture
   std::optional<double> written_psnr_db;
   std::string reason;
-  nlohmann::json probes;   // the texel search's probes (null where it did not run)
-  double texel_scale = 1;  // the texel search's scale of the baked images' side (1: as baked)
+  nlohmann::json probes;                     // the texel search's probes (null where it did not run)
+  double texel_scale = 1;                    // the texel search's scale of the baked images' side (1: as baked)
+  std::vector<double> codec_mse_by_quality;  // the texel search's, where its images come back unchecked
 };
 
 /// The lowest quality in [1, 100] whose surface PSNR (`psnr_at`, rising with the quality) reaches
