@@ -242,14 +242,25 @@ void add_probes(const ProbeContext& c, double scale, TexturedMesh& output, RateM
   model.probes.push_back(std::move(curve));
 }
 
+/// Whether no scale below the bake's reaches --target-psnr even unencoded: the texels are kept, and the
+/// full-size probes would only tell the quality, which the checks on the images as written find.
+bool only_full_size_reaches(const BudgetSearchRequest& request, const RateModel& model) {
+  if (!(request.target_psnr_db > 0)) return false;
+  for (size_t s = 1; s < model.scales.size(); ++s)
+    if (psnr_of(model.shrink_mse[s]) >= request.target_psnr_db + kTargetMarginDb) return false;
+  return true;
+}
+
 /// The rate model of `output` and its choice (model_choice): the shrink measured, then the probes
 /// scale by scale from the smallest; the full-size probes are left out where the caller re-bakes at
-/// the scale chosen and the smaller probes alone choose at most kLargestScaleWithoutFullProbes.
+/// the scale chosen and the smaller probes alone choose at most kLargestScaleWithoutFullProbes, and
+/// where only the full size reaches the target (only_full_size_reaches).
 std::pair<RateModel, std::pair<size_t, int>> fit_and_choose(const ProbeContext& c, TexturedMesh& output, nlohmann::json& probes) {
   RateModel model = shrink_model(c, output);
   std::pair<size_t, int> choice{0, 100};
   for (const double scale : kProbeScales) {
     if (!c.request.check_shrunk && model.probes.size() >= 2 && model.scales[choice.first] <= kLargestScaleWithoutFullProbes) break;
+    if (model.probes.size() >= 2 && only_full_size_reaches(c.request, model)) break;  // the checks find its quality
     add_probes(c, scale, output, model, probes);
     if (model.probes.size() >= 2) choice = model_choice(c.request, model);
   }
@@ -292,18 +303,33 @@ std::pair<std::optional<Written>, Written> check_qualities(const BudgetSearchReq
   std::optional<Written> best, closest;
   for (int check = 0; check < kMaxChecks; ++check) {
     if (request.progress) request.progress(0.8 + 0.2 * check / kMaxChecks);
-    encoding.jpeg_quality = encoding.webp_quality = q;
-    Written w{q, encode_all(output, std::vector<Image>(output.textures.size()), encoding), 0};
-    w.psnr = psnr_as_written(judge, colour, output, w.images);
-    const uint64_t bytes = total_bytes(w.images);
-    probes.push_back({{"scale", model.scales[s]}, {"quality", q}, {"bytes", bytes}, {"psnr_db", w.psnr}, {"check", true}});
-    const bool ok = answers(request, w.psnr, bytes);
-    (target == ok ? hi : lo) = q;  // a target reached or a bound exceeded: so is every higher quality
-    if (ok && (!best || (target ? q < best->quality : q > best->quality))) best = w;
-    if (!ok && (!closest || (target ? w.psnr > closest->psnr : q < closest->quality))) closest = w;
+    // q, and beside it the quality that would prove q the answer (one below a target's, one above a
+    // bound's), encoded side by side: a single image's encoder uses one core.
+    std::vector<Written> written{Written{q, {}, 0}};
+    const int proof = target ? q - 1 : q + 1;
+    if (proof > lo && proof < hi) written.push_back(Written{proof, {}, 0});
+    tbb::parallel_for(size_t(0), written.size(), [&](size_t i) {
+      ImageEncoding e = encoding;
+      e.jpeg_quality = e.webp_quality = written[i].quality;
+      written[i].images = encode_all(output, std::vector<Image>(output.textures.size()), e);
+    });
+    for (Written& w : written) {
+      w.psnr = psnr_as_written(judge, colour, output, w.images);
+      const uint64_t bytes = total_bytes(w.images);
+      probes.push_back({{"scale", model.scales[s]}, {"quality", w.quality}, {"bytes", bytes}, {"psnr_db", w.psnr}, {"check", true}});
+      const bool ok = answers(request, w.psnr, bytes);
+      // A target reached or a bound exceeded: so is every higher quality.
+      if (target == ok)
+        hi = std::min(hi, w.quality);
+      else
+        lo = std::max(lo, w.quality);
+      if (ok && (!best || (target ? w.quality < best->quality : w.quality > best->quality))) best = w;
+      if (!ok && (!closest || (target ? w.psnr > closest->psnr : w.quality < closest->quality))) closest = w;
+    }
     const auto [psnr, log_bytes, codec_mse] = predict(model, s, q);
+    const uint64_t bytes = total_bytes(written[0].images);
     const double log_bytes_offset = std::log(double(std::max<uint64_t>(bytes, 1))) - log_bytes;
-    const int next = hi - lo <= 1 ? q : corrected_quality(request, model, s, w.psnr - psnr, log_bytes_offset, lo, hi);
+    const int next = hi - lo <= 1 ? q : corrected_quality(request, model, s, written[0].psnr - psnr, log_bytes_offset, lo, hi);
     if (next == q || next <= lo || next >= hi) break;
     q = next;
   }
