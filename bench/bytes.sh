@@ -8,6 +8,7 @@
 #
 #   bash bench/bytes.sh [OUT] [MODEL...]    (default: every model of ../shared/data; a build with the tools)
 #   TARGETS="40" QUALITIES="50 70 80 90 95" bash bench/bytes.sh ...   (other targets and re-encode qualities)
+#   REPEATS=3 bash bench/bytes.sh ...   (the time ratio from the medians of 3 alternating runs of each)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-build/bytes-bench}
@@ -29,6 +30,11 @@ for model in "${models[@]}"; do
   ./build/tightex "$model" -o "$out/$name/default" -q --no-html
   ./build/tightex "$model" -o "$out/$name/webp" -q --no-html --format webp
   for t in "${targets[@]}"; do ./build/tightex "$model" -o "$out/$name/webp$t" -q --no-html --format webp --target-psnr "$t"; done
+  # The times again, alternating, for medians (the runs of a few seconds vary by +-0.3x alone).
+  for ((r = 2; r <= ${REPEATS:-1}; ++r)); do
+    ./build/tightex "$model" -o "$out/$name/time$r/webp" -q --no-html --format webp
+    for t in "${targets[@]}"; do ./build/tightex "$model" -o "$out/$name/time$r/webp$t" -q --no-html --format webp --target-psnr "$t"; done
+  done
   ./build/tightex_reencode_curve "$model" webp "${qualities[@]}" > "$out/$name/reencode.txt"
   python3 - "$out/$name" "$name" "${targets[@]}" <<'PY'
 import json, sys
@@ -40,8 +46,11 @@ def reencode_bytes_at(db):
         if p0 <= db <= p1:
             return b0 + (b1 - b0) * (db - p0) / (p1 - p0) if p1 > p0 else b1
     return None
+import glob, statistics
 d = json.load(open(folder + "/default/report.json"))["bytes"]
-base_s = json.load(open(folder + "/webp/report.json"))["wall_seconds"]
+def median_wall(run):  # the first run's and every repeat's
+    return statistics.median(json.load(open(f))["wall_seconds"] for f in [f"{folder}/{run}/report.json"] + glob.glob(f"{folder}/time*/{run}/report.json"))
+base_s = median_wall("webp")
 cells = []
 for t in targets:
     r = json.load(open(f"{folder}/webp{t}/report.json"))
@@ -49,7 +58,7 @@ for t in targets:
     db, out = b["surface_psnr_written_db"], b["output"]["total"]
     ref = reencode_bytes_at(db)
     cells.append(f"{t}: {db:.2f}, {out/1024:.0f}, " + (f"{ref/1024:.0f}, {out/ref:.2f}" if ref else "beyond the curve") +
-                 f", {r['wall_seconds'] / base_s:.2f}x")
+                 f", {median_wall('webp' + t) / base_s:.2f}x")
 kib = lambda x: f"{x/1024:.0f}"
 print(f"| {name} | {kib(d['input']['total'])} | {d['encoding']['format']} q{d['encoding'].get('quality', '-')}, {kib(d['output']['total'])}, "
       f"{d['surface_psnr_written_db']:.1f} | {'; '.join(cells)} | " + "; ".join(f"{q:.0f}: {p:.1f} {b/1024:.0f}" for q, b, p in curve) + " |")

@@ -23,9 +23,10 @@ namespace {
 /// the cheap ones first; between them the model interpolates over log scale, to kSteps steps a halving.
 constexpr double kProbeScales[] = {0.25, 0.5, 1.0};
 /// Where the texels are planned and baked again at the scale chosen (BudgetSearchRequest::check_shrunk
-/// false), a model of the two smaller probes alone that chooses at most this scale is kept: the
-/// probes at full size (the costliest, every map included) would not move a choice that far below
-/// it by much, and the re-bake's own quality search corrects the rest.
+/// false), a model of the two smaller probes alone that chooses at most this scale, or the full size,
+/// is kept: the probes at full size (the costliest, every map included) would not move a choice that
+/// far from it by much, and the quality search on the images as written (the re-bake's, or the
+/// checks at full size) corrects the rest.
 constexpr double kLargestScaleWithoutFullProbes = 0.75;
 constexpr int kSteps = 4;
 /// The qualities each probed scale is encoded at; between them the model interpolates.
@@ -253,13 +254,16 @@ bool only_full_size_reaches(const BudgetSearchRequest& request, const RateModel&
 
 /// The rate model of `output` and its choice (model_choice): the shrink measured, then the probes
 /// scale by scale from the smallest; the full-size probes are left out where the caller re-bakes at
-/// the scale chosen and the smaller probes alone choose at most kLargestScaleWithoutFullProbes, and
-/// where only the full size reaches the target (only_full_size_reaches).
+/// the scale chosen and the smaller probes alone choose the full size or at most
+/// kLargestScaleWithoutFullProbes, and where only the full size reaches the target
+/// (only_full_size_reaches).
 std::pair<RateModel, std::pair<size_t, int>> fit_and_choose(const ProbeContext& c, TexturedMesh& output, nlohmann::json& probes) {
   RateModel model = shrink_model(c, output);
   std::pair<size_t, int> choice{0, 100};
   for (const double scale : kProbeScales) {
-    if (!c.request.check_shrunk && model.probes.size() >= 2 && model.scales[choice.first] <= kLargestScaleWithoutFullProbes) break;
+    if (!c.request.check_shrunk && model.probes.size() >= 2 &&
+        (choice.first == 0 || model.scales[choice.first] <= kLargestScaleWithoutFullProbes))
+      break;
     if (model.probes.size() >= 2 && only_full_size_reaches(c.request, model)) break;  // the checks find its quality
     add_probes(c, scale, output, model, probes);
     if (model.probes.size() >= 2) choice = model_choice(c.request, model);
