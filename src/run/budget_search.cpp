@@ -108,8 +108,7 @@ uint64_t total_bytes(const std::vector<std::string>& files) {
   return std::accumulate(files.begin(), files.end(), uint64_t(0), [](uint64_t n, const std::string& f) { return n + f.size(); });
 }
 
-/// A surface PSNR as the mean squared error it stands for, and back.
-double mse_of(double psnr) { return 255.0 * 255.0 * std::pow(10.0, -psnr / 10); }
+/// A mean squared error as the surface PSNR it stands for (mse_of_psnr the other way).
 double psnr_of(double mse) { return 10 * std::log10(255.0 * 255.0 / std::max(mse, 1e-12)); }
 
 /// One probed scale's codec error (the log of the written images' MSE less the unencoded images' at
@@ -212,7 +211,7 @@ RateModel shrink_model(const ProbeContext& c, TexturedMesh& output) {
   for (const double scale : model.scales) {
     std::vector<Image> scaled = images_at(output, baked_colour, c.inside, scale);
     swap_in(output, scaled);
-    model.shrink_mse.push_back(mse_of(c.judge(output)));
+    model.shrink_mse.push_back(mse_of_psnr(c.judge(output)));
     swap_in(output, scaled);
   }
   return model;
@@ -234,7 +233,7 @@ void add_probes(const ProbeContext& c, double scale, TexturedMesh& output, RateM
   ScaleCurve curve{scale, {}, {}};
   swap_in(output, scaled);
   for (size_t k = 0; k < files.size(); ++k) {
-    const double psnr = psnr_as_written(c.judge, c.colour, output, files[k]), mse = mse_of(psnr);
+    const double psnr = psnr_as_written(c.judge, c.colour, output, files[k]), mse = mse_of_psnr(psnr);
     curve.log_codec_mse.push_back(std::log(std::max(mse - model.shrink_mse[s], 1e-3 * mse)));
     curve.log_bytes.push_back(std::log(double(std::max<uint64_t>(1, total_bytes(files[k])))));
     probes.push_back({{"scale", scale}, {"quality", kProbeQualities[k]}, {"bytes", total_bytes(files[k])}, {"psnr_db", psnr}});
@@ -348,6 +347,8 @@ std::vector<char> colour_textures(const TexturedMesh& output) {
     if (m.texture >= 0) colour[size_t(m.texture)] = 1;
   return colour;
 }
+
+double mse_of_psnr(double psnr) { return 255.0 * 255.0 * std::pow(10.0, -psnr / 10); }
 
 double psnr_as_written(const SurfacePsnrOfImages& judge, const std::vector<char>& colour, TexturedMesh& output,
                        const std::vector<std::string>& files) {

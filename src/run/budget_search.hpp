@@ -46,6 +46,9 @@ struct BudgetSearchResult {
 /// reads (the other maps change the bytes alone).
 std::vector<char> colour_textures(const TexturedMesh& output);
 
+/// The mean squared error (8-bit levels, per channel) that a surface PSNR stands for.
+double mse_of_psnr(double psnr);
+
 /// The surface PSNR (`judge`'s points) of `output` with its base colour images (`colour`) as `files`
 /// decode (swapped in, then back).
 double psnr_as_written(const SurfacePsnrOfImages& judge, const std::vector<char>& colour, TexturedMesh& output,

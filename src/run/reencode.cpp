@@ -16,17 +16,11 @@ namespace tightex {
 
 namespace {
 
-/// Per texture of `mesh`, whether a material binds it (as base colour or any other map) and it holds
-/// an image of its own (not vertex colours).
+/// Per texture of `mesh`, whether a material binds it (bound_textures) and it holds an image of its
+/// own (not vertex colours).
 std::vector<char> bound_images(const TexturedMesh& mesh) {
-  std::vector<char> bound(mesh.textures.size(), 0);
-  auto mark = [&](int t) {
-    if (t >= 0 && !mesh.textures[size_t(t)].image.empty() && !mesh.textures[size_t(t)].from_vertex_colours) bound[size_t(t)] = 1;
-  };
-  for (const Material& m : mesh.materials) {
-    mark(m.texture);
-    for (const int t : m.maps) mark(t);
-  }
+  std::vector<char> bound = bound_textures(mesh);
+  for (size_t i = 0; i < bound.size(); ++i) bound[i] = bound[i] && !mesh.textures[i].image.empty() && !mesh.textures[i].from_vertex_colours;
   return bound;
 }
 

@@ -175,23 +175,6 @@ std::vector<ImageFormat> search_codecs(ModelFormat format) {
 
 /// The images' codec and quality (the input's codec; rate control), chosen for `result`: with
 /// --target-psnr or --max-bytes and tightex's own texel budget, the texels of the baked images too
-/// (budget_search.hpp), which then shrinks them in `result`. Tells `progress` "encode" as it goes, and
-/// may throw Cancelled.
-/// Whether `a` answers --target-psnr or --max-bytes better than `b`: fewer bytes at the target (more
-/// PSNR where neither reaches it), more PSNR within the bound (fewer bytes where neither fits).
-bool answers_better(const Options& o, const EncodingChoice& a, const EncodingChoice& b) {
-  const auto bytes = [](const EncodingChoice& c) { return std::accumulate(c.bytes.begin(), c.bytes.end(), uint64_t(0)); };
-  const double pa = a.written_psnr_db.value_or(0), pb = b.written_psnr_db.value_or(0);
-  if (o.target_psnr_db > 0) {
-    const bool ra = pa >= o.target_psnr_db, rb = pb >= o.target_psnr_db;
-    return ra != rb ? ra : ra ? bytes(a) < bytes(b) : pa > pb;
-  }
-  const bool fa = bytes(a) <= o.max_bytes, fb = bytes(b) <= o.max_bytes;
-  return fa != fb ? fa : fa ? pa > pb : bytes(a) < bytes(b);
-}
-
-/// The images' codec and quality (the input's codec; rate control), chosen for `result`: with
-/// --target-psnr or --max-bytes and tightex's own texel budget, the texels of the baked images too
 /// (budget_search.hpp). Where the search shrinks them, the charts are planned and baked once more at
 /// that budget (a plan at fewer texels gives them to the detail: WaterBottle at 0.59 of its side reads
 /// 46.9 dB re-baked, 43.4 shrunk) and its quality chosen alone; whichever answers better replaces
@@ -222,7 +205,11 @@ EncodingChoice choose_images(const Options& options, const Options& method, cons
   alone.codec_mse_by_quality = choice.codec_mse_by_quality;
   alone.progress = [&](double f) { progress("encode", 0.8 + 0.2 * f); };
   EncodingChoice c = choose_encoding(alone, input, sources, rebaked.output);
-  if (!choice.images.empty() && !answers_better(options, c, choice)) return choice;  // empty: the model's choice, unchecked
+  const auto bytes = [](const EncodingChoice& e) { return std::accumulate(e.bytes.begin(), e.bytes.end(), uint64_t(0)); };
+  if (!choice.images.empty() &&  // empty: the model's choice, unchecked
+      !answers_better(options.target_psnr_db, options.max_bytes, bytes(c), c.written_psnr_db.value_or(0), bytes(choice),
+                      choice.written_psnr_db.value_or(0)))
+    return choice;
   c.reason = fmt::format("{}; planned and baked again at {}^2 (of the default {}^2), which answers it better: {}", choice.reason,
                          smaller.side, budget.side, c.reason);
   c.probes = std::move(choice.probes);

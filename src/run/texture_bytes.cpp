@@ -19,6 +19,25 @@
 
 namespace tightex {
 
+bool answers_better(double target_psnr_db, uint64_t max_bytes, uint64_t bytes_a, double psnr_a, uint64_t bytes_b, double psnr_b) {
+  if (target_psnr_db > 0) {
+    const bool reach_a = psnr_a >= target_psnr_db, reach_b = psnr_b >= target_psnr_db;
+    return reach_a != reach_b ? reach_a : reach_a ? bytes_a < bytes_b : psnr_a > psnr_b;
+  }
+  const bool fit_a = bytes_a <= max_bytes, fit_b = bytes_b <= max_bytes;
+  return fit_a != fit_b ? fit_a : fit_a ? psnr_a > psnr_b : bytes_a < bytes_b;
+}
+
+std::vector<char> bound_textures(const TexturedMesh& mesh) {
+  std::vector<char> bound(mesh.textures.size(), 0);
+  for (const Material& m : mesh.materials) {
+    if (m.texture >= 0) bound[size_t(m.texture)] = 1;
+    for (const int t : m.maps)
+      if (t >= 0) bound[size_t(t)] = 1;
+  }
+  return bound;
+}
+
 int lowest_quality_reaching(const std::function<std::vector<double>(const std::vector<int>&)>& psnr_at, double target, int hint) {
   int lo = 0, hi = 101;        // lo fails (or is 0), hi reaches (or is 101)
   std::map<int, double> psnr;  // every quality measured
@@ -85,14 +104,9 @@ double psnr_as_written(const SurfacePsnrOfImages& judge, TexturedMesh& output, c
 
 /// The bytes of the input's images that its materials bind (base colour or another map), each once.
 uint64_t bound_input_bytes(const TexturedMesh& input, const std::vector<TextureSource>& sources) {
-  std::vector<char> bound(sources.size(), 0);
-  for (const Material& m : input.materials) {
-    if (m.texture >= 0) bound[size_t(m.texture)] = 1;
-    for (const int t : m.maps)
-      if (t >= 0) bound[size_t(t)] = 1;
-  }
+  const std::vector<char> bound = bound_textures(input);
   uint64_t n = 0;
-  for (size_t i = 0; i < sources.size(); ++i) n += bound[i] ? sources[i].bytes : 0;
+  for (size_t i = 0; i < sources.size() && i < bound.size(); ++i) n += bound[i] ? sources[i].bytes : 0;
   return n;
 }
 
@@ -182,8 +196,7 @@ constexpr int kMaxStepsUp = 4;
 /// target; else request.quality_hint.
 int starting_quality(const BytesRequest& request, const SurfacePsnrOfImages& few, const TexturedMesh& output) {
   if (request.codec_mse_by_quality.size() != 101) return request.quality_hint;
-  const auto mse = [](double psnr) { return 255.0 * 255.0 * std::pow(10.0, -psnr / 10); };
-  const double room = mse(request.target_psnr_db) - mse(few(output));
+  const double room = mse_of_psnr(request.target_psnr_db) - mse_of_psnr(few(output));
   for (int q = 1; q <= 100; ++q)
     if (request.codec_mse_by_quality[size_t(q)] <= room) return q;
   return 100;
@@ -275,18 +288,6 @@ std::string choose_codecs(const BytesRequest& request, const TexturedMesh& input
   return reason;
 }
 
-/// Whether the search's result `a` answers the request better than `b`: fewer bytes at the target (or
-/// more PSNR where neither reaches it), more PSNR within the bound (or fewer bytes where neither fits).
-bool better(const BytesRequest& request, const BudgetSearchResult& a, const BudgetSearchResult& b) {
-  const uint64_t bytes_a = total(a.images), bytes_b = total(b.images);
-  if (request.target_psnr_db > 0) {
-    const bool reach_a = a.written_psnr_db >= request.target_psnr_db, reach_b = b.written_psnr_db >= request.target_psnr_db;
-    return reach_a != reach_b ? reach_a : reach_a ? bytes_a < bytes_b : a.written_psnr_db > b.written_psnr_db;
-  }
-  const bool fit_a = bytes_a <= request.max_bytes, fit_b = bytes_b <= request.max_bytes;
-  return fit_a != fit_b ? fit_a : fit_a ? a.written_psnr_db > b.written_psnr_db : bytes_a < bytes_b;
-}
-
 /// --target-psnr / --max-bytes with tightex's own texel budget: the texels and quality searched together
 /// (budget_search.hpp) for --format's codec, or without it for each lossy codec the output format
 /// reads everywhere (request.codecs), the best kept; the output's baked images shrunk to the scale chosen.
@@ -303,7 +304,9 @@ EncodingChoice search_codec_texels_and_quality(const BytesRequest& request, cons
     BudgetSearchRequest search{request.target_psnr_db, request.max_bytes, request.new_pages, codecs.size() > 1, {}};
     if (request.progress) search.progress = [&](double f) { request.progress((double(k) + f) / double(codecs.size())); };
     BudgetSearchResult r = search_texels_and_quality(search, input, output, e);
-    if (!best || better(request, r, *best)) best = std::move(r), best_encoding = e;
+    if (!best || answers_better(request.target_psnr_db, request.max_bytes, total(r.images), r.written_psnr_db, total(best->images),
+                                best->written_psnr_db))
+      best = std::move(r), best_encoding = e;
   }
   c.encoding = best_encoding;
   c.reason = request.format

@@ -54,6 +54,14 @@ struct EncodingChoice {
   std::vector<double> codec_mse_by_quality;  // the texel search's, where its images come back unchecked
 };
 
+/// Whether images of `bytes_a` bytes at `psnr_a` dB answer --target-psnr (`target_psnr_db` > 0) or else
+/// --max-bytes better than `bytes_b` at `psnr_b`: fewer bytes at the target (more PSNR where neither
+/// reaches it), more PSNR within the bound (fewer bytes where neither fits).
+bool answers_better(double target_psnr_db, uint64_t max_bytes, uint64_t bytes_a, double psnr_a, uint64_t bytes_b, double psnr_b);
+
+/// Per texture of `mesh`, whether some material binds it (as base colour or any other map).
+std::vector<char> bound_textures(const TexturedMesh& mesh);
+
 /// The lowest quality in [1, 100] whose surface PSNR (`psnr_at`, rising with the quality) reaches
 /// `target`; 101 where none does. `psnr_at` measures a quality and, where not yet known, the one
 /// below it (a caller encodes them side by side): where the first is the answer, the second proves
