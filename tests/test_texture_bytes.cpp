@@ -230,6 +230,24 @@ TEST(TextureBytes, CompareReencodeGivesTheInputsOwnBytesAtTheWrittenPsnr) {
   EXPECT_TRUE(run(in, dir / "png", "--compare-reencode")["bytes"]["reencode"].contains("reason"));
 }
 
+TEST(TextureBytes, CompareReencodeSaysWhyWhereTheCodecCannotHoldAnInputImage) {
+  // The input's texture is wider than WebP allows; the output's atlas is not: the run and its files
+  // stand, and the comparison says why it has no figure.
+  const fs::path dir = testing::scratch_folder("bytes_reencode_wide");
+  TexturedMesh m = testing::sphere();
+  Image img(16400, 8);
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) img.at(x, y) = {uint8_t(x * 7), uint8_t(y * 31), uint8_t(x ^ y), 255};
+  m.textures[0].image = img;
+  m.textures[0].path = "wide_texture";
+  write_obj(m, (dir / "in").string(), "scan", ImageEncoding(ImageFormat::kPng));
+  const json report = run(dir / "in" / "scan.obj", dir / "out", "--format webp --target-psnr 30 --compare-reencode");
+  const std::string reason = report["bytes"]["reencode"].value("reason", "");
+  EXPECT_NE(reason.find("larger than WebP allows"), std::string::npos) << reason;
+  EXPECT_FALSE(report["bytes"]["reencode"].contains("quality"));
+  EXPECT_TRUE(fs::exists(dir / "out" / "scan.obj"));
+}
+
 TEST(TextureBytes, WebpGlbDeclaresItsExtensionAndValidates) {
   const fs::path dir = testing::scratch_folder("bytes_webp_glb");
   testing::GridGltf g = testing::grid_gltf();

@@ -220,7 +220,8 @@ EncodingChoice choose_images(const Options& options, const Options& method, cons
 
 /// --compare-reencode: report.json bytes.reencode, the input's own images re-encoded in the output's
 /// lossy codec at the surface PSNR the written images reach (`written_psnr_db`), beside the output's
-/// bytes; a reason where there is nothing to compare (a lossless output, an input without images).
+/// bytes; a reason where there is nothing to compare (a lossless output, an input without images) or
+/// the codec cannot hold an input image (a WebP side is at most 16383).
 /// Its time into the report's timings.
 void add_reencode(TexturedMesh& input, const ImageEncoding& encoding, double written_psnr_db, nlohmann::json& json) {
   nlohmann::json& r = json["bytes"]["reencode"];
@@ -237,7 +238,13 @@ void add_reencode(TexturedMesh& input, const ImageEncoding& encoding, double wri
   }
   const auto t0 = std::chrono::steady_clock::now();
   const CpuTimes cpu = process_cpu_times();
-  const ReencodeFigures f = reencode_at_psnr(input, encoding.format, written_psnr_db);
+  ReencodeFigures f;
+  try {
+    f = reencode_at_psnr(input, encoding.format, written_psnr_db);
+  } catch (const InputError& e) {  // an input image the codec cannot hold: the run's files stay, the figure says why
+    r = {{"reason", fmt::format("the input's images cannot be re-encoded as {}: {}", to_string(encoding.format), e.what())}};
+    return;
+  }
   const uint64_t output_bytes = json["bytes"]["output"]["total"].get<uint64_t>();
   r = {{"codec", to_string(encoding.format)},
        {"quality", f.quality},
