@@ -34,6 +34,7 @@
 #include "prepare/repair.hpp"
 #include "report/metrics.hpp"
 #include "report/report.hpp"
+#include "run/budget_search.hpp"
 #include "tightex/tightex.hpp"
 
 namespace tightex {
@@ -2136,6 +2137,78 @@ TEST(Pipeline, BakePlanReleasingMapsBakesTheSame) {
   EXPECT_EQ(plan.kept_triangles(), kept_triangles);
   EXPECT_TRUE(plan_state(plan).disks[0].mesh.triangles.empty());
   EXPECT_THROW(bake_plan(plan, in, opt), InputError);
+}
+
+/// Whether `rects` tile each of the `sizes` pages exactly (every texel in one rectangle), each at least
+/// `min_side` a side.
+void expect_pages_tiled(const std::vector<Rect>& rects, const std::vector<std::pair<int, int>>& sizes, int min_side) {
+  for (size_t p = 0; p < sizes.size(); ++p) {
+    const auto [w, h] = sizes[p];
+    std::vector<int> cover(size_t(w) * size_t(h), 0);
+    for (const Rect& r : rects) {
+      if (size_t(r.image) != p) continue;
+      EXPECT_GE(std::min(r.w, r.h), min_side);
+      ASSERT_TRUE(r.x >= 0 && r.y >= 0 && r.x + r.w <= w && r.y + r.h <= h);
+      for (int y = r.y; y < r.y + r.h; ++y)
+        for (int x = r.x; x < r.x + r.w; ++x) ++cover[size_t(y) * size_t(w) + size_t(x)];
+    }
+    EXPECT_EQ(std::count(cover.begin(), cover.end(), 1), long(cover.size())) << "page " << p;
+  }
+}
+
+// The rate search's second bake (rescale_plan): the same charts on textures of half the side tile them
+// as before, and bake every triangle unfolded with the texels used as fully as the first bake did,
+// reading better than the first bake's images shrunk to that size. A scale at which the small
+// components' rectangles would vanish lays the page out again; a plan with a kept component is left
+// to be planned again.
+TEST(Pipeline, RescaledPlanBakesTheSameChartsOnSmallerTextures) {
+  Options opt;
+  opt.size = 256;
+  {  // Two large components: every edge moves to the same fraction of the side.
+    cat::Geometry g = cat::torus_geometry(32, 16);
+    g.append(cat::disk_geometry(6, 24, 1.0), Vec3(3, 0, 0));
+    const TexturedMesh two = cat::make_textured("torus_and_disk", g.positions, g.triangles, cat::checker_image(256, 256, 8));
+    Plan p = plan_charts(two, opt);
+    const std::vector<Rect> before = plan_state(p).rects;
+    ASSERT_TRUE(rescale_plan(p, 0.5));
+    const std::vector<Rect>& after = plan_state(p).rects;
+    ASSERT_EQ(after.size(), 2u);
+    for (size_t c = 0; c < 2; ++c) {
+      EXPECT_EQ(after[c].x, std::lround(before[c].x / 2.0));
+      EXPECT_EQ(after[c].x + after[c].w, std::lround((before[c].x + before[c].w) / 2.0));
+      EXPECT_EQ(after[c].y + after[c].h, std::lround((before[c].y + before[c].h) / 2.0));
+    }
+    expect_pages_tiled(after, plan_state(p).image_size, 4);
+    EXPECT_EQ(bake_plan(p, two, opt).report.flipped_triangles, 0u);
+  }
+  TexturedMesh in = cat::multi_component();  // a torus, a disk and two floaters of 4 x 4 texels
+  in.textures[0].image = cat::checker_image(256, 256, 8);
+  Plan plan = plan_charts(in, opt);
+  const Result full = bake_plan(plan, in, opt);
+  ASSERT_TRUE(rescale_plan(plan, 0.5));
+  const Plan::State& state = plan_state(plan);
+  ASSERT_EQ(state.image_size, (std::vector<std::pair<int, int>>{{128, 128}}));
+  expect_pages_tiled(state.rects, state.image_size, 4);  // the floaters' 2 x 2: laid out again
+  const Result half = bake_plan(plan, in, opt);
+  EXPECT_EQ(half.output.triangles, full.output.triangles);
+  EXPECT_EQ(half.report.lost_triangles, 0u);
+  EXPECT_EQ(half.report.flipped_triangles, 0u);
+  EXPECT_EQ(half.report.charts, full.report.charts);
+  EXPECT_GE(half.report.output_texels_used, full.report.output_texels_used - 0.02);
+  TexturedMesh shrunk = full.output;
+  shrunk.textures[0].image = shrink_image(full.output.textures[0].image, {}, 128, 128);
+  EXPECT_GT(half.report.surface_psnr_bake_db, surface_psnr(in, shrunk) + 0.5);
+
+  ASSERT_TRUE(rescale_plan(plan, 0.1));  // 12 x 12: the floaters' rectangles would round to nothing
+  expect_pages_tiled(plan_state(plan).rects, plan_state(plan).image_size, 4);
+  const Result tiny = bake_plan_releasing_maps(plan, in, opt);
+  EXPECT_EQ(tiny.report.flipped_triangles, 0u);
+  EXPECT_EQ(tiny.output.textures[0].image.width, 12);
+
+  Plan with_kept = plan_charts(in, opt, PlanHooks{{1}});
+  const std::vector<Rect> rects = plan_state(with_kept).rects;
+  EXPECT_FALSE(rescale_plan(with_kept, 0.5));
+  EXPECT_EQ(plan_state(with_kept).image_size, (std::vector<std::pair<int, int>>{{256, 256}}));
 }
 
 // A plan whose preparation (repair, components, seams, handles) was made from the geometry alone, as

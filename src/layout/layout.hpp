@@ -1,6 +1,8 @@
 // Where each component's unit square goes in texture space: rectangles of texels in one shared atlas,
 // or one texture per component as in the paper.
 #pragma once
+#include <algorithm>
+#include <cmath>
 #include <optional>
 #include <vector>
 
@@ -18,6 +20,13 @@ constexpr double kChartInset = 1e-6;
 inline Vec2 rect_pixel(const Rect& r, const Vec2& s) {
   return Vec2(r.x + 0.5 - kChartInset + s.x() * (r.w - 1 + 2 * kChartInset),
               r.y + 0.5 - kChartInset + (1.0 - s.y()) * (r.h - 1 + 2 * kChartInset));
+}
+
+/// A texture side at `scale` of `side` (the rate search's smaller textures): a multiple of 4, at least
+/// 8, never more than the side itself.
+inline int texture_side_at(int side, double scale) {
+  if (scale >= 1) return side;
+  return std::min(side, std::max(8, int(std::lround(side * scale / 4)) * 4));
 }
 
 /// How layout_atlas shares the texture out between components.

@@ -13,6 +13,7 @@
 
 #include "core/raster.hpp"
 #include "io/image_io.hpp"
+#include "layout/layout.hpp"
 #include "report/metrics.hpp"
 
 namespace tightex {
@@ -22,7 +23,7 @@ namespace {
 /// The scales of the baked images' sides the search encodes (texels: 1/16, 1/4 and 1 of the bake's),
 /// the cheap ones first; between them the model interpolates over log scale, to kSteps steps a halving.
 constexpr double kProbeScales[] = {0.25, 0.5, 1.0};
-/// Where the texels are planned and baked again at the scale chosen (BudgetSearchRequest::check_shrunk
+/// Where the charts are baked again at the scale chosen (BudgetSearchRequest::check_shrunk
 /// false), a model of the two smaller probes alone that chooses at most this scale, or the full size,
 /// is kept: the probes at full size (the costliest, every map included) would not move a choice that
 /// far from it by much, and the quality search on the images as written (the re-bake's, or the
@@ -76,12 +77,6 @@ std::vector<std::vector<uint8_t>> chart_texels(const TexturedMesh& output, const
   return inside;
 }
 
-/// A side at `scale`: a multiple of 4, at least 8, never more than the side itself.
-int scaled_side(int side, double scale) {
-  if (scale >= 1) return side;
-  return std::min(side, std::max(8, int(std::lround(side * scale / 4)) * 4));
-}
-
 /// The baked images of `output` at `scale` (empty where a texture is not baked, or at scale 1).
 std::vector<Image> images_at(const TexturedMesh& output, const std::vector<char>& baked, const std::vector<std::vector<uint8_t>>& inside,
                              double scale) {
@@ -89,7 +84,8 @@ std::vector<Image> images_at(const TexturedMesh& output, const std::vector<char>
   if (scale >= 1) return scaled;
   for (size_t i = 0; i < scaled.size(); ++i) {
     const Image& img = output.textures[i].image;
-    if (baked[i] && !img.empty()) scaled[i] = shrink_image(img, inside[i], scaled_side(img.width, scale), scaled_side(img.height, scale));
+    if (baked[i] && !img.empty())
+      scaled[i] = shrink_image(img, inside[i], texture_side_at(img.width, scale), texture_side_at(img.height, scale));
   }
   return scaled;
 }

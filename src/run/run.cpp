@@ -175,14 +175,16 @@ std::vector<ImageFormat> search_codecs(ModelFormat format) {
 
 /// The images' codec and quality (the input's codec; rate control), chosen for `result`: with
 /// --target-psnr or --max-bytes and tightex's own texel budget, the texels of the baked images too
-/// (budget_search.hpp). Where the search shrinks them, the charts are planned and baked once more at
-/// that budget (a plan at fewer texels gives them to the detail: WaterBottle at 0.59 of its side reads
-/// 46.9 dB re-baked, 43.4 shrunk) and its quality chosen alone; whichever answers better replaces
-/// `result`'s images. `method`: the options the method ran with. Tells `progress` "encode" as it goes,
-/// and may throw Cancelled.
+/// (budget_search.hpp). Where the search shrinks them, the charts of `plan` (its maps kept by the first
+/// bake) are baked once more at that scale (rescale_plan; where it cannot, planned again at that
+/// budget): a bake at fewer texels reads the input once where the shrunk images resample the bake
+/// (WaterBottle at 0.59 of its side: 46.9 dB re-baked, 43.4 shrunk), and its quality is chosen alone;
+/// whichever answers better replaces `result`'s images, the report's stage timings kept the first
+/// bake's. `method`: the options the method ran with. Tells `progress` "encode" as it goes, and may
+/// throw Cancelled.
 EncodingChoice choose_images(const Options& options, const Options& method, const TexturedMesh& input,
-                             const std::vector<TextureSource>& sources, const TextureBudget& budget, ModelFormat format, Result& result,
-                             const StageProgress& progress) {
+                             const std::vector<TextureSource>& sources, const TextureBudget& budget, ModelFormat format, Plan& plan,
+                             Result& result, const StageProgress& progress) {
   BytesRequest request = bytes_request(options);
   request.progress = [&](double f) { progress("encode", 0.8 * f); };
   if (budget.is_default) request.new_pages = result.report.texture_sizes.size();
@@ -197,7 +199,8 @@ EncodingChoice choose_images(const Options& options, const Options& method, cons
   Options quiet = method;
   quiet.progress = [&](std::string_view, double) { return progress("encode", 0.8), true; };
   const TextureBudget smaller{std::max(8, int(std::lround(budget.side * scale / 4)) * 4), true};
-  Result rebaked = bake_plan(plan_charts(input, quiet, smaller), input, quiet);
+  const bool same_charts = rescale_plan(plan, scale);
+  Result rebaked = same_charts ? bake_plan_releasing_maps(plan, input, quiet) : bake_plan(plan_charts(input, quiet, smaller), input, quiet);
   round_uvs_as_stored(rebaked.output, format);
   BytesRequest alone = bytes_request(options);
   alone.format = choice.encoding.format;
@@ -210,11 +213,14 @@ EncodingChoice choose_images(const Options& options, const Options& method, cons
       !answers_better(options.target_psnr_db, options.max_bytes, bytes(c), c.written_psnr_db.value_or(0), bytes(choice),
                       choice.written_psnr_db.value_or(0)))
     return choice;
-  c.reason = fmt::format("{}; planned and baked again at {}^2 (of the default {}^2), which answers it better: {}", choice.reason,
-                         smaller.side, budget.side, c.reason);
+  const auto [w, h] = rebaked.report.texture_sizes.at(0);
+  c.reason = fmt::format("{}; {} again at {}x{} ({:.2f} of the side), which answers it better: {}", choice.reason,
+                         same_charts ? "the same charts baked" : "planned and baked", w, h, scale, c.reason);
   c.probes = std::move(choice.probes);
   c.texel_scale = scale;
+  nlohmann::json timings = std::move(report_json(result.report)["timings"]);
   result = std::move(rebaked);
+  report_json(result.report)["timings"] = std::move(timings);
   return c;
 }
 
@@ -309,13 +315,15 @@ Report run(const std::string& input, const std::string& outdir, const Options& o
   PlannedModel planned = read_textures_and_plan(std::move(geometry), opt, budget, t0);
   timings.textures_s = planned.textures_s;
   if (options.layout != Layout::kAtlas) check_per_component_memory(guard, planned.plan);
-  Result result = bake_plan_releasing_maps(planned.plan, planned.mesh, opt);
+  // The rate search may bake the same charts again at fewer texels (choose_images): their maps are kept.
+  const bool may_bake_again = budget.is_default && (options.target_psnr_db > 0 || options.max_bytes > 0);
+  Result result = may_bake_again ? bake_plan(planned.plan, planned.mesh, opt) : bake_plan_releasing_maps(planned.plan, planned.mesh, opt);
   round_uvs_as_stored(result.output, format);
 
   const std::vector<TextureSource> sources = texture_sources(planned.mesh);
   const auto encode_start = std::chrono::steady_clock::now();
   const CpuTimes encode_cpu = process_cpu_times();
-  const EncodingChoice choice = choose_images(options, opt, planned.mesh, sources, budget, format, result, progress);
+  const EncodingChoice choice = choose_images(options, opt, planned.mesh, sources, budget, format, planned.plan, result, progress);
   timings.encode_s = seconds_since(encode_start);
   timings.encode_cpu = CpuTimes{process_cpu_times().user - encode_cpu.user, process_cpu_times().sys - encode_cpu.sys};
   const ModelFormat input_format = model_format_of(input);
