@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <map>
 
 #include <fmt/format.h>
 #include "bake/bake.hpp"
@@ -286,6 +287,38 @@ TEST(MaterialMaps, AReducedMapIsJudgedAtItsOwnTextureCoordinates) {
   const MaterialMapFigures* figures = figures_of(measured, MaterialSlot::kEmissive);  // points into `measured`
   ASSERT_NE(figures, nullptr);
   EXPECT_GE(figures->surface_psnr, 45.0);
+}
+
+// The rate search's second bake (rescale_plan) bakes each map at the side over the base colour's that
+// the first bake sized it to, enlarged or reduced, instead of sizing it again: the search judged every
+// image shrunk alike.
+TEST(MaterialMaps, ARescaledPlanKeepsEachMapsSizeOverTheBaseColour) {
+  TexturedMesh in = plate_with_maps([](const Vec3& p) { return fine_pattern(p, 90, 95); }, [](const Vec3&) { return uint8_t(150); });
+  Image emissive = in.textures[2].image;  // one colour: reduced
+  for (int y = 0; y < emissive.height; ++y)
+    for (int x = 0; x < emissive.width; ++x) emissive.at(x, y) = {200, 128, 64, 255};
+  in.materials[0].maps[size_t(MaterialSlot::kEmissive)] = int(in.textures.size());
+  in.materials[0].factor[size_t(MaterialSlot::kEmissive)] = {1, 1, 1, 1};
+  in.textures.push_back(Texture{"emissive", std::move(emissive)});
+  Options opt = small_options();
+  opt.size = 64;
+  Plan plan = plan_charts(in, opt, TextureBudget{opt.size, true});
+  const Result first = bake_plan(plan, in, opt);
+  std::map<std::string, double> scales;
+  for (const nlohmann::json& m : report_json(first.report)["maps"]) scales[m["name"]] = m["scale"].get<double>();
+  ASSERT_GT(scales["metallic_roughness"], 1.0);
+  ASSERT_LT(scales["emissive"], 1.0);
+  ASSERT_TRUE(rescale_plan(plan, 0.5, scales));
+  const Result again = bake_plan(plan, in, opt);
+  const int base = again.output.textures[size_t(again.output.materials[0].texture)].image.width;
+  EXPECT_EQ(base, first.output.textures[size_t(first.output.materials[0].texture)].image.width / 2);
+  for (const auto& [name, scale] : scales) {
+    const nlohmann::json* entry = map_entry(again, name);
+    ASSERT_NE(entry, nullptr) << name;
+    EXPECT_DOUBLE_EQ((*entry)["scale"].get<double>(), scale) << name;
+    EXPECT_EQ((*entry)["sizes"][0][0].get<int>(), int(std::lround(base * scale))) << name;
+  }
+  EXPECT_EQ(again.report.flipped_triangles, 0u);
 }
 
 /// The warning lines of `stderr_file` that name `slot`'s map.

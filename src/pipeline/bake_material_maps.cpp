@@ -563,6 +563,25 @@ SizedMap bake_sized_map(const TexturedMesh& input, const MaterialMapSource& map,
   return sized;
 }
 
+/// The map at `scale` of the base colour's side as an earlier bake sized it (OutputModel::
+/// fixed_map_scales): baked larger by that fraction, or at the base colour's size and reduced by its
+/// inverse. nullopt where the scale is not one the sizing gives on these pages (a fraction of eighths
+/// above 1 whose denominator divides every page side, the inverse of a whole number below): sized anew.
+std::optional<SizedMap> bake_fixed_map(const TexturedMesh& input, const MaterialMapSource& map, const OutputModel& om, double scale,
+                                       const BakeOptions& options) {
+  const int reduction = scale < 1 ? int(std::lround(1 / scale)) : 1;
+  MaterialMapScale larger{scale > 1 ? int(std::lround(scale * 8)) : 1, scale > 1 ? 8 : 1};
+  while (larger.den > 1 && larger.num % 2 == 0) larger.num /= 2, larger.den /= 2;
+  if (std::abs(larger.value() / reduction - scale) > 1e-6) return std::nullopt;
+  for (int p = 0; p < om.new_images; ++p)
+    if (om.mesh.textures[size_t(p)].image.width % larger.den != 0 || om.mesh.textures[size_t(p)].image.height % larger.den != 0)
+      return std::nullopt;
+  auto [triangles, rects] = scaled_layout(om, larger);
+  SizedMap sized{blank_pages(om, larger), larger, reduction};
+  bake_material_map(input, map, triangles, rects, sized.pages, nullptr, options);
+  return sized;
+}
+
 }  // namespace
 
 std::vector<MaterialMapEntry> bake_material_maps(const TexturedMesh& input, const Options& options, OutputModel& om) {
@@ -602,9 +621,13 @@ std::vector<MaterialMapEntry> bake_material_maps(const TexturedMesh& input, cons
     if (g.source.encoding == SlotEncoding::kTangentNormal) map_options.fit = false;
     std::vector<unsigned> slot_channels;
     for (MaterialSlot s : g.slots) slot_channels.push_back(material_slot_channels(s));
-    SizedMap sized = bake_sized_map(input, g.source, om, slot_channels, options, map_options, points, base_colour);
     MaterialMapEntry entry;
     entry.name = material_slot_name(g.slots[0]);
+    const auto fixed = om.fixed_map_scales.find(entry.name);
+    std::optional<SizedMap> fixed_size =
+        fixed == om.fixed_map_scales.end() ? std::nullopt : bake_fixed_map(input, g.source, om, fixed->second, map_options);
+    SizedMap sized =
+        fixed_size ? std::move(*fixed_size) : bake_sized_map(input, g.source, om, slot_channels, options, map_options, points, base_colour);
     for (MaterialSlot s : g.slots) entry.slots.push_back(material_slot_name(s));
     entry.encoding = encoding_name(g.source.encoding);
     entry.scale = sized.enlarged.value() / sized.reduction;

@@ -241,6 +241,7 @@ OutputModel build_output_model(const Plan::State& plan, const TexturedMesh& inpu
   om.mesh.positions = input.positions;
   om.mesh.gltf = input.gltf;
   om.budget_is_default = plan.budget.is_default;
+  om.fixed_map_scales = plan.fixed_map_scales;
   reserve_triangles(input, om);
   const std::vector<int> image_index = renumber_images(plan, &om.new_images);
   std::set<std::string> names;  // file stems and material names taken, compared without case

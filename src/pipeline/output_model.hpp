@@ -3,7 +3,9 @@
 // the kept components as they were.
 #pragma once
 #include <array>
+#include <map>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "bake/bake.hpp"
@@ -19,6 +21,9 @@ struct OutputModel {
   /// Per corner of mesh (3 per triangle): which corner of its input triangle (mesh.input_triangle) it is.
   std::vector<uint8_t> input_corner;
   bool budget_is_default = true;  // the plan's TextureBudget::is_default
+  /// The plan's Plan::State::fixed_map_scales: per map name, its side over the base colour's, taken as
+  /// it is instead of sized again.
+  std::map<std::string, double> fixed_map_scales;
   /// Per material of the mapped triangles (the first materials of mesh, one per input material and
   /// new image they use): the input material it copies (-1: none) and its new image.
   std::vector<std::pair<int32_t, int>> mapped_materials;

@@ -2,6 +2,7 @@
 // its disk and map onto the unit square, its rectangle of texture, and the report so far.
 #pragma once
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -56,6 +57,10 @@ struct Plan::State {
   ReportData report;               // what was done so far
   nlohmann::json report_json;      // the same, as Plan::report() gives it
   uint64_t input_fingerprint = 0;  // input_fingerprint() of the mesh planned
+  /// Per material map (its report name, "normal", "metallic_roughness", ...), its side over the base
+  /// colour's as an earlier bake sized it (report "maps" scale), baked so again without sizing it anew
+  /// (rescale_plan). Empty: every map sized by Options::material_map_budget_db.
+  std::map<std::string, double> fixed_map_scales;
   /// The mapped components' surfaces, disks and texture coordinates were freed by a bake
   /// (bake_plan_releasing_maps): the plan cannot be baked again.
   bool maps_released = false;
@@ -75,11 +80,13 @@ Result bake_plan_releasing_maps(Plan& plan, const TexturedMesh& input, const Opt
 /// The plan's charts on textures `scale` of each side (a multiple of 4, at least 8: the texel search's
 /// rounding), for a second bake at fewer texels that skips the planning: every rectangle's edges move to
 /// the same fraction of its texture, so the rectangles tile the smaller textures as they tiled the
-/// larger, and the texture coordinates are kept fold-free in float at the new size. Returns false,
+/// larger, and the texture coordinates are kept fold-free in float at the new size; each material map
+/// keeps its side over the base colour's from `map_scales` (the first bake's report "maps": name,
+/// scale) instead of being sized again, as the texel search judged every image shrunk alike. Returns false,
 /// the plan unchanged, where it cannot: its maps released, a component kept with its input texture
 /// coordinates, or a rectangle that would fall below 4 texels a side; then plan again at the smaller
 /// budget.
-bool rescale_plan(Plan& plan, double scale);
+bool rescale_plan(Plan& plan, double scale, const std::map<std::string, double>& map_scales = {});
 
 /// A hash of what the plan depends on in the input (vertex and triangle counts, triangles, texture
 /// coordinates, materials), so bake_plan can refuse another mesh.

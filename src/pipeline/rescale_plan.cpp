@@ -46,7 +46,7 @@ bool move_page(const std::vector<size_t>& on, std::pair<int, int> from, std::pai
 
 }  // namespace
 
-bool rescale_plan(Plan& plan, double scale) {
+bool rescale_plan(Plan& plan, double scale, const std::map<std::string, double>& map_scales) {
   Plan::State& state = mutable_plan_state(plan);
   if (state.maps_released || !(scale > 0 && scale < 1)) return false;
   if (std::any_of(state.kept.begin(), state.kept.end(), [](const std::string& k) { return !k.empty(); })) return false;
@@ -70,6 +70,7 @@ bool rescale_plan(Plan& plan, double scale) {
     e.rect = state.rects[e.index];
     e.map.float_moved += guards[e.index].moved, e.map.float_unfixed = guards[e.index].unfixed;
   }
+  state.fixed_map_scales = map_scales;
   state.report.options.size = texture_side_at(state.report.options.size, scale);
   state.report_json = to_json(state.report);
   return true;

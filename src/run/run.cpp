@@ -79,7 +79,7 @@ BytesRequest bytes_request(const Options& o) {
   e.jpeg_quality = o.jpeg_quality.value_or(kDefaultJpegQuality);
   e.webp_quality = o.webp_quality.value_or(kDefaultWebpQuality);
   e.webp_lossless = o.webp_lossless;
-  return {o.texture_format, e, o.jpeg_quality.has_value() || o.webp_quality.has_value(), o.target_psnr_db, o.max_bytes, 0, 0, {}, {}};
+  return {o.texture_format, e, o.jpeg_quality.has_value() || o.webp_quality.has_value(), o.target_psnr_db, o.max_bytes, 0, 0, {}, {}, {}};
 }
 
 /// The model's geometry (no pixels) with its textures' sizes from their headers, checked against the
@@ -199,7 +199,10 @@ EncodingChoice choose_images(const Options& options, const Options& method, cons
   Options quiet = method;
   quiet.progress = [&](std::string_view, double) { return progress("encode", 0.8), true; };
   const TextureBudget smaller{std::max(8, int(std::lround(budget.side * scale / 4)) * 4), true};
-  const bool same_charts = rescale_plan(plan, scale);
+  std::map<std::string, double> map_scales;  // each material map as the first bake sized it
+  for (const nlohmann::json& m : report_json(result.report).value("maps", nlohmann::json::array()))
+    map_scales[m.at("name").get<std::string>()] = m.at("scale").get<double>();
+  const bool same_charts = rescale_plan(plan, scale, map_scales);
   Result rebaked = same_charts ? bake_plan_releasing_maps(plan, input, quiet) : bake_plan(plan_charts(input, quiet, smaller), input, quiet);
   round_uvs_as_stored(rebaked.output, format);
   BytesRequest alone = bytes_request(options);
