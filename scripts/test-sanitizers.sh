@@ -3,7 +3,7 @@
 # ./build-asan): every test on generated meshes, the hostile-input catalogue and the fuzz corpus. Of the
 # real scans in ../shared/data only fuze (the smallest, and the one JPEG texture) goes through the CLI
 # here; the Release suite (scripts/test.sh) runs them all, and the --target-psnr / --max-bytes search
-# (probes of the baked atlas, then one more plan and bake: the same code as one run) too. Any report
+# (probes of the baked atlas, then one more bake: the same code as one run) too. Any report
 # fails the run.
 # Kept short for CI: the preset builds at -O1 -g1 without the tools (the tests run no slower than at
 # -O2), the real scans but fuze are left to the Release suite, and the test binary runs as one process
