@@ -146,6 +146,27 @@ TEST(TextureBytes, WebpTargetPsnrIsReachedAsWritten) {
   EXPECT_LT(bytes_of(dir / "out30", ".webp"), bytes_of(dir / "out38", ".webp"));
 }
 
+/// Whether a line of the report's warnings starts with `start`.
+bool warns(const json& report, const std::string& start) {
+  for (const json& w : report["warnings"])
+    if (w.get<std::string>().starts_with(start)) return true;
+  return false;
+}
+
+// A target the bake cannot reach, or a bound no quality fits, is said, not left to the reason string.
+TEST(TextureBytes, ATargetOrBoundNotMetIsAWarning) {
+  const fs::path dir = testing::scratch_folder("bytes_not_met");
+  const fs::path in = scan_obj(dir / "in", ImageFormat::kPng);
+  const json reached = run(in, dir / "reached", "--format webp --target-psnr 30");
+  EXPECT_FALSE(warns(reached, "--target-psnr"));
+  const json beyond = run(in, dir / "beyond", "--format webp --target-psnr 80");
+  EXPECT_LT(beyond["bytes"]["surface_psnr_written_db"].get<double>(), 80.0);
+  EXPECT_TRUE(warns(beyond, "--target-psnr 80 dB not reached")) << beyond["warnings"];
+  const json tight = run(in, dir / "tight", "--format webp --max-bytes 50");
+  EXPECT_GT(bytes_of(dir / "tight", ".webp"), 50u);
+  EXPECT_TRUE(warns(tight, "--max-bytes 50 not met")) << tight["warnings"];
+}
+
 TEST(TextureBytes, MaxBytesIsABound) {
   const fs::path dir = testing::scratch_folder("bytes_max");
   const fs::path in = scan_obj(dir / "in", ImageFormat::kPng);

@@ -349,6 +349,7 @@ Report run(const std::string& input, const std::string& outdir, const Options& o
   if (!choice.probes.is_null()) json["bytes"]["probes"] = choice.probes;
   if (options.compare_reencode) add_reencode(planned.mesh, choice.encoding, metrics.surface_psnr, json);
   add_warnings(planned.plan, planned.mesh, read_stats, format, written.removed, json);
+  add_rate_warnings(options, json);
   if (!options.preview_path.empty()) write_preview(options.preview_path, planned.mesh, result.output);
   Report report = public_report(std::move(json), result.output, result.report.texture_sizes.size());
   const fs::path json_path = options.report_path.empty() ? fs::path(outdir) / "report.json" : fs::path(options.report_path);

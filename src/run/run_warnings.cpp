@@ -94,4 +94,18 @@ void add_warnings(const Plan& plan, const TexturedMesh& input, const ModelReadSt
   report["notes"] = lines.notes;
 }
 
+void add_rate_warnings(const Options& options, nlohmann::json& report) {
+  const nlohmann::json& bytes = report.at("bytes");
+  const double written = bytes.value("surface_psnr_written_db", 0.0), baked = bytes.value("surface_psnr_bake_db", 0.0);
+  const uint64_t total = bytes.at("output").at("total").get<uint64_t>();
+  if (options.target_psnr_db > 0 && written < options.target_psnr_db)
+    report["warnings"].push_back(fmt::format(
+        "--target-psnr {} dB not reached: {:.2f} dB as written; {}", options.target_psnr_db, written,
+        baked < options.target_psnr_db
+            ? fmt::format("the bake itself reads {:.2f} dB at this texel budget: more texels (--size, --texels) reach further", baked)
+            : fmt::format("the bake reads {:.2f} dB, the codec stops below: another --format (a lossless one) reaches further", baked)));
+  if (options.max_bytes > 0 && total > options.max_bytes)
+    report["warnings"].push_back(fmt::format("--max-bytes {} not met: the images as written take {} bytes", options.max_bytes, total));
+}
+
 }  // namespace tightex

@@ -19,4 +19,8 @@ namespace tightex {
 void add_warnings(const Plan& plan, const TexturedMesh& input, const ModelReadStats& read_stats, std::optional<ModelFormat> written,
                   const std::vector<std::string>& removed, nlohmann::json& report);
 
+/// Adds to the report's "warnings" where --target-psnr or --max-bytes (`options`) is not met by the
+/// images as written (report "bytes"): how far, and what would reach further.
+void add_rate_warnings(const Options& options, nlohmann::json& report);
+
 }  // namespace tightex
