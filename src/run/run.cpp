@@ -19,6 +19,7 @@
 #include "io/model_files.hpp"
 #include "io/output_files.hpp"
 #include "io/texture_sources.hpp"
+#include "layout/layout.hpp"
 #include "pipeline/plan_state.hpp"
 #include "report/report.hpp"
 #include "run/memory_guard.hpp"
@@ -198,7 +199,7 @@ EncodingChoice choose_images(const Options& options, const Options& method, cons
   if (choice.probes.is_null() || !(scale < 1)) return choice;
   Options quiet = method;
   quiet.progress = [&](std::string_view, double) { return progress("encode", 0.8), true; };
-  const TextureBudget smaller{std::max(8, int(std::lround(budget.side * scale / 4)) * 4), true};
+  const TextureBudget smaller{texture_side_at(budget.side, scale), true};
   std::map<std::string, double> map_scales;  // each material map as the first bake sized it
   for (const nlohmann::json& m : report_json(result.report).value("maps", nlohmann::json::array()))
     map_scales[m.at("name").get<std::string>()] = m.at("scale").get<double>();
