@@ -739,32 +739,115 @@ void check_image_encoding(const ImageEncoding& encoding, const std::string& path
 
 namespace {
 
-/// The image as a WebP file's bytes (libwebp's simple API: lossy at `quality`, or lossless), RGB where
-/// it is opaque. WebP's side is at most 16383.
-std::string encode_webp(const Image& image, const ImageEncoding& encoding, const std::string& name) {
-  constexpr int kMaxWebpSide = 16383;
+constexpr int kMaxWebpSide = 16383;
+
+void check_webp_side(const Image& image, const std::string& name) {
   if (image.width > kMaxWebpSide || image.height > kMaxWebpSide)
     fail_input("{}: {}x{} is larger than WebP allows ({} pixels a side)", name, image.width, image.height, kMaxWebpSide);
-  const bool opaque = is_opaque(image);
+}
+
+/// The image's RGB bytes where it is opaque (else empty): WebP then stores no alpha.
+std::vector<uint8_t> opaque_rgb(const Image& image) {
   std::vector<uint8_t> rgb;
-  const uint8_t* pixels = reinterpret_cast<const uint8_t*>(image.pixels.data());
-  int stride = image.width * 4;
-  if (opaque) {
-    rgb.resize(size_t(image.width) * size_t(image.height) * 3);
-    for (size_t i = 0; i < image.pixels.size(); ++i)
-      rgb[3 * i] = image.pixels[i].r, rgb[3 * i + 1] = image.pixels[i].g, rgb[3 * i + 2] = image.pixels[i].b;
-    pixels = rgb.data();
-    stride = image.width * 3;
-  }
+  if (!is_opaque(image)) return rgb;
+  rgb.resize(size_t(image.width) * size_t(image.height) * 3);
+  for (size_t i = 0; i < image.pixels.size(); ++i)
+    rgb[3 * i] = image.pixels[i].r, rgb[3 * i + 1] = image.pixels[i].g, rgb[3 * i + 2] = image.pixels[i].b;
+  return rgb;
+}
+
+/// The image as a lossless WebP file's bytes (libwebp's simple API), RGB where it is opaque.
+std::string encode_webp_lossless(const Image& image, const std::string& name) {
+  check_webp_side(image, name);
+  const std::vector<uint8_t> rgb = opaque_rgb(image);
   uint8_t* out = nullptr;
-  const float q = float(encoding.webp_quality);
-  const size_t size = encoding.webp_lossless ? (opaque ? WebPEncodeLosslessRGB(pixels, image.width, image.height, stride, &out)
-                                                       : WebPEncodeLosslessRGBA(pixels, image.width, image.height, stride, &out))
-                                             : (opaque ? WebPEncodeRGB(pixels, image.width, image.height, stride, q, &out)
-                                                       : WebPEncodeRGBA(pixels, image.width, image.height, stride, q, &out));
+  const size_t size = !rgb.empty() ? WebPEncodeLosslessRGB(rgb.data(), image.width, image.height, image.width * 3, &out)
+                                   : WebPEncodeLosslessRGBA(reinterpret_cast<const uint8_t*>(image.pixels.data()), image.width,
+                                                            image.height, image.width * 4, &out);
   std::string bytes(reinterpret_cast<const char*>(out), size);
   WebPFree(out);
   if (size == 0) fail_internal("{}: libwebp could not encode a {}x{} image", name, image.width, image.height);
+  return bytes;
+}
+
+}  // namespace
+
+/// libwebp's picture of an image in YUV 4:2:0 (with alpha where it is not opaque), what its lossy
+/// encoder reads.
+struct ImageEncoder::WebpYuv {
+  WebPPicture picture{};
+  WebpYuv() = default;
+  WebpYuv(const WebpYuv&) = delete;
+  WebpYuv& operator=(const WebpYuv&) = delete;
+  ~WebpYuv() { WebPPictureFree(&picture); }
+};
+
+namespace {
+
+/// From this mean squared error (8-bit levels, over RGB) of the plain RGB-to-YUV 4:2:0 conversion alone
+/// (converted and upsampled back, no coding), an image takes the sharp conversion (webp_yuv).
+constexpr double kSharpYuvFromPlainMse = 2.0;
+
+/// The mean squared error (over RGB, of the texels not fully transparent) of `argb` (a picture holding
+/// `image` as ARGB) converted to YUV 4:2:0 by libwebp's plain conversion and back as its decoder
+/// upsamples it.
+double plain_conversion_mse(const WebPPicture& argb, const Image& image) {
+  WebPPicture probe;
+  if (!WebPPictureInit(&probe) || !WebPPictureCopy(&argb, &probe)) throw std::bad_alloc();
+  const bool ok = WebPPictureARGBToYUVA(&probe, is_opaque(image) ? WEBP_YUV420 : WEBP_YUV420A) && WebPPictureYUVAToARGB(&probe);
+  double squared = 0;
+  size_t texels = 0;
+  for (int y = 0; ok && y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      const Rgba8 p = image.at(x, y);
+      const uint32_t back = probe.argb[size_t(y) * size_t(probe.argb_stride) + size_t(x)];
+      const double r = double((back >> 16) & 255) - p.r, g = double((back >> 8) & 255) - p.g, b = double(back & 255) - p.b;
+      squared += p.a > 0 ? r * r + g * g + b * b : 0;
+      texels += p.a > 0 ? 1 : 0;
+    }
+  WebPPictureFree(&probe);
+  if (!ok) throw std::bad_alloc();
+  return texels > 0 ? squared / double(3 * texels) : 0;
+}
+
+/// `image` converted for libwebp's lossy encoder. Where 4:2:0 chroma alone loses much (the plain
+/// conversion's error above kSharpYuvFromPlainMse: saturated print, colour edges a texel or two wide),
+/// the colour goes through libwebp's sharp conversion, an iterative fit of the planes to the RGB as the
+/// decoder upsamples them; elsewhere (photographs, grey) its extra luma detail costs more bytes than
+/// it gains (docs/decisions.md). Transparent texels are cleaned here, once, as libwebp's encoder would
+/// on every call.
+std::unique_ptr<ImageEncoder::WebpYuv> webp_yuv(const Image& image, const std::string& name) {
+  check_webp_side(image, name);
+  auto yuv = std::make_unique<ImageEncoder::WebpYuv>();
+  WebPPicture& pic = yuv->picture;
+  if (!WebPPictureInit(&pic)) fail_internal("{}: libwebp version mismatch", name);
+  pic.width = image.width, pic.height = image.height, pic.use_argb = 1;
+  if (!WebPPictureImportRGBA(&pic, reinterpret_cast<const uint8_t*>(image.pixels.data()), image.width * 4)) throw std::bad_alloc();
+  const bool sharp = plain_conversion_mse(pic, image) > kSharpYuvFromPlainMse;
+  const WebPEncCSP space = is_opaque(image) ? WEBP_YUV420 : WEBP_YUV420A;
+  if (!(sharp ? WebPPictureSharpARGBToYUVA(&pic) : WebPPictureARGBToYUVA(&pic, space))) throw std::bad_alloc();
+  WebPCleanupTransparentArea(&pic);
+  return yuv;
+}
+
+/// `yuv` as a lossy WebP file's bytes at `quality`. The picture is only read (a shallow copy carries
+/// the writer), so several threads may encode one picture at once.
+std::string encode_webp_yuv(const WebPPicture& yuv, float quality, const std::string& name) {
+  WebPConfig config;
+  if (!WebPConfigInit(&config)) fail_internal("{}: libwebp version mismatch", name);
+  config.quality = quality;
+  config.exact = 1;  // the transparent texels are already cleaned (webp_yuv)
+  WebPPicture pic = yuv;
+  WebPMemoryWriter writer;
+  WebPMemoryWriterInit(&writer);
+  pic.writer = WebPMemoryWrite, pic.custom_ptr = &writer;
+  const bool ok = WebPEncode(&config, &pic) != 0;
+  std::string bytes(reinterpret_cast<const char*>(writer.mem), ok ? writer.size : 0);
+  WebPMemoryWriterClear(&writer);
+  if (!ok) {
+    if (pic.error_code == VP8_ENC_ERROR_OUT_OF_MEMORY) throw std::bad_alloc();
+    fail_internal("{}: libwebp could not encode a {}x{} image (error {})", name, yuv.width, yuv.height, int(pic.error_code));
+  }
   return bytes;
 }
 
@@ -794,23 +877,35 @@ const char* image_extension(ImageFormat format) {
   return ".png";
 }
 
-std::string encode_image(const Image& image, const ImageEncoding& encoding, const std::string& name) {
-  check_image_encoding(encoding, name);
-  if (encoding.format == ImageFormat::kJpeg) return encode_jpeg(image, encoding.jpeg_quality);
-  if (encoding.format == ImageFormat::kWebp) return encode_webp(image, encoding, name);
+ImageEncoder::ImageEncoder(const Image& image, std::string name) : image_(image), name_(std::move(name)) {}
+
+ImageEncoder::~ImageEncoder() = default;
+
+std::string ImageEncoder::encode(const ImageEncoding& encoding) const {
+  check_image_encoding(encoding, name_);
+  if (encoding.format == ImageFormat::kJpeg) return encode_jpeg(image_, encoding.jpeg_quality);
+  if (encoding.format == ImageFormat::kWebp && encoding.webp_lossless) return encode_webp_lossless(image_, name_);
+  if (encoding.format == ImageFormat::kWebp) {
+    std::call_once(webp_converted_, [&] { webp_ = webp_yuv(image_, name_); });
+    return encode_webp_yuv(webp_->picture, float(encoding.webp_quality), name_);
+  }
   // PNG through a file (libspng writes to a FILE): a memory stream.
   char* buffer = nullptr;
   size_t size = 0;
   std::FILE* stream = open_memstream(&buffer, &size);
   if (stream == nullptr) throw std::bad_alloc();
   {
-    OutputFile out(stream, name);
-    save_png(out, image, encoding.png_level);
+    OutputFile out(stream, name_);
+    save_png(out, image_, encoding.png_level);
     out.commit();
   }
   std::string bytes(buffer != nullptr ? buffer : "", buffer != nullptr ? size : 0);
   std::free(buffer);
   return bytes;
+}
+
+std::string encode_image(const Image& image, const ImageEncoding& encoding, const std::string& name) {
+  return ImageEncoder(image, name).encode(encoding);
 }
 
 void save_image(const std::string& path, const Image& image, const ImageEncoding& encoding) {
@@ -827,7 +922,7 @@ void save_image(const std::string& path, const Image& image, const ImageEncoding
       save_jpeg(out, image, encoding.jpeg_quality);
       break;
     case ImageFormat::kWebp: {
-      const std::string bytes = encode_webp(image, encoding, path);
+      const std::string bytes = encode_image(image, encoding, path);
       if (std::fwrite(bytes.data(), 1, bytes.size(), out.get()) != bytes.size()) out.fail("write failed");
       break;
     }

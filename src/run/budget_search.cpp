@@ -90,16 +90,6 @@ std::vector<Image> images_at(const TexturedMesh& output, const std::vector<char>
   return scaled;
 }
 
-/// Each texture of `output` encoded as `e` says, a baked one as `scaled` holds it where it holds one.
-std::vector<std::string> encode_all(const TexturedMesh& output, const std::vector<Image>& scaled, const ImageEncoding& e) {
-  std::vector<std::string> files(output.textures.size());
-  tbb::parallel_for(size_t(0), files.size(), [&](size_t i) {
-    const Image& img = scaled[i].empty() ? output.textures[i].image : scaled[i];
-    if (!img.empty()) files[i] = encode_image(img, e.of_texture(i), output.textures[i].path);
-  });
-  return files;
-}
-
 uint64_t total_bytes(const std::vector<std::string>& files) {
   return std::accumulate(files.begin(), files.end(), uint64_t(0), [](uint64_t n, const std::string& f) { return n + f.size(); });
 }
@@ -218,11 +208,12 @@ RateModel shrink_model(const ProbeContext& c, TexturedMesh& output) {
 void add_probes(const ProbeContext& c, double scale, TexturedMesh& output, RateModel& model, nlohmann::json& probes) {
   if (c.request.progress) c.request.progress(0.8 * double(model.probes.size()) / double(std::size(kProbeScales)));
   std::vector<Image> scaled = images_at(output, c.baked, c.inside, scale);
+  const TextureEncoders encoders(output, scaled);
   std::vector<std::vector<std::string>> files(std::size(kProbeQualities));
   tbb::parallel_for(size_t(0), files.size(), [&](size_t k) {
     ImageEncoding e = c.encoding;
     e.jpeg_quality = e.webp_quality = kProbeQualities[k];
-    files[k] = encode_all(output, scaled, e);
+    files[k] = encoders.encode(e);
   });
   const size_t s = size_t(std::find_if(model.scales.begin(), model.scales.end(), [&](double x) { return std::abs(x - scale) < 1e-9; }) -
                           model.scales.begin());
@@ -300,6 +291,7 @@ std::pair<std::optional<Written>, Written> check_qualities(const BudgetSearchReq
   const bool target = request.target_psnr_db > 0;
   int lo = 0, hi = 101;
   std::optional<Written> best, closest;
+  const TextureEncoders encoders(output);
   for (int check = 0; check < kMaxChecks; ++check) {
     if (request.progress) request.progress(0.8 + 0.2 * check / kMaxChecks);
     // q, and beside it the quality that would prove q the answer (one below a target's, one above a
@@ -310,7 +302,7 @@ std::pair<std::optional<Written>, Written> check_qualities(const BudgetSearchReq
     tbb::parallel_for(size_t(0), written.size(), [&](size_t i) {
       ImageEncoding e = encoding;
       e.jpeg_quality = e.webp_quality = written[i].quality;
-      written[i].images = encode_all(output, std::vector<Image>(output.textures.size()), e);
+      written[i].images = encoders.encode(e);
     });
     for (Written& w : written) {
       w.psnr = psnr_as_written(judge, colour, output, w.images);
@@ -336,6 +328,22 @@ std::pair<std::optional<Written>, Written> check_qualities(const BudgetSearchReq
 }
 
 }  // namespace
+
+TextureEncoders::TextureEncoders(const TexturedMesh& mesh, const std::vector<Image>& replaced, const std::vector<char>& only)
+    : encoders_(mesh.textures.size()) {
+  for (size_t i = 0; i < encoders_.size(); ++i) {
+    const Image& img = i < replaced.size() && !replaced[i].empty() ? replaced[i] : mesh.textures[i].image;
+    if (!img.empty() && (only.empty() || only[i])) encoders_[i] = std::make_unique<ImageEncoder>(img, mesh.textures[i].path);
+  }
+}
+
+std::vector<std::string> TextureEncoders::encode(const ImageEncoding& encoding, bool lossy_only) const {
+  std::vector<std::string> files(encoders_.size());
+  tbb::parallel_for(size_t(0), files.size(), [&](size_t i) {
+    if (encoders_[i] && (!lossy_only || encoding.of_texture(i).lossy())) files[i] = encoders_[i]->encode(encoding.of_texture(i));
+  });
+  return files;
+}
 
 std::vector<char> colour_textures(const TexturedMesh& output) {
   std::vector<char> colour(output.textures.size(), 0);

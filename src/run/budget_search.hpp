@@ -4,10 +4,12 @@
 // best (scale, quality) chosen from that model, then checked and nudged on the images as written.
 #pragma once
 #include <cstdint>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
+#include "io/image_io.hpp"
 #include "report/metrics.hpp"
 #include "tightex/io.hpp"
 #include "tightex/mesh.hpp"
@@ -40,6 +42,21 @@ struct BudgetSearchResult {
   /// images come back unchecked (BudgetSearchRequest::check_shrunk): with the re-bake's own error it
   /// tells the quality to start its search at. Empty otherwise.
   std::vector<double> codec_mse_by_quality;
+};
+
+/// An encoder (ImageEncoder) per texture image of a model, for encoding them all at several settings:
+/// the conversions every lossy WebP encoding of an image shares are made once.
+class TextureEncoders {
+ public:
+  /// For each texture of `mesh` with an image (and, where `only` is given, marked in it): its image, or
+  /// the one `replaced` holds at its index where that is not empty. The images must outlive it.
+  explicit TextureEncoders(const TexturedMesh& mesh, const std::vector<Image>& replaced = {}, const std::vector<char>& only = {});
+  /// Each image encoded as encoding.of_texture(i) says (on every core; empty where there is no encoder,
+  /// and, with `lossy_only`, where its encoding is lossless).
+  std::vector<std::string> encode(const ImageEncoding& encoding, bool lossy_only = false) const;
+
+ private:
+  std::vector<std::unique_ptr<ImageEncoder>> encoders_;
 };
 
 /// Per texture of `output`, whether a material binds it as its base colour: the images the surface PSNR

@@ -42,14 +42,14 @@ ReencodeFigures reencode_at_psnr(TexturedMesh& input, ImageFormat codec, double 
   TexturedMesh reencoded = without_images(input);
   const SurfacePsnrOfImages judge(input, reencoded);
   std::map<int, std::pair<uint64_t, double>> measured;  // quality -> bytes, PSNR
+  const TextureEncoders encoders(input, {}, bound);
   // Each quality's images encoded side by side with the other's (one core an image), then measured.
   auto psnr_at = [&](const std::vector<int>& qualities) {
-    std::vector<std::vector<std::string>> files(qualities.size(), std::vector<std::string>(input.textures.size()));
-    tbb::parallel_for(size_t(0), qualities.size() * files[0].size(), [&](size_t k) {
-      const size_t q = k / files[0].size(), i = k % files[0].size();
+    std::vector<std::vector<std::string>> files(qualities.size());
+    tbb::parallel_for(size_t(0), qualities.size(), [&](size_t q) {
       ImageEncoding encoding(codec);
       encoding.jpeg_quality = encoding.webp_quality = qualities[q];
-      if (bound[i]) files[q][i] = encode_image(input.textures[i].image, encoding, input.textures[i].path);
+      files[q] = encoders.encode(encoding);
     });
     std::vector<double> psnr;
     for (size_t q = 0; q < qualities.size(); ++q) {

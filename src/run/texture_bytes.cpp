@@ -80,17 +80,6 @@ namespace {
 /// Rate control's one quality, for every lossy image (JPEG or WebP).
 void set_quality(ImageEncoding& e, int quality) { e.jpeg_quality = e.webp_quality = quality; }
 
-/// Each texture of `output` encoded as `encoding` says (on every core); with `lossy_only`, only the lossy
-/// ones (the others empty).
-std::vector<std::string> encoded(const TexturedMesh& output, const ImageEncoding& encoding, bool lossy_only = false) {
-  std::vector<std::string> bytes(output.textures.size());
-  tbb::parallel_for(size_t(0), bytes.size(), [&](size_t i) {
-    if (!output.textures[i].image.empty() && (!lossy_only || encoding.of_texture(i).lossy()))
-      bytes[i] = encode_image(output.textures[i].image, encoding.of_texture(i), output.textures[i].path);
-  });
-  return bytes;
-}
-
 uint64_t total(const std::vector<std::string>& images) {
   uint64_t n = 0;
   for (const std::string& b : images) n += b.size();
@@ -176,10 +165,11 @@ void step(const BytesRequest& request, int& steps) {
 std::string within_own_roles(const BytesRequest& request, const TexturedMesh& input, const std::vector<TextureSource>& sources,
                              const TexturedMesh& output, ImageEncoding& e, int& steps, uint64_t bound) {
   const uint64_t own = input_bytes_of_lossy_roles(input, sources, output, e);
+  const TextureEncoders encoders(output);
   const int over = lowest_quality([&](int quality) {
     step(request, steps);
     set_quality(e, quality);
-    return lossy_total(encoded(output, e, true), e) > own;
+    return lossy_total(encoders.encode(e, true), e) > own;
   });
   set_quality(e, std::max(over - 1, 1));
   return fmt::format(
@@ -207,6 +197,7 @@ int starting_quality(const BytesRequest& request, const SurfacePsnrOfImages& few
 std::string pick_quality(const BytesRequest& request, const TexturedMesh& input, const std::vector<TextureSource>& sources,
                          TexturedMesh& output, ImageEncoding& e, std::optional<std::pair<std::vector<std::string>, double>>& checked) {
   int steps = 0;
+  const TextureEncoders encoders(output);
   if (request.target_psnr_db > 0) {
     // The search at a tenth of the report's points, then the report's own points, a quality up at a
     // time where the few erred.
@@ -219,7 +210,7 @@ std::string pick_quality(const BytesRequest& request, const TexturedMesh& input,
           tbb::parallel_for(size_t(0), qualities.size(), [&](size_t i) {
             ImageEncoding at = e;
             set_quality(at, qualities[i]);
-            files[i] = encoded(output, at);
+            files[i] = encoders.encode(at);
           });
           std::vector<double> psnr;
           for (size_t i = 0; i < qualities.size(); ++i) {
@@ -232,7 +223,7 @@ std::string pick_quality(const BytesRequest& request, const TexturedMesh& input,
         request.target_psnr_db, starting_quality(request, few, output));
     for (int up = 0; lowest <= 100 && up < kMaxStepsUp; ++up, ++lowest) {
       set_quality(e, lowest);
-      std::vector<std::string> images_at = images.count(lowest) ? std::move(images[lowest]) : encoded(output, e);
+      std::vector<std::string> images_at = images.count(lowest) ? std::move(images[lowest]) : encoders.encode(e);
       const double psnr = psnr_as_written(judge, output, images_at);
       if (psnr >= request.target_psnr_db) {
         checked.emplace(std::move(images_at), psnr);
@@ -251,7 +242,7 @@ std::string pick_quality(const BytesRequest& request, const TexturedMesh& input,
       [&](int quality) {
         step(request, steps);
         set_quality(e, quality);
-        return total(encoded(output, e)) > bound;
+        return total(encoders.encode(e)) > bound;
       },
       request.quality_hint > 0 ? request.quality_hint + 1 : 0);
   set_quality(e, std::max(over - 1, 1));
@@ -340,7 +331,7 @@ EncodingChoice choose_encoding(const BytesRequest& request, const TexturedMesh& 
   if (checked) {
     c.images = std::move(checked->first), c.written_psnr_db = checked->second;
   } else {
-    c.images = encoded(output, c.encoding);
+    c.images = TextureEncoders(output).encode(c.encoding);
     if (c.encoding.lossy()) c.written_psnr_db = psnr_as_written(SurfacePsnrOfImages(input, output), output, c.images);
   }
   for (const std::string& b : c.images) c.bytes.push_back(b.size());
