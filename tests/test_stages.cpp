@@ -2158,10 +2158,11 @@ void expect_pages_tiled(const std::vector<Rect>& rects, const std::vector<std::p
 
 // The rate search's second bake (rescale_plan): the same charts on textures of half the side tile them
 // as before, and bake every triangle unfolded with the texels used as fully as the first bake did,
-// reading better than the first bake's images shrunk to that size. A scale at which the small
-// components' rectangles would vanish lays the page out again; a plan with a kept component is left
-// to be planned again.
-TEST(Pipeline, RescaledPlanBakesTheSameChartsOnSmallerTextures) {
+// reading better than the first bake's images shrunk to that size; on textures of twice the side
+// (a --target-psnr the first bake's texels do not reach), every edge doubles and the bake reads
+// higher than the first. A scale at which the small components' rectangles would vanish lays the page
+// out again; a plan with a kept component is left to be planned again.
+TEST(Pipeline, RescaledPlanBakesTheSameChartsOnSmallerOrLargerTextures) {
   Options opt;
   opt.size = 256;
   {  // Two large components: every edge moves to the same fraction of the side.
@@ -2180,6 +2181,21 @@ TEST(Pipeline, RescaledPlanBakesTheSameChartsOnSmallerTextures) {
     }
     expect_pages_tiled(after, plan_state(p).image_size, 4);
     EXPECT_EQ(bake_plan(p, two, opt).report.flipped_triangles, 0u);
+
+    Plan grown = plan_charts(two, opt);
+    const Result first = bake_plan(grown, two, opt);
+    ASSERT_TRUE(rescale_plan(grown, 2));
+    ASSERT_EQ(plan_state(grown).image_size, (std::vector<std::pair<int, int>>{{512, 512}}));
+    for (size_t c = 0; c < 2; ++c) {
+      const Rect &r = plan_state(grown).rects[c], &b = before[c];
+      EXPECT_EQ(std::tuple(r.x, r.y, r.w, r.h), std::tuple(2 * b.x, 2 * b.y, 2 * b.w, 2 * b.h)) << "component " << c;
+    }
+    expect_pages_tiled(plan_state(grown).rects, plan_state(grown).image_size, 4);
+    const Result twice = bake_plan(grown, two, opt);
+    EXPECT_EQ(twice.report.flipped_triangles, 0u);
+    EXPECT_EQ(twice.report.lost_triangles, 0u);
+    EXPECT_EQ(twice.output.textures[0].image.width, 512);
+    EXPECT_GT(twice.report.surface_psnr_bake_db, first.report.surface_psnr_bake_db + 1);
   }
   TexturedMesh in = cat::multi_component();  // a torus, a disk and two floaters of 4 x 4 texels
   in.textures[0].image = cat::checker_image(256, 256, 8);

@@ -22,11 +22,13 @@ inline Vec2 rect_pixel(const Rect& r, const Vec2& s) {
               r.y + 0.5 - kChartInset + (1.0 - s.y()) * (r.h - 1 + 2 * kChartInset));
 }
 
-/// A texture side at `scale` of `side` (the rate search's smaller textures): a multiple of 4, at least
-/// 8, never more than the side itself.
+/// A texture side at `scale` of `side` (the rate search's smaller or larger textures): a multiple of 4,
+/// at least 8; never more than the side itself for a scale below 1, never less above it; the side
+/// itself at 1.
 inline int texture_side_at(int side, double scale) {
-  if (scale >= 1) return side;
-  return std::min(side, std::max(8, int(std::lround(side * scale / 4)) * 4));
+  if (scale == 1) return side;
+  const int rounded = std::max(8, int(std::lround(side * scale / 4)) * 4);
+  return scale < 1 ? std::min(side, rounded) : std::max(side, rounded);
 }
 
 /// How layout_atlas shares the texture out between components.

@@ -77,15 +77,15 @@ Plan::State& mutable_plan_state(Plan& plan);
 /// before); baking it again is an InputError.
 Result bake_plan_releasing_maps(Plan& plan, const TexturedMesh& input, const Options& options);
 
-/// The plan's charts on textures `scale` of each side (a multiple of 4, at least 8: the texel search's
-/// rounding), for a second bake at fewer texels that skips the planning: every rectangle's edges move to
-/// the same fraction of its texture, so the rectangles tile the smaller textures as they tiled the
-/// larger, and the texture coordinates are kept fold-free in float at the new size; each material map
+/// The plan's charts on textures `scale` of each side (texture_side_at), for a second bake at fewer or
+/// more texels that skips the planning: every rectangle's edges move to the same fraction of its
+/// texture, so the rectangles tile the new textures as they tiled the old, and the texture
+/// coordinates are kept fold-free in float at the new size; each material map
 /// keeps its side over the base colour's from `map_scales` (the first bake's report "maps": name,
 /// scale) instead of being sized again, as the texel search judged every image shrunk alike. Returns false,
 /// the plan unchanged, where it cannot: its maps released, a component kept with its input texture
-/// coordinates, or a rectangle that would fall below 4 texels a side; then plan again at the smaller
-/// budget.
+/// coordinates, or a page that cannot hold its rectangles at 4 texels a side; then plan again at the
+/// new budget.
 bool rescale_plan(Plan& plan, double scale, const std::map<std::string, double>& map_scales = {});
 
 /// A hash of what the plan depends on in the input (vertex and triangle counts, triangles, texture

@@ -1,4 +1,4 @@
-// rescale_plan: the same charts on smaller textures, for the rate search's second bake.
+// rescale_plan: the same charts on smaller or larger textures, for the rate search's second bake.
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -48,7 +48,7 @@ bool move_page(const std::vector<size_t>& on, std::pair<int, int> from, std::pai
 
 bool rescale_plan(Plan& plan, double scale, const std::map<std::string, double>& map_scales) {
   Plan::State& state = mutable_plan_state(plan);
-  if (state.maps_released || !(scale > 0 && scale < 1)) return false;
+  if (state.maps_released || !(scale > 0) || scale == 1) return false;
   if (std::any_of(state.kept.begin(), state.kept.end(), [](const std::string& k) { return !k.empty(); })) return false;
   std::vector<std::pair<int, int>> sizes;
   std::vector<std::vector<size_t>> on(state.image_size.size());

@@ -377,6 +377,9 @@ BudgetSearchResult search_texels_and_quality(const BudgetSearchRequest& request,
   BudgetSearchResult r;
   const SurfacePsnrOfImages few(input, output, kProbePoints);
   const auto [model, choice] = fit_and_choose(ProbeContext{request, few, baked, colour, inside, encoding}, output, r.probes);
+  const auto half = std::find_if(model.scales.begin(), model.scales.end(), [](double x) { return std::abs(x - 0.5) < 1e-9; });
+  if (half != model.scales.end() && model.shrink_mse[0] > 0)
+    r.bake_error_exponent = std::log2(model.shrink_mse[size_t(half - model.scales.begin())] / model.shrink_mse[0]);
   // The model's choice, checked; where no quality at its scale reaches a target, the bake's own size.
   auto [s, q] = choice;
   const std::string asked = request.target_psnr_db > 0 ? fmt::format("--target-psnr {} dB", request.target_psnr_db)

@@ -42,6 +42,10 @@ struct BudgetSearchResult {
   /// images come back unchecked (BudgetSearchRequest::check_shrunk): with the re-bake's own error it
   /// tells the quality to start its search at. Empty otherwise.
   std::vector<double> codec_mse_by_quality;
+  /// How fast the bake's own error grows as the side shrinks: log2 of its mean squared error at half the
+  /// side over its error at the full side (measured unencoded; 2 where it is not measured). A target the
+  /// full side does not reach takes this to tell how many more texels may reach it.
+  double bake_error_exponent = 2;
 };
 
 /// An encoder (ImageEncoder) per texture image of a model, for encoding them all at several settings:

@@ -62,4 +62,10 @@ void check_per_component_memory(const MemoryGuard& guard, const Plan& plan) {
   guard.check(guard.estimate + out_texels * kBytesPerOutputTexel * guard.output_images, "this model's per-component textures");
 }
 
+bool fits_larger_textures(const MemoryGuard& guard, const std::vector<std::pair<int, int>>& pages, double scale) {
+  double added = 0;
+  for (const auto& [w, h] : pages) added += (scale * scale - 1) * double(w) * double(h) * kBytesPerOutputTexel * guard.output_images;
+  return (guard.estimate + added) / double(1 << 20) <= guard.limit_mib;
+}
+
 }  // namespace tightex

@@ -37,4 +37,8 @@ MemoryGuard check_memory(const std::string& input, const Options& options, const
 /// Checks the memory of the per-component layout's output textures, now that the plan has sized them.
 void check_per_component_memory(const MemoryGuard& guard, const Plan& plan);
 
+/// Whether the output textures `pages` (width, height) made `scale` times larger a side still fit the
+/// guard's limit beside its estimate (a --target-psnr that grows the texels).
+bool fits_larger_textures(const MemoryGuard& guard, const std::vector<std::pair<int, int>>& pages, double scale);
+
 }  // namespace tightex

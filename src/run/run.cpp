@@ -6,6 +6,7 @@
 
 #include <fmt/ranges.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -22,6 +23,7 @@
 #include "layout/layout.hpp"
 #include "pipeline/plan_state.hpp"
 #include "report/report.hpp"
+#include "run/budget_search.hpp"
 #include "run/memory_guard.hpp"
 #include "run/process_tuning.hpp"
 #include "run/reencode.hpp"
@@ -174,18 +176,43 @@ std::vector<ImageFormat> search_codecs(ModelFormat format) {
   return {ImageFormat::kWebp, ImageFormat::kJpeg};
 }
 
+/// The least and the most scale of the side by which the texels grow where --target-psnr is not
+/// reached at tightex's budget (growth_scale): a smaller step is within the search's own error, and a
+/// larger one (over 4x the texels) is more a different --size than a search.
+constexpr double kLeastGrowth = 1.2, kMostGrowth = 2;
+
+/// Where the images as written at tightex's texel budget stay below --target-psnr (the bake's own error,
+/// or the codec's at quality 100): the scale of the side at which a bake may reach it, taking the
+/// written error as falling with the side as the bake's own error rises as it shrinks
+/// (EncodingChoice::bake_error_exponent, taken within [1, 2]), 10% more, and at least kLeastGrowth.
+/// 1 where the target is reached, or where that scale is beyond kMostGrowth, puts a page beyond
+/// Options::max_page_side (16380 where there is none: WebP's limit) or the textures beyond `guard`'s
+/// memory: the warning then asks for more texels.
+double growth_scale(const Options& options, const EncodingChoice& choice, const std::vector<std::pair<int, int>>& pages,
+                    const MemoryGuard& guard) {
+  const double written = choice.written_psnr_db.value_or(0);
+  if (!(options.target_psnr_db > 0) || choice.images.empty() || written >= options.target_psnr_db) return 1;
+  const double exponent = std::clamp(choice.bake_error_exponent, 1.0, 2.0);
+  const double scale = std::max(kLeastGrowth, 1.1 * std::pow(mse_of_psnr(written) / mse_of_psnr(options.target_psnr_db), 1 / exponent));
+  const int cap = options.max_page_side > 0 ? options.max_page_side : 16380;
+  for (const auto& [w, h] : pages)
+    if (texture_side_at(std::max(w, h), scale) > cap) return 1;
+  return scale <= kMostGrowth && fits_larger_textures(guard, pages, scale) ? scale : 1;
+}
+
 /// The images' codec and quality (the input's codec; rate control), chosen for `result`: with
 /// --target-psnr or --max-bytes and tightex's own texel budget, the texels of the baked images too
-/// (budget_search.hpp). Where the search shrinks them, the charts of `plan` (its maps kept by the first
-/// bake) are baked once more at that scale (rescale_plan; where it cannot, planned again at that
-/// budget): a bake at fewer texels reads the input once where the shrunk images resample the bake
-/// (WaterBottle at 0.59 of its side: 46.9 dB re-baked, 43.4 shrunk), and its quality is chosen alone;
-/// whichever answers better replaces `result`'s images, the report's stage timings kept the first
-/// bake's. `method`: the options the method ran with. Tells `progress` "encode" as it goes, and may
-/// throw Cancelled.
+/// (budget_search.hpp). Where the search shrinks them, or a target is not reached at the bake's size
+/// (growth_scale), the charts of `plan` (its maps kept by the first bake) are baked once more at that
+/// scale (rescale_plan; where it cannot, planned again at that budget): a bake at fewer texels reads
+/// the input once where the shrunk images resample the bake (WaterBottle at 0.59 of its side: 46.9 dB
+/// re-baked, 43.4 shrunk), and its quality is chosen alone; whichever answers better replaces
+/// `result`'s images, the report's stage timings kept the first bake's. `method`: the options the
+/// method ran with; `guard`: the run's memory, which larger textures must fit. Tells `progress`
+/// "encode" as it goes, and may throw Cancelled.
 EncodingChoice choose_images(const Options& options, const Options& method, const TexturedMesh& input,
-                             const std::vector<TextureSource>& sources, const TextureBudget& budget, ModelFormat format, Plan& plan,
-                             Result& result, const StageProgress& progress) {
+                             const std::vector<TextureSource>& sources, const TextureBudget& budget, const MemoryGuard& guard,
+                             ModelFormat format, Plan& plan, Result& result, const StageProgress& progress) {
   BytesRequest request = bytes_request(options);
   request.progress = [&](double f) { progress("encode", 0.8 * f); };
   if (budget.is_default) request.new_pages = result.report.texture_sizes.size();
@@ -196,15 +223,17 @@ EncodingChoice choose_images(const Options& options, const Options& method, cons
   // 42,950 bytes: 37.02 dB kept at its size, 37.5 at 0.65-0.73 of its side by hand).
   double scale = choice.texel_scale;
   if (!choice.probes.is_null() && !(scale < 1) && options.max_bytes > 0) scale = std::sqrt(0.5);
-  if (choice.probes.is_null() || !(scale < 1)) return choice;
+  if (!choice.probes.is_null() && !(scale < 1)) scale = growth_scale(options, choice, result.report.texture_sizes, guard);
+  if (choice.probes.is_null() || scale == 1) return choice;
   Options quiet = method;
   quiet.progress = [&](std::string_view, double) { return progress("encode", 0.8), true; };
-  const TextureBudget smaller{texture_side_at(budget.side, scale), true};
+  const TextureBudget rescaled{texture_side_at(budget.side, scale), true};
   std::map<std::string, double> map_scales;  // each material map as the first bake sized it
   for (const nlohmann::json& m : report_json(result.report).value("maps", nlohmann::json::array()))
     map_scales[m.at("name").get<std::string>()] = m.at("scale").get<double>();
   const bool same_charts = rescale_plan(plan, scale, map_scales);
-  Result rebaked = same_charts ? bake_plan_releasing_maps(plan, input, quiet) : bake_plan(plan_charts(input, quiet, smaller), input, quiet);
+  Result rebaked =
+      same_charts ? bake_plan_releasing_maps(plan, input, quiet) : bake_plan(plan_charts(input, quiet, rescaled), input, quiet);
   round_uvs_as_stored(rebaked.output, format);
   BytesRequest alone = bytes_request(options);
   alone.format = choice.encoding.format;
@@ -327,7 +356,7 @@ Report run(const std::string& input, const std::string& outdir, const Options& o
   const std::vector<TextureSource> sources = texture_sources(planned.mesh);
   const auto encode_start = std::chrono::steady_clock::now();
   const CpuTimes encode_cpu = process_cpu_times();
-  const EncodingChoice choice = choose_images(options, opt, planned.mesh, sources, budget, format, planned.plan, result, progress);
+  const EncodingChoice choice = choose_images(options, opt, planned.mesh, sources, budget, guard, format, planned.plan, result, progress);
   timings.encode_s = seconds_since(encode_start);
   timings.encode_cpu = CpuTimes{process_cpu_times().user - encode_cpu.user, process_cpu_times().sys - encode_cpu.sys};
   const ModelFormat input_format = model_format_of(input);

@@ -312,6 +312,7 @@ EncodingChoice search_codec_texels_and_quality(const BytesRequest& request, cons
   c.probes = std::move(best->probes);
   c.texel_scale = best->scale;
   c.codec_mse_by_quality = std::move(best->codec_mse_by_quality);
+  c.bake_error_exponent = best->bake_error_exponent;
   return c;
 }
 

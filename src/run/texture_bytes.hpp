@@ -52,6 +52,7 @@ struct EncodingChoice {
   nlohmann::json probes;                     // the texel search's probes (null where it did not run)
   double texel_scale = 1;                    // the texel search's scale of the baked images' side (1: as baked)
   std::vector<double> codec_mse_by_quality;  // the texel search's, where its images come back unchecked
+  double bake_error_exponent = 2;            // the texel search's (BudgetSearchResult)
 };
 
 /// Whether images of `bytes_a` bytes at `psnr_a` dB answer --target-psnr (`target_psnr_db` > 0) or else
