@@ -364,6 +364,24 @@ TEST(Metrics, TrianglesCorrespondByTheirCornerPositions) {
   EXPECT_EQ(measure(sphere(), moved, 20000).lost_triangles, around);
 }
 
+// The judge a search asks of many encodings (SurfacePsnrOfImages) reads what the images do not change
+// once: its figure is surface_psnr's, bit for bit, for any image swapped in, of any size, a lost
+// triangle included.
+TEST(Metrics, SurfacePsnrOfImagesIsSurfacePsnrForEveryImage) {
+  const TexturedMesh input = sphere();
+  TexturedMesh output = rewritten(input, true);
+  output.positions[0] += Vec3(1e-9, 0, 0);  // the triangles around vertex 0 lost: black in both figures
+  output.materials[0].kd = {0.5, 0.75, 1.0};
+  output.materials[0].kd_multiplies_texture = true;
+  const SurfacePsnrOfImages judge(input, output, 20000);
+  for (const Image& image : {input.textures[0].image, checker_image(64, 64, 3), checker_image(17, 40, 2), Image(5, 7)}) {
+    output.textures[0].image = image;
+    const double psnr = surface_psnr(input, output, 20000);
+    EXPECT_LT(psnr, 99.0);
+    EXPECT_EQ(judge(output), psnr) << image.width << "x" << image.height;
+  }
+}
+
 /// `m` with its texture coordinates turned by `degrees` about the texture's centre (then mirrored in u
 /// where `mirror`), its image a `side` x `side` square.
 TexturedMesh turned(TexturedMesh m, double degrees, bool mirror = false, int side = 64) {

@@ -578,9 +578,12 @@ std::vector<SurfacePoint> surface_points(const TexturedMesh& in, const Correspon
   // place within it. Each point is still uniform by area; the figure varies far less with the seed
   // (a map whose error lies on a small part of the surface: 0.7 dB between two seeds at 1,000,000
   // plain random points on WaterBottle's emissive).
+  // The picks rise with s, so the triangle under each is found by walking the cumulative areas once
+  // (the first whose sum exceeds the pick: std::upper_bound's answer).
+  size_t t = 0;
   for (size_t s = 0; s < samples && acc > 0; ++s) {
     const double pick = (double(s) + uni(rng)) / double(samples) * acc;
-    const size_t t = size_t(std::upper_bound(cdf.begin(), cdf.end(), pick) - cdf.begin());
+    while (t < cdf.size() && !(pick < cdf[t])) ++t;
     double r1 = uni(rng), r2 = uni(rng);
     if (r1 + r2 > 1) r1 = 1 - r1, r2 = 1 - r2;
     if (t < in.num_triangles()) points.push_back({uint32_t(t), {1 - r1 - r2, r1, r2}});
@@ -801,21 +804,64 @@ double surface_psnr(const TexturedMesh& in, const TexturedMesh& out, size_t psnr
   return measure_surface_psnr(in, out, c, surface_points(in, c, psnr_samples)).first;
 }
 
+/// Where a sample point lies in the output, as a SurfacePsnrOfImages keeps it: the matched triangle
+/// (kNone if lost), the point's barycentrics in its input triangle's corner order and each of those
+/// corners' corner in the output triangle. 32 bytes, so that a million of them come from the heap that
+/// keep_freed_memory_for_reuse (run/process_tuning.hpp) keeps; larger blocks are mapped, and zeroed by
+/// the kernel, anew at each judge. Trivial, so that it can be allocated uninitialised.
+struct KeptOutputPoint {
+  uint32_t o;
+  std::array<uint8_t, 3> corner;
+  double b[3];
+};
+static_assert(sizeof(KeptOutputPoint) == 32);
+
+/// What every call of a SurfacePsnrOfImages reads: per sample point the input's shown colour and where
+/// it lies in the output, which the images do not change; a call samples the output's images alone.
+/// Allocated uninitialised and first written on every core: the kernel's zeroing of the new pages,
+/// as costly as the rest of the construction on a million points, is shared out too.
 struct SurfacePsnrOfImages::Points {
-  Correspondence match;
-  std::vector<SurfacePoint> points;
+  size_t size = 0;
+  std::unique_ptr<std::array<double, 3>[]> input_colour;
+  std::unique_ptr<KeptOutputPoint[]> where;
 };
 
 SurfacePsnrOfImages::SurfacePsnrOfImages(const TexturedMesh& input, const TexturedMesh& output, size_t psnr_samples)
-    : input_(input), points_(std::make_unique<Points>()) {
-  points_->match = match_triangles(input, output);
-  points_->points = surface_points(input, points_->match, psnr_samples);
+    : points_(std::make_unique<Points>()) {
+  const Correspondence match = match_triangles(input, output);
+  const std::vector<SurfacePoint> points = surface_points(input, match, psnr_samples);
+  points_->size = points.size();
+  points_->input_colour = std::make_unique_for_overwrite<std::array<double, 3>[]>(points.size());
+  points_->where = std::make_unique_for_overwrite<KeptOutputPoint[]>(points.size());
+  tbb::parallel_for(size_t(0), points.size(), [&](size_t i) {
+    const SurfacePoint& p = points[i];
+    points_->input_colour[i] = shown_colour(input, p.t, input_uv(input, p), p.b);
+    KeptOutputPoint& q = points_->where[i];
+    q.o = match.match[p.t];
+    for (size_t k = 0; k < 3; ++k) q.corner[k] = uint8_t(match.corner_map[p.t][k]), q.b[k] = p.b[k];
+  });
 }
 
 SurfacePsnrOfImages::~SurfacePsnrOfImages() = default;
 
 double SurfacePsnrOfImages::operator()(const TexturedMesh& output) const {
-  return measure_surface_psnr(input_, output, points_->match, points_->points).first;
+  // measure_surface_psnr's sum, term by term (output_point's sums in its order), with what the images
+  // do not change read from points_.
+  const std::array<double, 3>* in = points_->input_colour.get();
+  const double se = deterministic_sum(points_->size, [&](size_t i) {
+    const KeptOutputPoint& kept = points_->where[i];
+    std::array<double, 3> co{0, 0, 0};
+    if (kept.o != kNone) {
+      OutputPoint q;
+      q.o = kept.o;
+      for (size_t k = 0; k < 3; ++k) q.b[kept.corner[k]] = kept.b[k], q.uv += kept.b[k] * output.sampled_uv(q.o, kept.corner[k]);
+      co = shown_colour(output, q.o, q.uv, q.b);
+    }
+    double sum = 0;
+    for (size_t k = 0; k < 3; ++k) sum += (in[i][k] - co[k]) * (in[i][k] - co[k]);
+    return sum;
+  });
+  return psnr_of(se, 3.0 * double(points_->size));
 }
 
 nlohmann::json to_json(const Metrics& m) {

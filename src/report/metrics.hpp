@@ -91,8 +91,9 @@ Metrics measure(const TexturedMesh& input, const TexturedMesh& output, const Wel
 double surface_psnr(const TexturedMesh& input, const TexturedMesh& output, size_t psnr_samples = kPsnrPoints);
 
 /// surface_psnr of one input against outputs that differ from `output` in their images alone (the same
-/// triangles and texture coordinates; other sizes allowed): the correspondence and the points are made
-/// once, for a caller that tries many encodings or sizes of the same layout.
+/// triangles and texture coordinates; other sizes allowed): the points, the input's colour at each and
+/// where each falls in the output are found once, so a call reads only the output's images, for a
+/// caller that tries many encodings or sizes of the same layout.
 class SurfacePsnrOfImages {
  public:
   SurfacePsnrOfImages(const TexturedMesh& input, const TexturedMesh& output, size_t psnr_samples = kPsnrPoints);
@@ -101,7 +102,6 @@ class SurfacePsnrOfImages {
 
  private:
   struct Points;
-  const TexturedMesh& input_;
   std::unique_ptr<Points> points_;
 };
 
