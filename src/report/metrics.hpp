@@ -110,6 +110,13 @@ class SurfacePsnrOfImages {
   std::unique_ptr<Points> points_;
 };
 
+/// The judges a search of encodings asks: one at a tenth of the report's points for its steps, one at
+/// the report's points for its answer (null where not made). Shared, so that a search of another bake
+/// of the same triangles asks them again instead of making its own.
+struct PsnrJudges {
+  std::shared_ptr<const SurfacePsnrOfImages> few, all;
+};
+
 /// The figures of every map slot that both models bind (MaterialMapFigures), at the surface PSNR's points.
 std::vector<MaterialMapFigures> measure_material_maps(const TexturedMesh& input, const TexturedMesh& output, size_t samples = kPsnrPoints);
 

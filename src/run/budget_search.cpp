@@ -375,7 +375,9 @@ BudgetSearchResult search_texels_and_quality(const BudgetSearchRequest& request,
   const std::vector<char> colour = colour_textures(output);
   const std::vector<std::vector<uint8_t>> inside = chart_texels(output, baked);
   BudgetSearchResult r;
-  const SurfacePsnrOfImages few(input, output, kProbePoints);
+  r.judges = request.judges;
+  if (!r.judges.few) r.judges.few = std::make_shared<const SurfacePsnrOfImages>(input, output, kProbePoints);
+  const SurfacePsnrOfImages& few = *r.judges.few;
   const auto [model, choice] = fit_and_choose(ProbeContext{request, few, baked, colour, inside, encoding}, output, r.probes);
   const auto half = std::find_if(model.scales.begin(), model.scales.end(), [](double x) { return std::abs(x - 0.5) < 1e-9; });
   if (half != model.scales.end() && model.shrink_mse[0] > 0)
@@ -391,7 +393,8 @@ BudgetSearchResult search_texels_and_quality(const BudgetSearchRequest& request,
     r.reason = fmt::format("texels and quality chosen together for {}: the model's {:.2f} of the side at quality {}", asked, r.scale, q);
     return r;
   }
-  const SurfacePsnrOfImages judge(input, output, kPsnrPoints);
+  if (!r.judges.all) r.judges.all = std::make_shared<const SurfacePsnrOfImages>(input, output, kPsnrPoints);
+  const SurfacePsnrOfImages& judge = *r.judges.all;
   std::optional<Written> best;
   Written closest;
   for (;;) {

@@ -24,6 +24,8 @@ struct BudgetSearchRequest {
   /// false: a scale below 1 is returned as the model chose it, unchecked and without images (the caller
   /// plans and bakes at that budget again and chooses its quality there).
   bool check_shrunk = true;
+  /// Judges made for this output (another codec's search), asked instead of new ones. Null: made here.
+  PsnrJudges judges;
   /// Told the fraction of the search done; may throw Cancelled. Empty: none.
   std::function<void(double)> progress;
 };
@@ -46,6 +48,7 @@ struct BudgetSearchResult {
   /// side over its error at the full side (measured unencoded; 2 where it is not measured). A target the
   /// full side does not reach takes this to tell how many more texels may reach it.
   double bake_error_exponent = 2;
+  PsnrJudges judges;  // those the search made (`all` null where it checked nothing)
 };
 
 /// An encoder (ImageEncoder) per texture image of a model, for encoding them all at several settings:

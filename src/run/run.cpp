@@ -82,7 +82,8 @@ BytesRequest bytes_request(const Options& o) {
   e.jpeg_quality = o.jpeg_quality.value_or(kDefaultJpegQuality);
   e.webp_quality = o.webp_quality.value_or(kDefaultWebpQuality);
   e.webp_lossless = o.webp_lossless;
-  return {o.texture_format, e, o.jpeg_quality.has_value() || o.webp_quality.has_value(), o.target_psnr_db, o.max_bytes, 0, 0, {}, {}, {}};
+  return {
+      o.texture_format, e, o.jpeg_quality.has_value() || o.webp_quality.has_value(), o.target_psnr_db, o.max_bytes, 0, 0, {}, {}, {}, {}};
 }
 
 /// The model's geometry (no pixels) with its textures' sizes from their headers, checked against the
@@ -239,6 +240,11 @@ EncodingChoice choose_images(const Options& options, const Options& method, cons
   alone.format = choice.encoding.format;
   alone.quality_hint = choice.encoding.format == ImageFormat::kJpeg ? choice.encoding.jpeg_quality : choice.encoding.webp_quality;
   alone.codec_mse_by_quality = choice.codec_mse_by_quality;
+  // The same charts baked again: the same triangles, corners and vertices, so the first search's
+  // judges find every point where they did (they read the texture coordinates at each call).
+  if (same_charts && rebaked.output.triangles == result.output.triangles && rebaked.output.positions == result.output.positions &&
+      rebaked.output.face_material == result.output.face_material)
+    alone.judges = choice.judges;
   alone.progress = [&](double f) { progress("encode", 0.8 + 0.2 * f); };
   EncodingChoice c = choose_encoding(alone, input, sources, rebaked.output);
   const auto bytes = [](const EncodingChoice& e) { return std::accumulate(e.bytes.begin(), e.bytes.end(), uint64_t(0)); };

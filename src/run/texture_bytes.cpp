@@ -201,7 +201,9 @@ std::string pick_quality(const BytesRequest& request, const TexturedMesh& input,
   if (request.target_psnr_db > 0) {
     // The search at a tenth of the report's points, then the report's own points, a quality up at a
     // time where the few erred.
-    const SurfacePsnrOfImages few(input, output, kPsnrPoints / 10), judge(input, output);
+    std::optional<SurfacePsnrOfImages> own_few, own_judge;
+    const SurfacePsnrOfImages& few = request.judges.few ? *request.judges.few : own_few.emplace(input, output, kPsnrPoints / 10);
+    const SurfacePsnrOfImages& judge = request.judges.all ? *request.judges.all : own_judge.emplace(input, output);
     std::map<int, std::vector<std::string>> images;  // per quality tried, its files
     int lowest = lowest_quality_reaching(
         [&](const std::vector<int>& qualities) {
@@ -289,12 +291,14 @@ EncodingChoice search_codec_texels_and_quality(const BytesRequest& request, cons
                                                              : request.codecs;
   std::optional<BudgetSearchResult> best;
   ImageEncoding best_encoding;
+  PsnrJudges judges = request.judges;  // made by the first codec's search, asked by the next
   for (size_t k = 0; k < codecs.size(); ++k) {
     ImageEncoding e = c.encoding;
     e.format = codecs[k], e.formats.clear();
-    BudgetSearchRequest search{request.target_psnr_db, request.max_bytes, request.new_pages, codecs.size() > 1, {}};
+    BudgetSearchRequest search{request.target_psnr_db, request.max_bytes, request.new_pages, codecs.size() > 1, judges, {}};
     if (request.progress) search.progress = [&](double f) { request.progress((double(k) + f) / double(codecs.size())); };
     BudgetSearchResult r = search_texels_and_quality(search, input, output, e);
+    judges = r.judges;
     if (!best || answers_better(request.target_psnr_db, request.max_bytes, total(r.images), r.written_psnr_db, total(best->images),
                                 best->written_psnr_db))
       best = std::move(r), best_encoding = e;
@@ -313,6 +317,7 @@ EncodingChoice search_codec_texels_and_quality(const BytesRequest& request, cons
   c.texel_scale = best->scale;
   c.codec_mse_by_quality = std::move(best->codec_mse_by_quality);
   c.bake_error_exponent = best->bake_error_exponent;
+  c.judges = std::move(best->judges);
   return c;
 }
 

@@ -33,6 +33,9 @@ struct BytesRequest {
   /// search's model); rate control then starts where it and the images' own error, measured, meet the
   /// target, instead of at quality_hint. Empty: none.
   std::vector<double> codec_mse_by_quality;
+  /// --target-psnr: judges made for an output with the same triangles, corners and vertices as this
+  /// one (another bake of the same charts), asked instead of new ones. Null: made here.
+  PsnrJudges judges;
   /// Without --format, the lossy codecs that search may choose from (those the output format reads
   /// everywhere).
   std::vector<ImageFormat> codecs;
@@ -53,6 +56,7 @@ struct EncodingChoice {
   double texel_scale = 1;                    // the texel search's scale of the baked images' side (1: as baked)
   std::vector<double> codec_mse_by_quality;  // the texel search's, where its images come back unchecked
   double bake_error_exponent = 2;            // the texel search's (BudgetSearchResult)
+  PsnrJudges judges;                         // the texel search's
 };
 
 /// Whether images of `bytes_a` bytes at `psnr_a` dB answer --target-psnr (`target_psnr_db` > 0) or else
