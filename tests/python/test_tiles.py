@@ -49,12 +49,12 @@ def no_temporaries(root):
 
 
 def test_folder_bad_tile_and_rerun(tightex, tmp_path):
-    tile_folder(tmp_path / "in", small=36)  # 41 tiles
+    tile_folder(tmp_path / "in", small=12)  # 17 tiles
     rc, err = run_tiles(tmp_path / "in", tmp_path / "out", "--workers", "2", "--size", "128")
     assert rc == 1, err
     with open(tmp_path / "out" / "summary.json") as f:
         summary = json.load(f)
-    assert (summary["done"], summary["passed_through"], summary["failed"], summary["workers"]) == (39, 1, 1, 2)
+    assert (summary["done"], summary["passed_through"], summary["failed"], summary["workers"]) == (15, 1, 1, 2)
     records = {r["tile"]: r for r in summary["per_tile"]}
     for tile, record in records.items():
         if tile not in ("b/bad.obj", "b/plain.obj"):
@@ -69,7 +69,7 @@ def test_folder_bad_tile_and_rerun(tightex, tmp_path):
     assert bad["status"] == "failed" and bad["error"].startswith("InputError: ") and "bad.obj:" in bad["error"]
     assert "\n" not in bad["error"] and "b/bad.obj: InputError" in err
     with open(tmp_path / "out" / "summary.csv") as f:
-        assert len(f.read().splitlines()) == 42
+        assert len(f.read().splitlines()) == 18
     assert not no_temporaries(tmp_path / "out")
     assert not [n for d, _, files in os.walk(tmp_path / "out") for n in files if n == "report.html"], "no page per tile without --html"
 
@@ -79,11 +79,11 @@ def test_folder_bad_tile_and_rerun(tightex, tmp_path):
     assert rc == 1 and "0 to do" in err, err
     with open(tmp_path / "out" / "summary.json") as f:
         again = json.load(f)
-    assert (again["skipped"], again["passed_through"], again["failed"], again["workers"]) == (39, 1, 1, 0)
+    assert (again["skipped"], again["passed_through"], again["failed"], again["workers"]) == (15, 1, 1, 0)
     assert all(os.stat(records[t]["content"]).st_mtime_ns == m for t, m in mtimes.items())
     # Changed options redo the tiles.
     rc, err = run_tiles(tmp_path / "in", tmp_path / "out", "--workers", "2", "--size", "64")
-    assert rc == 1 and "41 to do" in err, err
+    assert rc == 1 and "17 to do" in err, err
 
 
 def write_tileset(root, tileset):
@@ -135,7 +135,7 @@ def test_tileset_rewritten_to_new_content(tightex, tmp_path):
 
 
 def test_glb_and_b3dm_tileset(tightex, tmp_path):
-    """A 3D Tiles set of 40 tiles: 1.0 b3dm (feature and batch tables, _BATCHID per vertex) and 1.1 GLB
+    """A 3D Tiles set of 14 tiles: 1.0 b3dm (feature and batch tables, _BATCHID per vertex) and 1.1 GLB
     content, one corrupt GLB. Every good tile comes out optimized in its own kind, the b3dm tables byte
     for byte, every vertex still in its batch."""
     from tightex.b3dm import B3dm, build_b3dm, parse_b3dm
@@ -143,7 +143,7 @@ def test_glb_and_b3dm_tileset(tightex, tmp_path):
     (root / "tiles").mkdir(parents=True)
     box = {"box": [0, 0, 0, 100, 0, 0, 0, 100, 0, 0, 0, 10]}
     children, tables = [], {}
-    for i in range(39):
+    for i in range(13):
         obj = make_boxes(tmp_path / "src" / f"t{i}", 3 + i % 9, 200 + i)
         tightex.optimize(obj, tmp_path / "glb" / f"t{i}", model_format="glb", size=64, html=False)
         glb = glb_with_batch_ids((tmp_path / "glb" / f"t{i}" / "boxes.glb").read_bytes(), 5)
@@ -162,7 +162,7 @@ def test_glb_and_b3dm_tileset(tightex, tmp_path):
     assert rc == 1, err
     with open(out / "summary.json") as f:
         summary = json.load(f)
-    assert (summary["done"], summary["failed"]) == (39, 1), err
+    assert (summary["done"], summary["failed"]) == (13, 1), err
     for record in summary["per_tile"]:
         if record["tile"].endswith("bad.glb"):
             assert record["status"] == "failed" and "bad.glb" in record["error"] and "\n" not in record["error"]
