@@ -38,8 +38,6 @@ using testing::GridGltf;
 fs::path scratch(const std::string& name) { return testing::scratch_folder("gltf_" + name); }
 void write_file(const fs::path& p, const std::string& bytes) { testing::write_whole(p, bytes); }
 std::string read_file(const fs::path& p) { return testing::read_whole(p); }
-int run_cli(const std::string& args) { return testing::run_tightex(args); }
-
 double linear_to_srgb(double c) { return c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055; }
 
 /// The grid written as a GLB into `dir`.
@@ -606,7 +604,7 @@ TEST(GltfValidator, WrittenFilesHaveNoErrorNorWarningAndLoadInThree) {
 /// The CLI on `input` (glTF out by default): its report, after checking lost 0, flipped 0 and one chart
 /// per component, and the written file in the validator.
 json run_and_check(const fs::path& input, const fs::path& out, const std::string& options = "") {
-  const int rc = run_cli("'" + input.string() + "' -o '" + out.string() + "' --quiet " + options);
+  const int rc = testing::run_tightex("'" + input.string() + "' -o '" + out.string() + "' --quiet " + options);
   EXPECT_EQ(rc, 0);
   const json report = json::parse(read_file(out / "report.json"));
   EXPECT_EQ(report["metrics"]["lost_triangles"], 0);
@@ -654,8 +652,9 @@ TEST(GltfCli, AnObjScanConvertedToGlbGoesThrough) {
   EXPECT_EQ(report["input"]["triangles"], scan.num_triangles());
   expect_valid_and_loading(dir / "out" / "fuze.glb", scan.num_triangles());
   // And --output-format obj from a glTF input: an OBJ beside nothing else.
-  EXPECT_EQ(
-      run_cli("'" + (dir / "in" / "fuze.glb").string() + "' -o '" + (dir / "obj").string() + "' --quiet --size 64 --output-format obj"), 0);
+  EXPECT_EQ(testing::run_tightex("'" + (dir / "in" / "fuze.glb").string() + "' -o '" + (dir / "obj").string() +
+                                 "' --quiet --size 64 --output-format obj"),
+            0);
   EXPECT_TRUE(fs::exists(dir / "obj" / "fuze.obj"));
 }
 
@@ -683,7 +682,9 @@ TEST(GltfCli, RefusesHostileFilesWithExitOneAndNothingWritten) {
     const fs::path input = dir / "in.glb", out = dir / "out", err = dir / "err.txt";
     write_file(input, bytes);
     fs::remove_all(out);
-    EXPECT_EQ(run_cli("'" + input.string() + "' -o '" + out.string() + "' --quiet --max-memory 4096 2> '" + err.string() + "'"), 1) << name;
+    EXPECT_EQ(
+        testing::run_tightex("'" + input.string() + "' -o '" + out.string() + "' --quiet --max-memory 4096 2> '" + err.string() + "'"), 1)
+        << name;
     const std::string message = read_file(err);
     EXPECT_EQ(std::count(message.begin(), message.end(), '\n'), 1) << name << ": " << message;
     EXPECT_NE(message.find(input.string()), std::string::npos) << name << ": " << message;

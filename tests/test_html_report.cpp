@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "command_line.hpp"
 #include "mesh_catalogue.hpp"
 #include "report/html_report.hpp"
 #include "report/metrics.hpp"
@@ -239,11 +240,6 @@ TEST(HtmlReport, PageHoldsEverythingAndNoMarker) {
   }
 }
 
-int run_cli(const std::string& args) {
-  const int status = std::system((std::string(TIGHTEX_CLI) + " " + args).c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
 std::string contents(const fs::path& path) {
   std::ifstream f(path, std::ios::binary);
   return std::string((std::istreambuf_iterator<char>(f)), {});
@@ -254,8 +250,8 @@ TEST(HtmlReport, CommandLineWritesThePageUnlessToldNotTo) {
   fs::remove_all(dir);
   write_obj(sphere_with_holes(), (dir / "in").string(), "holey", ImageFormat::kPng);
   const std::string in = "'" + (dir / "in" / "holey.obj").string() + "' --size 128";
-  ASSERT_EQ(run_cli(in + " -o '" + (dir / "page").string() + "' > '" + (dir / "stdout.txt").string() + "'"), 0);
-  ASSERT_EQ(run_cli(in + " -o '" + (dir / "plain").string() + "' --no-html --quiet"), 0);
+  ASSERT_EQ(testing::run_tightex(in + " -o '" + (dir / "page").string() + "' > '" + (dir / "stdout.txt").string() + "'"), 0);
+  ASSERT_EQ(testing::run_tightex(in + " -o '" + (dir / "plain").string() + "' --no-html --quiet"), 0);
 
   EXPECT_TRUE(fs::exists(dir / "page" / "report.html"));
   EXPECT_FALSE(fs::exists(dir / "plain" / "report.html"));

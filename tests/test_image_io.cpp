@@ -558,7 +558,7 @@ TEST(PngOnePass, EveryFilterOfEveryCommonKindDecodesAsLibspng) {
     const Bytes samples = mixed_samples(width, height, channels);
     for (int choice : {int(SPNG_DISABLE_FILTERING), int(SPNG_FILTER_CHOICE_SUB), int(SPNG_FILTER_CHOICE_UP), int(SPNG_FILTER_CHOICE_AVG),
                        int(SPNG_FILTER_CHOICE_PAETH), int(SPNG_FILTER_CHOICE_ALL)}) {
-      SCOPED_TRACE(testing::Message() << "colour type " << colour_type << ", filter choice " << choice);
+      SCOPED_TRACE(::testing::Message() << "colour type " << colour_type << ", filter choice " << choice);
       const Bytes png =
           encode_png(make_ihdr(width, height, 8, uint8_t(colour_type)), samples.data(), samples.size(), nullptr, nullptr, choice);
       const Bytes raw = png_raw_rows(png, size_t(height) * (1 + size_t(width) * size_t(channels)));

@@ -16,6 +16,7 @@
 #include <set>
 #include <string>
 
+#include "command_line.hpp"
 #include "core/error.hpp"
 #include "io/output_files.hpp"
 #include "mesh_catalogue.hpp"
@@ -68,12 +69,6 @@ std::set<std::string> files_in(const fs::path& dir) {
   std::set<std::string> names;
   for (const auto& e : fs::directory_iterator(dir)) names.insert(e.path().filename().string());
   return names;
-}
-
-/// Runs the tightex command line; returns its exit code (-1 if it did not exit).
-int run_cli(const std::string& args) {
-  const int status = std::system((std::string(TIGHTEX_CLI) + " " + args).c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
 class PlyWriterTest : public ::testing::Test {
@@ -150,7 +145,7 @@ TEST_F(PlyWriterTest, AFolderThatCannotBeMadeIsAnInputError) {
 
 /// The docs/metrics.md figures of `tightex measure IN OUT`, as JSON.
 nlohmann::json measure_cli(const fs::path& in, const fs::path& out, const fs::path& json) {
-  EXPECT_EQ(run_cli("measure '" + in.string() + "' '" + out.string() + "' --samples 20000 > '" + json.string() + "'"), 0);
+  EXPECT_EQ(testing::run_tightex("measure '" + in.string() + "' '" + out.string() + "' --samples 20000 > '" + json.string() + "'"), 0);
   std::ifstream f(json);
   return nlohmann::json::parse(f);
 }
@@ -162,7 +157,7 @@ TEST_F(PlyWriterTest, CommandLineWritesTheInputsKindOrTheOneAskedFor) {
   const std::string common = " --size 128 --quiet";
 
   // Default: a PLY in gives a PLY out, which read_ply reads and which measures clean.
-  ASSERT_EQ(run_cli("'" + in.string() + "' -o '" + (dir_ / "out").string() + "'" + common), 0);
+  ASSERT_EQ(testing::run_tightex("'" + in.string() + "' -o '" + (dir_ / "out").string() + "'" + common), 0);
   EXPECT_TRUE(fs::exists(dir_ / "out" / "multi.ply"));
   EXPECT_FALSE(fs::exists(dir_ / "out" / "multi.obj"));
   EXPECT_FALSE(fs::exists(dir_ / "out" / "multi.mtl"));
@@ -178,7 +173,7 @@ TEST_F(PlyWriterTest, CommandLineWritesTheInputsKindOrTheOneAskedFor) {
   EXPECT_EQ(report["preparation"]["components"], 4);
 
   // --output-format obj: an OBJ from the same PLY.
-  ASSERT_EQ(run_cli("'" + in.string() + "' -o '" + (dir_ / "obj").string() + "' --output-format obj" + common), 0);
+  ASSERT_EQ(testing::run_tightex("'" + in.string() + "' -o '" + (dir_ / "obj").string() + "' --output-format obj" + common), 0);
   EXPECT_FALSE(fs::exists(dir_ / "obj" / "multi.ply"));
   const Metrics obj_metrics = measure(read_ply(in.string()), read_obj((dir_ / "obj" / "multi.obj").string()), 20000);
   EXPECT_EQ(obj_metrics.lost_triangles, 0u);
@@ -190,7 +185,8 @@ TEST_F(PlyWriterTest, CommandLineRefusesToWriteOverAPlyInput) {
   write_ply(two_texture_mesh(false), (dir_ / "in").string(), "multi", ImageFormat::kPng);
   const fs::path in = dir_ / "in" / "multi.ply";
   const fs::path err = dir_ / "stderr.txt";
-  EXPECT_EQ(run_cli("'" + in.string() + "' -o '" + (dir_ / "in").string() + "' --size 64 --quiet 2> '" + err.string() + "'"), 1);
+  EXPECT_EQ(testing::run_tightex("'" + in.string() + "' -o '" + (dir_ / "in").string() + "' --size 64 --quiet 2> '" + err.string() + "'"),
+            1);
   std::ifstream f(err);
   const std::string message((std::istreambuf_iterator<char>(f)), {});
   EXPECT_NE(message.find("multi.ply would replace the input"), std::string::npos) << message;

@@ -30,7 +30,7 @@ fs::path sphere_obj(const fs::path& dir) {
 }
 
 /// The files a run writes into `dir` (none where it does not exist), by name.
-std::vector<std::string> files_in(const fs::path& dir) {
+std::vector<std::string> sorted_files_in(const fs::path& dir) {
   std::vector<std::string> names;
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(dir, ec)) names.push_back(e.path().filename().string());
@@ -50,11 +50,11 @@ TEST(RunLibrary, LastProgressEventComesAfterEveryFileIsInPlace) {
   Options options;
   options.size = 128;
   options.progress = [&](std::string_view stage, double fraction) {
-    events.push_back({std::string(stage), fraction, files_in(out).size()});
+    events.push_back({std::string(stage), fraction, sorted_files_in(out).size()});
     return true;
   };
   const Report report = run(in.string(), out.string(), options);
-  const std::vector<std::string> written = files_in(out);
+  const std::vector<std::string> written = sorted_files_in(out);
   // The model, its material, its texture, report.json and report.html.
   ASSERT_EQ(written.size(), 5u);
   ASSERT_FALSE(events.empty());
@@ -102,7 +102,7 @@ void expect_cancel_leaves_nothing(const std::string& stage, double from, const s
   };
   EXPECT_THROW(run(in.string(), out.string(), options), Cancelled);
   EXPECT_TRUE(asked);
-  EXPECT_EQ(files_in(out), std::vector<std::string>{});
+  EXPECT_EQ(sorted_files_in(out), std::vector<std::string>{});
 }
 
 TEST(RunLibrary, CancelAtALateStageLeavesNoFile) {
@@ -123,8 +123,8 @@ TEST(RunLibrary, LibraryAndCommandWriteTheSameBytes) {
   Options options;
   options.size = 96;
   run(in.string(), (dir / "library").string(), options);
-  const std::vector<std::string> names = files_in(dir / "command");
-  EXPECT_EQ(files_in(dir / "library").size(), names.size());
+  const std::vector<std::string> names = sorted_files_in(dir / "command");
+  EXPECT_EQ(sorted_files_in(dir / "library").size(), names.size());
   size_t compared = 0;
   for (const std::string& name : names) {
     if (name == "report.json" || name == "report.html") continue;  // their times differ

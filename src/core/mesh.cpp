@@ -146,6 +146,11 @@ double input_detail(const TexturedMesh& mesh, size_t t) {
   return std::isfinite(detail) ? detail : 0.0;
 }
 
+int texture_of(const TexturedMesh& m, size_t t) {
+  const int32_t mat = m.face_material[t];
+  return mat >= 0 && size_t(mat) < m.materials.size() ? m.materials[size_t(mat)].texture : -1;
+}
+
 const Image* image_of(const TexturedMesh& m, size_t t) {
   const int32_t mat = m.face_material[t];
   if (mat < 0) return nullptr;

@@ -28,6 +28,9 @@ double input_texel_area(const TexturedMesh& mesh, size_t t);
 /// signal-specialized parametrization).
 double input_detail(const TexturedMesh& mesh, size_t t);
 
+/// The texture triangle t samples (its material's), or -1 without a material or texture.
+int texture_of(const TexturedMesh& m, size_t t);
+
 /// The loaded texture image triangle t samples; nullptr without a material, texture or pixels.
 const Image* image_of(const TexturedMesh& m, size_t t);
 

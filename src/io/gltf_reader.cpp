@@ -42,8 +42,6 @@ constexpr uint32_t kGlbMagic = 0x46546C67, kChunkJson = 0x4E4F534A, kChunkBin = 
 // Corners the primitives may read per byte of the model file and the files it names (a triangle strip
 // with byte indices reaches 3), and beyond that budget a fixed allowance for tiny files.
 constexpr uint64_t kCornersPerInputByte = 4, kCornerSlack = uint64_t(1) << 20;
-// As the OBJ reader: beyond this a coordinate is an exporter bug, and squaring it would overflow.
-constexpr double kAbsurdCoordinate = 1e15;
 
 uint32_t le32(const char* p) {
   uint32_t v;

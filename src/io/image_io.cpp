@@ -178,24 +178,24 @@ std::vector<unsigned char> read_whole_file(const std::string& path) {
 
 // An output file that is removed again unless commit() succeeds, so a failed save leaves no truncated
 // image behind that a later step could mistake for a good one.
-class OutputFile {
+class ImageFileBeingWritten {
  public:
-  explicit OutputFile(const std::string& path) : path_(path), file_(std::fopen(path.c_str(), "wb")) {
+  explicit ImageFileBeingWritten(const std::string& path) : path_(path), file_(std::fopen(path.c_str(), "wb")) {
     if (file_ == nullptr) fail_input("{}: cannot open for writing ({})", path, errno_message(errno));
     struct stat info {};
     // Only a regular file we created may be deleted on failure (never a device such as /dev/null).
     is_regular_ = ::fstat(::fileno(file_), &info) == 0 && S_ISREG(info.st_mode);
   }
-  ~OutputFile() {
+  ~ImageFileBeingWritten() {
     if (file_ != nullptr) {
       std::fclose(file_);
       discard();
     }
   }
   /// A stream opened by the caller (a memory stream, `name` for messages): never removed.
-  OutputFile(std::FILE* stream, const std::string& name) : path_(name), file_(stream) {}
-  OutputFile(const OutputFile&) = delete;
-  OutputFile& operator=(const OutputFile&) = delete;
+  ImageFileBeingWritten(std::FILE* stream, const std::string& name) : path_(name), file_(stream) {}
+  ImageFileBeingWritten(const ImageFileBeingWritten&) = delete;
+  ImageFileBeingWritten& operator=(const ImageFileBeingWritten&) = delete;
 
   std::FILE* get() const { return file_; }
 
@@ -290,7 +290,7 @@ PngSettings png_settings(int png_level) {
   return {png_level, Z_DEFAULT_STRATEGY, PngRowFilter::kAdaptive};
 }
 
-void save_png(OutputFile& out, const Image& image, int png_level) {
+void save_png(ImageFileBeingWritten& out, const Image& image, int png_level) {
   if (image.width <= 0 || image.height <= 0) out.fail(fmt::format("a PNG needs pixels ({}x{})", image.width, image.height));
   const std::string bytes = encode_png(image, png_settings(png_level));
   if (std::fwrite(bytes.data(), 1, bytes.size(), out.get()) != bytes.size()) out.fail("fwrite");
@@ -504,7 +504,7 @@ bool jpeg_encode_guarded(JpegEncoder& e, std::FILE* file, const Image& image, in
   return true;
 }
 
-void save_jpeg(OutputFile& out, const Image& image, int quality) {
+void save_jpeg(ImageFileBeingWritten& out, const Image& image, int quality) {
   // libjpeg's format limit (JPEG_MAX_DIMENSION); checked here to give a clear message.
   constexpr int kMaxJpegSide = 65500;
   if (image.width > kMaxJpegSide || image.height > kMaxJpegSide) {
@@ -895,7 +895,7 @@ std::string ImageEncoder::encode(const ImageEncoding& encoding) const {
   std::FILE* stream = open_memstream(&buffer, &size);
   if (stream == nullptr) throw std::bad_alloc();
   {
-    OutputFile out(stream, name_);
+    ImageFileBeingWritten out(stream, name_);
     save_png(out, image_, encoding.png_level);
     out.commit();
   }
@@ -913,7 +913,7 @@ void save_image(const std::string& path, const Image& image, const ImageEncoding
     fail_internal("{}: cannot save a {}x{} image with {} pixels", path, image.width, image.height, image.pixels.size());
   }
   check_image_encoding(encoding, path);
-  OutputFile out(path);
+  ImageFileBeingWritten out(path);
   switch (encoding.format) {
     case ImageFormat::kPng:
       save_png(out, image, encoding.png_level);

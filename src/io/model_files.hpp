@@ -12,6 +12,14 @@
 
 namespace tightex {
 
+/// Beyond this a coordinate is an exporter bug (uninitialised memory, a unit mistake of many orders of
+/// magnitude), and squaring it in any later area or length computation would overflow or lose all
+/// precision: every reader refuses it.
+constexpr double kAbsurdCoordinate = 1e15;
+
+/// The blanks that separate words in OBJ, MTL and PLY header text.
+constexpr bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
+
 /// Input text quoted in a message: at most 60 characters, unprintable ones as '?', so a binary file
 /// handed in as a model cannot turn an error into a screenful of garbage or break the one-line message.
 std::string excerpt(std::string_view s);

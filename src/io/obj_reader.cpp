@@ -36,13 +36,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Beyond this a coordinate is an exporter bug (uninitialised memory, a unit mistake of many orders of
-// magnitude), and squaring it in any later area or length computation would overflow or lose all
-// precision.
-constexpr double kAbsurdCoordinate = 1e15;
-
-bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
-
 std::string_view trim(std::string_view s) {
   while (!s.empty() && is_blank(s.front())) s.remove_prefix(1);
   while (!s.empty() && is_blank(s.back())) s.remove_suffix(1);

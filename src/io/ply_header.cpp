@@ -39,8 +39,6 @@ constexpr std::array<TypeName, 16> kTypeNames{{{"char", PlyType::kInt8},
                                                {"float32", PlyType::kFloat32},
                                                {"float64", PlyType::kFloat64}}};
 
-bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
-
 /// Blank-separated words of one header line.
 class Words {
  public:

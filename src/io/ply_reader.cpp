@@ -29,8 +29,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// As the OBJ reader: beyond this a coordinate is an exporter bug, and squaring it would overflow.
-constexpr double kAbsurdCoordinate = 1e15;
 // Corners of one polygon: more than any scan's faces, few enough that a lying list size cannot make
 // the scratch arrays large.
 constexpr size_t kMaxCorners = 1024;

@@ -60,12 +60,6 @@ std::string base64_array(const std::vector<T>& values) {
   return base64(values.data(), values.size() * sizeof(T));
 }
 
-/// The texture triangle t samples, or -1.
-int texture_of(const TexturedMesh& mesh, size_t t) {
-  const int32_t m = mesh.face_material[t];
-  return m >= 0 && size_t(m) < mesh.materials.size() ? mesh.materials[size_t(m)].texture : -1;
-}
-
 /// Per triangle, bit k set where edge k (corner k to corner k+1) is a seam as docs/metrics.md counts charts:
 /// the texture coordinates (or the texture) differ on its two sides, or it has not exactly one
 /// neighbour across it (a border, or a non-manifold edge).

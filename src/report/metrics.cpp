@@ -32,11 +32,6 @@ namespace tightex {
 
 namespace {
 
-int texture_of(const TexturedMesh& m, size_t t) {
-  const int32_t mat = m.face_material[t];
-  return mat < 0 ? -1 : m.materials[size_t(mat)].texture;
-}
-
 /// Calls f(x, y) for every texel centre inside the UV triangle (edges included), in texel indices of a
 /// W x H image before wrapping.
 template <typename F>

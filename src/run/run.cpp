@@ -38,11 +38,6 @@ namespace tightex {
 
 namespace {
 
-/// Seconds from t0 to now.
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
 /// Throws InputError naming the option (as the CLI spells it) unless `value` is in [lo, hi].
 template <typename T>
 void check_range(T value, T lo, T hi, const char* option) {

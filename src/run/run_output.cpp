@@ -47,11 +47,6 @@ void write_texts_atomically(const std::vector<std::pair<fs::path, std::string>>&
   }
 }
 
-/// Seconds from t0 to now.
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
 /// Writes the output model in the target's format. Returns what the writer left out: what the glTF
 /// writer removed, or the map slots OBJ or PLY cannot bind.
 std::vector<std::string> write_model(const ModelTarget& target, const TexturedMesh& output) {
@@ -90,6 +85,10 @@ HtmlReportOptions page_links(const ModelTarget& target, const TexturedMesh& inpu
 }
 
 }  // namespace
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
 
 std::string output_model_name(const std::string& input, ModelFormat format) {
   return fs::path(input).stem().string() + "." + std::string(to_string(format));

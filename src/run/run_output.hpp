@@ -2,6 +2,7 @@
 // report.html's model data side by side, the reports and the preview, each file renamed into place
 // only once written whole.
 #pragma once
+#include <chrono>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -18,6 +19,9 @@
 #include "tightex/mesh.hpp"
 
 namespace tightex {
+
+/// Seconds from t0 to now.
+double seconds_since(std::chrono::steady_clock::time_point t0);
 
 /// The output model's file name inside the output folder: the input's stem and the format's extension.
 std::string output_model_name(const std::string& input, ModelFormat format);
