@@ -6,7 +6,8 @@
 # (probes of the baked atlas, then one more bake: the same code as one run) too. Any report
 # fails the run.
 # Kept short for CI: the preset builds the library and the CLI at -O1 -g1 without the tools (the tests
-# run no slower than at -O2) and the test sources at -Og (tests/CMakeLists.txt); it measures the surface
+# run no slower than at -O2), as unity sources without UBSan's null, vptr and pointer-overflow checks
+# (CMakeLists.txt), and the test sources at -Og (tests/CMakeLists.txt); it measures the surface
 # PSNR on 100,000 points, not 1,000,000 (src/report/metrics.hpp: the same code, which took over half
 # the tests' time; the Release suite measures with 1,000,000); the real scans but fuze are left to the
 # Release suite; and the test binary runs as two processes per core (gtest shards, which deal the tests
