@@ -15,19 +15,13 @@
 #include "param/sparse_cholesky.hpp"
 #include "prepare/components.hpp"
 #include "prepare/repair.hpp"
+#include "torus_disk.hpp"
 
 namespace tightex {
 namespace {
 
 namespace cat = testing;
 namespace fs = std::filesystem;
-
-Disk torus_disk() {
-  auto g = cat::torus_geometry(96, 48);
-  const TexturedMesh mesh = cat::make_textured("torus", g.positions, g.triangles);
-  const std::vector<Surface> parts = split_components(prepare_surface(mesh, nullptr));
-  return cut_to_disk(parts.at(0), CutOptions{}, nullptr);
-}
 
 /// The largest component of the Meshroom scan cut to a disk; nullopt without ../shared/data.
 std::optional<Disk> scan_disk() {
@@ -73,7 +67,7 @@ double largest_difference(const std::vector<Vec2>& a, const std::vector<Vec2>& b
 }
 
 TEST(Multigrid, AggregatesAreNestedAndCoarsen) {
-  const Disk disk = torus_disk();
+  const Disk disk = cat::torus_disk();
   const VertexAggregates aggregates = aggregates_of(disk);
   ASSERT_GE(aggregates.levels.size(), 2u);
   size_t before = disk.mesh.num_vertices();
@@ -97,7 +91,7 @@ TEST(Multigrid, AggregatesAreNestedAndCoarsen) {
 
 // The same Tutte map as the factorisation's, up to the solve's tolerance, from a cold start.
 TEST(Multigrid, TutteMapMatchesTheFactorisationOnATorus) {
-  const Disk disk = torus_disk();
+  const Disk disk = cat::torus_disk();
   auto aggregates = std::make_shared<const VertexAggregates>(aggregates_of(disk));
   DirichletSolver direct, iterative;
   iterative.solve_iteratively(aggregates, 1e-12);
@@ -170,7 +164,7 @@ double relative_error_against_factorisation(const MultilevelSolver::Matrix& a, c
 }
 
 TEST(Multigrid, SolvesATwoCoordinateSystemAsTheFactorisationDoes) {
-  const Disk disk = torus_disk();
+  const Disk disk = cat::torus_disk();
   const TwoCoordinateSystem sys = two_coordinate_system(disk);
   const Eigen::VectorXd rhs = Eigen::VectorXd::LinSpaced(sys.a.rows(), -1.0, 1.0);
   Eigen::VectorXd x;

@@ -13,19 +13,12 @@
 #include "param/param.hpp"
 #include "prepare/components.hpp"
 #include "prepare/repair.hpp"
+#include "torus_disk.hpp"
 
 namespace tightex {
 namespace {
 
 namespace cat = testing;
-
-/// A torus of 4608 vertices cut to a disk (its boundary is the cut: two loops around it).
-Disk torus_cut_to_disk() {
-  auto g = cat::torus_geometry(96, 48);
-  const TexturedMesh mesh = cat::make_textured("torus", g.positions, g.triangles);
-  const std::vector<Surface> parts = split_components(prepare_surface(mesh, nullptr));
-  return cut_to_disk(parts.at(0), CutOptions{}, nullptr);
-}
 
 /// Targets that vary over the surface (8x between the densest and the sparsest region), as the detail
 /// map's do.
@@ -61,7 +54,7 @@ void expect_multilevel_map_like(const Disk& disk, const std::vector<Vec2>& uv, c
 }
 
 TEST(Multilevel, CoarseDiskKeepsTheBoundaryTopologyAndTargets) {
-  const Disk fine = torus_cut_to_disk();
+  const Disk fine = cat::torus_disk();
   const std::vector<double> target = varying_targets(fine.mesh);
   const CoarseDisk coarse = coarsen_disk(fine, target, 1000);
   const Surface& cm = coarse.disk.mesh;
@@ -97,7 +90,7 @@ TEST(Multilevel, CoarseDiskKeepsTheBoundaryTopologyAndTargets) {
 // for each size alone (the multilevel map's finer copies, where a coarse one's map folds, cost no
 // second coarsening).
 TEST(Multilevel, CopiesInStepsAreTheCopiesOfEachSize) {
-  const Disk fine = torus_cut_to_disk();
+  const Disk fine = cat::torus_disk();
   const std::vector<double> target = varying_targets(fine.mesh);
   const std::vector<size_t> sizes{2400, 1200, 600};
   const std::vector<CoarseDisk> steps = coarsen_disk_in_steps(fine, target, sizes);
@@ -113,7 +106,7 @@ TEST(Multilevel, CopiesInStepsAreTheCopiesOfEachSize) {
 }
 
 TEST(Multilevel, MapIsFoldFreeOnTheSquareAndNearTheFullMapsDensity) {
-  const Disk disk = torus_cut_to_disk();
+  const Disk disk = cat::torus_disk();
   SquareMapOptions options;
   options.face_target = varying_targets(disk.mesh);
   options.refine_keeps_density = false;
@@ -145,7 +138,7 @@ TEST(Multilevel, MapIsFoldFreeOnTheSquareAndNearTheFullMapsDensity) {
 // kVertexOrderFrom vertices): the map stays fold-free on the square, with the density of the map whose
 // systems CHOLMOD orders one by one, up to rounding.
 TEST(Multilevel, OneVertexOrderForEverySystemGivesTheSameMap) {
-  const Disk disk = torus_cut_to_disk();
+  const Disk disk = cat::torus_disk();
   SquareMapOptions options = multilevel_options(disk);
   options.vertex_order_from = size_t(-1);
   SquareMapStats own;
@@ -165,7 +158,7 @@ TEST(Multilevel, OneVertexOrderForEverySystemGivesTheSameMap) {
 // order, as a large disk's are), the Laplacians too (iterative_laplacians): fold-free on the square,
 // with the density of the map whose systems are factorised.
 TEST(Multilevel, IterativeFineStageGivesTheFactorisedMapsDensity) {
-  const Disk disk = torus_cut_to_disk();
+  const Disk disk = cat::torus_disk();
   SquareMapOptions options = multilevel_options(disk);
   options.refine_keeps_density = false;  // every step taken
   SquareMapStats factorised;
@@ -187,7 +180,7 @@ TEST(Multilevel, IterativeFineStageGivesTheFactorisedMapsDensity) {
 // the orders CHOLMOD finds one at a time, metis_mutex): four multilevel maps at once, on every core,
 // each the map it is alone, bit for bit.
 TEST(Multilevel, MapsMadeSideBySideAreTheMapsMadeAlone) {
-  const Disk disk = torus_cut_to_disk();
+  const Disk disk = cat::torus_disk();
   SquareMapOptions options = multilevel_options(disk);
   options.supernodal_from = 0;  // every system supernodal, as a large piece's are
   options.refine_keeps_density = false;
