@@ -616,16 +616,32 @@ struct OutputPoint {
   Vec2 uv{0, 0};
 };
 
-OutputPoint output_point(const TexturedMesh& out, const Correspondence& c, const SurfacePoint& p) {
+/// The point at barycentrics b (in its input triangle's corner order) of output triangle o (kNone: lost),
+/// whose corner corner[k] is input corner k.
+template <typename Corners>
+OutputPoint point_in_output(const TexturedMesh& out, uint32_t o, const Corners& corner, const double* b) {
   OutputPoint q;
-  q.o = c.match[p.t];
+  q.o = o;
   if (q.o == kNone) return q;
   for (size_t k = 0; k < 3; ++k) {
-    const int ok = c.corner_map[p.t][k];
-    q.b[ok] = p.b[k];
-    q.uv += p.b[k] * out.sampled_uv(q.o, ok);
+    const int ok = int(corner[k]);
+    q.b[ok] = b[k];
+    q.uv += b[k] * out.sampled_uv(q.o, ok);
   }
   return q;
+}
+
+OutputPoint output_point(const TexturedMesh& out, const Correspondence& c, const SurfacePoint& p) {
+  return point_in_output(out, c.match[p.t], c.corner_map[p.t], p.b);
+}
+
+/// A sample point's squared error in the surface PSNR: the input's shown colour `in_colour` against the
+/// output's at q (black where the point is lost), summed over the three channels.
+double squared_colour_error(const std::array<double, 3>& in_colour, const TexturedMesh& out, const OutputPoint& q) {
+  const auto co = q.o == kNone ? std::array<double, 3>{0, 0, 0} : shown_colour(out, q.o, q.uv, q.b);
+  double sum = 0;
+  for (size_t k = 0; k < 3; ++k) sum += (in_colour[k] - co[k]) * (in_colour[k] - co[k]);
+  return sum;
 }
 
 Vec2 input_uv(const TexturedMesh& in, const SurfacePoint& p) {
@@ -638,12 +654,7 @@ Vec2 input_uv(const TexturedMesh& in, const SurfacePoint& p) {
 std::pair<double, size_t> measure_surface_psnr(const TexturedMesh& in, const TexturedMesh& out, const Correspondence& c,
                                                const std::vector<SurfacePoint>& points) {
   const double se = deterministic_sum(points.size(), [&](size_t i) {
-    const auto ci = shown_colour(in, points[i].t, input_uv(in, points[i]), points[i].b);
-    const OutputPoint q = output_point(out, c, points[i]);
-    const auto co = q.o == kNone ? std::array<double, 3>{0, 0, 0} : shown_colour(out, q.o, q.uv, q.b);
-    double sum = 0;
-    for (size_t k = 0; k < 3; ++k) sum += (ci[k] - co[k]) * (ci[k] - co[k]);
-    return sum;
+    return squared_colour_error(shown_colour(in, points[i].t, input_uv(in, points[i]), points[i].b), out, output_point(out, c, points[i]));
   });
   return {psnr_of(se, 3.0 * double(points.size())), points.size()};
 }
@@ -840,21 +851,10 @@ SurfacePsnrOfImages::SurfacePsnrOfImages(const TexturedMesh& input, const Textur
 SurfacePsnrOfImages::~SurfacePsnrOfImages() = default;
 
 double SurfacePsnrOfImages::operator()(const TexturedMesh& output) const {
-  // measure_surface_psnr's sum, term by term (output_point's sums in its order), with what the images
-  // do not change read from points_.
-  const std::array<double, 3>* in = points_->input_colour.get();
+  // measure_surface_psnr's sum, term by term, with what the images do not change read from points_.
   const double se = deterministic_sum(points_->size, [&](size_t i) {
     const KeptOutputPoint& kept = points_->where[i];
-    std::array<double, 3> co{0, 0, 0};
-    if (kept.o != kNone) {
-      OutputPoint q;
-      q.o = kept.o;
-      for (size_t k = 0; k < 3; ++k) q.b[kept.corner[k]] = kept.b[k], q.uv += kept.b[k] * output.sampled_uv(q.o, kept.corner[k]);
-      co = shown_colour(output, q.o, q.uv, q.b);
-    }
-    double sum = 0;
-    for (size_t k = 0; k < 3; ++k) sum += (in[i][k] - co[k]) * (in[i][k] - co[k]);
-    return sum;
+    return squared_colour_error(points_->input_colour[i], output, point_in_output(output, kept.o, kept.corner, kept.b));
   });
   return psnr_of(se, 3.0 * double(points_->size));
 }
