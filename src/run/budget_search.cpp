@@ -126,8 +126,10 @@ double at_quality(const std::vector<double>& y, int q) {
 struct Prediction {
   double psnr = 0, log_bytes = 0, codec_mse = 0;
 };
-Prediction predict(const RateModel& model, size_t s, int q) {
-  const double x = std::log(model.scales[s]);
+/// The probes' log codec error and log bytes interpolated over log scale (extrapolated beyond them) to
+/// `scale` of the bake's side, at quality q.
+std::pair<double, double> log_codec_mse_and_bytes(const RateModel& model, double scale, int q) {
+  const double x = std::log(scale);
   double log_codec_mse = 0, log_bytes = 0;
   for (size_t i = 0; i < model.probes.size(); ++i) {
     double w = 1;  // Lagrange's weight of probe i at x
@@ -135,6 +137,11 @@ Prediction predict(const RateModel& model, size_t s, int q) {
       if (j != i) w *= (x - std::log(model.probes[j].scale)) / (std::log(model.probes[i].scale) - std::log(model.probes[j].scale));
     log_codec_mse += w * at_quality(model.probes[i].log_codec_mse, q), log_bytes += w * at_quality(model.probes[i].log_bytes, q);
   }
+  return {log_codec_mse, log_bytes};
+}
+
+Prediction predict(const RateModel& model, size_t s, int q) {
+  const auto [log_codec_mse, log_bytes] = log_codec_mse_and_bytes(model, model.scales[s], q);
   return {psnr_of(model.shrink_mse[s] + std::exp(log_codec_mse)), log_bytes, std::exp(log_codec_mse)};
 }
 
@@ -305,6 +312,8 @@ std::pair<std::optional<Written>, Written> check_qualities(const BudgetSearchReq
       written[i].images = encoders.encode(e);
     });
     for (Written& w : written) {
+      // q not answering (a target missed, a bound exceeded): neither does its proof, left unmeasured.
+      if (&w != &written[0] && !answers(request, written[0].psnr, total_bytes(written[0].images))) break;
       w.psnr = psnr_as_written(judge, colour, output, w.images);
       const uint64_t bytes = total_bytes(w.images);
       probes.push_back({{"scale", model.scales[s]}, {"quality", w.quality}, {"bytes", bytes}, {"psnr_db", w.psnr}, {"check", true}});
@@ -325,6 +334,14 @@ std::pair<std::optional<Written>, Written> check_qualities(const BudgetSearchReq
     q = next;
   }
   return {std::move(best), best ? Written{} : std::move(*closest)};
+}
+
+/// The model's codec error at any scale and quality (BudgetSearchResult::codec_mse_at), scaled by what
+/// `checked` (the images at the bake's size as written) measured over what the model predicts there.
+std::function<double(double, int)> checked_codec_mse(const RateModel& model, const Written& checked) {
+  const double written = mse_of_psnr(checked.psnr);
+  const double factor = std::max(written - model.shrink_mse[0], 1e-3 * written) / predict(model, 0, checked.quality).codec_mse;
+  return [model, factor](double scale, int quality) { return factor * std::exp(log_codec_mse_and_bytes(model, scale, quality).first); };
 }
 
 }  // namespace
@@ -407,6 +424,7 @@ BudgetSearchResult search_texels_and_quality(const BudgetSearchRequest& request,
     s = 0, q = std::max(closest.quality, kProbeQualities[std::size(kProbeQualities) - 2]);
   }
   const Written& chosen = best ? *best : closest;
+  if (!best && request.target_psnr_db > 0 && s == 0) r.codec_mse_at = checked_codec_mse(model, chosen);
   encoding.jpeg_quality = encoding.webp_quality = chosen.quality;
   r.quality = chosen.quality, r.images = chosen.images, r.written_psnr_db = chosen.psnr;
   const Image& img = r.scaled.empty() || r.scaled[0].empty() ? output.textures[0].image : r.scaled[0];

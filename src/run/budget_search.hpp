@@ -4,6 +4,7 @@
 // best (scale, quality) chosen from that model, then checked and nudged on the images as written.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -44,6 +45,10 @@ struct BudgetSearchResult {
   /// images come back unchecked (BudgetSearchRequest::check_shrunk): with the re-bake's own error it
   /// tells the quality to start its search at. Empty otherwise.
   std::vector<double> codec_mse_by_quality;
+  /// Where no quality reaches a target at the bake's size: the model's codec error (as above) at a
+  /// scale of the side (above 1 too: a bake at more texels) and a quality, scaled by what the checks at
+  /// the bake's size measured. Empty otherwise.
+  std::function<double(double scale, int quality)> codec_mse_at;
   /// How fast the bake's own error grows as the side shrinks: log2 of its mean squared error at half the
   /// side over its error at the full side (measured unencoded; 2 where it is not measured). A target the
   /// full side does not reach takes this to tell how many more texels may reach it.

@@ -235,6 +235,10 @@ EncodingChoice choose_images(const Options& options, const Options& method, cons
   alone.format = choice.encoding.format;
   alone.quality_hint = choice.encoding.format == ImageFormat::kJpeg ? choice.encoding.jpeg_quality : choice.encoding.webp_quality;
   alone.codec_mse_by_quality = choice.codec_mse_by_quality;
+  if (choice.codec_mse_at) {  // a target not reached at the bake's size: the model's codec error at the larger one
+    alone.codec_mse_by_quality.assign(101, 0);
+    for (int quality = 0; quality <= 100; ++quality) alone.codec_mse_by_quality[size_t(quality)] = choice.codec_mse_at(scale, quality);
+  }
   // The same charts baked again: the same triangles, corners and vertices, so the first search's
   // judges find every point where they did (they read the texture coordinates at each call).
   if (same_charts && rebaked.output.triangles == result.output.triangles && rebaked.output.positions == result.output.positions &&
@@ -369,8 +373,11 @@ Report run(const std::string& input, const std::string& outdir, const Options& o
                            options.html,
                            input_format == ModelFormat::kGltf || input_format == ModelFormat::kGlb};
   WrittenAndMeasured written = write_and_measure(target, planned.mesh, result.output, timings, progress);
-  // The figures are the files' as written (a lossy codec's images decoded back); the bake's beside them.
-  if (choice.encoding.lossy()) written.metrics.surface_psnr_bake = surface_psnr(planned.mesh, result.output);
+  // The figures are the files' as written (a lossy codec's images decoded back); the bake's beside them,
+  // asked of the judge that measured the written images where there is one (the same points and figure
+  // as surface_psnr, without finding them again).
+  if (choice.encoding.lossy())
+    written.metrics.surface_psnr_bake = choice.judges.all ? (*choice.judges.all)(result.output) : surface_psnr(planned.mesh, result.output);
   const Metrics& metrics = written.metrics;
   nlohmann::json json = report_json(result.report);
   add_run_figures(json, metrics, timings, seconds_since(t0), read_stats,

@@ -193,17 +193,18 @@ int starting_quality(const BytesRequest& request, const SurfacePsnrOfImages& few
 }
 
 /// Rate control of a lossy encoding: the quality and why. With --target-psnr, the images chosen and
-/// their PSNR at the report's points into `checked`.
+/// their PSNR at the report's points into `checked`, asked of `judges` (those missing made into it).
 std::string pick_quality(const BytesRequest& request, const TexturedMesh& input, const std::vector<TextureSource>& sources,
-                         TexturedMesh& output, ImageEncoding& e, std::optional<std::pair<std::vector<std::string>, double>>& checked) {
+                         TexturedMesh& output, ImageEncoding& e, std::optional<std::pair<std::vector<std::string>, double>>& checked,
+                         PsnrJudges& judges) {
   int steps = 0;
   const TextureEncoders encoders(output);
   if (request.target_psnr_db > 0) {
     // The search at a tenth of the report's points, then the report's own points, a quality up at a
     // time where the few erred.
-    std::optional<SurfacePsnrOfImages> own_few, own_judge;
-    const SurfacePsnrOfImages& few = request.judges.few ? *request.judges.few : own_few.emplace(input, output, kPsnrPoints / 10);
-    const SurfacePsnrOfImages& judge = request.judges.all ? *request.judges.all : own_judge.emplace(input, output);
+    if (!judges.few) judges.few = std::make_shared<const SurfacePsnrOfImages>(input, output, kPsnrPoints / 10);
+    if (!judges.all) judges.all = std::make_shared<const SurfacePsnrOfImages>(input, output);
+    const SurfacePsnrOfImages &few = *judges.few, &judge = *judges.all;
     std::map<int, std::vector<std::string>> images;  // per quality tried, its files
     int lowest = lowest_quality_reaching(
         [&](const std::vector<int>& qualities) {
@@ -316,6 +317,7 @@ EncodingChoice search_codec_texels_and_quality(const BytesRequest& request, cons
   c.probes = std::move(best->probes);
   c.texel_scale = best->scale;
   c.codec_mse_by_quality = std::move(best->codec_mse_by_quality);
+  c.codec_mse_at = std::move(best->codec_mse_at);
   c.bake_error_exponent = best->bake_error_exponent;
   c.judges = std::move(best->judges);
   return c;
@@ -332,13 +334,16 @@ EncodingChoice choose_encoding(const BytesRequest& request, const TexturedMesh& 
   if (search_texels && (c.encoding.lossy() || (!request.format && !request.codecs.empty())))
     return search_codec_texels_and_quality(request, input, output, c);
   std::optional<std::pair<std::vector<std::string>, double>> checked;  // the images rate control measured last
-  if (c.encoding.lossy() && !request.quality_given) c.reason += "; " + pick_quality(request, input, sources, output, c.encoding, checked);
+  c.judges = request.judges;
+  if (c.encoding.lossy() && !request.quality_given)
+    c.reason += "; " + pick_quality(request, input, sources, output, c.encoding, checked, c.judges);
   if (request.progress) request.progress(8.0 / 9);
   if (checked) {
     c.images = std::move(checked->first), c.written_psnr_db = checked->second;
   } else {
     c.images = TextureEncoders(output).encode(c.encoding);
-    if (c.encoding.lossy()) c.written_psnr_db = psnr_as_written(SurfacePsnrOfImages(input, output), output, c.images);
+    if (c.encoding.lossy() && !c.judges.all) c.judges.all = std::make_shared<const SurfacePsnrOfImages>(input, output);
+    if (c.encoding.lossy()) c.written_psnr_db = psnr_as_written(*c.judges.all, output, c.images);
   }
   for (const std::string& b : c.images) c.bytes.push_back(b.size());
   if (request.progress) request.progress(1);

@@ -56,7 +56,12 @@ struct EncodingChoice {
   double texel_scale = 1;                    // the texel search's scale of the baked images' side (1: as baked)
   std::vector<double> codec_mse_by_quality;  // the texel search's, where its images come back unchecked
   double bake_error_exponent = 2;            // the texel search's (BudgetSearchResult)
-  PsnrJudges judges;                         // the texel search's
+  /// The texel search's codec error at a scale and quality, where no quality reached a target at the
+  /// bake's size (BudgetSearchResult).
+  std::function<double(double scale, int quality)> codec_mse_at;
+  /// The judges that measured the images (made for `output`'s triangles; null where none did): the
+  /// caller asks them again for the same output's figures, such as its images unencoded.
+  PsnrJudges judges;
 };
 
 /// Whether images of `bytes_a` bytes at `psnr_a` dB answer --target-psnr (`target_psnr_db` > 0) or else
