@@ -6,7 +6,7 @@
 # conversion, as Pillow and cwebp by default); tightex's bytes beside the re-encode's at the same
 # written PSNR (its curve interpolated), and beside a re-encode by tightex's own encoder (the sharp
 # conversion: what the repacking alone saves), and each --target-psnr run's wall time over that of
-# `--format webp` at its default quality (the time the search adds).
+# `--format webp` at its default quality (the time the search adds) and over the default run's.
 #
 #   bash bench/bytes.sh [OUT] [MODEL...]    (default: every model of ../shared/data; a build with the tools)
 #   TARGETS="40" QUALITIES="50 70 80 90 95" bash bench/bytes.sh ...   (other targets and re-encode qualities)
@@ -25,7 +25,7 @@ fi
 rm -rf "$out" && mkdir -p "$out"
 read -r -a targets <<< "${TARGETS:-36 40 44}"
 read -r -a qualities <<< "${QUALITIES:-1 5 10 20 35 50 70 80 90 95}"
-echo "| model | input KiB | default: codec, KiB, written dB | webp --target-psnr: written dB, KiB, re-encode KiB at that dB, ratio (tightex's encoder's re-encode: ratio), time over --format webp's | input re-encoded to WebP: quality dB KiB |"
+echo "| model | input KiB | default: codec, KiB, written dB | webp --target-psnr: written dB, KiB, re-encode KiB at that dB, ratio (tightex's encoder's re-encode: ratio), time over --format webp's (over the default run's) | input re-encoded to WebP: quality dB KiB |"
 echo "|---|---|---|---|---|"
 for model in "${models[@]}"; do
   name=$(basename "$(dirname "$model")")
@@ -34,6 +34,7 @@ for model in "${models[@]}"; do
   for t in "${targets[@]}"; do ./build/tightex "$model" -o "$out/$name/webp$t" -q --no-html --format webp --target-psnr "$t"; done
   # The times again, alternating, for medians (the runs of a few seconds vary by +-0.3x alone).
   for ((r = 2; r <= ${REPEATS:-1}; ++r)); do
+    ./build/tightex "$model" -o "$out/$name/time$r/default" -q --no-html
     ./build/tightex "$model" -o "$out/$name/time$r/webp" -q --no-html --format webp
     for t in "${targets[@]}"; do ./build/tightex "$model" -o "$out/$name/time$r/webp$t" -q --no-html --format webp --target-psnr "$t"; done
   done
@@ -55,7 +56,7 @@ import glob, statistics
 d = json.load(open(folder + "/default/report.json"))["bytes"]
 def median_wall(run):  # the first run's and every repeat's
     return statistics.median(json.load(open(f))["wall_seconds"] for f in [f"{folder}/{run}/report.json"] + glob.glob(f"{folder}/time*/{run}/report.json"))
-base_s = median_wall("webp")
+base_s, default_s = median_wall("webp"), median_wall("default")
 cells = []
 for t in targets:
     r = json.load(open(f"{folder}/webp{t}/report.json"))
@@ -64,7 +65,7 @@ for t in targets:
     ref, own = reencode_bytes_at(db), reencode_bytes_at(db, own_curve)
     cells.append(f"{t}: {db:.2f}, {out/1024:.0f}, " + (f"{ref/1024:.0f}, {out/ref:.2f}" if ref else "beyond the curve") +
                  (f" ({out/own:.2f})" if own else " (beyond)") +
-                 f", {median_wall('webp' + t) / base_s:.2f}x")
+                 f", {median_wall('webp' + t) / base_s:.2f}x ({median_wall('webp' + t) / default_s:.2f}x)")
 kib = lambda x: f"{x/1024:.0f}"
 print(f"| {name} | {kib(d['input']['total'])} | {d['encoding']['format']} q{d['encoding'].get('quality', '-')}, {kib(d['output']['total'])}, "
       f"{d['surface_psnr_written_db']:.1f} | {'; '.join(cells)} | " + "; ".join(f"{q:.0f}: {p:.1f} {b/1024:.0f}" for q, b, p in curve) + " |")
