@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <map>
 #include <numeric>
 #include <optional>
 #include <tuple>
@@ -286,9 +287,18 @@ struct Written {
   double psnr = 0;
 };
 
+/// Between a quality `lo` that misses a target (`psnr_lo`) and one `hi` that reaches it, the quality the
+/// line through both reaches it at, rounded up: the checks, as written, say more there than the
+/// model, whose quality curve is smoother than the codec's.
+int bracketed_quality(int lo, double psnr_lo, int hi, double psnr_hi, double target) {
+  const double at = lo + (target - psnr_lo) * double(hi - lo) / (psnr_hi - psnr_lo);
+  return std::clamp(int(std::ceil(at)), lo + 1, hi - 1);
+}
+
 /// The model's choice at scale index s, starting at quality q: checked on the images as written
 /// (`output` holds them at that scale) at `judge`'s points and moved along the quality by the model,
-/// corrected by each check, to the best quality that answers the request, at most kMaxChecks
+/// corrected by each check (for a target, once a missing and a reaching quality are measured, by the
+/// line between them: bracketed_quality), to the best quality that answers the request, at most kMaxChecks
 /// encodings. Returns the best that answers it, else the closest; each check into `probes`.
 std::pair<std::optional<Written>, Written> check_qualities(const BudgetSearchRequest& request, const RateModel& model, size_t s, int q,
                                                            const SurfacePsnrOfImages& judge, const std::vector<char>& colour,
@@ -297,6 +307,7 @@ std::pair<std::optional<Written>, Written> check_qualities(const BudgetSearchReq
   // reaches the target or is over the bound.
   const bool target = request.target_psnr_db > 0;
   int lo = 0, hi = 101;
+  std::map<int, double> measured;  // a target's PSNR per quality checked
   std::optional<Written> best, closest;
   const TextureEncoders encoders(output);
   for (int check = 0; check < kMaxChecks; ++check) {
@@ -317,6 +328,7 @@ std::pair<std::optional<Written>, Written> check_qualities(const BudgetSearchReq
       w.psnr = psnr_as_written(judge, colour, output, w.images);
       const uint64_t bytes = total_bytes(w.images);
       probes.push_back({{"scale", model.scales[s]}, {"quality", w.quality}, {"bytes", bytes}, {"psnr_db", w.psnr}, {"check", true}});
+      measured[w.quality] = w.psnr;
       const bool ok = answers(request, w.psnr, bytes);
       // A target reached or a bound exceeded: so is every higher quality.
       if (target == ok)
@@ -329,7 +341,9 @@ std::pair<std::optional<Written>, Written> check_qualities(const BudgetSearchReq
     const auto [psnr, log_bytes, codec_mse] = predict(model, s, q);
     const uint64_t bytes = total_bytes(written[0].images);
     const double log_bytes_offset = std::log(double(std::max<uint64_t>(bytes, 1))) - log_bytes;
-    const int next = hi - lo <= 1 ? q : corrected_quality(request, model, s, written[0].psnr - psnr, log_bytes_offset, lo, hi);
+    int next = hi - lo <= 1 ? q : corrected_quality(request, model, s, written[0].psnr - psnr, log_bytes_offset, lo, hi);
+    if (target && hi - lo > 1 && measured.count(lo) && measured.count(hi) && measured[hi] > measured[lo])
+      next = bracketed_quality(lo, measured[lo], hi, measured[hi], request.target_psnr_db);
     if (next == q || next <= lo || next >= hi) break;
     q = next;
   }
