@@ -350,12 +350,16 @@ std::pair<std::optional<Written>, Written> check_qualities(const BudgetSearchReq
   return {std::move(best), best ? Written{} : std::move(*closest)};
 }
 
-/// The model's codec error at any scale and quality (BudgetSearchResult::codec_mse_at), scaled by what
-/// `checked` (the images at the bake's size as written) measured over what the model predicts there.
-std::function<double(double, int)> checked_codec_mse(const RateModel& model, const Written& checked) {
-  const double written = mse_of_psnr(checked.psnr);
-  const double factor = std::max(written - model.shrink_mse[0], 1e-3 * written) / predict(model, 0, checked.quality).codec_mse;
+/// The model's codec error at any scale and quality (BudgetSearchResult::codec_mse_at), times `factor`.
+std::function<double(double, int)> codec_mse_curve(const RateModel& model, double factor) {
   return [model, factor](double scale, int quality) { return factor * std::exp(log_codec_mse_and_bytes(model, scale, quality).first); };
+}
+
+/// What `checked` (the images at the bake's size as written) measured of the codec's error over what the
+/// model predicts there.
+double checked_over_predicted(const RateModel& model, const Written& checked) {
+  const double written = mse_of_psnr(checked.psnr);
+  return std::max(written - model.shrink_mse[0], 1e-3 * written) / predict(model, 0, checked.quality).codec_mse;
 }
 
 }  // namespace
@@ -420,7 +424,7 @@ BudgetSearchResult search_texels_and_quality(const BudgetSearchRequest& request,
   if (!request.check_shrunk && s > 0) {
     r.scale = model.scales[s], r.quality = q;
     encoding.jpeg_quality = encoding.webp_quality = q;
-    for (int quality = 0; quality <= 100; ++quality) r.codec_mse_by_quality.push_back(predict(model, s, quality).codec_mse);
+    r.codec_mse_at = codec_mse_curve(model, 1);
     r.reason = fmt::format("texels and quality chosen together for {}: the model's {:.2f} of the side at quality {}", asked, r.scale, q);
     return r;
   }
@@ -438,7 +442,7 @@ BudgetSearchResult search_texels_and_quality(const BudgetSearchRequest& request,
     s = 0, q = std::max(closest.quality, kProbeQualities[std::size(kProbeQualities) - 2]);
   }
   const Written& chosen = best ? *best : closest;
-  if (!best && request.target_psnr_db > 0 && s == 0) r.codec_mse_at = checked_codec_mse(model, chosen);
+  if (!best && request.target_psnr_db > 0 && s == 0) r.codec_mse_at = codec_mse_curve(model, checked_over_predicted(model, chosen));
   encoding.jpeg_quality = encoding.webp_quality = chosen.quality;
   r.quality = chosen.quality, r.images = chosen.images, r.written_psnr_db = chosen.psnr;
   const Image& img = r.scaled.empty() || r.scaled[0].empty() ? output.textures[0].image : r.scaled[0];

@@ -41,13 +41,11 @@ struct BudgetSearchResult {
   double written_psnr_db = 0;
   std::string reason;
   nlohmann::json probes = nlohmann::json::array();
-  /// The model's codec error (mean squared, 8-bit levels) at `scale`, per quality 0..100, where the
-  /// images come back unchecked (BudgetSearchRequest::check_shrunk): with the re-bake's own error it
-  /// tells the quality to start its search at. Empty otherwise.
-  std::vector<double> codec_mse_by_quality;
-  /// Where no quality reaches a target at the bake's size: the model's codec error (as above) at a
-  /// scale of the side (above 1 too: a bake at more texels) and a quality, scaled by what the checks at
-  /// the bake's size measured. Empty otherwise.
+  /// The model's codec error (mean squared, 8-bit levels) at a scale of the side and a quality, where
+  /// the images come back unchecked (BudgetSearchRequest::check_shrunk), and where no quality reaches a
+  /// target at the bake's size (then scaled by what the checks there measured; asked above 1 too, of a
+  /// bake at more texels): with a re-bake's own error it tells the quality to start its search at.
+  /// Empty otherwise.
   std::function<double(double scale, int quality)> codec_mse_at;
   /// How fast the bake's own error grows as the side shrinks: log2 of its mean squared error at half the
   /// side over its error at the full side (measured unencoded; 2 where it is not measured). A target the

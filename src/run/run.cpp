@@ -234,8 +234,7 @@ EncodingChoice choose_images(const Options& options, const Options& method, cons
   BytesRequest alone = bytes_request(options);
   alone.format = choice.encoding.format;
   alone.quality_hint = choice.encoding.format == ImageFormat::kJpeg ? choice.encoding.jpeg_quality : choice.encoding.webp_quality;
-  alone.codec_mse_by_quality = choice.codec_mse_by_quality;
-  if (choice.codec_mse_at) {  // a target not reached at the bake's size: the model's codec error at the larger one
+  if (choice.codec_mse_at) {  // the model's codec error at the scale baked again
     alone.codec_mse_by_quality.assign(101, 0);
     for (int quality = 0; quality <= 100; ++quality) alone.codec_mse_by_quality[size_t(quality)] = choice.codec_mse_at(scale, quality);
   }

@@ -316,7 +316,6 @@ EncodingChoice search_codec_texels_and_quality(const BytesRequest& request, cons
   if (!c.images.empty()) c.written_psnr_db = best->written_psnr_db;
   c.probes = std::move(best->probes);
   c.texel_scale = best->scale;
-  c.codec_mse_by_quality = std::move(best->codec_mse_by_quality);
   c.codec_mse_at = std::move(best->codec_mse_at);
   c.bake_error_exponent = best->bake_error_exponent;
   c.judges = std::move(best->judges);

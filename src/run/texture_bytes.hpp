@@ -52,12 +52,10 @@ struct EncodingChoice {
   std::vector<uint64_t> bytes;      // per output texture
   std::optional<double> written_psnr_db;
   std::string reason;
-  nlohmann::json probes;                     // the texel search's probes (null where it did not run)
-  double texel_scale = 1;                    // the texel search's scale of the baked images' side (1: as baked)
-  std::vector<double> codec_mse_by_quality;  // the texel search's, where its images come back unchecked
-  double bake_error_exponent = 2;            // the texel search's (BudgetSearchResult)
-  /// The texel search's codec error at a scale and quality, where no quality reached a target at the
-  /// bake's size (BudgetSearchResult).
+  nlohmann::json probes;           // the texel search's probes (null where it did not run)
+  double texel_scale = 1;          // the texel search's scale of the baked images' side (1: as baked)
+  double bake_error_exponent = 2;  // the texel search's (BudgetSearchResult)
+  /// The texel search's model of the codec's error (BudgetSearchResult).
   std::function<double(double scale, int quality)> codec_mse_at;
   /// The judges that measured the images (made for `output`'s triangles; null where none did): the
   /// caller asks them again for the same output's figures, such as its images unencoded.
