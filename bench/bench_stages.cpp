@@ -1,7 +1,8 @@
 // Per-stage benchmarks on generated meshes of 10k..1M triangles: a bumpy sphere (closed, genus 0,
 // cut along one path) and the same with holes, a bumpy torus for the handle search, its coarse copy for the multilevel map, and reading it
-// back from an OBJ (in stretches on every core, and as one stretch), and a scan texture's PNG decoded. Speed is measured here, never
-// asserted in tests. Run: build/bench/tightex_bench --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
+// back from an OBJ (in stretches on every core, and as one stretch), a scan texture's PNG decoded, and a baked atlas shrunk as the rate
+// search does. Speed is measured here, never asserted in tests. Run: build/bench/tightex_bench --benchmark_repetitions=3
+// --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
 
 #include <unistd.h>
@@ -24,6 +25,7 @@
 #include "prepare/components.hpp"
 #include "prepare/handles.hpp"
 #include "prepare/repair.hpp"
+#include "run/budget_search.hpp"
 
 using namespace tightex;
 
@@ -258,6 +260,25 @@ void BM_DecodePng(benchmark::State& state) {
   }
 }
 
+/// The rate search's shrink of a baked atlas (argument: its side) to the eight scales its model reads
+/// (kSteps 4 a halving, from 2^-1/4 down to 1/4): random texels, six of seven inside charts (bands 50
+/// texels wide), as a bake between charts leaves them.
+void BM_ShrinkAtlas(benchmark::State& state) {
+  const int side = int(state.range(0));
+  Image atlas(side, side);
+  std::vector<uint8_t> inside(atlas.pixels.size());
+  std::mt19937 rng(1);
+  for (size_t i = 0; i < atlas.pixels.size(); ++i) {
+    atlas.pixels[i] = {uint8_t(rng()), uint8_t(rng()), uint8_t(rng()), 255};
+    inside[i] = (i / size_t(side) / 50 + i % size_t(side) / 50) % 7 != 0;
+  }
+  for (auto _ : state)
+    for (int step = 1; step <= 8; ++step) {
+      const int scaled = int(std::lround(side * std::pow(2.0, -step / 4.0)));
+      benchmark::DoNotOptimize(shrink_image(atlas, inside, scaled, scaled));
+    }
+}
+
 }  // namespace
 
 BENCHMARK(BM_ReadObj)->Args({1000000, 0})->Args({1000000, 1})->Unit(benchmark::kMillisecond);
@@ -269,5 +290,7 @@ BENCHMARK(BM_CoarsenDisk)->Arg(200000)->Arg(1000000)->Arg(2000000)->Unit(benchma
 BENCHMARK(BM_BakeTexture)->Args({100000, 2048})->Args({100000, 4096})->Args({1000000, 8192})->Unit(benchmark::kMillisecond);
 
 BENCHMARK(BM_DecodePng)->Args({4096, 0})->Args({4096, 1})->Args({8192, 0})->Args({8192, 1})->Unit(benchmark::kMillisecond);
+
+BENCHMARK(BM_ShrinkAtlas)->Arg(3044)->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();

@@ -42,6 +42,13 @@ TEST(BudgetSearch, ShrinkByAFractionWeighsTexelsByTheirOverlap) {
   EXPECT_EQ(small.at(1, 0).r, 150);  // (90 * 0.5 + 180 * 1) / 1.5
 }
 
+TEST(BudgetSearch, ShrinkRoundsAMeanHalfwayBetweenLevelsUp) {
+  // 2 texels into 1: means of 0.5, 254.5 and 3 (exact) per channel.
+  Image image(2, 1);
+  image.at(0, 0) = {0, 254, 3, 255}, image.at(1, 0) = {1, 255, 3, 255};
+  EXPECT_EQ(shrink_image(image, {}, 1, 1).at(0, 0), (Rgba8{1, 255, 3, 255}));
+}
+
 /// A codec's PSNR over its quality: rising, steeper towards the top, a little flat step in the middle.
 double codec_curve(int q) { return 28 + 0.12 * q + 6 * std::pow(q / 100.0, 6) + (q >= 60 && q < 63 ? -0.05 : 0); }
 

@@ -455,30 +455,70 @@ BudgetSearchResult search_texels_and_quality(const BudgetSearchRequest& request,
   return r;
 }
 
+namespace {
+
+/// Along one side of `source` texels shrunk to `target`, per output texel the source texels its side
+/// covers: [first, first + count), each covering weights[offset + i] of a texel.
+struct Footprints {
+  struct Span {
+    int first = 0, count = 0;
+    size_t offset = 0;
+  };
+  std::vector<Span> spans;
+  std::vector<double> weights;
+
+  Footprints(int source, int target) : spans(static_cast<size_t>(target)) {
+    const double f = double(source) / target;
+    for (int x = 0; x < target; ++x) {
+      const double x0 = x * f, x1 = (x + 1) * f;
+      Span& span = spans[size_t(x)];
+      span.first = int(x0), span.offset = weights.size();
+      for (int sx = span.first; sx < std::min(source, int(std::ceil(x1))); ++sx, ++span.count)
+        weights.push_back(std::min(x1, sx + 1.0) - std::max(x0, double(sx)));
+    }
+  }
+};
+
+/// Adds to `sum` the texels of `image` under the spans `x` (of `columns`) and `y` (of `rows`), each
+/// weighted by how much of it they cover: those `inside` marks, or all where `only_inside` is false.
+/// Returns the weights' sum.
+double add_footprint(const Image& image, const std::vector<uint8_t>& inside, bool only_inside, const Footprints& columns, size_t x,
+                     const Footprints& rows, size_t y, double (&sum)[4]) {
+  const Footprints::Span &fx = columns.spans[x], &fy = rows.spans[y];
+  double wsum = 0;
+  for (int j = 0; j < fy.count; ++j) {
+    const size_t at = size_t(fy.first + j) * size_t(image.width) + size_t(fx.first);
+    const Rgba8* p = image.pixels.data() + at;
+    const uint8_t* in = inside.empty() ? nullptr : inside.data() + at;
+    for (int i = 0; i < fx.count; ++i) {
+      if (only_inside && (!in || !in[i])) continue;
+      const double w = rows.weights[fy.offset + size_t(j)] * columns.weights[fx.offset + size_t(i)];
+      sum[0] += w * p[i].r, sum[1] += w * p[i].g, sum[2] += w * p[i].b, sum[3] += w * p[i].a;
+      wsum += w;
+    }
+  }
+  return wsum;
+}
+
+/// std::lround of a level in [0, 255], inline: the part below the whole is exact in a double.
+uint8_t round_level(double v) {
+  const long whole = long(v);
+  return uint8_t(std::clamp(whole + (v - double(whole) >= 0.5 ? 1l : 0l), 0l, 255l));
+}
+
+}  // namespace
+
 Image shrink_image(const Image& image, const std::vector<uint8_t>& inside, int width, int height) {
   width = std::min(width, image.width), height = std::min(height, image.height);
-  const double fx = double(image.width) / width, fy = double(image.height) / height;
+  const Footprints columns(image.width, width), rows(image.height, height);
   Image out(width, height);
   tbb::parallel_for(0, height, [&](int y) {
-    const double y0 = y * fy, y1 = (y + 1) * fy;
     for (int x = 0; x < width; ++x) {
-      const double x0 = x * fx, x1 = (x + 1) * fx;
-      double in_sum[4] = {0, 0, 0, 0}, all_sum[4] = {0, 0, 0, 0}, in_w = 0, all_w = 0;
-      for (int sy = int(y0); sy < std::min(image.height, int(std::ceil(y1))); ++sy) {
-        const double wy = std::min(y1, sy + 1.0) - std::max(y0, double(sy));
-        for (int sx = int(x0); sx < std::min(image.width, int(std::ceil(x1))); ++sx) {
-          const double w = wy * (std::min(x1, sx + 1.0) - std::max(x0, double(sx)));
-          const Rgba8 p = image.at(sx, sy);
-          const double c[4] = {double(p.r), double(p.g), double(p.b), double(p.a)};
-          const bool in = !inside.empty() && inside[size_t(sy) * size_t(image.width) + size_t(sx)];
-          for (int k = 0; k < 4; ++k) all_sum[k] += w * c[k], in_sum[k] += in ? w * c[k] : 0;
-          all_w += w, in_w += in ? w : 0;
-        }
-      }
-      const double* sum = in_w > 0 ? in_sum : all_sum;
-      const double wsum = in_w > 0 ? in_w : all_w;
-      auto level = [&](int k) { return uint8_t(std::clamp(std::lround(sum[k] / wsum), 0l, 255l)); };
-      out.at(x, y) = {level(0), level(1), level(2), level(3)};
+      // The chart texels under the output texel; where none is (between charts), all of them.
+      double sum[4] = {0, 0, 0, 0};
+      double wsum = add_footprint(image, inside, true, columns, size_t(x), rows, size_t(y), sum);
+      if (!(wsum > 0)) wsum = add_footprint(image, inside, false, columns, size_t(x), rows, size_t(y), sum);
+      out.at(x, y) = {round_level(sum[0] / wsum), round_level(sum[1] / wsum), round_level(sum[2] / wsum), round_level(sum[3] / wsum)};
     }
   });
   return out;
